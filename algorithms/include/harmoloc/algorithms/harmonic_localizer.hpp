@@ -1,0 +1,27 @@
+#pragma once
+/// @file Online harmonic localizer (seed 000, eq. 9): f_new = sum_j W'_j f_j / sum_j W'_j with
+/// W'_j = exp(-sigma ||O_new - O_j||^2) over all training samples. O(n d), no allocation.
+
+#include <array>
+#include <cstdint>
+
+#include "harmoloc/algorithms/harmonic_model.hpp"
+
+namespace harmoloc::algorithms {
+
+struct HarmonicFix {
+  double x_m = 0.0;
+  double y_m = 0.0;
+  /// Euclidean distance (feature units) to the nearest training sample.
+  double nearest_distance = 0.0;
+  /// True when the frame looks like a place the map was trained on (nearest_distance within the
+  /// model's bound) and some board was seen at all.
+  bool known_place = false;
+};
+
+/// Evaluates eq. 9 for one feature vector. The weights are computed relative to the nearest
+/// sample (exp(-sigma (d^2 - d_min^2))), which leaves eq. 9 unchanged but cannot underflow.
+HarmonicFix harmonic_query(const HarmonicModel& model,
+                           const std::array<float, HarmonicModel::kMaxFeatures>& features);
+
+}  // namespace harmoloc::algorithms

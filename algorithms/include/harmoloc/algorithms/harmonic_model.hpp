@@ -1,0 +1,46 @@
+#pragma once
+/// @file The precomputed harmonic map (seed 000): training area vectors and the coordinates the
+/// offline solve gave each of them. Fixed capacity, so the firmware can hold it in static memory.
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+
+#include "harmoloc/algorithms/segmentation.hpp"
+
+namespace harmoloc::algorithms {
+
+struct HarmonicModel {
+  static constexpr std::size_t kMaxSamples = 4096;
+  static constexpr std::size_t kMaxFeatures = kMaxBoards;
+
+  std::uint32_t sample_count = 0;
+  std::uint32_t feature_count = 0;
+  /// Which boards (indices into the threshold set) are features, in feature order.
+  std::array<std::uint8_t, kMaxFeatures> board_index{};
+  /// feature = area_px * area_scale. The trainer sets 100 / (width * height): percent of frame.
+  float area_scale = 0.0F;
+  /// Kernel widths of W = exp(-sigma * ||O_i - O_j||^2), per output axis, in 1/feature^2.
+  float sigma_x = 0.0F;
+  float sigma_y = 0.0F;
+  /// Regularisation weights the offline solve used (kept for the record).
+  float gamma_x = 0.0F;
+  float gamma_y = 0.0F;
+  /// Known-place test: a fix whose nearest training sample is farther than this (in feature
+  /// units, Euclidean) is flagged as off the trained route.
+  float max_nearest_distance = 0.0F;
+
+  /// Row-major sample_count x feature_count.
+  std::array<float, kMaxSamples * kMaxFeatures> features{};
+  std::array<float, kMaxSamples> target_x_m{};
+  std::array<float, kMaxSamples> target_y_m{};
+
+  const float* sample(std::size_t i) const { return features.data() + i * kMaxFeatures; }
+  float* sample(std::size_t i) { return features.data() + i * kMaxFeatures; }
+};
+
+/// Converts a frame's board areas into the model's feature vector.
+void areas_to_features(const HarmonicModel& model, const AreaVector& areas,
+                       std::array<float, HarmonicModel::kMaxFeatures>& features);
+
+}  // namespace harmoloc::algorithms

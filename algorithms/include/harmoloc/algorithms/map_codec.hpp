@@ -1,0 +1,38 @@
+#pragma once
+/// @file The map file: a harmonic model with what it was trained with (camera mode, colour
+/// thresholds), little-endian, versioned, with a CRC-32 over everything. Layout in docs/map-format.md.
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "harmoloc/algorithms/harmonic_model.hpp"
+#include "harmoloc/algorithms/segmentation.hpp"
+
+namespace harmoloc::algorithms {
+
+constexpr std::uint32_t kMapFormatVersion = 1;
+
+struct MapFile {
+  std::uint32_t image_width_px = 0;
+  std::uint32_t image_height_px = 0;
+  ThresholdSet thresholds;
+  HarmonicModel model;
+};
+
+/// Serialises @p map (host/trainer side; allocates).
+std::vector<std::uint8_t> encode_map(const MapFile& map);
+
+/// Why a map was rejected: a static message and the byte offset where it was noticed.
+struct MapError {
+  const char* what = nullptr;  ///< nullptr when the map is good
+  std::size_t offset = 0;
+  explicit operator bool() const { return what != nullptr; }
+};
+
+/// Parses and validates a map held in memory into @p map (which may be a static object: no
+/// allocation). Rejects bad magic, unknown version, truncation, trailing bytes, checksum
+/// mismatch, counts above capacity, non-finite or non-positive parameters.
+MapError decode_map(const std::uint8_t* data, std::size_t size, MapFile& map);
+
+}  // namespace harmoloc::algorithms

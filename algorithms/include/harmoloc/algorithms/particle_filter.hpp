@@ -1,0 +1,78 @@
+#pragma once
+/// @file Fixed-capacity particle filter over (x, y, yaw) (seed 001): differential-drive motion
+/// model with AMCL-style noise, position fixes from the harmonic localizer as the measurement,
+/// low-variance resampling. Static memory; deterministic for a given seed.
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+
+#include "harmoloc/algorithms/geometry.hpp"
+#include "harmoloc/algorithms/odometry.hpp"
+#include "harmoloc/algorithms/random.hpp"
+
+namespace harmoloc::algorithms {
+
+struct MotionNoise {
+  /// Variances grow with motion as in AMCL's odometry model: yaw noise variance
+  /// alpha1 yaw^2 + alpha2 dist^2, distance noise variance alpha3 dist^2 + alpha4 yaw^2.
+  double alpha1 = 0.02;
+  double alpha2 = 0.02;
+  double alpha3 = 0.02;
+  double alpha4 = 0.002;
+  /// Floor on the per-step standard deviations, so a stopped robot still diffuses a little.
+  double min_distance_sigma_m = 0.0005;
+  double min_yaw_sigma_rad = 0.0005;
+};
+
+struct PoseEstimate {
+  Pose2 mean;
+  PoseCovariance covariance;
+  double effective_particles = 0.0;
+};
+
+class ParticleFilter {
+ public:
+  static constexpr std::size_t kMaxParticles = 4096;
+
+  /// @p particle_count must be 1..kMaxParticles (clamped).
+  void configure(std::size_t particle_count, std::uint64_t seed, const MotionNoise& noise);
+
+  /// Spreads the particles around @p centre: Gaussian in x and y, and in yaw unless
+  /// @p uniform_yaw, in which case yaw is uniform over the circle.
+  void initialize(const Pose2& centre, double position_sigma_m, double yaw_sigma_rad, bool uniform_yaw);
+  bool initialized() const { return initialized_; }
+
+  /// Applies one odometry step to every particle with sampled noise.
+  void predict(const OdometryDelta& delta);
+
+  /// Weights particles by a Gaussian position fix; the small @p outlier_probability mixes in a
+  /// uniform floor so that one wrong fix cannot wipe out every particle.
+  void update_position(double x_m, double y_m, double sigma_m, double outlier_probability);
+
+  /// Low-variance (systematic) resampling when the effective sample size falls below
+  /// @p threshold_fraction of the particle count. Returns true if it resampled.
+  bool resample_if_needed(double threshold_fraction);
+
+  PoseEstimate estimate() const;
+  std::size_t size() const { return count_; }
+
+  struct Particle {
+    double x_m;
+    double y_m;
+    double yaw_rad;
+  };
+  const Particle& particle(std::size_t i) const { return particles_[i]; }
+  double weight(std::size_t i) const { return weights_[i]; }
+
+ private:
+  std::array<Particle, kMaxParticles> particles_{};
+  std::array<Particle, kMaxParticles> scratch_{};
+  std::array<double, kMaxParticles> weights_{};
+  std::size_t count_ = 0;
+  MotionNoise noise_{};
+  Pcg32 rng_{};
+  bool initialized_ = false;
+};
+
+}  // namespace harmoloc::algorithms

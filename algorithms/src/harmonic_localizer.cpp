@@ -1,0 +1,57 @@
+#include "harmoloc/algorithms/harmonic_localizer.hpp"
+
+#include <cmath>
+#include <limits>
+
+namespace harmoloc::algorithms {
+
+namespace {
+
+inline float squared_distance(const float* a, const float* b, std::size_t d) {
+  float s = 0.0F;
+  for (std::size_t k = 0; k < d; ++k) {
+    const float t = a[k] - b[k];
+    s += t * t;
+  }
+  return s;
+}
+
+}  // namespace
+
+HarmonicFix harmonic_query(const HarmonicModel& model,
+                           const std::array<float, HarmonicModel::kMaxFeatures>& features) {
+  HarmonicFix fix;
+  const std::size_t n = model.sample_count;
+  const std::size_t d = model.feature_count;
+  if (n == 0 || d == 0) return fix;
+
+  float d2_min = std::numeric_limits<float>::max();
+  for (std::size_t j = 0; j < n; ++j) {
+    const float d2 = squared_distance(features.data(), model.sample(j), d);
+    if (d2 < d2_min) d2_min = d2;
+  }
+
+  double sum_wx = 0.0, sum_wy = 0.0, sum_wx_fx = 0.0, sum_wy_fy = 0.0;
+  const float sx = model.sigma_x;
+  const float sy = model.sigma_y;
+  for (std::size_t j = 0; j < n; ++j) {
+    const float excess = squared_distance(features.data(), model.sample(j), d) - d2_min;
+    const double wx = std::exp(static_cast<double>(-sx * excess));
+    const double wy = std::exp(static_cast<double>(-sy * excess));
+    sum_wx += wx;
+    sum_wy += wy;
+    sum_wx_fx += wx * static_cast<double>(model.target_x_m[j]);
+    sum_wy_fy += wy * static_cast<double>(model.target_y_m[j]);
+  }
+  // The nearest sample has weight 1, so both sums are >= 1.
+  fix.x_m = sum_wx_fx / sum_wx;
+  fix.y_m = sum_wy_fy / sum_wy;
+  fix.nearest_distance = std::sqrt(static_cast<double>(d2_min));
+
+  bool any_board = false;
+  for (std::size_t k = 0; k < d; ++k) any_board = any_board || features[k] > 0.0F;
+  fix.known_place = any_board && fix.nearest_distance <= static_cast<double>(model.max_nearest_distance);
+  return fix;
+}
+
+}  // namespace harmoloc::algorithms

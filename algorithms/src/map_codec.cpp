@@ -1,0 +1,190 @@
+#include "harmoloc/algorithms/map_codec.hpp"
+
+#include <cmath>
+#include <cstring>
+
+#include "harmoloc/algorithms/crc32.hpp"
+
+namespace harmoloc::algorithms {
+
+namespace {
+
+constexpr std::uint8_t kMagic[8] = {'H', 'A', 'R', 'M', 'O', 'M', 'A', 'P'};
+
+class Writer {
+ public:
+  void bytes(const void* p, std::size_t n) {
+    const auto* b = static_cast<const std::uint8_t*>(p);
+    out.insert(out.end(), b, b + n);
+  }
+  void u8(std::uint8_t v) { out.push_back(v); }
+  void u32(std::uint32_t v) {
+    for (int i = 0; i < 4; ++i) out.push_back(static_cast<std::uint8_t>(v >> (8 * i)));
+  }
+  void f32(float v) {
+    std::uint32_t u = 0;
+    std::memcpy(&u, &v, 4);
+    u32(u);
+  }
+  std::vector<std::uint8_t> out;
+};
+
+class Reader {
+ public:
+  Reader(const std::uint8_t* data, std::size_t size) : data_(data), size_(size) {}
+  bool u8(std::uint8_t& v, const char* what) {
+    if (!need(1, what)) return false;
+    v = data_[pos_++];
+    return true;
+  }
+  bool u32(std::uint32_t& v, const char* what) {
+    if (!need(4, what)) return false;
+    v = 0;
+    for (int i = 0; i < 4; ++i) v |= static_cast<std::uint32_t>(data_[pos_ + i]) << (8 * i);
+    pos_ += 4;
+    return true;
+  }
+  bool f32(float& v, const char* what) {
+    std::uint32_t u = 0;
+    if (!u32(u, what)) return false;
+    std::memcpy(&v, &u, 4);
+    return true;
+  }
+  bool need(std::size_t n, const char* what) {
+    if (size_ - pos_ < n) {
+      error = MapError{what, pos_};
+      return false;
+    }
+    return true;
+  }
+  std::size_t pos() const { return pos_; }
+  MapError error;
+
+ private:
+  const std::uint8_t* data_;
+  std::size_t size_;
+  std::size_t pos_ = 0;
+};
+
+bool finite_positive(float v) { return std::isfinite(v) && v > 0.0F; }
+
+}  // namespace
+
+std::vector<std::uint8_t> encode_map(const MapFile& map) {
+  Writer w;
+  const HarmonicModel& m = map.model;
+  w.bytes(kMagic, sizeof kMagic);
+  w.u32(kMapFormatVersion);
+  w.u32(map.image_width_px);
+  w.u32(map.image_height_px);
+  w.u32(static_cast<std::uint32_t>(map.thresholds.count));
+  for (std::size_t i = 0; i < map.thresholds.count; ++i) {
+    const ColourThreshold& t = map.thresholds.boards[i];
+    w.f32(t.hue_min_deg);
+    w.f32(t.hue_max_deg);
+    w.u8(t.saturation_min);
+    w.u8(t.value_min);
+    w.u8(t.value_max);
+    w.u8(0);
+  }
+  w.u32(m.sample_count);
+  w.u32(m.feature_count);
+  for (std::size_t k = 0; k < m.feature_count; ++k) w.u8(m.board_index[k]);
+  w.f32(m.area_scale);
+  w.f32(m.sigma_x);
+  w.f32(m.sigma_y);
+  w.f32(m.gamma_x);
+  w.f32(m.gamma_y);
+  w.f32(m.max_nearest_distance);
+  for (std::size_t i = 0; i < m.sample_count; ++i) {
+    for (std::size_t k = 0; k < m.feature_count; ++k) w.f32(m.sample(i)[k]);
+    w.f32(m.target_x_m[i]);
+    w.f32(m.target_y_m[i]);
+  }
+  w.u32(crc32(w.out.data(), w.out.size()));
+  return std::move(w.out);
+}
+
+MapError decode_map(const std::uint8_t* data, std::size_t size, MapFile& map) {
+  if (data == nullptr || size < sizeof kMagic + 8) return MapError{"file too short to be a map", 0};
+  if (std::memcmp(data, kMagic, sizeof kMagic) != 0) return MapError{"not a harmoloc map (bad magic)", 0};
+  const std::size_t body = size - 4;
+  const std::uint32_t stored = static_cast<std::uint32_t>(data[body]) |
+                               static_cast<std::uint32_t>(data[body + 1]) << 8U |
+                               static_cast<std::uint32_t>(data[body + 2]) << 16U |
+                               static_cast<std::uint32_t>(data[body + 3]) << 24U;
+
+  Reader r(data, body);
+  std::uint8_t skip = 0;
+  for (std::size_t i = 0; i < sizeof kMagic; ++i) r.u8(skip, "magic");
+  std::uint32_t version = 0;
+  if (!r.u32(version, "version")) return r.error;
+  if (version != kMapFormatVersion) return MapError{"unsupported map format version (this firmware reads version 1)", 8};
+  if (crc32(data, body) != stored) return MapError{"checksum mismatch: the map is corrupt", body};
+
+  std::uint32_t boards = 0;
+  if (!r.u32(map.image_width_px, "image width") || !r.u32(map.image_height_px, "image height") ||
+      !r.u32(boards, "board count")) {
+    return r.error;
+  }
+  if (map.image_width_px == 0 || map.image_height_px == 0 || map.image_width_px > 8192 ||
+      map.image_height_px > 8192) {
+    return MapError{"image size out of range (1..8192)", 12};
+  }
+  if (boards == 0 || boards > kMaxBoards) return MapError{"board count out of range (1..8)", 20};
+  map.thresholds.count = boards;
+  for (std::size_t i = 0; i < boards; ++i) {
+    ColourThreshold& t = map.thresholds.boards[i];
+    std::uint8_t pad = 0;
+    if (!r.f32(t.hue_min_deg, "threshold") || !r.f32(t.hue_max_deg, "threshold") ||
+        !r.u8(t.saturation_min, "threshold") || !r.u8(t.value_min, "threshold") ||
+        !r.u8(t.value_max, "threshold") || !r.u8(pad, "threshold")) {
+      return r.error;
+    }
+    if (!(t.hue_min_deg >= 0.0F && t.hue_min_deg <= 360.0F && t.hue_max_deg >= 0.0F &&
+          t.hue_max_deg <= 360.0F)) {
+      return MapError{"threshold hue outside 0..360 degrees", r.pos()};
+    }
+  }
+  HarmonicModel& m = map.model;
+  if (!r.u32(m.sample_count, "sample count") || !r.u32(m.feature_count, "feature count")) return r.error;
+  if (m.sample_count == 0 || m.sample_count > HarmonicModel::kMaxSamples) {
+    return MapError{"sample count out of range (1..4096)", r.pos()};
+  }
+  if (m.feature_count == 0 || m.feature_count > HarmonicModel::kMaxFeatures) {
+    return MapError{"feature count out of range (1..8)", r.pos()};
+  }
+  for (std::size_t k = 0; k < m.feature_count; ++k) {
+    if (!r.u8(m.board_index[k], "feature boards")) return r.error;
+    if (m.board_index[k] >= boards) return MapError{"feature refers to a board that is not in the map", r.pos()};
+  }
+  if (!r.f32(m.area_scale, "area scale") || !r.f32(m.sigma_x, "sigma x") || !r.f32(m.sigma_y, "sigma y") ||
+      !r.f32(m.gamma_x, "gamma x") || !r.f32(m.gamma_y, "gamma y") ||
+      !r.f32(m.max_nearest_distance, "known-place bound")) {
+    return r.error;
+  }
+  if (!finite_positive(m.area_scale) || !finite_positive(m.sigma_x) || !finite_positive(m.sigma_y) ||
+      !finite_positive(m.max_nearest_distance) || !std::isfinite(m.gamma_x) || !std::isfinite(m.gamma_y)) {
+    return MapError{"model parameter not a finite positive number", r.pos()};
+  }
+  const std::size_t record = (m.feature_count + 2U) * 4U;
+  if (!r.need(static_cast<std::size_t>(m.sample_count) * record, "samples")) {
+    return MapError{"truncated: fewer samples than the header says", r.pos()};
+  }
+  for (std::size_t i = 0; i < m.sample_count; ++i) {
+    float* s = m.sample(i);
+    for (std::size_t k = 0; k < m.feature_count; ++k) r.f32(s[k], "samples");
+    r.f32(m.target_x_m[i], "samples");
+    r.f32(m.target_y_m[i], "samples");
+    for (std::size_t k = 0; k < m.feature_count; ++k) {
+      if (!std::isfinite(s[k]) || s[k] < 0.0F) return MapError{"sample feature not finite and >= 0", r.pos()};
+    }
+    if (!std::isfinite(m.target_x_m[i]) || !std::isfinite(m.target_y_m[i])) {
+      return MapError{"sample coordinate not finite", r.pos()};
+    }
+  }
+  if (r.pos() != body) return MapError{"trailing bytes after the samples", r.pos()};
+  return MapError{};
+}
+
+}  // namespace harmoloc::algorithms

@@ -1,0 +1,108 @@
+#include "harmoloc/algorithms/particle_filter.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace harmoloc::algorithms {
+
+void ParticleFilter::configure(std::size_t particle_count, std::uint64_t seed, const MotionNoise& noise) {
+  count_ = std::clamp<std::size_t>(particle_count, 1, kMaxParticles);
+  noise_ = noise;
+  rng_.reseed(seed);
+  initialized_ = false;
+}
+
+void ParticleFilter::initialize(const Pose2& centre, double position_sigma_m, double yaw_sigma_rad,
+                                bool uniform_yaw) {
+  const double w = 1.0 / static_cast<double>(count_);
+  for (std::size_t i = 0; i < count_; ++i) {
+    Particle& p = particles_[i];
+    p.x_m = rng_.normal(centre.x_m, position_sigma_m);
+    p.y_m = rng_.normal(centre.y_m, position_sigma_m);
+    p.yaw_rad = uniform_yaw ? rng_.uniform(-kPi, kPi) : wrap_angle_rad(rng_.normal(centre.yaw_rad, yaw_sigma_rad));
+    weights_[i] = w;
+  }
+  initialized_ = true;
+}
+
+void ParticleFilter::predict(const OdometryDelta& delta) {
+  const double d2 = delta.distance_m * delta.distance_m;
+  const double y2 = delta.yaw_rad * delta.yaw_rad;
+  const double sigma_yaw = std::max(noise_.min_yaw_sigma_rad, std::sqrt(noise_.alpha1 * y2 + noise_.alpha2 * d2));
+  const double sigma_dist =
+      std::max(noise_.min_distance_sigma_m, std::sqrt(noise_.alpha3 * d2 + noise_.alpha4 * y2));
+  for (std::size_t i = 0; i < count_; ++i) {
+    Particle& p = particles_[i];
+    const OdometryDelta noisy{delta.distance_m + sigma_dist * rng_.normal(),
+                              delta.yaw_rad + sigma_yaw * rng_.normal()};
+    const Pose2 moved = apply_arc(Pose2{p.x_m, p.y_m, p.yaw_rad}, noisy);
+    p = Particle{moved.x_m, moved.y_m, moved.yaw_rad};
+  }
+}
+
+void ParticleFilter::update_position(double x_m, double y_m, double sigma_m, double outlier_probability) {
+  const double inv_two_var = 0.5 / (sigma_m * sigma_m);
+  const double inlier = 1.0 - outlier_probability;
+  double sum = 0.0;
+  for (std::size_t i = 0; i < count_; ++i) {
+    const double dx = particles_[i].x_m - x_m;
+    const double dy = particles_[i].y_m - y_m;
+    weights_[i] *= inlier * std::exp(-(dx * dx + dy * dy) * inv_two_var) + outlier_probability;
+    sum += weights_[i];
+  }
+  if (!(sum > 0.0) || !std::isfinite(sum)) {
+    const double w = 1.0 / static_cast<double>(count_);
+    for (std::size_t i = 0; i < count_; ++i) weights_[i] = w;
+    return;
+  }
+  const double inv = 1.0 / sum;
+  for (std::size_t i = 0; i < count_; ++i) weights_[i] *= inv;
+}
+
+bool ParticleFilter::resample_if_needed(double threshold_fraction) {
+  double sum_sq = 0.0;
+  for (std::size_t i = 0; i < count_; ++i) sum_sq += weights_[i] * weights_[i];
+  const double n_eff = 1.0 / sum_sq;
+  if (n_eff >= threshold_fraction * static_cast<double>(count_)) return false;
+
+  const double step = 1.0 / static_cast<double>(count_);
+  const double start = rng_.uniform() * step;
+  double cumulative = weights_[0];
+  std::size_t i = 0;
+  for (std::size_t m = 0; m < count_; ++m) {
+    const double u = start + static_cast<double>(m) * step;
+    while (u > cumulative && i + 1 < count_) cumulative += weights_[++i];
+    scratch_[m] = particles_[i];
+  }
+  for (std::size_t m = 0; m < count_; ++m) {
+    particles_[m] = scratch_[m];
+    weights_[m] = step;
+  }
+  return true;
+}
+
+PoseEstimate ParticleFilter::estimate() const {
+  PoseEstimate e;
+  double sx = 0.0, sy = 0.0, ss = 0.0, sc = 0.0, sum_sq = 0.0;
+  for (std::size_t i = 0; i < count_; ++i) {
+    const double w = weights_[i];
+    sx += w * particles_[i].x_m;
+    sy += w * particles_[i].y_m;
+    ss += w * std::sin(particles_[i].yaw_rad);
+    sc += w * std::cos(particles_[i].yaw_rad);
+    sum_sq += w * w;
+  }
+  e.mean = Pose2{sx, sy, std::atan2(ss, sc)};
+  for (std::size_t i = 0; i < count_; ++i) {
+    const double w = weights_[i];
+    const double d[3] = {particles_[i].x_m - sx, particles_[i].y_m - sy,
+                         wrap_angle_rad(particles_[i].yaw_rad - e.mean.yaw_rad)};
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) e.covariance(r, c) += w * d[r] * d[c];
+    }
+  }
+  e.effective_particles = sum_sq > 0.0 ? 1.0 / sum_sq : 0.0;
+  return e;
+}
+
+}  // namespace harmoloc::algorithms

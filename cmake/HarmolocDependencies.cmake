@@ -1,0 +1,37 @@
+# All dependencies come from Debian packages; `./run` installs them.
+find_package(Eigen3 3.3 REQUIRED NO_MODULE)
+find_package(Threads REQUIRED)
+
+# OpenCV core and imgproc only. Debian's libopencv-dev (the only package with OpenCVConfig.cmake)
+# drags in every module and its arm64 flavour conflicts with amd64, so find the two libraries
+# directly (see ../shared/notes/cross-build.md).
+find_path(HARMOLOC_OPENCV_INCLUDE_DIR opencv2/core.hpp PATH_SUFFIXES opencv4)
+find_library(HARMOLOC_OPENCV_CORE_LIB opencv_core)
+find_library(HARMOLOC_OPENCV_IMGPROC_LIB opencv_imgproc)
+if(HARMOLOC_OPENCV_INCLUDE_DIR AND HARMOLOC_OPENCV_CORE_LIB AND HARMOLOC_OPENCV_IMGPROC_LIB)
+  add_library(harmoloc::opencv_core UNKNOWN IMPORTED)
+  set_target_properties(harmoloc::opencv_core PROPERTIES
+    IMPORTED_LOCATION ${HARMOLOC_OPENCV_CORE_LIB}
+    INTERFACE_INCLUDE_DIRECTORIES ${HARMOLOC_OPENCV_INCLUDE_DIR})
+  add_library(harmoloc::opencv_imgproc UNKNOWN IMPORTED)
+  set_target_properties(harmoloc::opencv_imgproc PROPERTIES
+    IMPORTED_LOCATION ${HARMOLOC_OPENCV_IMGPROC_LIB}
+    INTERFACE_INCLUDE_DIRECTORIES ${HARMOLOC_OPENCV_INCLUDE_DIR}
+    INTERFACE_LINK_LIBRARIES harmoloc::opencv_core)
+  set(HARMOLOC_HAVE_OPENCV ON)
+else()
+  message(STATUS "OpenCV core/imgproc not found: the OpenCV reference checks are skipped")
+  set(HARMOLOC_HAVE_OPENCV OFF)
+endif()
+
+find_package(tomlplusplus REQUIRED)
+
+if(HARMOLOC_BOARD STREQUAL "host")
+  find_package(CLI11 REQUIRED)
+  find_package(nlohmann_json 3 REQUIRED)
+endif()
+
+if(HARMOLOC_BUILD_TESTS)
+  find_package(GTest REQUIRED)
+  include(GoogleTest)
+endif()

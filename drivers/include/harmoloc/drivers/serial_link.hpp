@@ -1,0 +1,43 @@
+#pragma once
+/// @file hal::PoseLink over a file descriptor: a serial line or pty (raw mode, configured baud,
+/// non-blocking) or a plain file. A frame the line cannot take whole is kept and finished first
+/// on the next write; frames that arrive meanwhile are dropped and counted. The wire never sees
+/// half a frame and the cycle never waits.
+
+#include <array>
+#include <cstdint>
+#include <string>
+
+#include "harmoloc/hal/pose_link.hpp"
+
+namespace harmoloc::drivers {
+
+class SerialLink final : public hal::PoseLink {
+ public:
+  static constexpr std::size_t kMaxFrameBytes = 512;
+
+  SerialLink() = default;
+  ~SerialLink();
+  SerialLink(const SerialLink&) = delete;
+  SerialLink& operator=(const SerialLink&) = delete;
+
+  /// Opens @p path: a character device is put in raw mode at @p baud; anything else is created
+  /// or truncated as a regular file. Returns an empty string on success, else the reason.
+  std::string open(const std::string& path, unsigned baud);
+  bool is_tty() const { return is_tty_; }
+
+  hal::LinkWrite write_frame(const std::uint8_t* bytes, std::size_t size) override;
+  hal::LinkCounters counters() const override { return counters_; }
+
+ private:
+  bool flush_pending();
+
+  int fd_ = -1;
+  bool is_tty_ = false;
+  std::array<std::uint8_t, kMaxFrameBytes> pending_{};
+  std::size_t pending_size_ = 0;
+  std::size_t pending_sent_ = 0;
+  hal::LinkCounters counters_{};
+};
+
+}  // namespace harmoloc::drivers

@@ -1,0 +1,32 @@
+#pragma once
+/// @file hal::WheelEncoders backed by a `candump -l` log: frames are parsed at start-up and
+/// handed out by their timestamps as the data clock advances.
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "harmoloc/algorithms/can_encoder_layout.hpp"
+#include "harmoloc/hal/wheel_encoders.hpp"
+
+namespace harmoloc::sim_host {
+
+class LogEncoders final : public hal::WheelEncoders {
+ public:
+  /// Throws std::runtime_error("FILE:LINE: reason") on a malformed line.
+  LogEncoders(const std::string& log_path, const algorithms::EncoderFrameLayout& layout);
+  /// For tests: frames already in memory.
+  LogEncoders(std::vector<algorithms::CanFrame> frames, const algorithms::EncoderFrameLayout& layout);
+
+  hal::EncoderStatus read(std::uint64_t data_time_ns, hal::EncoderCounts& counts) override;
+  hal::EncoderCounters counters() const override { return counters_; }
+  std::size_t frame_count() const { return frames_.size(); }
+
+ private:
+  std::vector<algorithms::CanFrame> frames_;
+  algorithms::EncoderFrameLayout layout_;
+  std::size_t next_ = 0;
+  hal::EncoderCounters counters_{};
+};
+
+}  // namespace harmoloc::sim_host

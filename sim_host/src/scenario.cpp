@@ -1,0 +1,239 @@
+#include "harmoloc/sim_host/scenario.hpp"
+
+#include <cmath>
+#include <filesystem>
+#include <sstream>
+#include <stdexcept>
+
+#include <toml++/toml.h>
+
+namespace harmoloc::sim_host {
+
+namespace {
+
+constexpr double kDeg = algorithms::kPi / 180.0;
+
+// Seed 000's setting: six single-colour boards of different sizes on a desk, the robot on a
+// 420 x 240 cm floor in front of it, 10 cm/s, 30 Hz, a camera with strong radial distortion.
+Scenario desk_shuttle() {
+  Scenario s;
+  s.name = "desk-shuttle";
+  s.description = "seed 000's desk: 6 boards, 320x240 distorted camera, S-shaped route driven forth and back";
+  const double face = -90.0 * kDeg;  // boards look at the robot (towards -y)
+  s.boards = {
+      {"red", {220, 30, 30}, 1.55, 2.55, 0.95, 0.30, 0.40, face + 15.0 * kDeg},
+      {"green", {30, 180, 40}, 1.85, 2.85, 1.05, 0.45, 0.30, face},
+      {"blue", {30, 60, 220}, 2.10, 2.50, 0.87, 0.18, 0.24, face - 10.0 * kDeg},
+      {"yellow", {230, 210, 30}, 2.38, 2.75, 1.05, 0.35, 0.55, face},
+      {"magenta", {200, 40, 190}, 2.62, 2.55, 0.84, 0.24, 0.18, face + 10.0 * kDeg},
+      {"cyan", {30, 190, 200}, 2.88, 2.85, 1.00, 0.50, 0.35, face - 15.0 * kDeg},
+  };
+  s.route.waypoints_m = {{2.10, 0.35}, {2.03, 0.70}, {2.17, 1.05}, {2.05, 1.40}, {2.10, 1.60}};
+  return s;
+}
+
+Scenario tiny() {
+  Scenario s = desk_shuttle();
+  s.name = "tiny";
+  s.description = "small and quick (160x120, short route): for tests";
+  s.camera.width_px = 160;
+  s.camera.height_px = 120;
+  s.route.waypoints_m = {{2.10, 0.70}, {2.04, 1.00}, {2.14, 1.30}};
+  s.route.pause_s = 0.3;
+  s.labelled_frames = 24;
+  return s;
+}
+
+Scenario wrap_test() {
+  Scenario s = tiny();
+  s.name = "tiny-wrap16";
+  s.description = "tiny, with 16-bit encoder counters that start just below the wrap";
+  s.can_layout.counter_bits = 16;
+  s.can_layout.length = 4;
+  s.can_layout.left_offset = 0;
+  s.can_layout.right_offset = 2;
+  s.encoders.initial_left = 65000;
+  s.encoders.initial_right = 65500;
+  return s;
+}
+
+[[noreturn]] void fail(const std::string& file, const std::string& what) {
+  throw std::runtime_error(file + ": " + what);
+}
+
+double num(const toml::node& n, const std::string& file, const std::string& key) {
+  if (auto i = n.value_exact<std::int64_t>()) return static_cast<double>(*i);
+  if (auto d = n.value_exact<double>()) return *d;
+  fail(file, key + " must be a number");
+}
+
+void set_num(const toml::table& t, const char* key, double& out, const std::string& file, const std::string& section,
+             double lo, double hi) {
+  if (const toml::node* n = t.get(key)) {
+    const double v = num(*n, file, section + key);
+    if (!(v >= lo && v <= hi)) {
+      std::ostringstream s;
+      s << section << key << " = " << v << " is outside " << lo << ".." << hi;
+      fail(file, s.str());
+    }
+    out = v;
+  }
+}
+
+template <typename T>
+void set_int(const toml::table& t, const char* key, T& out, const std::string& file, const std::string& section,
+             double lo, double hi) {
+  double v = static_cast<double>(out);
+  set_num(t, key, v, file, section, lo, hi);
+  out = static_cast<T>(v);
+}
+
+std::vector<double> numbers(const toml::node* n, std::size_t count, const std::string& file, const std::string& key) {
+  const toml::array* a = n != nullptr ? n->as_array() : nullptr;
+  if (a == nullptr || a->size() != count) fail(file, key + " must be an array of " + std::to_string(count) + " numbers");
+  std::vector<double> out;
+  for (const toml::node& e : *a) out.push_back(num(e, file, key));
+  return out;
+}
+
+Scenario from_file(const std::string& file) {
+  toml::table t;
+  try {
+    t = toml::parse_file(file);
+  } catch (const toml::parse_error& e) {
+    std::ostringstream s;
+    s << "line " << e.source().begin.line << ": " << e.description();
+    fail(file, s.str());
+  }
+  const std::string base = t["base"].value_or(std::string("desk-shuttle"));
+  Scenario s = load_scenario(base);
+  s.name = t["name"].value_or(std::filesystem::path(file).stem().string());
+  s.description = t["description"].value_or(std::string("from ") + file);
+  set_int(t, "labelled_frames", s.labelled_frames, file, "", 2, 4096);
+  set_num(t, "start_time_s", s.start_time_s, file, "", 0, 4e9);
+  if (const toml::table* c = t["camera"].as_table()) {
+    set_int(*c, "width_px", s.camera.width_px, file, "camera.", 16, 4096);
+    set_int(*c, "height_px", s.camera.height_px, file, "camera.", 16, 4096);
+    set_num(*c, "horizontal_fov_deg", s.camera.horizontal_fov_deg, file, "camera.", 10, 150);
+    set_num(*c, "radial_k", s.camera.radial_k, file, "camera.", -1, 1);
+    set_num(*c, "height_m", s.camera.height_m, file, "camera.", 0.01, 5);
+    set_num(*c, "pitch_deg", s.camera.pitch_deg, file, "camera.", -60, 60);
+    set_num(*c, "mount_yaw_deg", s.camera.mount_yaw_deg, file, "camera.", -180, 180);
+    set_num(*c, "rate_hz", s.camera.rate_hz, file, "camera.", 1, 240);
+    set_num(*c, "pixel_noise", s.camera.pixel_noise, file, "camera.", 0, 50);
+    set_num(*c, "light_gain", s.camera.light_gain, file, "camera.", 0.1, 3);
+  }
+  if (const toml::table* r = t["route"].as_table()) {
+    if (const toml::array* w = (*r)["waypoints"].as_array()) {
+      s.route.waypoints_m.clear();
+      for (const toml::node& p : *w) {
+        const auto xy = numbers(&p, 2, file, "route.waypoints[]");
+        s.route.waypoints_m.push_back({xy[0], xy[1]});
+      }
+      if (s.route.waypoints_m.size() < 2) fail(file, "route.waypoints needs at least 2 points");
+    }
+    set_num(*r, "speed_mps", s.route.speed_mps, file, "route.", 0.01, 2);
+    set_num(*r, "acceleration_mps2", s.route.acceleration_mps2, file, "route.", 0.01, 10);
+    set_num(*r, "pause_s", s.route.pause_s, file, "route.", 0, 60);
+    set_int(*r, "laps", s.route.laps, file, "route.", 1, 1000);
+    set_num(*r, "wander_m", s.route.wander_m, file, "route.", 0, 0.5);
+  }
+  if (const toml::table* e = t["encoders"].as_table()) {
+    set_num(*e, "rate_hz", s.encoders.rate_hz, file, "encoders.", 1, 2000);
+    set_num(*e, "slip_sigma", s.encoders.slip_sigma, file, "encoders.", 0, 0.5);
+    set_num(*e, "left_scale_error", s.encoders.left_scale_error, file, "encoders.", -0.5, 0.5);
+    set_num(*e, "right_scale_error", s.encoders.right_scale_error, file, "encoders.", -0.5, 0.5);
+    set_int(*e, "initial_left", s.encoders.initial_left, file, "encoders.", 0, 4294967295.0);
+    set_int(*e, "initial_right", s.encoders.initial_right, file, "encoders.", 0, 4294967295.0);
+    set_int(*e, "counter_bits", s.can_layout.counter_bits, file, "encoders.", 8, 32);
+  }
+  if (const toml::table* b = t["robot"].as_table()) {
+    set_num(*b, "wheel_radius_m", s.robot.wheel_radius_m, file, "robot.", 0.005, 1);
+    set_num(*b, "track_m", s.robot.track_m, file, "robot.", 0.05, 3);
+    set_num(*b, "ticks_per_rev", s.robot.ticks_per_rev, file, "robot.", 1, 1e7);
+  }
+  if (const toml::array* boards = t["boards"].as_array()) {
+    s.boards.clear();
+    for (const toml::node& n : *boards) {
+      const toml::table* b = n.as_table();
+      if (b == nullptr) fail(file, "[[boards]] entries must be tables");
+      BoardSpec spec;
+      spec.name = (*b)["name"].value_or(std::string("board") + std::to_string(s.boards.size() + 1));
+      const auto c = numbers(b->get("colour"), 3, file, "boards.colour");
+      for (double v : c) {
+        if (v < 0 || v > 255) fail(file, "boards.colour values must be 0..255");
+      }
+      spec.colour = Rgb{static_cast<std::uint8_t>(c[0]), static_cast<std::uint8_t>(c[1]), static_cast<std::uint8_t>(c[2])};
+      const auto centre = numbers(b->get("centre"), 3, file, "boards.centre");
+      const auto size = numbers(b->get("size"), 2, file, "boards.size");
+      if (size[0] <= 0 || size[1] <= 0) fail(file, "boards.size must be positive");
+      spec.centre_x_m = centre[0];
+      spec.centre_y_m = centre[1];
+      spec.centre_z_m = centre[2];
+      spec.width_m = size[0];
+      spec.height_m = size[1];
+      double facing = -90.0;
+      set_num(*b, "facing_deg", facing, file, "boards.", -360, 360);
+      spec.facing_yaw_rad = facing * kDeg;
+      s.boards.push_back(spec);
+    }
+    if (s.boards.empty() || s.boards.size() > 8) fail(file, "1 to 8 boards");
+  }
+  const std::uint8_t bytes = static_cast<std::uint8_t>((s.can_layout.counter_bits + 7) / 8);
+  s.can_layout.left_offset = 0;
+  s.can_layout.right_offset = bytes;
+  s.can_layout.length = static_cast<std::uint8_t>(2 * bytes);
+  if (s.camera.width_px % 2 != 0) fail(file, "camera.width_px must be even");
+  return s;
+}
+
+}  // namespace
+
+std::vector<std::pair<std::string, std::string>> builtin_scenarios() {
+  std::vector<std::pair<std::string, std::string>> out;
+  for (const Scenario& s : {desk_shuttle(), tiny(), wrap_test()}) out.emplace_back(s.name, s.description);
+  return out;
+}
+
+Scenario load_scenario(const std::string& name_or_file) {
+  if (name_or_file == "desk-shuttle") return desk_shuttle();
+  if (name_or_file == "tiny") return tiny();
+  if (name_or_file == "tiny-wrap16") return wrap_test();
+  if (std::filesystem::is_regular_file(name_or_file)) return from_file(name_or_file);
+  std::string names;
+  for (const auto& [name, text] : builtin_scenarios()) names += (names.empty() ? "" : ", ") + name;
+  throw std::runtime_error("unknown scenario '" + name_or_file + "' (built-in: " + names + "; or a .toml file)");
+}
+
+std::string scenario_to_toml(const Scenario& s) {
+  std::ostringstream o;
+  o.precision(10);
+  o << "# Scenario as simulated (format: docs/scenarios.md)\n"
+    << "name = \"" << s.name << "\"\n"
+    << "description = \"" << s.description << "\"\n"
+    << "labelled_frames = " << s.labelled_frames << "\n"
+    << "start_time_s = " << s.start_time_s << "\n\n[camera]\n"
+    << "width_px = " << s.camera.width_px << "\nheight_px = " << s.camera.height_px
+    << "\nhorizontal_fov_deg = " << s.camera.horizontal_fov_deg << "\nradial_k = " << s.camera.radial_k
+    << "\nheight_m = " << s.camera.height_m << "\npitch_deg = " << s.camera.pitch_deg
+    << "\nmount_yaw_deg = " << s.camera.mount_yaw_deg << "\nrate_hz = " << s.camera.rate_hz
+    << "\npixel_noise = " << s.camera.pixel_noise << "\nlight_gain = " << s.camera.light_gain << "\n\n[route]\nwaypoints = [";
+  for (std::size_t i = 0; i < s.route.waypoints_m.size(); ++i) {
+    o << (i ? ", " : "") << "[" << s.route.waypoints_m[i][0] << ", " << s.route.waypoints_m[i][1] << "]";
+  }
+  o << "]\nspeed_mps = " << s.route.speed_mps << "\nacceleration_mps2 = " << s.route.acceleration_mps2
+    << "\npause_s = " << s.route.pause_s << "\nlaps = " << s.route.laps << "\nwander_m = " << s.route.wander_m
+    << "\n\n[encoders]\nrate_hz = " << s.encoders.rate_hz << "\nslip_sigma = " << s.encoders.slip_sigma
+    << "\nleft_scale_error = " << s.encoders.left_scale_error << "\nright_scale_error = " << s.encoders.right_scale_error
+    << "\ninitial_left = " << s.encoders.initial_left << "\ninitial_right = " << s.encoders.initial_right
+    << "\ncounter_bits = " << int{s.can_layout.counter_bits} << "\n\n[robot]\nwheel_radius_m = " << s.robot.wheel_radius_m
+    << "\ntrack_m = " << s.robot.track_m << "\nticks_per_rev = " << s.robot.ticks_per_rev << "\n";
+  for (const BoardSpec& b : s.boards) {
+    o << "\n[[boards]]\nname = \"" << b.name << "\"\ncolour = [" << int{b.colour.r} << ", " << int{b.colour.g} << ", "
+      << int{b.colour.b} << "]\ncentre = [" << b.centre_x_m << ", " << b.centre_y_m << ", " << b.centre_z_m
+      << "]\nsize = [" << b.width_m << ", " << b.height_m << "]\nfacing_deg = " << b.facing_yaw_rad / kDeg << "\n";
+  }
+  return o.str();
+}
+
+}  // namespace harmoloc::sim_host
