@@ -40,6 +40,15 @@ void ParticleFilter::predict(const OdometryDelta& delta) {
   }
 }
 
+void ParticleFilter::diffuse(double position_sigma_m, double yaw_sigma_rad) {
+  for (std::size_t i = 0; i < count_; ++i) {
+    Particle& p = particles_[i];
+    p.x_m += position_sigma_m * rng_.normal();
+    p.y_m += position_sigma_m * rng_.normal();
+    p.yaw_rad = wrap_angle_rad(p.yaw_rad + yaw_sigma_rad * rng_.normal());
+  }
+}
+
 void ParticleFilter::update_position(double x_m, double y_m, double sigma_m, double outlier_probability) {
   const double inv_two_var = 0.5 / (sigma_m * sigma_m);
   const double inlier = 1.0 - outlier_probability;

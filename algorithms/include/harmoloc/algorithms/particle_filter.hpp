@@ -46,6 +46,9 @@ class ParticleFilter {
   /// Applies one odometry step to every particle with sampled noise.
   void predict(const OdometryDelta& delta);
 
+  /// Random walk of every particle (motion unknown, e.g. while odometry is missing).
+  void diffuse(double position_sigma_m, double yaw_sigma_rad);
+
   /// Weights particles by a Gaussian position fix; the small @p outlier_probability mixes in a
   /// uniform floor so that one wrong fix cannot wipe out every particle.
   void update_position(double x_m, double y_m, double sigma_m, double outlier_probability);

@@ -1,0 +1,172 @@
+// harmoloc for the host board: the firmware's cycle with file-backed fakes of the camera and the
+// encoder bus (a dataset folder), the pose link into a file or a serial device (a pty works).
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+#include "harmoloc/drivers/monotonic_clock.hpp"
+#include "harmoloc/drivers/serial_link.hpp"
+#include "harmoloc/firmware/config.hpp"
+#include "harmoloc/firmware/localization_cycle.hpp"
+#include "harmoloc/firmware/map_loader.hpp"
+#include "harmoloc/firmware/stats_report.hpp"
+#include "harmoloc/sim_host/file_camera.hpp"
+#include "harmoloc/sim_host/log_encoders.hpp"
+#include "harmoloc/sim_host/metadata.hpp"
+#include "harmoloc/sim_host/tum.hpp"
+
+namespace {
+
+using namespace harmoloc;
+
+// The map is large (fixed capacity); it lives in static storage like on the robot.
+algorithms::MapFile g_map;
+
+int fail(const std::string& why) {
+  std::fprintf(stderr, "harmoloc: %s\n", why.c_str());
+  return 2;
+}
+
+// A TUM output with its buffer reserved up front; each line is formatted without allocating.
+class TumSink {
+ public:
+  bool open(const std::string& path) {
+    file_ = std::fopen(path.c_str(), "w");
+    if (file_ != nullptr) std::setvbuf(file_, buffer_, _IOFBF, sizeof buffer_);
+    return file_ != nullptr;
+  }
+  void write(std::uint64_t t_ns, const algorithms::Pose2& pose) {
+    if (file_ == nullptr) return;
+    char line[160];
+    const double t_s = static_cast<double>(t_ns / 1000U) * 1e-6;
+    const int n = sim_host::format_tum_line(line, sizeof line, t_s, pose);
+    if (n > 0) std::fwrite(line, 1, static_cast<std::size_t>(n), file_);
+  }
+  bool close() {
+    if (file_ == nullptr) return true;
+    const bool ok = std::fclose(file_) == 0;
+    file_ = nullptr;
+    return ok;
+  }
+
+ private:
+  std::FILE* file_ = nullptr;
+  char buffer_[1 << 16];
+};
+
+TumSink g_trajectory, g_fixes;
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "harmoloc (host board): runs the firmware's fixed-rate localization cycle on a dataset folder.\n"
+      "Frames and encoder frames are replayed from the dataset by their timestamps; the pose goes out as\n"
+      "MAVLink v2 on --link, as TUM on --trajectory, and timing statistics go to --stats (JSON).\n"
+      "Exit status 0 on a completed run, 2 with a one-line reason on bad input.",
+      "harmoloc"};
+  std::string dataset, map_path, config_path, trajectory_path, link_path, stats_path, fixes_path;
+  bool realtime = false, quiet = false;
+  app.add_option("--dataset", dataset, "dataset folder (metadata.toml, frames.csv, encoders.log)")->required();
+  app.add_option("--map", map_path, "map file from harmoloc-train")->required();
+  app.add_option("--config", config_path, "firmware config (TOML, docs/config-format.md); default: built-in");
+  app.add_option("--trajectory", trajectory_path, "write the fused pose of every cycle here (TUM)");
+  app.add_option("--link", link_path, "MAVLink v2 output: a file, or a serial device or pty (raw, --config link.baud)");
+  app.add_option("--stats", stats_path, "write run statistics here (JSON: per-stage timing, overruns, counters)");
+  app.add_option("--fixes", fixes_path, "write the harmonic localizer's own fixes here (TUM), for comparison");
+  app.add_flag("--realtime", realtime, "pace the cycle at the recording's rate instead of as fast as possible");
+  app.add_flag("--quiet", quiet, "no progress output");
+  CLI11_PARSE(app, argc, argv);
+
+  // ---- start-up: everything is read, checked and reserved here ----
+  firmware::FirmwareConfig config;
+  sim_host::DatasetMetadata meta;
+  std::unique_ptr<sim_host::FileCamera> camera;
+  std::unique_ptr<sim_host::LogEncoders> encoders;
+  drivers::SerialLink link;
+  try {
+    config = config_path.empty() ? firmware::default_config() : firmware::load_config(config_path);
+    meta = sim_host::read_metadata(dataset);
+    // The dataset describes the recorded robot; a config without these sections follows it.
+    if (!config.has_odometry_section) config.geometry = meta.geometry;
+    if (!config.has_can_section) config.can_layout = meta.encoder_layout;
+    if (const std::string e = firmware::load_map(map_path, g_map); !e.empty()) return fail(e);
+    if (const std::string e = firmware::check_map_matches(g_map, config, meta.image_width_px, meta.image_height_px);
+        !e.empty()) {
+      return fail(e);
+    }
+    camera = std::make_unique<sim_host::FileCamera>(dataset, meta);
+    encoders = std::make_unique<sim_host::LogEncoders>((std::filesystem::path(dataset) / meta.encoder_log).string(),
+                                                       config.can_layout);
+    if (const std::string e = link.open(link_path.empty() ? "/dev/null" : link_path, config.link.baud); !e.empty()) {
+      return fail("link " + e);
+    }
+    if (!trajectory_path.empty() && !g_trajectory.open(trajectory_path)) return fail(trajectory_path + ": cannot write");
+    if (!fixes_path.empty() && !g_fixes.open(fixes_path)) return fail(fixes_path + ": cannot write");
+  } catch (const std::exception& e) {
+    return fail(e.what());
+  }
+  if (!stats_path.empty()) {
+    std::ofstream probe(stats_path);
+    if (!probe) return fail(stats_path + ": cannot write");
+  }
+
+  drivers::MonotonicClock clock;
+  auto cycle = std::make_unique<firmware::LocalizationCycle>(config, g_map, *camera, *encoders, link, clock);
+  if (!quiet) {
+    std::fprintf(stderr, "harmoloc: %zu frames %ux%u, %zu encoder frames, map of %u samples on %u boards, %zu particles%s\n",
+                 camera->frame_count(), meta.image_width_px, meta.image_height_px, encoders->frame_count(),
+                 g_map.model.sample_count, g_map.model.feature_count, config.filter.particles,
+                 realtime ? ", real-time pacing" : "");
+  }
+
+  // ---- the cycle ----
+  const std::uint64_t wall_start = clock.now_ns();
+  const std::uint64_t data_start = camera->first_timestamp_ns();
+  std::size_t done = 0;
+  for (;;) {
+    if (realtime && camera->next_timestamp_ns() >= data_start) {
+      clock.sleep_until(wall_start + (camera->next_timestamp_ns() - data_start));
+    }
+    if (cycle->run_once() == firmware::CycleResult::kEnded) break;
+    const firmware::PoseOutput& out = cycle->pose();
+    if (out.valid) g_trajectory.write(out.data_time_ns, out.pose);
+    const firmware::FixOutput& fix = cycle->last_fix();
+    if (fix.present && fix.fix.known_place) {
+      g_fixes.write(out.data_time_ns, algorithms::Pose2{fix.fix.x_m, fix.fix.y_m, 0.0});
+    }
+    if (!quiet && ++done % 300 == 0) {
+      std::fprintf(stderr, "\r  cycle %zu/%zu", done, camera->frame_count());
+    }
+  }
+  if (!quiet) std::fprintf(stderr, "\r  cycle %zu/%zu\n", done, camera->frame_count());
+  if (!g_trajectory.close() || !g_fixes.close()) return fail("writing the trajectory failed");
+
+  firmware::RunCounters run;
+  run.board = "host";
+  run.rate_hz = config.cycle.rate_hz;
+  run.camera = camera->counters();
+  run.encoders = encoders->counters();
+  run.link = link.counters();
+  if (!stats_path.empty()) {
+    std::ofstream out(stats_path);
+    out << firmware::stats_json(*cycle, run);
+    if (!out) return fail(stats_path + ": write failed");
+  }
+  const auto& c = cycle->counters();
+  const auto& h = cycle->stage_histogram(firmware::Stage::kCycle);
+  std::printf("harmoloc: %llu cycles, %llu fixes (%llu off the map), health nominal %llu / odometry-only %llu / "
+              "vision-only %llu / invalid %llu; cycle median %.0f us, p99 %.0f us, max %.0f us, %llu overruns\n",
+              static_cast<unsigned long long>(c.cycles), static_cast<unsigned long long>(c.fixes_used),
+              static_cast<unsigned long long>(c.unknown_place), static_cast<unsigned long long>(c.cycles_in_health[1]),
+              static_cast<unsigned long long>(c.cycles_in_health[2]), static_cast<unsigned long long>(c.cycles_in_health[3]),
+              static_cast<unsigned long long>(c.cycles_in_health[4]), static_cast<double>(h.quantile_ns(0.5)) / 1000.0,
+              static_cast<double>(h.quantile_ns(0.99)) / 1000.0, static_cast<double>(h.max_ns()) / 1000.0,
+              static_cast<unsigned long long>(c.overruns));
+  return 0;
+}

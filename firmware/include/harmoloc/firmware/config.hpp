@@ -1,0 +1,69 @@
+#pragma once
+/// @file The firmware's configuration (TOML): cycle rate and budget, colour thresholds, robot
+/// geometry, CAN frame layout, filter and link settings. Every field has a default; the
+/// documented example is docs/examples/harmoloc.toml and the schema docs/config-format.md.
+
+#include <array>
+#include <cstdint>
+#include <string>
+
+#include "harmoloc/algorithms/can_encoder_layout.hpp"
+#include "harmoloc/algorithms/odometry.hpp"
+#include "harmoloc/algorithms/particle_filter.hpp"
+#include "harmoloc/algorithms/segmentation.hpp"
+
+namespace harmoloc::firmware {
+
+struct CycleConfig {
+  double rate_hz = 30.0;
+  double budget_ms = 15.0;  ///< compute budget per cycle; a cycle over it is an overrun
+  double camera_timeout_ms = 250.0;   ///< no usable frame for this long: odometry only
+  double encoder_timeout_ms = 250.0;  ///< no encoder data for this long: vision only
+};
+
+struct FilterConfig {
+  std::size_t particles = 1024;
+  std::uint64_t seed = 1;
+  algorithms::MotionNoise noise;
+  double fix_sigma_m = 0.04;          ///< standard deviation of a harmonic fix
+  double outlier_probability = 0.05;  ///< chance that a fix is wrong altogether
+  double resample_threshold = 0.5;    ///< resample when N_eff < this fraction of particles
+  double init_position_sigma_m = 0.05;
+  double vision_only_speed_mps = 0.3;  ///< how fast the robot may move when odometry is missing
+};
+
+struct LinkConfig {
+  std::uint8_t system_id = 1;
+  std::uint8_t component_id = 197;  ///< MAV_COMP_ID_VISUAL_INERTIAL_ODOMETRY
+  unsigned baud = 115200;
+  double heartbeat_hz = 1.0;
+};
+
+struct BoardNames {
+  std::array<std::string, algorithms::kMaxBoards> names;
+};
+
+struct FirmwareConfig {
+  CycleConfig cycle;
+  algorithms::ThresholdSet thresholds;
+  BoardNames board_names;
+  algorithms::DiffDriveGeometry geometry;
+  algorithms::EncoderFrameLayout can_layout;
+  std::string can_interface = "can0";
+  FilterConfig filter;
+  LinkConfig link;
+  /// Whether the file set these sections itself (else the host board may take them from the
+  /// dataset's metadata, which describes the recorded robot).
+  bool has_odometry_section = false;
+  bool has_can_section = false;
+  std::string source = "built-in defaults";
+};
+
+/// Defaults: the simulator's robot and its six boards (red, green, blue, yellow, magenta, cyan).
+FirmwareConfig default_config();
+
+/// Reads and validates a config file on top of the defaults. Throws std::runtime_error with one
+/// line "FILE: [line N:] what is wrong" for anything unreadable, unknown or out of range.
+FirmwareConfig load_config(const std::string& path);
+
+}  // namespace harmoloc::firmware

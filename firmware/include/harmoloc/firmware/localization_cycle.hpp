@@ -1,0 +1,119 @@
+#pragma once
+/// @file The fixed-rate cycle: acquire -> segment -> localize -> read encoders -> predict ->
+/// update -> publish -> account time. One instance holds every buffer the cycle touches; it is
+/// built at start-up and then never allocates.
+
+#include <array>
+#include <cstdint>
+
+#include "harmoloc/algorithms/harmonic_localizer.hpp"
+#include "harmoloc/algorithms/map_codec.hpp"
+#include "harmoloc/algorithms/particle_filter.hpp"
+#include "harmoloc/firmware/config.hpp"
+#include "harmoloc/firmware/latency_histogram.hpp"
+#include "harmoloc/firmware/mavlink_v2.hpp"
+#include "harmoloc/hal/camera.hpp"
+#include "harmoloc/hal/clock.hpp"
+#include "harmoloc/hal/pose_link.hpp"
+#include "harmoloc/hal/wheel_encoders.hpp"
+
+namespace harmoloc::firmware {
+
+enum class Stage : std::uint8_t { kAcquire, kSegment, kLocalize, kEncoders, kPredict, kUpdate, kPublish, kCycle };
+constexpr std::size_t kStageCount = 8;
+const char* stage_name(Stage stage);
+
+/// What the pose can be trusted for.
+enum class Health : std::uint8_t {
+  kNotInitialized = 0,  ///< no fix yet since start-up
+  kNominal = 1,         ///< camera and encoders both contribute
+  kOdometryOnly = 2,    ///< no usable frame lately: dead reckoning, covariance grows
+  kVisionOnly = 3,      ///< no encoder data lately: fixes only, motion unknown
+  kInvalid = 4,         ///< neither input lately: pose flagged invalid
+};
+const char* health_name(Health health);
+
+struct PoseOutput {
+  std::uint64_t data_time_ns = 0;
+  algorithms::Pose2 pose;
+  algorithms::PoseCovariance covariance;
+  double speed_mps = 0.0;
+  double yaw_rate_rps = 0.0;
+  Health health = Health::kNotInitialized;
+  bool valid = false;  ///< a pose exists (filter initialised)
+};
+
+struct FixOutput {
+  algorithms::HarmonicFix fix;
+  bool present = false;  ///< a frame was localised this cycle
+};
+
+struct CycleCounters {
+  std::uint64_t cycles = 0;
+  std::uint64_t frames = 0;
+  std::uint64_t no_frame = 0;
+  std::uint64_t corrupt_frames = 0;
+  std::uint64_t frame_size_mismatch = 0;
+  std::uint64_t fixes_used = 0;
+  std::uint64_t unknown_place = 0;
+  std::uint64_t encoder_samples = 0;
+  std::uint64_t overruns = 0;
+  std::uint64_t resamples = 0;
+  std::uint64_t link_dropped = 0;
+  std::array<std::uint64_t, 5> cycles_in_health{};
+};
+
+enum class CycleResult : std::uint8_t { kRan, kEnded };
+
+class LocalizationCycle {
+ public:
+  /// @p map must outlive the cycle (the firmware keeps it in static storage).
+  LocalizationCycle(const FirmwareConfig& config, const algorithms::MapFile& map, hal::Camera& camera,
+                    hal::WheelEncoders& encoders, hal::PoseLink& link, const hal::Clock& clock);
+
+  /// Runs one cycle. The data clock follows the frames; a cycle without a frame advances it
+  /// by one period.
+  CycleResult run_once();
+
+  const PoseOutput& pose() const { return pose_; }
+  const FixOutput& last_fix() const { return fix_; }
+  const CycleCounters& counters() const { return counters_; }
+  const LatencyHistogram& stage_histogram(Stage stage) const { return histograms_[static_cast<std::size_t>(stage)]; }
+  std::uint64_t budget_ns() const { return budget_ns_; }
+
+ private:
+  void publish();
+  void send(std::size_t size);
+  Health assess_health() const;
+
+  const FirmwareConfig& config_;
+  const algorithms::MapFile& map_;
+  hal::Camera& camera_;
+  hal::WheelEncoders& encoders_;
+  hal::PoseLink& link_;
+  const hal::Clock& clock_;
+
+  algorithms::ParticleFilter filter_;
+  mavlink::Encoder mavlink_;
+  mavlink::FrameBuffer frame_buffer_{};
+  std::array<LatencyHistogram, kStageCount> histograms_{};
+
+  std::uint64_t period_ns_;
+  std::uint64_t budget_ns_;
+  std::uint64_t data_time_ns_ = 0;
+  bool have_data_time_ = false;
+  std::uint64_t last_fix_ns_ = 0;
+  bool ever_fix_ = false;
+  std::uint64_t last_encoder_ns_ = 0;
+  bool have_encoder_ = false;
+  hal::EncoderCounts last_counts_{};
+  std::uint64_t next_heartbeat_ns_ = 0;
+  std::uint8_t reset_counter_ = 0;
+  Health last_reported_health_ = Health::kNotInitialized;
+
+  PoseOutput pose_{};
+  FixOutput fix_{};
+  CycleCounters counters_{};
+};
+
+}  // namespace harmoloc::firmware

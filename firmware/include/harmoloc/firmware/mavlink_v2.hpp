@@ -1,0 +1,83 @@
+#pragma once
+/// @file MAVLink v2 framing and the three messages the firmware sends: HEARTBEAT (#0),
+/// STATUSTEXT (#253) and ODOMETRY (#331), from the common message set. Frames are built into a
+/// caller's fixed buffer; nothing allocates. Wire details in docs/wire-protocol.md.
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+
+namespace harmoloc::firmware::mavlink {
+
+constexpr std::uint8_t kStx = 0xFD;
+constexpr std::size_t kHeaderBytes = 10;
+constexpr std::size_t kChecksumBytes = 2;
+constexpr std::size_t kMaxPayloadBytes = 255;
+constexpr std::size_t kMaxFrameBytes = kHeaderBytes + kMaxPayloadBytes + kChecksumBytes;
+
+constexpr std::uint32_t kMsgHeartbeat = 0;
+constexpr std::uint32_t kMsgStatustext = 253;
+constexpr std::uint32_t kMsgOdometry = 331;
+
+// Enumerations of the common set used here.
+constexpr std::uint8_t kMavTypeOnboardController = 18;
+constexpr std::uint8_t kMavAutopilotInvalid = 8;
+constexpr std::uint8_t kMavStateStandby = 3;
+constexpr std::uint8_t kMavStateActive = 4;
+constexpr std::uint8_t kMavStateCritical = 5;
+constexpr std::uint8_t kMavStateEmergency = 6;
+constexpr std::uint8_t kMavFrameBodyFrd = 12;
+constexpr std::uint8_t kMavFrameLocalFrd = 20;
+constexpr std::uint8_t kMavEstimatorTypeVision = 2;
+constexpr std::uint8_t kSeverityCritical = 2;
+constexpr std::uint8_t kSeverityWarning = 4;
+constexpr std::uint8_t kSeverityInfo = 6;
+
+/// CRC-16/MCRF4XX (X.25) as MAVLink uses it.
+std::uint16_t crc_x25(const std::uint8_t* data, std::size_t size, std::uint16_t crc = 0xFFFF);
+
+struct Odometry {
+  std::uint64_t time_usec = 0;
+  std::uint8_t frame_id = kMavFrameLocalFrd;
+  std::uint8_t child_frame_id = kMavFrameBodyFrd;
+  float x = 0, y = 0, z = 0;
+  std::array<float, 4> q{1, 0, 0, 0};  ///< w, x, y, z
+  float vx = 0, vy = 0, vz = 0;
+  float rollspeed = 0, pitchspeed = 0, yawspeed = 0;
+  std::array<float, 21> pose_covariance{};
+  std::array<float, 21> velocity_covariance{};
+  std::uint8_t reset_counter = 0;
+  std::uint8_t estimator_type = kMavEstimatorTypeVision;
+  std::int8_t quality = 0;  ///< 0..100, -1 = failed
+};
+
+struct Heartbeat {
+  std::uint32_t custom_mode = 0;
+  std::uint8_t type = kMavTypeOnboardController;
+  std::uint8_t autopilot = kMavAutopilotInvalid;
+  std::uint8_t base_mode = 0;
+  std::uint8_t system_status = kMavStateStandby;
+  std::uint8_t mavlink_version = 3;
+};
+
+using FrameBuffer = std::array<std::uint8_t, kMaxFrameBytes>;
+
+/// Builds frames with one system/component identity and a running sequence number.
+class Encoder {
+ public:
+  Encoder(std::uint8_t system_id, std::uint8_t component_id) : system_id_(system_id), component_id_(component_id) {}
+
+  std::size_t heartbeat(const Heartbeat& msg, FrameBuffer& out);
+  std::size_t odometry(const Odometry& msg, FrameBuffer& out);
+  /// @p text is cut at 50 characters.
+  std::size_t statustext(std::uint8_t severity, const char* text, FrameBuffer& out);
+
+ private:
+  std::size_t finish(std::uint32_t msg_id, std::uint8_t crc_extra, std::size_t payload_len, FrameBuffer& out);
+
+  std::uint8_t system_id_;
+  std::uint8_t component_id_;
+  std::uint8_t sequence_ = 0;
+};
+
+}  // namespace harmoloc::firmware::mavlink

@@ -1,0 +1,276 @@
+#include "harmoloc/firmware/localization_cycle.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "harmoloc/algorithms/odometry.hpp"
+#include "harmoloc/algorithms/segmentation.hpp"
+
+namespace harmoloc::firmware {
+
+using algorithms::Pose2;
+
+const char* stage_name(Stage stage) {
+  static constexpr const char* kNames[kStageCount] = {"acquire", "segment", "localize", "encoders",
+                                                      "predict", "update",  "publish",  "cycle"};
+  return kNames[static_cast<std::size_t>(stage)];
+}
+
+const char* health_name(Health health) {
+  switch (health) {
+    case Health::kNotInitialized: return "not_initialized";
+    case Health::kNominal: return "nominal";
+    case Health::kOdometryOnly: return "odometry_only";
+    case Health::kVisionOnly: return "vision_only";
+    case Health::kInvalid: return "invalid";
+  }
+  return "unknown";
+}
+
+LocalizationCycle::LocalizationCycle(const FirmwareConfig& config, const algorithms::MapFile& map, hal::Camera& camera,
+                                     hal::WheelEncoders& encoders, hal::PoseLink& link, const hal::Clock& clock)
+    : config_(config),
+      map_(map),
+      camera_(camera),
+      encoders_(encoders),
+      link_(link),
+      clock_(clock),
+      mavlink_(config.link.system_id, config.link.component_id),
+      period_ns_(static_cast<std::uint64_t>(std::llround(1e9 / config.cycle.rate_hz))),
+      budget_ns_(static_cast<std::uint64_t>(std::llround(config.cycle.budget_ms * 1e6))) {
+  filter_.configure(config.filter.particles, config.filter.seed, config.filter.noise);
+}
+
+namespace {
+
+// Times one stage into its histogram.
+class StageTimer {
+ public:
+  StageTimer(const hal::Clock& clock, LatencyHistogram& histogram)
+      : clock_(clock), histogram_(histogram), start_(clock.now_ns()) {}
+  ~StageTimer() { histogram_.record(clock_.now_ns() - start_); }
+  StageTimer(const StageTimer&) = delete;
+  StageTimer& operator=(const StageTimer&) = delete;
+
+ private:
+  const hal::Clock& clock_;
+  LatencyHistogram& histogram_;
+  std::uint64_t start_;
+};
+
+}  // namespace
+
+Health LocalizationCycle::assess_health() const {
+  if (!filter_.initialized()) return Health::kNotInitialized;
+  const auto ms = [](double v) { return static_cast<std::uint64_t>(v * 1e6); };
+  const bool vision = ever_fix_ && data_time_ns_ - last_fix_ns_ <= ms(config_.cycle.camera_timeout_ms);
+  const bool odometry = have_encoder_ && data_time_ns_ - last_encoder_ns_ <= ms(config_.cycle.encoder_timeout_ms);
+  if (vision && odometry) return Health::kNominal;
+  if (odometry) return Health::kOdometryOnly;
+  if (vision) return Health::kVisionOnly;
+  return Health::kInvalid;
+}
+
+CycleResult LocalizationCycle::run_once() {
+  const std::uint64_t cycle_start = clock_.now_ns();
+  auto& h = histograms_;
+  const auto at = [&h](Stage s) -> LatencyHistogram& { return h[static_cast<std::size_t>(s)]; };
+
+  // acquire
+  hal::FrameView frame{};
+  hal::CameraStatus status;
+  {
+    StageTimer t(clock_, at(Stage::kAcquire));
+    status = camera_.acquire(frame, cycle_start + period_ns_);
+  }
+  if (status == hal::CameraStatus::kEnded) return CycleResult::kEnded;
+  ++counters_.cycles;
+  const bool have_frame = status == hal::CameraStatus::kFrame;
+  if (have_frame) {
+    data_time_ns_ = frame.timestamp_ns;
+    have_data_time_ = true;
+    ++counters_.frames;
+  } else {
+    if (status == hal::CameraStatus::kCorrupt) ++counters_.corrupt_frames;
+    else ++counters_.no_frame;
+    data_time_ns_ += period_ns_;
+  }
+  const bool usable = have_frame && frame.width_px == map_.image_width_px && frame.height_px == map_.image_height_px;
+  if (have_frame && !usable) ++counters_.frame_size_mismatch;
+
+  // segment
+  algorithms::AreaVector areas;
+  {
+    StageTimer t(clock_, at(Stage::kSegment));
+    if (usable) {
+      if (frame.format == hal::PixelFormat::kRgb24) {
+        algorithms::segment_rgb24(frame.data, frame.width_px, frame.height_px, frame.stride_bytes, map_.thresholds, areas);
+      } else {
+        algorithms::segment_yuyv(frame.data, frame.width_px, frame.height_px, frame.stride_bytes, map_.thresholds, areas);
+      }
+    }
+  }
+  if (have_frame) camera_.release();
+
+  // localize
+  fix_.present = false;
+  {
+    StageTimer t(clock_, at(Stage::kLocalize));
+    if (usable) {
+      std::array<float, algorithms::HarmonicModel::kMaxFeatures> features{};
+      algorithms::areas_to_features(map_.model, areas, features);
+      fix_.fix = algorithms::harmonic_query(map_.model, features);
+      fix_.present = true;
+    }
+  }
+
+  // encoders
+  bool have_delta = false;
+  algorithms::OdometryDelta delta{};
+  double delta_dt_s = 0.0;
+  {
+    StageTimer t(clock_, at(Stage::kEncoders));
+    hal::EncoderCounts counts{};
+    if (encoders_.read(data_time_ns_, counts) == hal::EncoderStatus::kFresh) {
+      ++counters_.encoder_samples;
+      if (have_encoder_) {
+        const std::int64_t dl = algorithms::wrapped_delta(last_counts_.left_ticks, counts.left_ticks, counts.counter_bits);
+        const std::int64_t dr = algorithms::wrapped_delta(last_counts_.right_ticks, counts.right_ticks, counts.counter_bits);
+        delta = algorithms::odometry_from_ticks(config_.geometry, dl, dr);
+        delta_dt_s = static_cast<double>(counts.timestamp_ns - last_counts_.timestamp_ns) * 1e-9;
+        have_delta = true;
+      }
+      last_counts_ = counts;
+      last_encoder_ns_ = counts.timestamp_ns;
+      have_encoder_ = true;
+    }
+  }
+
+  // predict
+  {
+    StageTimer t(clock_, at(Stage::kPredict));
+    if (filter_.initialized()) {
+      if (have_delta) {
+        filter_.predict(delta);
+      } else if (assess_health() == Health::kVisionOnly) {
+        // Motion unknown: let the cloud spread as fast as the robot could move.
+        const double step_m = config_.filter.vision_only_speed_mps / config_.cycle.rate_hz;
+        filter_.predict(algorithms::OdometryDelta{0.0, 0.0});
+        filter_.diffuse(step_m, 0.5 * step_m / (0.5 * config_.geometry.track_m));
+      }
+    }
+    if (have_delta && delta_dt_s > 0.0) {
+      pose_.speed_mps = delta.distance_m / delta_dt_s;
+      pose_.yaw_rate_rps = delta.yaw_rad / delta_dt_s;
+    }
+  }
+
+  // update
+  {
+    StageTimer t(clock_, at(Stage::kUpdate));
+    if (fix_.present) {
+      if (fix_.fix.known_place) {
+        ++counters_.fixes_used;
+        last_fix_ns_ = data_time_ns_;
+        ever_fix_ = true;
+        if (!filter_.initialized()) {
+          filter_.initialize(Pose2{fix_.fix.x_m, fix_.fix.y_m, 0.0}, config_.filter.init_position_sigma_m, 0.0, true);
+          ++reset_counter_;
+        } else {
+          filter_.update_position(fix_.fix.x_m, fix_.fix.y_m, config_.filter.fix_sigma_m,
+                                  config_.filter.outlier_probability);
+          if (filter_.resample_if_needed(config_.filter.resample_threshold)) ++counters_.resamples;
+        }
+      } else {
+        ++counters_.unknown_place;
+      }
+    }
+    if (filter_.initialized()) {
+      const algorithms::PoseEstimate e = filter_.estimate();
+      pose_.pose = e.mean;
+      pose_.covariance = e.covariance;
+      pose_.valid = true;
+    }
+    pose_.data_time_ns = data_time_ns_;
+    pose_.health = assess_health();
+    ++counters_.cycles_in_health[static_cast<std::size_t>(pose_.health)];
+  }
+
+  // publish
+  {
+    StageTimer t(clock_, at(Stage::kPublish));
+    publish();
+  }
+
+  const std::uint64_t elapsed = clock_.now_ns() - cycle_start;
+  at(Stage::kCycle).record(elapsed);
+  if (elapsed > budget_ns_) ++counters_.overruns;
+  return CycleResult::kRan;
+}
+
+void LocalizationCycle::send(std::size_t size) {
+  if (link_.write_frame(frame_buffer_.data(), size) != hal::LinkWrite::kSent) ++counters_.link_dropped;
+}
+
+void LocalizationCycle::publish() {
+  const Health health = pose_.health;
+  if (data_time_ns_ >= next_heartbeat_ns_) {
+    mavlink::Heartbeat hb;
+    switch (health) {
+      case Health::kNotInitialized: hb.system_status = mavlink::kMavStateStandby; break;
+      case Health::kNominal: hb.system_status = mavlink::kMavStateActive; break;
+      case Health::kOdometryOnly:
+      case Health::kVisionOnly: hb.system_status = mavlink::kMavStateCritical; break;
+      case Health::kInvalid: hb.system_status = mavlink::kMavStateEmergency; break;
+    }
+    send(mavlink_.heartbeat(hb, frame_buffer_));
+    const auto step = static_cast<std::uint64_t>(std::llround(1e9 / config_.link.heartbeat_hz));
+    next_heartbeat_ns_ = (next_heartbeat_ns_ == 0 ? data_time_ns_ : next_heartbeat_ns_) + step;
+    if (next_heartbeat_ns_ <= data_time_ns_) next_heartbeat_ns_ = data_time_ns_ + step;
+  }
+  if (health != last_reported_health_) {
+    static constexpr const char* kText[] = {"harmoloc: waiting for a first fix", "harmoloc: pose nominal",
+                                            "harmoloc: odometry only (no camera fix)",
+                                            "harmoloc: vision only (no encoder data)",
+                                            "harmoloc: pose invalid (no camera, no encoders)"};
+    const std::uint8_t severity = health == Health::kNominal ? mavlink::kSeverityInfo
+                                  : health == Health::kInvalid ? mavlink::kSeverityCritical
+                                                               : mavlink::kSeverityWarning;
+    send(mavlink_.statustext(severity, kText[static_cast<std::size_t>(health)], frame_buffer_));
+    last_reported_health_ = health;
+  }
+  if (!pose_.valid) return;
+
+  // Map frame (x, y on the floor, z up, yaw counter-clockwise) -> MAV_FRAME_LOCAL_FRD
+  // (z down): y and yaw change sign. Body velocity in MAV_FRAME_BODY_FRD.
+  mavlink::Odometry m;
+  m.time_usec = data_time_ns_ / 1000U;
+  m.x = static_cast<float>(pose_.pose.x_m);
+  m.y = static_cast<float>(-pose_.pose.y_m);
+  m.z = 0.0F;
+  const double half_yaw = -0.5 * pose_.pose.yaw_rad;
+  m.q = {static_cast<float>(std::cos(half_yaw)), 0.0F, 0.0F, static_cast<float>(std::sin(half_yaw))};
+  m.vx = static_cast<float>(pose_.speed_mps);
+  m.yawspeed = static_cast<float>(-pose_.yaw_rate_rps);
+  const auto& c = pose_.covariance;
+  m.pose_covariance.fill(0.0F);
+  m.pose_covariance[0] = static_cast<float>(c(0, 0));    // x x
+  m.pose_covariance[1] = static_cast<float>(-c(0, 1));   // x y
+  m.pose_covariance[5] = static_cast<float>(-c(0, 2));   // x yaw
+  m.pose_covariance[6] = static_cast<float>(c(1, 1));    // y y
+  m.pose_covariance[10] = static_cast<float>(c(1, 2));   // y yaw (both signs flip)
+  m.pose_covariance[20] = static_cast<float>(c(2, 2));   // yaw yaw
+  m.velocity_covariance.fill(0.0F);
+  m.velocity_covariance[0] = std::numeric_limits<float>::quiet_NaN();  // not estimated
+  m.reset_counter = reset_counter_;
+  if (health == Health::kInvalid) {
+    m.quality = -1;
+  } else {
+    const double sigma_m = std::sqrt(std::max(0.0, 0.5 * (c(0, 0) + c(1, 1))));
+    m.quality = static_cast<std::int8_t>(std::lround(std::clamp(100.0 - 1000.0 * sigma_m, 0.0, 100.0)));
+  }
+  send(mavlink_.odometry(m, frame_buffer_));
+}
+
+}  // namespace harmoloc::firmware

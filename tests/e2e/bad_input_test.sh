@@ -1,0 +1,100 @@
+#!/usr/bin/env bash
+# Bad input: a missing or corrupt map, config, frame, encoder log or metadata gives exit status 2
+# and exactly one line on stderr, never a crash.
+source "$(dirname "$0")/lib.sh" "$@"
+out="$WORK/bad"
+rm -rf "$out"; mkdir -p "$out"
+
+# A small good dataset to break in different ways: the first 40 frames of the test run.
+make_dataset() {
+  local d=$1
+  rm -rf "$d"; mkdir -p "$d/frames"
+  cp "$WORK/test/metadata.toml" "$WORK/test/encoders.log" "$d/"
+  head -n 41 "$WORK/test/frames.csv" > "$d/frames.csv"
+  tail -n +2 "$d/frames.csv" | cut -d, -f2 | while read -r f; do cp "$WORK/test/$f" "$d/$f"; done
+}
+make_dataset "$out/good"
+
+cases=0
+expect_error() {  # expect_error NAME PATTERN COMMAND...
+  local name=$1 pattern=$2; shift 2
+  local status=0
+  "$@" > "$out/stdout" 2> "$out/stderr" || status=$?
+  [ "$status" -eq 2 ] || { cat "$out/stderr"; fail "$name: exit status $status, expected 2"; }
+  [ "$(wc -l < "$out/stderr")" -eq 1 ] || { cat "$out/stderr"; fail "$name: expected exactly one line on stderr"; }
+  grep -q -- "$pattern" "$out/stderr" || { cat "$out/stderr"; fail "$name: message does not mention '$pattern'"; }
+  echo "ok  $name: $(cat "$out/stderr")"
+  cases=$((cases + 1))
+}
+run() { "$BIN/harmoloc" --dataset "$1" --map "$2" --trajectory "$out/t.tum" --quiet "${@:3}"; }
+
+# The good one works.
+run "$out/good" "$WORK/tiny.hmap" > /dev/null || fail "the unbroken small dataset failed"
+
+# Maps.
+expect_error "missing map" "cannot open" run "$out/good" "$out/nope.hmap"
+: > "$out/empty.hmap"
+expect_error "empty map" "too short" run "$out/good" "$out/empty.hmap"
+head -c 200 "$WORK/tiny.hmap" > "$out/truncated.hmap"
+expect_error "truncated map" "map" run "$out/good" "$out/truncated.hmap"
+python3 - "$WORK/tiny.hmap" "$out/flipped.hmap" <<'PY'
+import sys
+d = bytearray(open(sys.argv[1], 'rb').read()); d[len(d) // 2] ^= 1; open(sys.argv[2], 'wb').write(d)
+PY
+expect_error "map with a flipped bit" "checksum" run "$out/good" "$out/flipped.hmap"
+printf 'this is not a map at all, just text that is long enough\n' > "$out/text.hmap"
+expect_error "text instead of a map" "magic" run "$out/good" "$out/text.hmap"
+
+# Configs.
+printf '[cycle]\nrate_hz = 30\nbudget_sm = 15\n' > "$out/typo.toml"
+expect_error "config with an unknown key" "unknown key 'cycle.budget_sm'" run "$out/good" "$WORK/tiny.hmap" --config "$out/typo.toml"
+printf '[filter]\nparticles = 100000\n' > "$out/range.toml"
+expect_error "config value out of range" "filter.particles" run "$out/good" "$WORK/tiny.hmap" --config "$out/range.toml"
+printf '[cycle\nrate_hz = 30\n' > "$out/syntax.toml"
+expect_error "config that is not TOML" "line" run "$out/good" "$WORK/tiny.hmap" --config "$out/syntax.toml"
+expect_error "missing config" "nope.toml: cannot open" run "$out/good" "$WORK/tiny.hmap" --config "$out/nope.toml"
+printf '[[board]]\nname = "red"\nhue_deg = [0, 20]\n' > "$out/other_thresholds.toml"
+expect_error "map trained with other thresholds" "retrain" run "$out/good" "$WORK/tiny.hmap" --config "$out/other_thresholds.toml"
+
+# Frames.
+make_dataset "$out/truncated_frame"
+f=$(sed -n 10p "$out/truncated_frame/frames.csv" | cut -d, -f2)
+head -c 1000 "$WORK/test/$f" > "$out/truncated_frame/$f"
+expect_error "truncated frame" "truncated" run "$out/truncated_frame" "$WORK/tiny.hmap"
+make_dataset "$out/garbage_frame"
+f=$(sed -n 5p "$out/garbage_frame/frames.csv" | cut -d, -f2)
+head -c "$(stat -c %s "$WORK/test/$f")" /dev/urandom > "$out/garbage_frame/$f"
+expect_error "garbage frame" "PPM" run "$out/garbage_frame" "$WORK/tiny.hmap"
+make_dataset "$out/missing_frame"
+rm "$out/missing_frame/frames/000003.ppm"
+expect_error "missing frame" "000003.ppm" run "$out/missing_frame" "$WORK/tiny.hmap"
+make_dataset "$out/bad_index"
+sed -i '7s/.*/12x34,frames\/000005.ppm/' "$out/bad_index/frames.csv"
+expect_error "bad frame index" "frames.csv:7" run "$out/bad_index" "$WORK/tiny.hmap"
+
+# Encoder logs.
+make_dataset "$out/bad_log"
+sed -i '20s/.*/(1767225600.190000) can0 181#00112233445566778899/' "$out/bad_log/encoders.log"
+expect_error "encoder log with an over-long frame" "encoders.log:20" run "$out/bad_log" "$WORK/tiny.hmap"
+make_dataset "$out/no_log"
+rm "$out/no_log/encoders.log"
+expect_error "missing encoder log" "encoders.log" run "$out/no_log" "$WORK/tiny.hmap"
+
+# Metadata and datasets.
+expect_error "missing dataset" "metadata.toml" run "$out/does_not_exist" "$WORK/tiny.hmap"
+make_dataset "$out/bad_meta"
+sed -i 's/pixel_format = "rgb24"/pixel_format = "nv12"/' "$out/bad_meta/metadata.toml"
+expect_error "unknown pixel format" "pixel_format" run "$out/bad_meta" "$WORK/tiny.hmap"
+make_dataset "$out/other_size"
+sed -i 's/width_px = 160/width_px = 320/' "$out/other_size/metadata.toml"
+expect_error "map for another frame size" "trained on 160x120" run "$out/other_size" "$WORK/tiny.hmap"
+
+# The host tools.
+expect_error "sim: unknown scenario" "unknown scenario" "$BIN/harmoloc-sim" --scenario nowhere --out "$out/x" --quiet
+printf '1 2 3\n' > "$out/bad_labels.tum"
+expect_error "train: malformed labels" "bad_labels.tum:1" "$BIN/harmoloc-train" --dataset "$out/good" --labels "$out/bad_labels.tum" --out "$out/x.hmap"
+printf '5.0 1 1 0 0 0 0 1\n' > "$out/far_labels.tum"
+expect_error "train: labels that match no frame" "labels match" "$BIN/harmoloc-train" --dataset "$out/good" --labels "$out/far_labels.tum" --out "$out/x.hmap"
+expect_error "report: missing truth" "harmoloc-report" "$BIN/harmoloc-report" --truth "$out/nope.tum" --estimate "$out/t.tum" --out "$out/r"
+
+echo "OK: $cases bad inputs rejected with one line and exit status 2"

@@ -1,0 +1,10 @@
+# Shared helpers for the end-to-end tests. Usage: source lib.sh BIN_DIR WORK_DIR
+set -euo pipefail
+BIN=$1
+WORK=$2
+mkdir -p "$WORK"
+fail() { echo "FAIL: $*" >&2; exit 1; }
+# json_number FILE KEY.PATH -> prints the number (python3 is part of Debian's base system here)
+json_number() { python3 -c "import json,sys; d=json.load(open(sys.argv[1])); [d:=d[k] for k in sys.argv[2].split('.')]; print(d)" "$1" "$2"; }
+# Asserts A < B for decimal numbers.
+less_than() { python3 -c "import sys; sys.exit(0 if float(sys.argv[1]) < float(sys.argv[2]) else 1)" "$1" "$2" || fail "$3: $1 is not below $2"; }
