@@ -23,3 +23,15 @@ less_than "$rmse" "$RMSE_BOUND_CM" "fused position RMSE (cm) after convergence"
 less_than "$heading" "$HEADING_BOUND_DEG" "fused heading RMSE (deg) after convergence"
 [ "$(json_number "$out/stats.json" overruns)" -eq 0 ] || fail "overruns on the host"
 for f in index.html trajectory.svg error.svg timing.svg; do test -s "$out/report/$f" || fail "report lacks $f"; done
+# The documented example config (every key at its default) gives the same result as no config.
+"$BIN/harmoloc" --dataset "$WORK/test" --map "$WORK/tiny.hmap" --config "$(dirname "$0")/../../docs/examples/harmoloc.toml" \
+  --trajectory "$out/example_config.tum" --quiet > /dev/null
+cmp "$out/est.tum" "$out/example_config.tum" || fail "docs/examples/harmoloc.toml does not reproduce the defaults"
+# Negative control: a wrong wheel direction in the config must break the bound.
+printf '[odometry]\nleft_direction = -1\n' > "$out/flipped.toml"
+"$BIN/harmoloc" --dataset "$WORK/test" --map "$WORK/tiny.hmap" --config "$out/flipped.toml" --trajectory "$out/flipped.tum" --quiet > /dev/null
+"$BIN/harmoloc-report" --truth "$WORK/test/groundtruth.tum" --estimate "$out/flipped.tum" --out "$out/flipped_report" --skip-initial 3 > /dev/null
+s="$out/flipped_report/summary.json"
+bad=$(summary estimate rmse_position_cm)
+echo "with the left wheel's direction flipped: RMSE $bad cm"
+less_than "$RMSE_BOUND_CM" "$bad" "the bound must catch a flipped wheel direction"
