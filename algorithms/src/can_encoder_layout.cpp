@@ -34,7 +34,8 @@ bool layout_valid(const EncoderFrameLayout& layout) {
   if (layout.length > 8) return false;
   const unsigned n = counter_bytes(layout);
   return layout.left_offset + n <= layout.length && layout.right_offset + n <= layout.length &&
-         (layout.left_offset + n <= layout.right_offset || layout.right_offset + n <= layout.left_offset);
+         (layout.left_offset + n <= layout.right_offset ||
+          layout.right_offset + n <= layout.left_offset);
 }
 
 CanDecode decode_encoder_frame(const EncoderFrameLayout& layout, const CanFrame& frame,

@@ -50,7 +50,8 @@ HarmonicFix harmonic_query(const HarmonicModel& model,
 
   bool any_board = false;
   for (std::size_t k = 0; k < d; ++k) any_board = any_board || features[k] > 0.0F;
-  fix.known_place = any_board && fix.nearest_distance <= static_cast<double>(model.max_nearest_distance);
+  fix.known_place =
+      any_board && fix.nearest_distance <= static_cast<double>(model.max_nearest_distance);
   return fix;
 }
 

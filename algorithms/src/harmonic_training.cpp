@@ -19,7 +19,8 @@ Eigen::MatrixXd squared_distances(const Eigen::MatrixXd& a, const Eigen::MatrixX
 
 Eigen::MatrixXd select_rows(const Eigen::MatrixXd& m, const std::vector<int>& rows) {
   Eigen::MatrixXd out(static_cast<Eigen::Index>(rows.size()), m.cols());
-  for (std::size_t i = 0; i < rows.size(); ++i) out.row(static_cast<Eigen::Index>(i)) = m.row(rows[i]);
+  for (std::size_t i = 0; i < rows.size(); ++i)
+    out.row(static_cast<Eigen::Index>(i)) = m.row(rows[i]);
   return out;
 }
 
@@ -78,8 +79,8 @@ double median_squared_distance(const Eigen::MatrixXd& features) {
   return *mid > 0.0 ? *mid : 1.0;
 }
 
-AxisChoice choose_axis_parameters(const Eigen::MatrixXd& features, const std::vector<bool>& labelled,
-                                  const Eigen::VectorXd& labels,
+AxisChoice choose_axis_parameters(const Eigen::MatrixXd& features,
+                                  const std::vector<bool>& labelled, const Eigen::VectorXd& labels,
                                   const CrossValidationOptions& options) {
   std::vector<int> labelled_rows;
   for (std::size_t i = 0; i < labelled.size(); ++i) {
@@ -110,7 +111,8 @@ AxisChoice choose_axis_parameters(const Eigen::MatrixXd& features, const std::ve
         std::vector<int> keep, held;
         std::vector<bool> held_mask(static_cast<std::size_t>(m), false);
         for (std::size_t k = 0; k < labelled_rows.size(); ++k) {
-          if (static_cast<int>(k) % folds == fold) held_mask[static_cast<std::size_t>(labelled_rows[k])] = true;
+          if (static_cast<int>(k) % folds == fold)
+            held_mask[static_cast<std::size_t>(labelled_rows[k])] = true;
         }
         for (Eigen::Index i = 0; i < m; ++i) {
           (held_mask[static_cast<std::size_t>(i)] ? held : keep).push_back(static_cast<int>(i));
@@ -125,8 +127,10 @@ AxisChoice choose_axis_parameters(const Eigen::MatrixXd& features, const std::ve
         }
         if (!any || held.empty()) continue;
         const Eigen::MatrixXd keep_features = select_rows(features, keep);
-        const Eigen::VectorXd f = solve_semi_supervised(keep_features, keep_labelled, keep_labels, sigma, gamma);
-        const Eigen::VectorXd predicted = harmonic_predict(keep_features, f, sigma, select_rows(features, held));
+        const Eigen::VectorXd f =
+            solve_semi_supervised(keep_features, keep_labelled, keep_labels, sigma, gamma);
+        const Eigen::VectorXd predicted =
+            harmonic_predict(keep_features, f, sigma, select_rows(features, held));
         for (std::size_t k = 0; k < held.size(); ++k) {
           const double e = predicted(static_cast<Eigen::Index>(k)) - labels(held[k]);
           sq_error += e * e;
@@ -137,7 +141,8 @@ AxisChoice choose_axis_parameters(const Eigen::MatrixXd& features, const std::ve
       if (std::isfinite(mse) && mse < best.cv_mse) best = AxisChoice{sigma, gamma, mse};
     }
   }
-  if (!std::isfinite(best.cv_mse)) throw std::runtime_error("cross-validation found no usable parameters");
+  if (!std::isfinite(best.cv_mse))
+    throw std::runtime_error("cross-validation found no usable parameters");
   return best;
 }
 

@@ -66,7 +66,9 @@ class Reader {
   std::size_t pos_ = 0;
 };
 
-bool finite_positive(float v) { return std::isfinite(v) && v > 0.0F; }
+bool finite_positive(float v) {
+  return std::isfinite(v) && v > 0.0F;
+}
 
 }  // namespace
 
@@ -107,7 +109,8 @@ std::vector<std::uint8_t> encode_map(const MapFile& map) {
 
 MapError decode_map(const std::uint8_t* data, std::size_t size, MapFile& map) {
   if (data == nullptr || size < sizeof kMagic + 8) return MapError{"file too short to be a map", 0};
-  if (std::memcmp(data, kMagic, sizeof kMagic) != 0) return MapError{"not a harmoloc map (bad magic)", 0};
+  if (std::memcmp(data, kMagic, sizeof kMagic) != 0)
+    return MapError{"not a harmoloc map (bad magic)", 0};
   const std::size_t body = size - 4;
   const std::uint32_t stored = static_cast<std::uint32_t>(data[body]) |
                                static_cast<std::uint32_t>(data[body + 1]) << 8U |
@@ -119,7 +122,8 @@ MapError decode_map(const std::uint8_t* data, std::size_t size, MapFile& map) {
   for (std::size_t i = 0; i < sizeof kMagic; ++i) r.u8(skip, "magic");
   std::uint32_t version = 0;
   if (!r.u32(version, "version")) return r.error;
-  if (version != kMapFormatVersion) return MapError{"unsupported map format version (this firmware reads version 1)", 8};
+  if (version != kMapFormatVersion)
+    return MapError{"unsupported map format version (this firmware reads version 1)", 8};
   if (crc32(data, body) != stored) return MapError{"checksum mismatch: the map is corrupt", body};
 
   std::uint32_t boards = 0;
@@ -147,7 +151,8 @@ MapError decode_map(const std::uint8_t* data, std::size_t size, MapFile& map) {
     }
   }
   HarmonicModel& m = map.model;
-  if (!r.u32(m.sample_count, "sample count") || !r.u32(m.feature_count, "feature count")) return r.error;
+  if (!r.u32(m.sample_count, "sample count") || !r.u32(m.feature_count, "feature count"))
+    return r.error;
   if (m.sample_count == 0 || m.sample_count > HarmonicModel::kMaxSamples) {
     return MapError{"sample count out of range (1..4096)", r.pos()};
   }
@@ -156,15 +161,17 @@ MapError decode_map(const std::uint8_t* data, std::size_t size, MapFile& map) {
   }
   for (std::size_t k = 0; k < m.feature_count; ++k) {
     if (!r.u8(m.board_index[k], "feature boards")) return r.error;
-    if (m.board_index[k] >= boards) return MapError{"feature refers to a board that is not in the map", r.pos()};
+    if (m.board_index[k] >= boards)
+      return MapError{"feature refers to a board that is not in the map", r.pos()};
   }
-  if (!r.f32(m.area_scale, "area scale") || !r.f32(m.sigma_x, "sigma x") || !r.f32(m.sigma_y, "sigma y") ||
-      !r.f32(m.gamma_x, "gamma x") || !r.f32(m.gamma_y, "gamma y") ||
-      !r.f32(m.max_nearest_distance, "known-place bound")) {
+  if (!r.f32(m.area_scale, "area scale") || !r.f32(m.sigma_x, "sigma x") ||
+      !r.f32(m.sigma_y, "sigma y") || !r.f32(m.gamma_x, "gamma x") ||
+      !r.f32(m.gamma_y, "gamma y") || !r.f32(m.max_nearest_distance, "known-place bound")) {
     return r.error;
   }
-  if (!finite_positive(m.area_scale) || !finite_positive(m.sigma_x) || !finite_positive(m.sigma_y) ||
-      !finite_positive(m.max_nearest_distance) || !std::isfinite(m.gamma_x) || !std::isfinite(m.gamma_y)) {
+  if (!finite_positive(m.area_scale) || !finite_positive(m.sigma_x) ||
+      !finite_positive(m.sigma_y) || !finite_positive(m.max_nearest_distance) ||
+      !std::isfinite(m.gamma_x) || !std::isfinite(m.gamma_y)) {
     return MapError{"model parameter not a finite positive number", r.pos()};
   }
   const std::size_t record = (m.feature_count + 2U) * 4U;
@@ -177,7 +184,8 @@ MapError decode_map(const std::uint8_t* data, std::size_t size, MapFile& map) {
     r.f32(m.target_x_m[i], "samples");
     r.f32(m.target_y_m[i], "samples");
     for (std::size_t k = 0; k < m.feature_count; ++k) {
-      if (!std::isfinite(s[k]) || s[k] < 0.0F) return MapError{"sample feature not finite and >= 0", r.pos()};
+      if (!std::isfinite(s[k]) || s[k] < 0.0F)
+        return MapError{"sample feature not finite and >= 0", r.pos()};
     }
     if (!std::isfinite(m.target_x_m[i]) || !std::isfinite(m.target_y_m[i])) {
       return MapError{"sample coordinate not finite", r.pos()};

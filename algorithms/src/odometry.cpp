@@ -18,7 +18,8 @@ OdometryDelta odometry_from_ticks(const DiffDriveGeometry& geometry, std::int64_
                                   std::int64_t right_ticks) {
   const double metres_per_tick = 2.0 * kPi * geometry.wheel_radius_m / geometry.ticks_per_rev;
   const double left_m = static_cast<double>(left_ticks * geometry.left_direction) * metres_per_tick;
-  const double right_m = static_cast<double>(right_ticks * geometry.right_direction) * metres_per_tick;
+  const double right_m =
+      static_cast<double>(right_ticks * geometry.right_direction) * metres_per_tick;
   return OdometryDelta{0.5 * (left_m + right_m), (right_m - left_m) / geometry.track_m};
 }
 

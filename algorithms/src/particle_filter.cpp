@@ -5,7 +5,8 @@
 
 namespace harmoloc::algorithms {
 
-void ParticleFilter::configure(std::size_t particle_count, std::uint64_t seed, const MotionNoise& noise) {
+void ParticleFilter::configure(std::size_t particle_count, std::uint64_t seed,
+                               const MotionNoise& noise) {
   count_ = std::clamp<std::size_t>(particle_count, 1, kMaxParticles);
   noise_ = noise;
   rng_.reseed(seed);
@@ -19,7 +20,8 @@ void ParticleFilter::initialize(const Pose2& centre, double position_sigma_m, do
     Particle& p = particles_[i];
     p.x_m = rng_.normal(centre.x_m, position_sigma_m);
     p.y_m = rng_.normal(centre.y_m, position_sigma_m);
-    p.yaw_rad = uniform_yaw ? rng_.uniform(-kPi, kPi) : wrap_angle_rad(rng_.normal(centre.yaw_rad, yaw_sigma_rad));
+    p.yaw_rad = uniform_yaw ? rng_.uniform(-kPi, kPi)
+                            : wrap_angle_rad(rng_.normal(centre.yaw_rad, yaw_sigma_rad));
     weights_[i] = w;
   }
   initialized_ = true;
@@ -28,7 +30,8 @@ void ParticleFilter::initialize(const Pose2& centre, double position_sigma_m, do
 void ParticleFilter::predict(const OdometryDelta& delta) {
   const double d2 = delta.distance_m * delta.distance_m;
   const double y2 = delta.yaw_rad * delta.yaw_rad;
-  const double sigma_yaw = std::max(noise_.min_yaw_sigma_rad, std::sqrt(noise_.alpha1 * y2 + noise_.alpha2 * d2));
+  const double sigma_yaw =
+      std::max(noise_.min_yaw_sigma_rad, std::sqrt(noise_.alpha1 * y2 + noise_.alpha2 * d2));
   const double sigma_dist =
       std::max(noise_.min_distance_sigma_m, std::sqrt(noise_.alpha3 * d2 + noise_.alpha4 * y2));
   for (std::size_t i = 0; i < count_; ++i) {
@@ -49,7 +52,8 @@ void ParticleFilter::diffuse(double position_sigma_m, double yaw_sigma_rad) {
   }
 }
 
-void ParticleFilter::update_position(double x_m, double y_m, double sigma_m, double outlier_probability) {
+void ParticleFilter::update_position(double x_m, double y_m, double sigma_m,
+                                     double outlier_probability) {
   const double inv_two_var = 0.5 / (sigma_m * sigma_m);
   const double inlier = 1.0 - outlier_probability;
   double sum = 0.0;

@@ -60,7 +60,9 @@ inline void count_pixel(const ThresholdSet& thresholds, AreaVector& areas, std::
   }
 }
 
-inline std::uint8_t clamp_u8(int v) { return static_cast<std::uint8_t>(std::clamp(v, 0, 255)); }
+inline std::uint8_t clamp_u8(int v) {
+  return static_cast<std::uint8_t>(std::clamp(v, 0, 255));
+}
 
 }  // namespace
 
@@ -93,8 +95,8 @@ void segment_yuyv(const std::uint8_t* data, std::uint32_t width_px, std::uint32_
       const int bu = 516 * u;
       for (int i = 0; i < 2 && x + static_cast<std::uint32_t>(i) < width_px; ++i) {
         const int c = 298 * (p[i * 2] - 16);
-        count_pixel(thresholds, areas, clamp_u8((c + rv + 128) >> 8), clamp_u8((c + guv + 128) >> 8),
-                    clamp_u8((c + bu + 128) >> 8));
+        count_pixel(thresholds, areas, clamp_u8((c + rv + 128) >> 8),
+                    clamp_u8((c + guv + 128) >> 8), clamp_u8((c + bu + 128) >> 8));
       }
     }
   }

@@ -8,7 +8,8 @@ namespace harmoloc::drivers {
 std::uint64_t MonotonicClock::now_ns() const {
   timespec ts{};
   clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<std::uint64_t>(ts.tv_sec) * 1000000000ULL + static_cast<std::uint64_t>(ts.tv_nsec);
+  return static_cast<std::uint64_t>(ts.tv_sec) * 1000000000ULL +
+         static_cast<std::uint64_t>(ts.tv_nsec);
 }
 
 void MonotonicClock::sleep_until(std::uint64_t wake_ns) {

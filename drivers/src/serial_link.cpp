@@ -14,15 +14,24 @@ namespace {
 
 speed_t baud_constant(unsigned baud) {
   switch (baud) {
-    case 9600: return B9600;
-    case 19200: return B19200;
-    case 38400: return B38400;
-    case 57600: return B57600;
-    case 115200: return B115200;
-    case 230400: return B230400;
-    case 460800: return B460800;
-    case 921600: return B921600;
-    default: return B0;
+    case 9600:
+      return B9600;
+    case 19200:
+      return B19200;
+    case 38400:
+      return B38400;
+    case 57600:
+      return B57600;
+    case 115200:
+      return B115200;
+    case 230400:
+      return B230400;
+    case 460800:
+      return B460800;
+    case 921600:
+      return B921600;
+    default:
+      return B0;
   }
 }
 
@@ -75,8 +84,17 @@ bool SerialLink::flush_pending() {
 
 hal::LinkWrite SerialLink::write_frame(const std::uint8_t* bytes, std::size_t size) {
   if (fd_ < 0) return hal::LinkWrite::kFailed;
-  if (size > kMaxFrameBytes || !flush_pending()) {
+  if (size > kMaxFrameBytes) {
     ++counters_.frames_dropped;
+    return hal::LinkWrite::kDropped;
+  }
+  const std::uint64_t errors_at_start = counters_.errors;
+  if (!flush_pending()) {
+    ++counters_.frames_dropped;
+    if (counters_.errors != errors_at_start) {  // hung up or I/O error: the rest will never go
+      pending_size_ = pending_sent_ = 0;
+      return hal::LinkWrite::kFailed;
+    }
     return hal::LinkWrite::kDropped;
   }
   std::memcpy(pending_.data(), bytes, size);

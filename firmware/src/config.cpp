@@ -19,13 +19,15 @@ class Checker {
   [[noreturn]] void fail(const toml::node* at, const std::string& what) const {
     std::ostringstream s;
     s << file_ << ": ";
-    if (at != nullptr && at->source().begin.line > 0) s << "line " << at->source().begin.line << ": ";
+    if (at != nullptr && at->source().begin.line > 0)
+      s << "line " << at->source().begin.line << ": ";
     s << what;
     throw std::runtime_error(s.str());
   }
 
   // Rejects keys the firmware does not know (a typo must not silently fall back to a default).
-  void only(const toml::table& t, const std::string& where, std::initializer_list<const char*> keys) const {
+  void only(const toml::table& t, const std::string& where,
+            std::initializer_list<const char*> keys) const {
     const std::set<std::string> allowed(keys.begin(), keys.end());
     for (const auto& [key, node] : t) {
       if (allowed.count(std::string(key.str())) == 0) {
@@ -34,14 +36,17 @@ class Checker {
     }
   }
 
-  double number(const toml::table& t, const char* key, const std::string& where, double fallback, double lo,
-                double hi) const {
+  double number(const toml::table& t, const char* key, const std::string& where, double fallback,
+                double lo, double hi) const {
     const toml::node* n = t.get(key);
     if (n == nullptr) return fallback;
     double v = 0.0;
-    if (auto i = n->value_exact<std::int64_t>()) v = static_cast<double>(*i);
-    else if (auto d = n->value_exact<double>()) v = *d;
-    else fail(n, where + key + " must be a number");
+    if (auto i = n->value_exact<std::int64_t>())
+      v = static_cast<double>(*i);
+    else if (auto d = n->value_exact<double>())
+      v = *d;
+    else
+      fail(n, where + key + " must be a number");
     if (!(v >= lo && v <= hi)) {
       std::ostringstream s;
       s << where << key << " = " << v << " is outside " << lo << ".." << hi;
@@ -50,19 +55,21 @@ class Checker {
     return v;
   }
 
-  std::int64_t integer(const toml::table& t, const char* key, const std::string& where, std::int64_t fallback,
-                       std::int64_t lo, std::int64_t hi) const {
+  std::int64_t integer(const toml::table& t, const char* key, const std::string& where,
+                       std::int64_t fallback, std::int64_t lo, std::int64_t hi) const {
     const toml::node* n = t.get(key);
     if (n == nullptr) return fallback;
     auto i = n->value_exact<std::int64_t>();
     if (!i) fail(n, where + key + " must be a whole number");
     if (*i < lo || *i > hi) {
-      fail(n, where + key + " = " + std::to_string(*i) + " is outside " + std::to_string(lo) + ".." + std::to_string(hi));
+      fail(n, where + key + " = " + std::to_string(*i) + " is outside " + std::to_string(lo) +
+                  ".." + std::to_string(hi));
     }
     return *i;
   }
 
-  std::string text(const toml::table& t, const char* key, const std::string& where, const std::string& fallback) const {
+  std::string text(const toml::table& t, const char* key, const std::string& where,
+                   const std::string& fallback) const {
     const toml::node* n = t.get(key);
     if (n == nullptr) return fallback;
     auto s = n->value_exact<std::string>();
@@ -124,14 +131,18 @@ FirmwareConfig load_config(const std::string& path) {
     check.only(*t, "cycle.", {"rate_hz", "budget_ms", "camera_timeout_ms", "encoder_timeout_ms"});
     c.cycle.rate_hz = check.number(*t, "rate_hz", "cycle.", c.cycle.rate_hz, 1.0, 1000.0);
     c.cycle.budget_ms = check.number(*t, "budget_ms", "cycle.", c.cycle.budget_ms, 0.01, 1000.0);
-    c.cycle.camera_timeout_ms = check.number(*t, "camera_timeout_ms", "cycle.", c.cycle.camera_timeout_ms, 1.0, 60000.0);
-    c.cycle.encoder_timeout_ms = check.number(*t, "encoder_timeout_ms", "cycle.", c.cycle.encoder_timeout_ms, 1.0, 60000.0);
+    c.cycle.camera_timeout_ms =
+        check.number(*t, "camera_timeout_ms", "cycle.", c.cycle.camera_timeout_ms, 1.0, 60000.0);
+    c.cycle.encoder_timeout_ms =
+        check.number(*t, "encoder_timeout_ms", "cycle.", c.cycle.encoder_timeout_ms, 1.0, 60000.0);
   }
 
   if (const toml::node* boards_node = root.get("board")) {
     const toml::array* boards = boards_node->as_array();
-    if (boards == nullptr || !boards->is_array_of_tables()) check.fail(boards_node, "[[board]] entries must be tables");
-    if (boards->empty() || boards->size() > algorithms::kMaxBoards) check.fail(boards_node, "1 to 8 [[board]] entries");
+    if (boards == nullptr || !boards->is_array_of_tables())
+      check.fail(boards_node, "[[board]] entries must be tables");
+    if (boards->empty() || boards->size() > algorithms::kMaxBoards)
+      check.fail(boards_node, "1 to 8 [[board]] entries");
     c.thresholds.count = boards->size();
     for (std::size_t i = 0; i < boards->size(); ++i) {
       const toml::table& b = *(*boards)[i].as_table();
@@ -140,18 +151,24 @@ FirmwareConfig load_config(const std::string& path) {
       c.board_names.names[i] = check.text(b, "name", where, "board" + std::to_string(i + 1));
       const toml::node* hue = b.get("hue_deg");
       const toml::array* h = hue != nullptr ? hue->as_array() : nullptr;
-      if (h == nullptr || h->size() != 2) check.fail(hue != nullptr ? hue : &b, where + "hue_deg must be [min, max] in degrees");
+      if (h == nullptr || h->size() != 2)
+        check.fail(hue != nullptr ? hue : &b, where + "hue_deg must be [min, max] in degrees");
       algorithms::ColourThreshold& t = c.thresholds.boards[i];
       for (int k = 0; k < 2; ++k) {
         const toml::node& e = *h->get(static_cast<std::size_t>(k));
         double v = 0.0;
-        if (auto iv = e.value_exact<std::int64_t>()) v = static_cast<double>(*iv);
-        else if (auto dv = e.value_exact<double>()) v = *dv;
-        else check.fail(&e, where + "hue_deg values must be numbers");
-        if (!(v >= 0.0 && v <= 360.0)) check.fail(&e, where + "hue_deg values must be within 0..360");
+        if (auto iv = e.value_exact<std::int64_t>())
+          v = static_cast<double>(*iv);
+        else if (auto dv = e.value_exact<double>())
+          v = *dv;
+        else
+          check.fail(&e, where + "hue_deg values must be numbers");
+        if (!(v >= 0.0 && v <= 360.0))
+          check.fail(&e, where + "hue_deg values must be within 0..360");
         (k == 0 ? t.hue_min_deg : t.hue_max_deg) = static_cast<float>(v);
       }
-      t.saturation_min = static_cast<std::uint8_t>(check.integer(b, "saturation_min", where, 100, 0, 255));
+      t.saturation_min =
+          static_cast<std::uint8_t>(check.integer(b, "saturation_min", where, 100, 0, 255));
       t.value_min = static_cast<std::uint8_t>(check.integer(b, "value_min", where, 50, 0, 255));
       t.value_max = static_cast<std::uint8_t>(check.integer(b, "value_max", where, 255, 0, 255));
       if (t.value_min > t.value_max) check.fail(&b, where + "value_min is above value_max");
@@ -160,65 +177,93 @@ FirmwareConfig load_config(const std::string& path) {
 
   if (const toml::table* t = check.section(root, "odometry")) {
     c.has_odometry_section = true;
-    check.only(*t, "odometry.", {"wheel_radius_m", "track_m", "ticks_per_rev", "left_direction", "right_direction"});
+    check.only(*t, "odometry.",
+               {"wheel_radius_m", "track_m", "ticks_per_rev", "left_direction", "right_direction"});
     auto& g = c.geometry;
-    g.wheel_radius_m = check.number(*t, "wheel_radius_m", "odometry.", g.wheel_radius_m, 0.001, 10.0);
+    g.wheel_radius_m =
+        check.number(*t, "wheel_radius_m", "odometry.", g.wheel_radius_m, 0.001, 10.0);
     g.track_m = check.number(*t, "track_m", "odometry.", g.track_m, 0.01, 100.0);
     g.ticks_per_rev = check.number(*t, "ticks_per_rev", "odometry.", g.ticks_per_rev, 1.0, 1e9);
-    g.left_direction = static_cast<int>(check.integer(*t, "left_direction", "odometry.", g.left_direction, -1, 1));
-    g.right_direction = static_cast<int>(check.integer(*t, "right_direction", "odometry.", g.right_direction, -1, 1));
-    if (g.left_direction == 0 || g.right_direction == 0) check.fail(t, "odometry.*_direction must be 1 or -1");
+    g.left_direction =
+        static_cast<int>(check.integer(*t, "left_direction", "odometry.", g.left_direction, -1, 1));
+    g.right_direction = static_cast<int>(
+        check.integer(*t, "right_direction", "odometry.", g.right_direction, -1, 1));
+    if (g.left_direction == 0 || g.right_direction == 0)
+      check.fail(t, "odometry.*_direction must be 1 or -1");
   }
 
   if (const toml::table* t = check.section(root, "can")) {
     c.has_can_section = true;
-    check.only(*t, "can.", {"interface", "encoder_id", "length", "left_offset", "right_offset", "counter_bits", "byte_order"});
+    check.only(*t, "can.",
+               {"interface", "encoder_id", "length", "left_offset", "right_offset", "counter_bits",
+                "byte_order"});
     auto& l = c.can_layout;
     c.can_interface = check.text(*t, "interface", "can.", c.can_interface);
     l.id = static_cast<std::uint32_t>(check.integer(*t, "encoder_id", "can.", l.id, 0, 0x1FFFFFFF));
     l.length = static_cast<std::uint8_t>(check.integer(*t, "length", "can.", l.length, 1, 8));
-    l.left_offset = static_cast<std::uint8_t>(check.integer(*t, "left_offset", "can.", l.left_offset, 0, 7));
-    l.right_offset = static_cast<std::uint8_t>(check.integer(*t, "right_offset", "can.", l.right_offset, 0, 7));
-    l.counter_bits = static_cast<std::uint8_t>(check.integer(*t, "counter_bits", "can.", l.counter_bits, 8, 32));
+    l.left_offset =
+        static_cast<std::uint8_t>(check.integer(*t, "left_offset", "can.", l.left_offset, 0, 7));
+    l.right_offset =
+        static_cast<std::uint8_t>(check.integer(*t, "right_offset", "can.", l.right_offset, 0, 7));
+    l.counter_bits =
+        static_cast<std::uint8_t>(check.integer(*t, "counter_bits", "can.", l.counter_bits, 8, 32));
     const std::string order = check.text(*t, "byte_order", "can.", "little");
-    if (order == "little") l.byte_order = algorithms::ByteOrder::kLittleEndian;
-    else if (order == "big") l.byte_order = algorithms::ByteOrder::kBigEndian;
-    else check.fail(t->get("byte_order"), "can.byte_order must be \"little\" or \"big\"");
-    if (!algorithms::layout_valid(l)) check.fail(t, "can: the two counters must fit, without overlapping, in 'length' bytes");
+    if (order == "little")
+      l.byte_order = algorithms::ByteOrder::kLittleEndian;
+    else if (order == "big")
+      l.byte_order = algorithms::ByteOrder::kBigEndian;
+    else
+      check.fail(t->get("byte_order"), "can.byte_order must be \"little\" or \"big\"");
+    if (!algorithms::layout_valid(l))
+      check.fail(t, "can: the two counters must fit, without overlapping, in 'length' bytes");
   }
 
   if (const toml::table* t = check.section(root, "filter")) {
-    check.only(*t, "filter.", {"particles", "seed", "alpha", "fix_sigma_m", "outlier_probability", "resample_threshold",
-                               "init_position_sigma_m", "vision_only_speed_mps"});
+    check.only(*t, "filter.",
+               {"particles", "seed", "alpha", "fix_sigma_m", "outlier_probability",
+                "resample_threshold", "init_position_sigma_m", "vision_only_speed_mps"});
     auto& f = c.filter;
-    f.particles = static_cast<std::size_t>(check.integer(*t, "particles", "filter.", static_cast<std::int64_t>(f.particles), 16,
-                                                         static_cast<std::int64_t>(algorithms::ParticleFilter::kMaxParticles)));
-    f.seed = static_cast<std::uint64_t>(check.integer(*t, "seed", "filter.", static_cast<std::int64_t>(f.seed), 0, INT64_MAX));
+    f.particles = static_cast<std::size_t>(
+        check.integer(*t, "particles", "filter.", static_cast<std::int64_t>(f.particles), 16,
+                      static_cast<std::int64_t>(algorithms::ParticleFilter::kMaxParticles)));
+    f.seed = static_cast<std::uint64_t>(
+        check.integer(*t, "seed", "filter.", static_cast<std::int64_t>(f.seed), 0, INT64_MAX));
     if (const toml::node* a = t->get("alpha")) {
       const toml::array* arr = a->as_array();
-      if (arr == nullptr || arr->size() != 4) check.fail(a, "filter.alpha must be [alpha1, alpha2, alpha3, alpha4]");
+      if (arr == nullptr || arr->size() != 4)
+        check.fail(a, "filter.alpha must be [alpha1, alpha2, alpha3, alpha4]");
       double* out[4] = {&f.noise.alpha1, &f.noise.alpha2, &f.noise.alpha3, &f.noise.alpha4};
       for (std::size_t k = 0; k < 4; ++k) {
         const toml::node& e = *arr->get(k);
         double v = -1.0;
-        if (auto iv = e.value_exact<std::int64_t>()) v = static_cast<double>(*iv);
-        else if (auto dv = e.value_exact<double>()) v = *dv;
-        if (!(v >= 0.0 && v <= 10.0)) check.fail(&e, "filter.alpha values must be numbers within 0..10");
+        if (auto iv = e.value_exact<std::int64_t>())
+          v = static_cast<double>(*iv);
+        else if (auto dv = e.value_exact<double>())
+          v = *dv;
+        if (!(v >= 0.0 && v <= 10.0))
+          check.fail(&e, "filter.alpha values must be numbers within 0..10");
         *out[k] = v;
       }
     }
     f.fix_sigma_m = check.number(*t, "fix_sigma_m", "filter.", f.fix_sigma_m, 0.001, 10.0);
-    f.outlier_probability = check.number(*t, "outlier_probability", "filter.", f.outlier_probability, 0.0, 0.9);
-    f.resample_threshold = check.number(*t, "resample_threshold", "filter.", f.resample_threshold, 0.0, 1.0);
-    f.init_position_sigma_m = check.number(*t, "init_position_sigma_m", "filter.", f.init_position_sigma_m, 0.001, 10.0);
-    f.vision_only_speed_mps = check.number(*t, "vision_only_speed_mps", "filter.", f.vision_only_speed_mps, 0.0, 10.0);
+    f.outlier_probability =
+        check.number(*t, "outlier_probability", "filter.", f.outlier_probability, 0.0, 0.9);
+    f.resample_threshold =
+        check.number(*t, "resample_threshold", "filter.", f.resample_threshold, 0.0, 1.0);
+    f.init_position_sigma_m =
+        check.number(*t, "init_position_sigma_m", "filter.", f.init_position_sigma_m, 0.001, 10.0);
+    f.vision_only_speed_mps =
+        check.number(*t, "vision_only_speed_mps", "filter.", f.vision_only_speed_mps, 0.0, 10.0);
   }
 
   if (const toml::table* t = check.section(root, "link")) {
     check.only(*t, "link.", {"system_id", "component_id", "baud", "heartbeat_hz"});
-    c.link.system_id = static_cast<std::uint8_t>(check.integer(*t, "system_id", "link.", c.link.system_id, 1, 255));
-    c.link.component_id = static_cast<std::uint8_t>(check.integer(*t, "component_id", "link.", c.link.component_id, 1, 255));
-    c.link.baud = static_cast<unsigned>(check.integer(*t, "baud", "link.", c.link.baud, 9600, 921600));
+    c.link.system_id = static_cast<std::uint8_t>(
+        check.integer(*t, "system_id", "link.", c.link.system_id, 1, 255));
+    c.link.component_id = static_cast<std::uint8_t>(
+        check.integer(*t, "component_id", "link.", c.link.component_id, 1, 255));
+    c.link.baud =
+        static_cast<unsigned>(check.integer(*t, "baud", "link.", c.link.baud, 9600, 921600));
     c.link.heartbeat_hz = check.number(*t, "heartbeat_hz", "link.", c.link.heartbeat_hz, 0.1, 50.0);
   }
   return c;

@@ -19,17 +19,23 @@ const char* stage_name(Stage stage) {
 
 const char* health_name(Health health) {
   switch (health) {
-    case Health::kNotInitialized: return "not_initialized";
-    case Health::kNominal: return "nominal";
-    case Health::kOdometryOnly: return "odometry_only";
-    case Health::kVisionOnly: return "vision_only";
-    case Health::kInvalid: return "invalid";
+    case Health::kNotInitialized:
+      return "not_initialized";
+    case Health::kNominal:
+      return "nominal";
+    case Health::kOdometryOnly:
+      return "odometry_only";
+    case Health::kVisionOnly:
+      return "vision_only";
+    case Health::kInvalid:
+      return "invalid";
   }
   return "unknown";
 }
 
-LocalizationCycle::LocalizationCycle(const FirmwareConfig& config, const algorithms::MapFile& map, hal::Camera& camera,
-                                     hal::WheelEncoders& encoders, hal::PoseLink& link, const hal::Clock& clock)
+LocalizationCycle::LocalizationCycle(const FirmwareConfig& config, const algorithms::MapFile& map,
+                                     hal::Camera& camera, hal::WheelEncoders& encoders,
+                                     hal::PoseLink& link, const hal::Clock& clock)
     : config_(config),
       map_(map),
       camera_(camera),
@@ -64,8 +70,10 @@ class StageTimer {
 Health LocalizationCycle::assess_health() const {
   if (!filter_.initialized()) return Health::kNotInitialized;
   const auto ms = [](double v) { return static_cast<std::uint64_t>(v * 1e6); };
-  const bool vision = ever_fix_ && data_time_ns_ - last_fix_ns_ <= ms(config_.cycle.camera_timeout_ms);
-  const bool odometry = have_encoder_ && data_time_ns_ - last_encoder_ns_ <= ms(config_.cycle.encoder_timeout_ms);
+  const bool vision =
+      ever_fix_ && data_time_ns_ - last_fix_ns_ <= ms(config_.cycle.camera_timeout_ms);
+  const bool odometry =
+      have_encoder_ && data_time_ns_ - last_encoder_ns_ <= ms(config_.cycle.encoder_timeout_ms);
   if (vision && odometry) return Health::kNominal;
   if (odometry) return Health::kOdometryOnly;
   if (vision) return Health::kVisionOnly;
@@ -92,11 +100,14 @@ CycleResult LocalizationCycle::run_once() {
     have_data_time_ = true;
     ++counters_.frames;
   } else {
-    if (status == hal::CameraStatus::kCorrupt) ++counters_.corrupt_frames;
-    else ++counters_.no_frame;
+    if (status == hal::CameraStatus::kCorrupt)
+      ++counters_.corrupt_frames;
+    else
+      ++counters_.no_frame;
     data_time_ns_ += period_ns_;
   }
-  const bool usable = have_frame && frame.width_px == map_.image_width_px && frame.height_px == map_.image_height_px;
+  const bool usable = have_frame && frame.width_px == map_.image_width_px &&
+                      frame.height_px == map_.image_height_px;
   if (have_frame && !usable) ++counters_.frame_size_mismatch;
 
   // segment
@@ -105,9 +116,11 @@ CycleResult LocalizationCycle::run_once() {
     StageTimer t(clock_, at(Stage::kSegment));
     if (usable) {
       if (frame.format == hal::PixelFormat::kRgb24) {
-        algorithms::segment_rgb24(frame.data, frame.width_px, frame.height_px, frame.stride_bytes, map_.thresholds, areas);
+        algorithms::segment_rgb24(frame.data, frame.width_px, frame.height_px, frame.stride_bytes,
+                                  map_.thresholds, areas);
       } else {
-        algorithms::segment_yuyv(frame.data, frame.width_px, frame.height_px, frame.stride_bytes, map_.thresholds, areas);
+        algorithms::segment_yuyv(frame.data, frame.width_px, frame.height_px, frame.stride_bytes,
+                                 map_.thresholds, areas);
       }
     }
   }
@@ -135,8 +148,10 @@ CycleResult LocalizationCycle::run_once() {
     if (encoders_.read(data_time_ns_, counts) == hal::EncoderStatus::kFresh) {
       ++counters_.encoder_samples;
       if (have_encoder_) {
-        const std::int64_t dl = algorithms::wrapped_delta(last_counts_.left_ticks, counts.left_ticks, counts.counter_bits);
-        const std::int64_t dr = algorithms::wrapped_delta(last_counts_.right_ticks, counts.right_ticks, counts.counter_bits);
+        const std::int64_t dl = algorithms::wrapped_delta(last_counts_.left_ticks,
+                                                          counts.left_ticks, counts.counter_bits);
+        const std::int64_t dr = algorithms::wrapped_delta(last_counts_.right_ticks,
+                                                          counts.right_ticks, counts.counter_bits);
         delta = algorithms::odometry_from_ticks(config_.geometry, dl, dr);
         delta_dt_s = static_cast<double>(counts.timestamp_ns - last_counts_.timestamp_ns) * 1e-9;
         have_delta = true;
@@ -175,7 +190,8 @@ CycleResult LocalizationCycle::run_once() {
         last_fix_ns_ = data_time_ns_;
         ever_fix_ = true;
         if (!filter_.initialized()) {
-          filter_.initialize(Pose2{fix_.fix.x_m, fix_.fix.y_m, 0.0}, config_.filter.init_position_sigma_m, 0.0, true);
+          filter_.initialize(Pose2{fix_.fix.x_m, fix_.fix.y_m, 0.0},
+                             config_.filter.init_position_sigma_m, 0.0, true);
           ++reset_counter_;
         } else {
           filter_.update_position(fix_.fix.x_m, fix_.fix.y_m, config_.filter.fix_sigma_m,
@@ -210,7 +226,8 @@ CycleResult LocalizationCycle::run_once() {
 }
 
 void LocalizationCycle::send(std::size_t size) {
-  if (link_.write_frame(frame_buffer_.data(), size) != hal::LinkWrite::kSent) ++counters_.link_dropped;
+  if (link_.write_frame(frame_buffer_.data(), size) != hal::LinkWrite::kSent)
+    ++counters_.link_dropped;
 }
 
 void LocalizationCycle::publish() {
@@ -218,11 +235,19 @@ void LocalizationCycle::publish() {
   if (data_time_ns_ >= next_heartbeat_ns_) {
     mavlink::Heartbeat hb;
     switch (health) {
-      case Health::kNotInitialized: hb.system_status = mavlink::kMavStateStandby; break;
-      case Health::kNominal: hb.system_status = mavlink::kMavStateActive; break;
+      case Health::kNotInitialized:
+        hb.system_status = mavlink::kMavStateStandby;
+        break;
+      case Health::kNominal:
+        hb.system_status = mavlink::kMavStateActive;
+        break;
       case Health::kOdometryOnly:
-      case Health::kVisionOnly: hb.system_status = mavlink::kMavStateCritical; break;
-      case Health::kInvalid: hb.system_status = mavlink::kMavStateEmergency; break;
+      case Health::kVisionOnly:
+        hb.system_status = mavlink::kMavStateCritical;
+        break;
+      case Health::kInvalid:
+        hb.system_status = mavlink::kMavStateEmergency;
+        break;
     }
     send(mavlink_.heartbeat(hb, frame_buffer_));
     const auto step = static_cast<std::uint64_t>(std::llround(1e9 / config_.link.heartbeat_hz));
@@ -230,11 +255,11 @@ void LocalizationCycle::publish() {
     if (next_heartbeat_ns_ <= data_time_ns_) next_heartbeat_ns_ = data_time_ns_ + step;
   }
   if (health != last_reported_health_) {
-    static constexpr const char* kText[] = {"harmoloc: waiting for a first fix", "harmoloc: pose nominal",
-                                            "harmoloc: odometry only (no camera fix)",
-                                            "harmoloc: vision only (no encoder data)",
-                                            "harmoloc: pose invalid (no camera, no encoders)"};
-    const std::uint8_t severity = health == Health::kNominal ? mavlink::kSeverityInfo
+    static constexpr const char* kText[] = {
+        "harmoloc: waiting for a first fix", "harmoloc: pose nominal",
+        "harmoloc: odometry only (no camera fix)", "harmoloc: vision only (no encoder data)",
+        "harmoloc: pose invalid (no camera, no encoders)"};
+    const std::uint8_t severity = health == Health::kNominal   ? mavlink::kSeverityInfo
                                   : health == Health::kInvalid ? mavlink::kSeverityCritical
                                                                : mavlink::kSeverityWarning;
     send(mavlink_.statustext(severity, kText[static_cast<std::size_t>(health)], frame_buffer_));
@@ -250,17 +275,18 @@ void LocalizationCycle::publish() {
   m.y = static_cast<float>(-pose_.pose.y_m);
   m.z = 0.0F;
   const double half_yaw = -0.5 * pose_.pose.yaw_rad;
-  m.q = {static_cast<float>(std::cos(half_yaw)), 0.0F, 0.0F, static_cast<float>(std::sin(half_yaw))};
+  m.q = {static_cast<float>(std::cos(half_yaw)), 0.0F, 0.0F,
+         static_cast<float>(std::sin(half_yaw))};
   m.vx = static_cast<float>(pose_.speed_mps);
   m.yawspeed = static_cast<float>(-pose_.yaw_rate_rps);
   const auto& c = pose_.covariance;
   m.pose_covariance.fill(0.0F);
-  m.pose_covariance[0] = static_cast<float>(c(0, 0));    // x x
-  m.pose_covariance[1] = static_cast<float>(-c(0, 1));   // x y
-  m.pose_covariance[5] = static_cast<float>(-c(0, 2));   // x yaw
-  m.pose_covariance[6] = static_cast<float>(c(1, 1));    // y y
-  m.pose_covariance[10] = static_cast<float>(c(1, 2));   // y yaw (both signs flip)
-  m.pose_covariance[20] = static_cast<float>(c(2, 2));   // yaw yaw
+  m.pose_covariance[0] = static_cast<float>(c(0, 0));   // x x
+  m.pose_covariance[1] = static_cast<float>(-c(0, 1));  // x y
+  m.pose_covariance[5] = static_cast<float>(-c(0, 2));  // x yaw
+  m.pose_covariance[6] = static_cast<float>(c(1, 1));   // y y
+  m.pose_covariance[10] = static_cast<float>(c(1, 2));  // y yaw (both signs flip)
+  m.pose_covariance[20] = static_cast<float>(c(2, 2));  // yaw yaw
   m.velocity_covariance.fill(0.0F);
   m.velocity_covariance[0] = std::numeric_limits<float>::quiet_NaN();  // not estimated
   m.reset_counter = reset_counter_;
@@ -268,7 +294,8 @@ void LocalizationCycle::publish() {
     m.quality = -1;
   } else {
     const double sigma_m = std::sqrt(std::max(0.0, 0.5 * (c(0, 0) + c(1, 1))));
-    m.quality = static_cast<std::int8_t>(std::lround(std::clamp(100.0 - 1000.0 * sigma_m, 0.0, 100.0)));
+    m.quality =
+        static_cast<std::int8_t>(std::lround(std::clamp(100.0 - 1000.0 * sigma_m, 0.0, 100.0)));
   }
   send(mavlink_.odometry(m, frame_buffer_));
 }

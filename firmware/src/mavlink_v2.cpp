@@ -49,7 +49,8 @@ std::uint16_t crc_x25(const std::uint8_t* data, std::size_t size, std::uint16_t 
   return crc;
 }
 
-std::size_t Encoder::finish(std::uint32_t msg_id, std::uint8_t crc_extra, std::size_t payload_len, FrameBuffer& out) {
+std::size_t Encoder::finish(std::uint32_t msg_id, std::uint8_t crc_extra, std::size_t payload_len,
+                            FrameBuffer& out) {
   // MAVLink 2 drops trailing zero bytes of the payload (at least one byte stays).
   while (payload_len > 1 && out[kHeaderBytes + payload_len - 1] == 0) --payload_len;
   out[0] = kStx;

@@ -7,7 +7,9 @@ namespace harmoloc::firmware {
 
 namespace {
 
-double us(std::uint64_t ns) { return static_cast<double>(ns) / 1000.0; }
+double us(std::uint64_t ns) {
+  return static_cast<double>(ns) / 1000.0;
+}
 
 }  // namespace
 
@@ -25,10 +27,11 @@ std::string stats_json(const LocalizationCycle& cycle, const RunCounters& run) {
     << "  \"stages\": {";
   for (std::size_t s = 0; s < kStageCount; ++s) {
     const LatencyHistogram& h = cycle.stage_histogram(static_cast<Stage>(s));
-    o << (s == 0 ? "\n" : ",\n") << "    \"" << stage_name(static_cast<Stage>(s)) << "\": {\"median_us\": "
-      << us(h.quantile_ns(0.5)) << ", \"p99_us\": " << us(h.quantile_ns(0.99)) << ", \"p999_us\": "
-      << us(h.quantile_ns(0.999)) << ", \"max_us\": " << us(h.max_ns()) << ", \"mean_us\": " << h.mean_ns() / 1000.0
-      << "}";
+    o << (s == 0 ? "\n" : ",\n") << "    \"" << stage_name(static_cast<Stage>(s))
+      << "\": {\"median_us\": " << us(h.quantile_ns(0.5))
+      << ", \"p99_us\": " << us(h.quantile_ns(0.99))
+      << ", \"p999_us\": " << us(h.quantile_ns(0.999)) << ", \"max_us\": " << us(h.max_ns())
+      << ", \"mean_us\": " << h.mean_ns() / 1000.0 << "}";
   }
   o << "\n  },\n  \"cycle_histogram\": {\"upper_us\": [";
   const LatencyHistogram& whole = cycle.stage_histogram(Stage::kCycle);
@@ -41,20 +44,27 @@ std::string stats_json(const LocalizationCycle& cycle, const RunCounters& run) {
     first = false;
   }
   o << "], \"counts\": [" << counts.str() << "]},\n"
-    << "  \"health_cycles\": {\"not_initialized\": " << c.cycles_in_health[0] << ", \"nominal\": " << c.cycles_in_health[1]
-    << ", \"odometry_only\": " << c.cycles_in_health[2] << ", \"vision_only\": " << c.cycles_in_health[3]
-    << ", \"invalid\": " << c.cycles_in_health[4] << "},\n"
-    << "  \"degraded\": {\"odometry_only\": " << c.cycles_in_health[2] << ", \"vision_only\": " << c.cycles_in_health[3]
-    << ", \"invalid\": " << c.cycles_in_health[4] << "},\n"
+    << "  \"health_cycles\": {\"not_initialized\": " << c.cycles_in_health[0]
+    << ", \"nominal\": " << c.cycles_in_health[1]
+    << ", \"odometry_only\": " << c.cycles_in_health[2]
+    << ", \"vision_only\": " << c.cycles_in_health[3] << ", \"invalid\": " << c.cycles_in_health[4]
+    << "},\n"
+    << "  \"degraded\": {\"odometry_only\": " << c.cycles_in_health[2]
+    << ", \"vision_only\": " << c.cycles_in_health[3] << ", \"invalid\": " << c.cycles_in_health[4]
+    << "},\n"
     << "  \"camera\": {\"frames\": " << run.camera.frames << ", \"corrupt\": " << run.camera.corrupt
     << ", \"dropped\": " << run.camera.dropped << ", \"no_frame_cycles\": " << c.no_frame
     << ", \"size_mismatch\": " << c.frame_size_mismatch << "},\n"
-    << "  \"encoders\": {\"samples\": " << run.encoders.samples << ", \"ignored_id\": " << run.encoders.ignored_id
-    << ", \"bad_length\": " << run.encoders.bad_length << ", \"glitches\": " << run.encoders.glitches
+    << "  \"encoders\": {\"samples\": " << run.encoders.samples
+    << ", \"ignored_id\": " << run.encoders.ignored_id
+    << ", \"bad_length\": " << run.encoders.bad_length
+    << ", \"glitches\": " << run.encoders.glitches
     << ", \"bus_errors\": " << run.encoders.bus_errors << "},\n"
-    << "  \"link\": {\"frames_sent\": " << run.link.frames_sent << ", \"frames_dropped\": " << run.link.frames_dropped
+    << "  \"link\": {\"frames_sent\": " << run.link.frames_sent
+    << ", \"frames_dropped\": " << run.link.frames_dropped
     << ", \"bytes_sent\": " << run.link.bytes_sent << ", \"errors\": " << run.link.errors << "},\n"
-    << "  \"localizer\": {\"fixes\": " << c.fixes_used << ", \"unknown_place\": " << c.unknown_place << "},\n"
+    << "  \"localizer\": {\"fixes\": " << c.fixes_used << ", \"unknown_place\": " << c.unknown_place
+    << "},\n"
     << "  \"filter\": {\"resamples\": " << c.resamples << "}\n}\n";
   return o.str();
 }

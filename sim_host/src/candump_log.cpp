@@ -45,8 +45,10 @@ bool parse_candump_line(const std::string& line, CanFrame& frame, std::string& r
       reason = "timestamp has a non-digit";
       return false;
     }
-    if (i < dot) sec = sec * 10U + static_cast<std::uint64_t>(stamp[i] - '0');
-    else usec = usec * 10U + static_cast<std::uint64_t>(stamp[i] - '0');
+    if (i < dot)
+      sec = sec * 10U + static_cast<std::uint64_t>(stamp[i] - '0');
+    else
+      usec = usec * 10U + static_cast<std::uint64_t>(stamp[i] - '0');
   }
   pos = close + 1;
   while (pos < line.size() && line[pos] == ' ') ++pos;
@@ -133,10 +135,12 @@ std::vector<CanFrame> read_candump_log(const std::string& path) {
 
 std::string format_candump_line(const CanFrame& frame, const std::string& iface) {
   char buf[96];
-  int n = std::snprintf(buf, sizeof buf, "(%llu.%06llu) %s ",
-                        static_cast<unsigned long long>(frame.timestamp_ns / 1000000000ULL),
-                        static_cast<unsigned long long>((frame.timestamp_ns / 1000ULL) % 1000000ULL), iface.c_str());
-  n += std::snprintf(buf + n, sizeof buf - static_cast<std::size_t>(n), frame.extended ? "%08X#" : "%03X#", frame.id);
+  int n = std::snprintf(
+      buf, sizeof buf, "(%llu.%06llu) %s ",
+      static_cast<unsigned long long>(frame.timestamp_ns / 1000000000ULL),
+      static_cast<unsigned long long>((frame.timestamp_ns / 1000ULL) % 1000000ULL), iface.c_str());
+  n += std::snprintf(buf + n, sizeof buf - static_cast<std::size_t>(n),
+                     frame.extended ? "%08X#" : "%03X#", frame.id);
   for (std::uint8_t i = 0; i < frame.length && i < 8; ++i) {
     n += std::snprintf(buf + n, sizeof buf - static_cast<std::size_t>(n), "%02X", frame.data[i]);
   }

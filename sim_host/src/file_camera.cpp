@@ -37,7 +37,8 @@ FileCamera::FileCamera(const std::string& dataset_dir, const DatasetMetadata& me
   const std::vector<FrameEntry> entries = read_frame_index(index_path);
   if (entries.empty()) throw std::runtime_error(index_path + ": no frames listed");
 
-  const std::size_t pixel_bytes = static_cast<std::size_t>(metadata.image_width_px) * metadata.image_height_px *
+  const std::size_t pixel_bytes = static_cast<std::size_t>(metadata.image_width_px) *
+                                  metadata.image_height_px *
                                   hal::bytes_per_pixel_x2(metadata.pixel_format) / 2U;
   std::array<std::uint8_t, 64> head{};
   for (const FrameEntry& e : entries) {
@@ -55,17 +56,20 @@ FileCamera::FileCamera(const std::string& dataset_dir, const DatasetMetadata& me
       if (h.width_px != metadata.image_width_px || h.height_px != metadata.image_height_px) {
         throw std::runtime_error("frame " + e.file + ": " + std::to_string(h.width_px) + "x" +
                                  std::to_string(h.height_px) + ", metadata says " +
-                                 std::to_string(metadata.image_width_px) + "x" + std::to_string(metadata.image_height_px));
+                                 std::to_string(metadata.image_width_px) + "x" +
+                                 std::to_string(metadata.image_height_px));
       }
       if (data_offset_ != 0 && h.data_offset != data_offset_) {
-        throw std::runtime_error("frame " + e.file + ": PPM header differs in length from the first frame's");
+        throw std::runtime_error("frame " + e.file +
+                                 ": PPM header differs in length from the first frame's");
       }
       data_offset_ = h.data_offset;
     }
     const std::size_t expected = data_offset_ + pixel_bytes;
     if (size != expected) {
-      throw std::runtime_error("frame " + e.file + ": " + std::to_string(size) + " bytes, expected " +
-                               std::to_string(expected) + (size < expected ? " (truncated)" : ""));
+      throw std::runtime_error("frame " + e.file + ": " + std::to_string(size) +
+                               " bytes, expected " + std::to_string(expected) +
+                               (size < expected ? " (truncated)" : ""));
     }
     paths_.push_back(path);
     stamps_.push_back(e.timestamp_ns);
@@ -75,7 +79,8 @@ FileCamera::FileCamera(const std::string& dataset_dir, const DatasetMetadata& me
   view_.width_px = metadata.image_width_px;
   view_.height_px = metadata.image_height_px;
   view_.format = metadata.pixel_format;
-  view_.stride_bytes = static_cast<std::uint32_t>(metadata.image_width_px * hal::bytes_per_pixel_x2(metadata.pixel_format) / 2U);
+  view_.stride_bytes = static_cast<std::uint32_t>(
+      metadata.image_width_px * hal::bytes_per_pixel_x2(metadata.pixel_format) / 2U);
   view_.data = buffer_.data() + data_offset_;
 }
 
@@ -85,9 +90,11 @@ hal::CameraStatus FileCamera::acquire(hal::FrameView& frame, std::uint64_t /*dea
   const long n = read_file(paths_[i].c_str(), buffer_.data(), buffer_.size());
   const char* why = nullptr;
   PpmHeader h;
-  const bool header_ok = view_.format != hal::PixelFormat::kRgb24 ||
-                         (n > 0 && parse_ppm_header(buffer_.data(), static_cast<std::size_t>(n), h, &why) &&
-                          h.data_offset == data_offset_ && h.width_px == view_.width_px && h.height_px == view_.height_px);
+  const bool header_ok =
+      view_.format != hal::PixelFormat::kRgb24 ||
+      (n > 0 && parse_ppm_header(buffer_.data(), static_cast<std::size_t>(n), h, &why) &&
+       h.data_offset == data_offset_ && h.width_px == view_.width_px &&
+       h.height_px == view_.height_px);
   if (n != static_cast<long>(file_size_) || !header_ok) {
     ++counters_.corrupt;
     return hal::CameraStatus::kCorrupt;

@@ -7,7 +7,8 @@ namespace harmoloc::sim_host {
 LogEncoders::LogEncoders(const std::string& log_path, const algorithms::EncoderFrameLayout& layout)
     : LogEncoders(read_candump_log(log_path), layout) {}
 
-LogEncoders::LogEncoders(std::vector<algorithms::CanFrame> frames, const algorithms::EncoderFrameLayout& layout)
+LogEncoders::LogEncoders(std::vector<algorithms::CanFrame> frames,
+                         const algorithms::EncoderFrameLayout& layout)
     : frames_(std::move(frames)), layout_(layout) {}
 
 hal::EncoderStatus LogEncoders::read(std::uint64_t data_time_ns, hal::EncoderCounts& counts) {
@@ -24,8 +25,12 @@ hal::EncoderStatus LogEncoders::read(std::uint64_t data_time_ns, hal::EncoderCou
         ++counters_.samples;
         fresh = true;
         break;
-      case algorithms::CanDecode::kOtherId: ++counters_.ignored_id; break;
-      case algorithms::CanDecode::kBadLength: ++counters_.bad_length; break;
+      case algorithms::CanDecode::kOtherId:
+        ++counters_.ignored_id;
+        break;
+      case algorithms::CanDecode::kBadLength:
+        ++counters_.bad_length;
+        break;
     }
   }
   if (fresh) return hal::EncoderStatus::kFresh;

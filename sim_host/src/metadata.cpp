@@ -2,6 +2,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -11,10 +12,13 @@ namespace harmoloc::sim_host {
 
 namespace {
 
-[[noreturn]] void fail(const std::string& what) { throw std::runtime_error("metadata.toml: " + what); }
+[[noreturn]] void fail(const std::string& what) {
+  throw std::runtime_error("metadata.toml: " + what);
+}
 
 template <typename T>
-T number(const toml::table& t, const char* section, const char* key, T lo, T hi, T fallback, bool required) {
+T number(const toml::table& t, const char* section, const char* key, T lo, T hi, T fallback,
+         bool required) {
   const toml::node* node = t.at_path(std::string(section) + "." + key).node();
   if (node == nullptr) {
     if (required) fail(std::string("missing ") + section + "." + key);
@@ -36,7 +40,8 @@ T number(const toml::table& t, const char* section, const char* key, T lo, T hi,
   return static_cast<T>(v);
 }
 
-std::string text(const toml::table& t, const char* section, const char* key, const std::string& fallback) {
+std::string text(const toml::table& t, const char* section, const char* key,
+                 const std::string& fallback) {
   const toml::node* node = t.at_path(std::string(section) + "." + key).node();
   if (node == nullptr) return fallback;
   auto s = node->value_exact<std::string>();
@@ -48,7 +53,8 @@ std::string text(const toml::table& t, const char* section, const char* key, con
 
 DatasetMetadata read_metadata(const std::string& dataset_dir) {
   const std::string path = (std::filesystem::path(dataset_dir) / "metadata.toml").string();
-  if (!std::filesystem::exists(path)) fail("not found in " + dataset_dir + " (is it a dataset folder?)");
+  if (!std::filesystem::exists(path))
+    fail("not found in " + dataset_dir + " (is it a dataset folder?)");
   toml::table t;
   try {
     t = toml::parse_file(path);
@@ -60,17 +66,22 @@ DatasetMetadata read_metadata(const std::string& dataset_dir) {
   DatasetMetadata m;
   const auto version = t["format_version"].value<std::int64_t>();
   if (!version) fail("missing format_version");
-  if (*version != 1) fail("format_version " + std::to_string(*version) + " is not supported (expected 1)");
+  if (*version != 1)
+    fail("format_version " + std::to_string(*version) + " is not supported (expected 1)");
   m.name = t["name"].value_or(std::string{});
   m.seed = static_cast<std::uint64_t>(t["seed"].value_or(std::int64_t{0}));
 
   m.image_width_px = number<std::uint32_t>(t, "camera", "width_px", 2, 8192, 0, true);
   m.image_height_px = number<std::uint32_t>(t, "camera", "height_px", 2, 8192, 0, true);
   const std::string format = text(t, "camera", "pixel_format", "rgb24");
-  if (format == "rgb24") m.pixel_format = hal::PixelFormat::kRgb24;
-  else if (format == "yuyv") m.pixel_format = hal::PixelFormat::kYuyv;
-  else fail("camera.pixel_format must be \"rgb24\" or \"yuyv\", not \"" + format + "\"");
-  if (m.pixel_format == hal::PixelFormat::kYuyv && m.image_width_px % 2 != 0) fail("camera.width_px must be even for yuyv");
+  if (format == "rgb24")
+    m.pixel_format = hal::PixelFormat::kRgb24;
+  else if (format == "yuyv")
+    m.pixel_format = hal::PixelFormat::kYuyv;
+  else
+    fail("camera.pixel_format must be \"rgb24\" or \"yuyv\", not \"" + format + "\"");
+  if (m.pixel_format == hal::PixelFormat::kYuyv && m.image_width_px % 2 != 0)
+    fail("camera.width_px must be even for yuyv");
   m.frame_rate_hz = number<double>(t, "camera", "rate_hz", 1.0, 1000.0, 30.0, true);
   m.frames_index = text(t, "camera", "frames_index", "frames.csv");
 
@@ -79,17 +90,25 @@ DatasetMetadata read_metadata(const std::string& dataset_dir) {
   auto& lay = m.encoder_layout;
   lay.id = number<std::uint32_t>(t, "encoders", "can_id", 0, 0x1FFFFFFF, lay.id, false);
   lay.length = number<std::uint8_t>(t, "encoders", "length", 1, 8, lay.length, false);
-  lay.left_offset = number<std::uint8_t>(t, "encoders", "left_offset", 0, 7, lay.left_offset, false);
-  lay.right_offset = number<std::uint8_t>(t, "encoders", "right_offset", 0, 7, lay.right_offset, false);
-  lay.counter_bits = number<std::uint8_t>(t, "encoders", "counter_bits", 8, 32, lay.counter_bits, false);
+  lay.left_offset =
+      number<std::uint8_t>(t, "encoders", "left_offset", 0, 7, lay.left_offset, false);
+  lay.right_offset =
+      number<std::uint8_t>(t, "encoders", "right_offset", 0, 7, lay.right_offset, false);
+  lay.counter_bits =
+      number<std::uint8_t>(t, "encoders", "counter_bits", 8, 32, lay.counter_bits, false);
   const std::string order = text(t, "encoders", "byte_order", "little");
-  if (order == "little") lay.byte_order = algorithms::ByteOrder::kLittleEndian;
-  else if (order == "big") lay.byte_order = algorithms::ByteOrder::kBigEndian;
-  else fail("encoders.byte_order must be \"little\" or \"big\"");
-  if (!algorithms::layout_valid(lay)) fail("encoders: counters do not fit in the frame (offsets, counter_bits, length)");
+  if (order == "little")
+    lay.byte_order = algorithms::ByteOrder::kLittleEndian;
+  else if (order == "big")
+    lay.byte_order = algorithms::ByteOrder::kBigEndian;
+  else
+    fail("encoders.byte_order must be \"little\" or \"big\"");
+  if (!algorithms::layout_valid(lay))
+    fail("encoders: counters do not fit in the frame (offsets, counter_bits, length)");
 
   auto& g = m.geometry;
-  g.wheel_radius_m = number<double>(t, "robot", "wheel_radius_m", 0.001, 10.0, g.wheel_radius_m, true);
+  g.wheel_radius_m =
+      number<double>(t, "robot", "wheel_radius_m", 0.001, 10.0, g.wheel_radius_m, true);
   g.track_m = number<double>(t, "robot", "track_m", 0.001, 100.0, g.track_m, true);
   g.ticks_per_rev = number<double>(t, "robot", "ticks_per_rev", 1.0, 1e9, g.ticks_per_rev, true);
   g.left_direction = number<int>(t, "robot", "left_direction", -1, 1, 1, false);
@@ -104,6 +123,7 @@ void write_metadata(const std::string& dataset_dir, const DatasetMetadata& m) {
   const std::string path = (std::filesystem::path(dataset_dir) / "metadata.toml").string();
   std::ofstream out(path);
   if (!out) throw std::runtime_error(path + ": cannot write");
+  out.precision(std::numeric_limits<double>::max_digits10);
   char id[16];
   std::snprintf(id, sizeof id, "0x%X", m.encoder_layout.id);
   out << "# harmoloc dataset metadata (schema: docs/dataset-format.md)\n"
@@ -113,7 +133,8 @@ void write_metadata(const std::string& dataset_dir, const DatasetMetadata& m) {
       << "[camera]\n"
       << "width_px = " << m.image_width_px << "\n"
       << "height_px = " << m.image_height_px << "\n"
-      << "pixel_format = \"" << (m.pixel_format == hal::PixelFormat::kRgb24 ? "rgb24" : "yuyv") << "\"\n"
+      << "pixel_format = \"" << (m.pixel_format == hal::PixelFormat::kRgb24 ? "rgb24" : "yuyv")
+      << "\"\n"
       << "rate_hz = " << m.frame_rate_hz << "\n"
       << "frames_index = \"" << m.frames_index << "\"\n\n"
       << "[encoders]\n"
@@ -124,7 +145,8 @@ void write_metadata(const std::string& dataset_dir, const DatasetMetadata& m) {
       << "left_offset = " << int{m.encoder_layout.left_offset} << "\n"
       << "right_offset = " << int{m.encoder_layout.right_offset} << "\n"
       << "counter_bits = " << int{m.encoder_layout.counter_bits} << "\n"
-      << "byte_order = \"" << (m.encoder_layout.byte_order == algorithms::ByteOrder::kLittleEndian ? "little" : "big")
+      << "byte_order = \""
+      << (m.encoder_layout.byte_order == algorithms::ByteOrder::kLittleEndian ? "little" : "big")
       << "\"\n\n"
       << "[robot]\n"
       << "wheel_radius_m = " << m.geometry.wheel_radius_m << "\n"

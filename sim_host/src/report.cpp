@@ -847,6 +847,15 @@ std::string summary_text(const Report& report, const std::string& index_path) {
       if (s.name == "cycle" || !std::isfinite(s.p99_us)) continue;
       if (slowest == nullptr || s.p99_us > slowest->p99_us) slowest = &s;
     }
+    if (!stats.stages.empty()) {
+      out +=
+          format("per stage      %-10s %10s %10s %10s %10s\n", "", "median", "p99", "p99.9", "max");
+      for (const StageTiming& s : stats.stages) {
+        out += format("               %-10s %10s %10s %10s %10s\n", s.name.c_str(),
+                      duration(s.median_us).c_str(), duration(s.p99_us).c_str(),
+                      duration(s.p999_us).c_str(), duration(s.max_us).c_str());
+      }
+    }
     if (slowest != nullptr) {
       out += format("slowest stage  %s (median %s, p99 %s)\n", slowest->name.c_str(),
                     duration(slowest->median_us).c_str(), duration(slowest->p99_us).c_str());

@@ -34,16 +34,21 @@ Polyline make_path(const std::vector<std::array<double, 2>>& w) {
   if (w.size() < 2) throw std::runtime_error("a route needs at least 2 waypoints");
   Polyline p;
   const std::size_t n = w.size();
-  auto pt = [&](std::ptrdiff_t i) { return w[static_cast<std::size_t>(std::clamp<std::ptrdiff_t>(i, 0, static_cast<std::ptrdiff_t>(n) - 1))]; };
+  auto pt = [&](std::ptrdiff_t i) {
+    return w[static_cast<std::size_t>(
+        std::clamp<std::ptrdiff_t>(i, 0, static_cast<std::ptrdiff_t>(n) - 1))];
+  };
   constexpr int kSteps = 400;
   for (std::size_t i = 0; i + 1 < n; ++i) {
     const auto p0 = pt(static_cast<std::ptrdiff_t>(i) - 1), p1 = pt(static_cast<std::ptrdiff_t>(i)),
-               p2 = pt(static_cast<std::ptrdiff_t>(i) + 1), p3 = pt(static_cast<std::ptrdiff_t>(i) + 2);
+               p2 = pt(static_cast<std::ptrdiff_t>(i) + 1),
+               p3 = pt(static_cast<std::ptrdiff_t>(i) + 2);
     for (int k = (i == 0 ? 0 : 1); k <= kSteps; ++k) {
       const double t = static_cast<double>(k) / kSteps, t2 = t * t, t3 = t2 * t;
       double c[2];
       for (int d = 0; d < 2; ++d) {
-        c[d] = 0.5 * (2 * p1[d] + (-p0[d] + p2[d]) * t + (2 * p0[d] - 5 * p1[d] + 4 * p2[d] - p3[d]) * t2 +
+        c[d] = 0.5 * (2 * p1[d] + (-p0[d] + p2[d]) * t +
+                      (2 * p0[d] - 5 * p1[d] + 4 * p2[d] - p3[d]) * t2 +
                       (-p0[d] + 3 * p1[d] - 3 * p2[d] + p3[d]) * t3);
       }
       p.x.push_back(c[0]);
@@ -51,7 +56,8 @@ Polyline make_path(const std::vector<std::array<double, 2>>& w) {
     }
   }
   p.s.assign(p.x.size(), 0.0);
-  for (std::size_t k = 1; k < p.x.size(); ++k) p.s[k] = p.s[k - 1] + std::hypot(p.x[k] - p.x[k - 1], p.y[k] - p.y[k - 1]);
+  for (std::size_t k = 1; k < p.x.size(); ++k)
+    p.s[k] = p.s[k - 1] + std::hypot(p.x[k] - p.x[k - 1], p.y[k] - p.y[k - 1]);
   return p;
 }
 
@@ -78,8 +84,8 @@ double leg_distance(double t, double length, double v, double a, double& duratio
 
 }  // namespace
 
-std::vector<MotionSample> simulate_motion(const Scenario& scenario, double step_s, algorithms::Pcg32& rng,
-                                          RouteStats* stats) {
+std::vector<MotionSample> simulate_motion(const Scenario& scenario, double step_s,
+                                          algorithms::Pcg32& rng, RouteStats* stats) {
   const RouteSpec& r = scenario.route;
   const Polyline path = make_path(r.waypoints_m);
   const double length = path.length();
@@ -97,7 +103,8 @@ std::vector<MotionSample> simulate_motion(const Scenario& scenario, double step_
   }
   auto wander = [&](double travelled) {
     double w = 0.0;
-    for (int k = 0; k < 3; ++k) w += amp[k] * std::sin(2.0 * kPi * travelled / wavelength[k] + phase[k]);
+    for (int k = 0; k < 3; ++k)
+      w += amp[k] * std::sin(2.0 * kPi * travelled / wavelength[k] + phase[k]);
     return w;
   };
 
@@ -133,7 +140,8 @@ std::vector<MotionSample> simulate_motion(const Scenario& scenario, double step_
     } else if (in_lap < 2.0 * r.pause_s + leg_s) {
       s = length;
     } else {
-      s = length - leg_distance(in_lap - 2.0 * r.pause_s - leg_s, length, r.speed_mps, r.acceleration_mps2, leg_s);
+      s = length - leg_distance(in_lap - 2.0 * r.pause_s - leg_s, length, r.speed_mps,
+                                r.acceleration_mps2, leg_s);
       dir = -1;
     }
     travelled += std::fabs(s - last_s);
@@ -174,7 +182,8 @@ std::vector<MotionSample> simulate_motion(const Scenario& scenario, double step_
     stats->duration_s = total_s;
     const double mean = std::atan2(mean_sin, mean_cos);
     double worst = 0.0;
-    for (const MotionSample& m : out) worst = std::max(worst, std::fabs(wrap_angle_rad(m.pose.yaw_rad - mean)));
+    for (const MotionSample& m : out)
+      worst = std::max(worst, std::fabs(wrap_angle_rad(m.pose.yaw_rad - mean)));
     stats->max_heading_offset_deg = worst * 180.0 / kPi;
   }
   return out;

@@ -18,7 +18,8 @@ constexpr double kDeg = algorithms::kPi / 180.0;
 Scenario desk_shuttle() {
   Scenario s;
   s.name = "desk-shuttle";
-  s.description = "seed 000's desk: 6 boards, 320x240 distorted camera, S-shaped route driven forth and back";
+  s.description =
+      "seed 000's desk: 6 boards, 320x240 distorted camera, S-shaped route driven forth and back";
   const double face = -90.0 * kDeg;  // boards look at the robot (towards -y)
   s.boards = {
       {"red", {220, 30, 30}, 1.55, 2.55, 0.95, 0.30, 0.40, face + 15.0 * kDeg},
@@ -67,8 +68,8 @@ double num(const toml::node& n, const std::string& file, const std::string& key)
   fail(file, key + " must be a number");
 }
 
-void set_num(const toml::table& t, const char* key, double& out, const std::string& file, const std::string& section,
-             double lo, double hi) {
+void set_num(const toml::table& t, const char* key, double& out, const std::string& file,
+             const std::string& section, double lo, double hi) {
   if (const toml::node* n = t.get(key)) {
     const double v = num(*n, file, section + key);
     if (!(v >= lo && v <= hi)) {
@@ -81,16 +82,29 @@ void set_num(const toml::table& t, const char* key, double& out, const std::stri
 }
 
 template <typename T>
-void set_int(const toml::table& t, const char* key, T& out, const std::string& file, const std::string& section,
-             double lo, double hi) {
+void set_int(const toml::table& t, const char* key, T& out, const std::string& file,
+             const std::string& section, double lo, double hi) {
   double v = static_cast<double>(out);
   set_num(t, key, v, file, section, lo, hi);
   out = static_cast<T>(v);
 }
 
-std::vector<double> numbers(const toml::node* n, std::size_t count, const std::string& file, const std::string& key) {
+// A scenario file is checked as strictly as the firmware config: a typo must not fall back to a
+// default silently.
+void only(const toml::table& t, const std::string& file, const std::string& where,
+          std::initializer_list<const char*> keys) {
+  for (const auto& [key, node] : t) {
+    bool known = false;
+    for (const char* k : keys) known = known || key.str() == k;
+    if (!known) fail(file, "unknown key '" + where + std::string(key.str()) + "'");
+  }
+}
+
+std::vector<double> numbers(const toml::node* n, std::size_t count, const std::string& file,
+                            const std::string& key) {
   const toml::array* a = n != nullptr ? n->as_array() : nullptr;
-  if (a == nullptr || a->size() != count) fail(file, key + " must be an array of " + std::to_string(count) + " numbers");
+  if (a == nullptr || a->size() != count)
+    fail(file, key + " must be an array of " + std::to_string(count) + " numbers");
   std::vector<double> out;
   for (const toml::node& e : *a) out.push_back(num(e, file, key));
   return out;
@@ -105,13 +119,24 @@ Scenario from_file(const std::string& file) {
     s << "line " << e.source().begin.line << ": " << e.description();
     fail(file, s.str());
   }
+  only(t, file, "",
+       {"base", "name", "description", "labelled_frames", "start_time_s", "camera", "route",
+        "encoders", "robot", "boards"});
   const std::string base = t["base"].value_or(std::string("desk-shuttle"));
-  Scenario s = load_scenario(base);
+  Scenario s;
+  try {
+    s = load_scenario(base);
+  } catch (const std::runtime_error& e) {
+    fail(file, std::string("base: ") + e.what());
+  }
   s.name = t["name"].value_or(std::filesystem::path(file).stem().string());
   s.description = t["description"].value_or(std::string("from ") + file);
   set_int(t, "labelled_frames", s.labelled_frames, file, "", 2, 4096);
   set_num(t, "start_time_s", s.start_time_s, file, "", 0, 4e9);
   if (const toml::table* c = t["camera"].as_table()) {
+    only(*c, file, "camera.",
+         {"width_px", "height_px", "horizontal_fov_deg", "radial_k", "height_m", "pitch_deg",
+          "mount_yaw_deg", "rate_hz", "pixel_noise", "light_gain"});
     set_int(*c, "width_px", s.camera.width_px, file, "camera.", 16, 4096);
     set_int(*c, "height_px", s.camera.height_px, file, "camera.", 16, 4096);
     set_num(*c, "horizontal_fov_deg", s.camera.horizontal_fov_deg, file, "camera.", 10, 150);
@@ -124,6 +149,8 @@ Scenario from_file(const std::string& file) {
     set_num(*c, "light_gain", s.camera.light_gain, file, "camera.", 0.1, 3);
   }
   if (const toml::table* r = t["route"].as_table()) {
+    only(*r, file, "route.",
+         {"waypoints", "speed_mps", "acceleration_mps2", "pause_s", "laps", "wander_m"});
     if (const toml::array* w = (*r)["waypoints"].as_array()) {
       s.route.waypoints_m.clear();
       for (const toml::node& p : *w) {
@@ -139,6 +166,9 @@ Scenario from_file(const std::string& file) {
     set_num(*r, "wander_m", s.route.wander_m, file, "route.", 0, 0.5);
   }
   if (const toml::table* e = t["encoders"].as_table()) {
+    only(*e, file, "encoders.",
+         {"rate_hz", "slip_sigma", "left_scale_error", "right_scale_error", "initial_left",
+          "initial_right", "counter_bits"});
     set_num(*e, "rate_hz", s.encoders.rate_hz, file, "encoders.", 1, 2000);
     set_num(*e, "slip_sigma", s.encoders.slip_sigma, file, "encoders.", 0, 0.5);
     set_num(*e, "left_scale_error", s.encoders.left_scale_error, file, "encoders.", -0.5, 0.5);
@@ -148,6 +178,7 @@ Scenario from_file(const std::string& file) {
     set_int(*e, "counter_bits", s.can_layout.counter_bits, file, "encoders.", 8, 32);
   }
   if (const toml::table* b = t["robot"].as_table()) {
+    only(*b, file, "robot.", {"wheel_radius_m", "track_m", "ticks_per_rev"});
     set_num(*b, "wheel_radius_m", s.robot.wheel_radius_m, file, "robot.", 0.005, 1);
     set_num(*b, "track_m", s.robot.track_m, file, "robot.", 0.05, 3);
     set_num(*b, "ticks_per_rev", s.robot.ticks_per_rev, file, "robot.", 1, 1e7);
@@ -157,13 +188,15 @@ Scenario from_file(const std::string& file) {
     for (const toml::node& n : *boards) {
       const toml::table* b = n.as_table();
       if (b == nullptr) fail(file, "[[boards]] entries must be tables");
+      only(*b, file, "boards.", {"name", "colour", "centre", "size", "facing_deg"});
       BoardSpec spec;
       spec.name = (*b)["name"].value_or(std::string("board") + std::to_string(s.boards.size() + 1));
       const auto c = numbers(b->get("colour"), 3, file, "boards.colour");
       for (double v : c) {
         if (v < 0 || v > 255) fail(file, "boards.colour values must be 0..255");
       }
-      spec.colour = Rgb{static_cast<std::uint8_t>(c[0]), static_cast<std::uint8_t>(c[1]), static_cast<std::uint8_t>(c[2])};
+      spec.colour = Rgb{static_cast<std::uint8_t>(c[0]), static_cast<std::uint8_t>(c[1]),
+                        static_cast<std::uint8_t>(c[2])};
       const auto centre = numbers(b->get("centre"), 3, file, "boards.centre");
       const auto size = numbers(b->get("size"), 2, file, "boards.size");
       if (size[0] <= 0 || size[1] <= 0) fail(file, "boards.size must be positive");
@@ -191,7 +224,8 @@ Scenario from_file(const std::string& file) {
 
 std::vector<std::pair<std::string, std::string>> builtin_scenarios() {
   std::vector<std::pair<std::string, std::string>> out;
-  for (const Scenario& s : {desk_shuttle(), tiny(), wrap_test()}) out.emplace_back(s.name, s.description);
+  for (const Scenario& s : {desk_shuttle(), tiny(), wrap_test()})
+    out.emplace_back(s.name, s.description);
   return out;
 }
 
@@ -202,7 +236,8 @@ Scenario load_scenario(const std::string& name_or_file) {
   if (std::filesystem::is_regular_file(name_or_file)) return from_file(name_or_file);
   std::string names;
   for (const auto& [name, text] : builtin_scenarios()) names += (names.empty() ? "" : ", ") + name;
-  throw std::runtime_error("unknown scenario '" + name_or_file + "' (built-in: " + names + "; or a .toml file)");
+  throw std::runtime_error("unknown scenario '" + name_or_file + "' (built-in: " + names +
+                           "; or a .toml file)");
 }
 
 std::string scenario_to_toml(const Scenario& s) {
@@ -214,24 +249,32 @@ std::string scenario_to_toml(const Scenario& s) {
     << "labelled_frames = " << s.labelled_frames << "\n"
     << "start_time_s = " << s.start_time_s << "\n\n[camera]\n"
     << "width_px = " << s.camera.width_px << "\nheight_px = " << s.camera.height_px
-    << "\nhorizontal_fov_deg = " << s.camera.horizontal_fov_deg << "\nradial_k = " << s.camera.radial_k
-    << "\nheight_m = " << s.camera.height_m << "\npitch_deg = " << s.camera.pitch_deg
-    << "\nmount_yaw_deg = " << s.camera.mount_yaw_deg << "\nrate_hz = " << s.camera.rate_hz
-    << "\npixel_noise = " << s.camera.pixel_noise << "\nlight_gain = " << s.camera.light_gain << "\n\n[route]\nwaypoints = [";
+    << "\nhorizontal_fov_deg = " << s.camera.horizontal_fov_deg
+    << "\nradial_k = " << s.camera.radial_k << "\nheight_m = " << s.camera.height_m
+    << "\npitch_deg = " << s.camera.pitch_deg << "\nmount_yaw_deg = " << s.camera.mount_yaw_deg
+    << "\nrate_hz = " << s.camera.rate_hz << "\npixel_noise = " << s.camera.pixel_noise
+    << "\nlight_gain = " << s.camera.light_gain << "\n\n[route]\nwaypoints = [";
   for (std::size_t i = 0; i < s.route.waypoints_m.size(); ++i) {
-    o << (i ? ", " : "") << "[" << s.route.waypoints_m[i][0] << ", " << s.route.waypoints_m[i][1] << "]";
+    o << (i ? ", " : "") << "[" << s.route.waypoints_m[i][0] << ", " << s.route.waypoints_m[i][1]
+      << "]";
   }
-  o << "]\nspeed_mps = " << s.route.speed_mps << "\nacceleration_mps2 = " << s.route.acceleration_mps2
-    << "\npause_s = " << s.route.pause_s << "\nlaps = " << s.route.laps << "\nwander_m = " << s.route.wander_m
-    << "\n\n[encoders]\nrate_hz = " << s.encoders.rate_hz << "\nslip_sigma = " << s.encoders.slip_sigma
-    << "\nleft_scale_error = " << s.encoders.left_scale_error << "\nright_scale_error = " << s.encoders.right_scale_error
-    << "\ninitial_left = " << s.encoders.initial_left << "\ninitial_right = " << s.encoders.initial_right
-    << "\ncounter_bits = " << int{s.can_layout.counter_bits} << "\n\n[robot]\nwheel_radius_m = " << s.robot.wheel_radius_m
+  o << "]\nspeed_mps = " << s.route.speed_mps
+    << "\nacceleration_mps2 = " << s.route.acceleration_mps2 << "\npause_s = " << s.route.pause_s
+    << "\nlaps = " << s.route.laps << "\nwander_m = " << s.route.wander_m
+    << "\n\n[encoders]\nrate_hz = " << s.encoders.rate_hz
+    << "\nslip_sigma = " << s.encoders.slip_sigma
+    << "\nleft_scale_error = " << s.encoders.left_scale_error
+    << "\nright_scale_error = " << s.encoders.right_scale_error
+    << "\ninitial_left = " << s.encoders.initial_left
+    << "\ninitial_right = " << s.encoders.initial_right
+    << "\ncounter_bits = " << int{s.can_layout.counter_bits}
+    << "\n\n[robot]\nwheel_radius_m = " << s.robot.wheel_radius_m
     << "\ntrack_m = " << s.robot.track_m << "\nticks_per_rev = " << s.robot.ticks_per_rev << "\n";
   for (const BoardSpec& b : s.boards) {
-    o << "\n[[boards]]\nname = \"" << b.name << "\"\ncolour = [" << int{b.colour.r} << ", " << int{b.colour.g} << ", "
-      << int{b.colour.b} << "]\ncentre = [" << b.centre_x_m << ", " << b.centre_y_m << ", " << b.centre_z_m
-      << "]\nsize = [" << b.width_m << ", " << b.height_m << "]\nfacing_deg = " << b.facing_yaw_rad / kDeg << "\n";
+    o << "\n[[boards]]\nname = \"" << b.name << "\"\ncolour = [" << int{b.colour.r} << ", "
+      << int{b.colour.g} << ", " << int{b.colour.b} << "]\ncentre = [" << b.centre_x_m << ", "
+      << b.centre_y_m << ", " << b.centre_z_m << "]\nsize = [" << b.width_m << ", " << b.height_m
+      << "]\nfacing_deg = " << b.facing_yaw_rad / kDeg << "\n";
   }
   return o.str();
 }

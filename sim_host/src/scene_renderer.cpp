@@ -41,7 +41,9 @@ bool undistort_radius(double r_d, double k, double& r_u) {
 }
 
 Rgb scale(const Rgb& c, double g) {
-  auto s = [g](std::uint8_t v) { return static_cast<std::uint8_t>(std::clamp(std::lround(v * g), 0L, 255L)); };
+  auto s = [g](std::uint8_t v) {
+    return static_cast<std::uint8_t>(std::clamp(std::lround(v * g), 0L, 255L));
+  };
   return Rgb{s(c.r), s(c.g), s(c.b)};
 }
 
@@ -88,7 +90,9 @@ int SceneRenderer::trace(const double o[3], const double d[3], Rgb& colour) cons
     if (t < best) {
       best = t;
       const double fx = o[0] + t * d[0], fy = o[1] + t * d[1];
-      const bool tile = (static_cast<long>(std::floor(fx / 0.3)) + static_cast<long>(std::floor(fy / 0.3))) % 2 == 0;
+      const bool tile =
+          (static_cast<long>(std::floor(fx / 0.3)) + static_cast<long>(std::floor(fy / 0.3))) % 2 ==
+          0;
       colour = tile ? Rgb{112, 112, 108} : Rgb{96, 96, 93};
     }
   }
@@ -111,7 +115,8 @@ int SceneRenderer::trace(const double o[3], const double d[3], Rgb& colour) cons
   if (std::fabs(d[2]) > 1e-12) {
     const double t = (s.desk_height_m - o[2]) / d[2];
     const double x = o[0] + t * d[0], y = o[1] + t * d[1];
-    if (t > 1e-6 && t < best && x >= desk_x0 && x <= desk_x1 && y >= s.desk_front_y_m && y <= s.wall_y_m) {
+    if (t > 1e-6 && t < best && x >= desk_x0 && x <= desk_x1 && y >= s.desk_front_y_m &&
+        y <= s.wall_y_m) {
       best = t;
       colour = Rgb{150, 110, 70};
       hit_board = kNoBoard;
@@ -144,7 +149,8 @@ int SceneRenderer::trace(const double o[3], const double d[3], Rgb& colour) cons
 
 namespace {
 
-void camera_frame(const Scenario& s, const Pose2& robot, double origin[3], double right[3], double down[3], double fwd[3]) {
+void camera_frame(const Scenario& s, const Pose2& robot, double origin[3], double right[3],
+                  double down[3], double fwd[3]) {
   const CameraSpec& c = s.camera;
   const double psi = robot.yaw_rad + c.mount_yaw_deg * kPi / 180.0;
   const double pitch = c.pitch_deg * kPi / 180.0;
@@ -165,7 +171,8 @@ void camera_frame(const Scenario& s, const Pose2& robot, double origin[3], doubl
 
 }  // namespace
 
-void SceneRenderer::render(const Pose2& robot_pose, algorithms::Pcg32& rng, std::vector<std::uint8_t>& rgb) const {
+void SceneRenderer::render(const Pose2& robot_pose, algorithms::Pcg32& rng,
+                           std::vector<std::uint8_t>& rgb) const {
   const CameraSpec& c = scenario_.camera;
   rgb.resize(rays_.size() * 3U);
   double o[3], r[3], dn[3], f[3];
@@ -182,7 +189,8 @@ void SceneRenderer::render(const Pose2& robot_pose, algorithms::Pcg32& rng, std:
     const std::uint8_t in[3] = {colour.r, colour.g, colour.b};
     for (int ch = 0; ch < 3; ++ch) {
       const double v = ray.valid ? in[ch] + c.pixel_noise * rng.normal() : 0.0;
-      rgb[i * 3U + static_cast<std::size_t>(ch)] = static_cast<std::uint8_t>(std::clamp(std::lround(v), 0L, 255L));
+      rgb[i * 3U + static_cast<std::size_t>(ch)] =
+          static_cast<std::uint8_t>(std::clamp(std::lround(v), 0L, 255L));
     }
   }
 }

@@ -26,11 +26,15 @@ std::vector<StampedPose> read_tum(const std::string& path) {
     std::istringstream fields(line);
     double v[8];
     for (double& x : v) {
-      if (!(fields >> x)) throw std::runtime_error(path + ":" + std::to_string(line_no) + ": expected 8 numbers (t x y z qx qy qz qw)");
-      if (!std::isfinite(x)) throw std::runtime_error(path + ":" + std::to_string(line_no) + ": value is not finite");
+      if (!(fields >> x))
+        throw std::runtime_error(path + ":" + std::to_string(line_no) +
+                                 ": expected 8 numbers (t x y z qx qy qz qw)");
+      if (!std::isfinite(x))
+        throw std::runtime_error(path + ":" + std::to_string(line_no) + ": value is not finite");
     }
     std::string extra;
-    if (fields >> extra) throw std::runtime_error(path + ":" + std::to_string(line_no) + ": more than 8 fields");
+    if (fields >> extra)
+      throw std::runtime_error(path + ":" + std::to_string(line_no) + ": more than 8 fields");
     StampedPose p;
     p.t_s = v[0];
     p.pose = Pose2{v[1], v[2], yaw_from_quaternion(v[4], v[5], v[6], v[7])};
@@ -60,7 +64,8 @@ void write_tum(const std::string& path, const std::vector<StampedPose>& poses) {
 }
 
 bool interpolate(const std::vector<StampedPose>& trajectory, double t_s, Pose2& pose) {
-  if (trajectory.empty() || t_s < trajectory.front().t_s || t_s > trajectory.back().t_s) return false;
+  if (trajectory.empty() || t_s < trajectory.front().t_s || t_s > trajectory.back().t_s)
+    return false;
   std::size_t lo = 0, hi = trajectory.size() - 1;
   while (hi - lo > 1) {
     const std::size_t mid = (lo + hi) / 2;
@@ -72,7 +77,8 @@ bool interpolate(const std::vector<StampedPose>& trajectory, double t_s, Pose2& 
   const double u = span > 0.0 ? (t_s - a.t_s) / span : 0.0;
   pose.x_m = a.pose.x_m + u * (b.pose.x_m - a.pose.x_m);
   pose.y_m = a.pose.y_m + u * (b.pose.y_m - a.pose.y_m);
-  pose.yaw_rad = algorithms::wrap_angle_rad(a.pose.yaw_rad + u * algorithms::wrap_angle_rad(b.pose.yaw_rad - a.pose.yaw_rad));
+  pose.yaw_rad = algorithms::wrap_angle_rad(
+      a.pose.yaw_rad + u * algorithms::wrap_angle_rad(b.pose.yaw_rad - a.pose.yaw_rad));
   return true;
 }
 

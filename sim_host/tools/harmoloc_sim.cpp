@@ -13,7 +13,8 @@ int main(int argc, char** argv) {
   using namespace harmoloc::sim_host;
   CLI::App app{
       "harmoloc-sim: simulate a scenario run and write it as a dataset folder.\n"
-      "The folder holds frames/ (binary PPM), frames.csv, encoders.log (candump -l), groundtruth.tum,\n"
+      "The folder holds frames/ (binary PPM), frames.csv, encoders.log (candump -l), "
+      "groundtruth.tum,\n"
       "labels.tum (the poses an external reference would label), metadata.toml and scenario.toml.\n"
       "See docs/dataset-format.md and docs/scenarios.md.",
       "harmoloc-sim"};
@@ -21,15 +22,19 @@ int main(int argc, char** argv) {
   std::string out_dir;
   std::uint64_t seed = 1;
   bool list = false, quiet = false;
-  app.add_option("--scenario", scenario_name, "built-in scenario name or a scenario .toml file")->capture_default_str();
-  app.add_option("--out", out_dir, "dataset folder to write (created; existing files are overwritten)");
-  app.add_option("--seed", seed, "random seed: pixel noise, wheel slip, route wander, label noise")->capture_default_str();
+  app.add_option("--scenario", scenario_name, "built-in scenario name or a scenario .toml file")
+      ->capture_default_str();
+  app.add_option("--out", out_dir,
+                 "dataset folder to write (created; existing files are overwritten)");
+  app.add_option("--seed", seed, "random seed: pixel noise, wheel slip, route wander, label noise")
+      ->capture_default_str();
   app.add_flag("--list", list, "list the built-in scenarios and exit");
   app.add_flag("--quiet", quiet, "no progress output");
   CLI11_PARSE(app, argc, argv);
 
   if (list) {
-    for (const auto& [name, text] : builtin_scenarios()) std::printf("%-14s %s\n", name.c_str(), text.c_str());
+    for (const auto& [name, text] : builtin_scenarios())
+      std::printf("%-14s %s\n", name.c_str(), text.c_str());
     return 0;
   }
   if (out_dir.empty()) {
@@ -39,18 +44,22 @@ int main(int argc, char** argv) {
   try {
     const Scenario scenario = load_scenario(scenario_name);
     if (!quiet) {
-      std::fprintf(stderr, "harmoloc-sim: scenario '%s' (%ux%u, %.0f Hz, %zu boards), seed %llu -> %s\n",
-                   scenario.name.c_str(), scenario.camera.width_px, scenario.camera.height_px, scenario.camera.rate_hz,
-                   scenario.boards.size(), static_cast<unsigned long long>(seed), out_dir.c_str());
+      std::fprintf(stderr,
+                   "harmoloc-sim: scenario '%s' (%ux%u, %.0f Hz, %zu boards), seed %llu -> %s\n",
+                   scenario.name.c_str(), scenario.camera.width_px, scenario.camera.height_px,
+                   scenario.camera.rate_hz, scenario.boards.size(),
+                   static_cast<unsigned long long>(seed), out_dir.c_str());
     }
     const auto progress = [quiet](std::size_t done, std::size_t total) {
       if (!quiet) std::fprintf(stderr, "\r  rendering frame %zu/%zu", done, total);
       if (!quiet && done == total) std::fprintf(stderr, "\n");
     };
     const SimulationSummary s = simulate_dataset(scenario, seed, out_dir, progress);
-    std::printf("wrote %s: %zu frames, %zu encoder frames, %zu labels; route %.2f m, %.1f s, heading within +-%.0f deg\n",
-                out_dir.c_str(), s.frames, s.encoder_frames, s.labels, s.route.length_m, s.route.duration_s,
-                s.route.max_heading_offset_deg);
+    std::printf(
+        "wrote %s: %zu frames, %zu encoder frames, %zu labels; route %.2f m, %.1f s, heading "
+        "within +-%.0f deg\n",
+        out_dir.c_str(), s.frames, s.encoder_frames, s.labels, s.route.length_m, s.route.duration_s,
+        s.route.max_heading_offset_deg);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "harmoloc-sim: %s\n", e.what());
     return 2;

@@ -91,6 +91,8 @@ expect_error "map for another frame size" "trained on 160x120" run "$out/other_s
 
 # The host tools.
 expect_error "sim: unknown scenario" "unknown scenario" "$BIN/harmoloc-sim" --scenario nowhere --out "$out/x" --quiet
+printf 'base = "tiny"\n[camera]\nwidht_px = 320\n' > "$out/typo_scenario.toml"
+expect_error "sim: scenario with a typo" "unknown key 'camera.widht_px'" "$BIN/harmoloc-sim" --scenario "$out/typo_scenario.toml" --out "$out/x" --quiet
 printf '1 2 3\n' > "$out/bad_labels.tum"
 expect_error "train: malformed labels" "bad_labels.tum:1" "$BIN/harmoloc-train" --dataset "$out/good" --labels "$out/bad_labels.tum" --out "$out/x.hmap"
 printf '5.0 1 1 0 0 0 0 1\n' > "$out/far_labels.tum"

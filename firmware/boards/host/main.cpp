@@ -65,21 +65,29 @@ TumSink g_trajectory, g_fixes;
 
 int main(int argc, char** argv) {
   CLI::App app{
-      "harmoloc (host board): runs the firmware's fixed-rate localization cycle on a dataset folder.\n"
-      "Frames and encoder frames are replayed from the dataset by their timestamps; the pose goes out as\n"
+      "harmoloc (host board): runs the firmware's fixed-rate localization cycle on a dataset "
+      "folder.\n"
+      "Frames and encoder frames are replayed from the dataset by their timestamps; the pose goes "
+      "out as\n"
       "MAVLink v2 on --link, as TUM on --trajectory, and timing statistics go to --stats (JSON).\n"
       "Exit status 0 on a completed run, 2 with a one-line reason on bad input.",
       "harmoloc"};
   std::string dataset, map_path, config_path, trajectory_path, link_path, stats_path, fixes_path;
   bool realtime = false, quiet = false;
-  app.add_option("--dataset", dataset, "dataset folder (metadata.toml, frames.csv, encoders.log)")->required();
+  app.add_option("--dataset", dataset, "dataset folder (metadata.toml, frames.csv, encoders.log)")
+      ->required();
   app.add_option("--map", map_path, "map file from harmoloc-train")->required();
-  app.add_option("--config", config_path, "firmware config (TOML, docs/config-format.md); default: built-in");
+  app.add_option("--config", config_path,
+                 "firmware config (TOML, docs/config-format.md); default: built-in");
   app.add_option("--trajectory", trajectory_path, "write the fused pose of every cycle here (TUM)");
-  app.add_option("--link", link_path, "MAVLink v2 output: a file, or a serial device or pty (raw, --config link.baud)");
-  app.add_option("--stats", stats_path, "write run statistics here (JSON: per-stage timing, overruns, counters)");
-  app.add_option("--fixes", fixes_path, "write the harmonic localizer's own fixes here (TUM), for comparison");
-  app.add_flag("--realtime", realtime, "pace the cycle at the recording's rate instead of as fast as possible");
+  app.add_option("--link", link_path,
+                 "MAVLink v2 output: a file, or a serial device or pty (raw, --config link.baud)");
+  app.add_option("--stats", stats_path,
+                 "write run statistics here (JSON: per-stage timing, overruns, counters)");
+  app.add_option("--fixes", fixes_path,
+                 "write the harmonic localizer's own fixes here (TUM), for comparison");
+  app.add_flag("--realtime", realtime,
+               "pace the cycle at the recording's rate instead of as fast as possible");
   app.add_flag("--quiet", quiet, "no progress output");
   CLI11_PARSE(app, argc, argv);
 
@@ -96,18 +104,23 @@ int main(int argc, char** argv) {
     if (!config.has_odometry_section) config.geometry = meta.geometry;
     if (!config.has_can_section) config.can_layout = meta.encoder_layout;
     if (const std::string e = firmware::load_map(map_path, g_map); !e.empty()) return fail(e);
-    if (const std::string e = firmware::check_map_matches(g_map, config, meta.image_width_px, meta.image_height_px);
+    if (const std::string e =
+            firmware::check_map_matches(g_map, config, meta.image_width_px, meta.image_height_px);
         !e.empty()) {
       return fail(e);
     }
     camera = std::make_unique<sim_host::FileCamera>(dataset, meta);
-    encoders = std::make_unique<sim_host::LogEncoders>((std::filesystem::path(dataset) / meta.encoder_log).string(),
-                                                       config.can_layout);
-    if (const std::string e = link.open(link_path.empty() ? "/dev/null" : link_path, config.link.baud); !e.empty()) {
+    encoders = std::make_unique<sim_host::LogEncoders>(
+        (std::filesystem::path(dataset) / meta.encoder_log).string(), config.can_layout);
+    if (const std::string e =
+            link.open(link_path.empty() ? "/dev/null" : link_path, config.link.baud);
+        !e.empty()) {
       return fail("link " + e);
     }
-    if (!trajectory_path.empty() && !g_trajectory.open(trajectory_path)) return fail(trajectory_path + ": cannot write");
-    if (!fixes_path.empty() && !g_fixes.open(fixes_path)) return fail(fixes_path + ": cannot write");
+    if (!trajectory_path.empty() && !g_trajectory.open(trajectory_path))
+      return fail(trajectory_path + ": cannot write");
+    if (!fixes_path.empty() && !g_fixes.open(fixes_path))
+      return fail(fixes_path + ": cannot write");
   } catch (const std::exception& e) {
     return fail(e.what());
   }
@@ -117,12 +130,15 @@ int main(int argc, char** argv) {
   }
 
   drivers::MonotonicClock clock;
-  auto cycle = std::make_unique<firmware::LocalizationCycle>(config, g_map, *camera, *encoders, link, clock);
+  auto cycle =
+      std::make_unique<firmware::LocalizationCycle>(config, g_map, *camera, *encoders, link, clock);
   if (!quiet) {
-    std::fprintf(stderr, "harmoloc: %zu frames %ux%u, %zu encoder frames, map of %u samples on %u boards, %zu particles%s\n",
-                 camera->frame_count(), meta.image_width_px, meta.image_height_px, encoders->frame_count(),
-                 g_map.model.sample_count, g_map.model.feature_count, config.filter.particles,
-                 realtime ? ", real-time pacing" : "");
+    std::fprintf(stderr,
+                 "harmoloc: %zu frames %ux%u, %zu encoder frames, map of %u samples on %u boards, "
+                 "%zu particles%s\n",
+                 camera->frame_count(), meta.image_width_px, meta.image_height_px,
+                 encoders->frame_count(), g_map.model.sample_count, g_map.model.feature_count,
+                 config.filter.particles, realtime ? ", real-time pacing" : "");
   }
 
   // ---- the cycle ----
@@ -160,13 +176,19 @@ int main(int argc, char** argv) {
   }
   const auto& c = cycle->counters();
   const auto& h = cycle->stage_histogram(firmware::Stage::kCycle);
-  std::printf("harmoloc: %llu cycles, %llu fixes (%llu off the map), health nominal %llu / odometry-only %llu / "
-              "vision-only %llu / invalid %llu; cycle median %.0f us, p99 %.0f us, max %.0f us, %llu overruns\n",
-              static_cast<unsigned long long>(c.cycles), static_cast<unsigned long long>(c.fixes_used),
-              static_cast<unsigned long long>(c.unknown_place), static_cast<unsigned long long>(c.cycles_in_health[1]),
-              static_cast<unsigned long long>(c.cycles_in_health[2]), static_cast<unsigned long long>(c.cycles_in_health[3]),
-              static_cast<unsigned long long>(c.cycles_in_health[4]), static_cast<double>(h.quantile_ns(0.5)) / 1000.0,
-              static_cast<double>(h.quantile_ns(0.99)) / 1000.0, static_cast<double>(h.max_ns()) / 1000.0,
-              static_cast<unsigned long long>(c.overruns));
+  std::printf(
+      "harmoloc: %llu cycles, %llu fixes (%llu off the map), health nominal %llu / odometry-only "
+      "%llu / "
+      "vision-only %llu / invalid %llu; cycle median %.0f us, p99 %.0f us, max %.0f us, %llu "
+      "overruns\n",
+      static_cast<unsigned long long>(c.cycles), static_cast<unsigned long long>(c.fixes_used),
+      static_cast<unsigned long long>(c.unknown_place),
+      static_cast<unsigned long long>(c.cycles_in_health[1]),
+      static_cast<unsigned long long>(c.cycles_in_health[2]),
+      static_cast<unsigned long long>(c.cycles_in_health[3]),
+      static_cast<unsigned long long>(c.cycles_in_health[4]),
+      static_cast<double>(h.quantile_ns(0.5)) / 1000.0,
+      static_cast<double>(h.quantile_ns(0.99)) / 1000.0, static_cast<double>(h.max_ns()) / 1000.0,
+      static_cast<unsigned long long>(c.overruns));
   return 0;
 }

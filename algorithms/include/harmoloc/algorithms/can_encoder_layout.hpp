@@ -21,11 +21,11 @@ struct CanFrame {
 enum class ByteOrder : std::uint8_t { kLittleEndian = 0, kBigEndian = 1 };
 
 struct EncoderFrameLayout {
-  std::uint32_t id = 0x181;           ///< frame carrying both counters
-  std::uint8_t length = 8;            ///< required data length
-  std::uint8_t left_offset = 0;       ///< byte offset of the left counter
-  std::uint8_t right_offset = 4;      ///< byte offset of the right counter
-  std::uint8_t counter_bits = 32;     ///< 16 or 32 (counter width on the wire)
+  std::uint32_t id = 0x181;        ///< frame carrying both counters
+  std::uint8_t length = 8;         ///< required data length
+  std::uint8_t left_offset = 0;    ///< byte offset of the left counter
+  std::uint8_t right_offset = 4;   ///< byte offset of the right counter
+  std::uint8_t counter_bits = 32;  ///< 16 or 32 (counter width on the wire)
   ByteOrder byte_order = ByteOrder::kLittleEndian;
 };
 

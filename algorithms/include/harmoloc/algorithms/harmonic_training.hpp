@@ -41,8 +41,8 @@ struct CrossValidationOptions {
 /// Chooses sigma and gamma for one axis by k-fold cross-validation over the labelled samples:
 /// each fold's labelled samples are taken out of the training set altogether, the rest is solved
 /// with eq. 8 and the held-out ones are predicted with eq. 9, as the firmware would see them.
-AxisChoice choose_axis_parameters(const Eigen::MatrixXd& features, const std::vector<bool>& labelled,
-                                  const Eigen::VectorXd& labels,
+AxisChoice choose_axis_parameters(const Eigen::MatrixXd& features,
+                                  const std::vector<bool>& labelled, const Eigen::VectorXd& labels,
                                   const CrossValidationOptions& options);
 
 /// Median of the pairwise squared distances between rows (the usual kernel-width scale).

@@ -1,6 +1,7 @@
 #pragma once
 /// @file The map file: a harmonic model with what it was trained with (camera mode, colour
-/// thresholds), little-endian, versioned, with a CRC-32 over everything. Layout in docs/map-format.md.
+/// thresholds), little-endian, versioned, with a CRC-32 over everything. Layout in
+/// docs/map-format.md.
 
 #include <cstddef>
 #include <cstdint>

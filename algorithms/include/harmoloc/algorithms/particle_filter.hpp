@@ -40,7 +40,8 @@ class ParticleFilter {
 
   /// Spreads the particles around @p centre: Gaussian in x and y, and in yaw unless
   /// @p uniform_yaw, in which case yaw is uniform over the circle.
-  void initialize(const Pose2& centre, double position_sigma_m, double yaw_sigma_rad, bool uniform_yaw);
+  void initialize(const Pose2& centre, double position_sigma_m, double yaw_sigma_rad,
+                  bool uniform_yaw);
   bool initialized() const { return initialized_; }
 
   /// Applies one odometry step to every particle with sampled noise.

@@ -10,7 +10,8 @@ namespace harmoloc::algorithms {
 /// PCG32 (O'Neill, pcg-random.org), XSH-RR output, 64-bit state.
 class Pcg32 {
  public:
-  explicit Pcg32(std::uint64_t seed = 0x853c49e6748fea9bULL, std::uint64_t stream = 0xda3e39cb94b95bdbULL) {
+  explicit Pcg32(std::uint64_t seed = 0x853c49e6748fea9bULL,
+                 std::uint64_t stream = 0xda3e39cb94b95bdbULL) {
     reseed(seed, stream);
   }
   void reseed(std::uint64_t seed, std::uint64_t stream = 0xda3e39cb94b95bdbULL) {

@@ -16,7 +16,7 @@ namespace harmoloc::firmware {
 
 struct CycleConfig {
   double rate_hz = 30.0;
-  double budget_ms = 15.0;  ///< compute budget per cycle; a cycle over it is an overrun
+  double budget_ms = 15.0;            ///< compute budget per cycle; a cycle over it is an overrun
   double camera_timeout_ms = 250.0;   ///< no usable frame for this long: odometry only
   double encoder_timeout_ms = 250.0;  ///< no encoder data for this long: vision only
 };

@@ -1,6 +1,6 @@
 #pragma once
 /// @file Fixed-size log-linear histogram of durations: 64 sub-buckets per power of two of
-/// nanoseconds, so any percentile is known to within 1.6% with 3 KiB per stage, however long
+/// nanoseconds, so any percentile is known to within 1.6% with 9.25 KiB per stage, however long
 /// the firmware runs. Recording is O(1) and never allocates.
 
 #include <array>
@@ -12,14 +12,16 @@ class LatencyHistogram {
  public:
   static constexpr int kSubBits = 6;
   static constexpr std::uint32_t kSub = 1U << kSubBits;
-  static constexpr int kOctaves = 36;  ///< up to 2^(36+6) ns (over an hour)
+  static constexpr int kOctaves = 37;  ///< top edge 2^42 ns (73 minutes)
   static constexpr std::size_t kBuckets = static_cast<std::size_t>(kOctaves) * kSub;
 
   void record(std::uint64_t duration_ns);
   std::uint64_t count() const { return count_; }
   std::uint64_t max_ns() const { return max_ns_; }
   std::uint64_t min_ns() const { return count_ == 0 ? 0 : min_ns_; }
-  double mean_ns() const { return count_ == 0 ? 0.0 : static_cast<double>(sum_ns_) / static_cast<double>(count_); }
+  double mean_ns() const {
+    return count_ == 0 ? 0.0 : static_cast<double>(sum_ns_) / static_cast<double>(count_);
+  }
   /// Upper edge of the bucket holding the q-quantile (q in [0, 1]); exact max for q = 1.
   std::uint64_t quantile_ns(double q) const;
 

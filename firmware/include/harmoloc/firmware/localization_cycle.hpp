@@ -19,7 +19,16 @@
 
 namespace harmoloc::firmware {
 
-enum class Stage : std::uint8_t { kAcquire, kSegment, kLocalize, kEncoders, kPredict, kUpdate, kPublish, kCycle };
+enum class Stage : std::uint8_t {
+  kAcquire,
+  kSegment,
+  kLocalize,
+  kEncoders,
+  kPredict,
+  kUpdate,
+  kPublish,
+  kCycle
+};
 constexpr std::size_t kStageCount = 8;
 const char* stage_name(Stage stage);
 
@@ -68,8 +77,9 @@ enum class CycleResult : std::uint8_t { kRan, kEnded };
 class LocalizationCycle {
  public:
   /// @p map must outlive the cycle (the firmware keeps it in static storage).
-  LocalizationCycle(const FirmwareConfig& config, const algorithms::MapFile& map, hal::Camera& camera,
-                    hal::WheelEncoders& encoders, hal::PoseLink& link, const hal::Clock& clock);
+  LocalizationCycle(const FirmwareConfig& config, const algorithms::MapFile& map,
+                    hal::Camera& camera, hal::WheelEncoders& encoders, hal::PoseLink& link,
+                    const hal::Clock& clock);
 
   /// Runs one cycle. The data clock follows the frames; a cycle without a frame advances it
   /// by one period.
@@ -78,7 +88,9 @@ class LocalizationCycle {
   const PoseOutput& pose() const { return pose_; }
   const FixOutput& last_fix() const { return fix_; }
   const CycleCounters& counters() const { return counters_; }
-  const LatencyHistogram& stage_histogram(Stage stage) const { return histograms_[static_cast<std::size_t>(stage)]; }
+  const LatencyHistogram& stage_histogram(Stage stage) const {
+    return histograms_[static_cast<std::size_t>(stage)];
+  }
   std::uint64_t budget_ns() const { return budget_ns_; }
 
  private:

@@ -65,7 +65,8 @@ using FrameBuffer = std::array<std::uint8_t, kMaxFrameBytes>;
 /// Builds frames with one system/component identity and a running sequence number.
 class Encoder {
  public:
-  Encoder(std::uint8_t system_id, std::uint8_t component_id) : system_id_(system_id), component_id_(component_id) {}
+  Encoder(std::uint8_t system_id, std::uint8_t component_id)
+      : system_id_(system_id), component_id_(component_id) {}
 
   std::size_t heartbeat(const Heartbeat& msg, FrameBuffer& out);
   std::size_t odometry(const Odometry& msg, FrameBuffer& out);
@@ -73,7 +74,8 @@ class Encoder {
   std::size_t statustext(std::uint8_t severity, const char* text, FrameBuffer& out);
 
  private:
-  std::size_t finish(std::uint32_t msg_id, std::uint8_t crc_extra, std::size_t payload_len, FrameBuffer& out);
+  std::size_t finish(std::uint32_t msg_id, std::uint8_t crc_extra, std::size_t payload_len,
+                     FrameBuffer& out);
 
   std::uint8_t system_id_;
   std::uint8_t component_id_;

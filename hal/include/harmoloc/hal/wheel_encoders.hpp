@@ -22,11 +22,11 @@ enum class EncoderStatus : std::uint8_t {
 
 /// Counters an encoder source keeps about itself.
 struct EncoderCounters {
-  std::uint64_t samples = 0;          ///< counter pairs accepted
-  std::uint64_t ignored_id = 0;       ///< CAN frames with an ID that is not ours
-  std::uint64_t bad_length = 0;       ///< frames of ours with the wrong length
-  std::uint64_t glitches = 0;         ///< impossible quadrature transitions
-  std::uint64_t bus_errors = 0;       ///< error frames, bus-off and similar
+  std::uint64_t samples = 0;     ///< counter pairs accepted
+  std::uint64_t ignored_id = 0;  ///< CAN frames with an ID that is not ours
+  std::uint64_t bad_length = 0;  ///< frames of ours with the wrong length
+  std::uint64_t glitches = 0;    ///< impossible quadrature transitions
+  std::uint64_t bus_errors = 0;  ///< error frames, bus-off and similar
 };
 
 class WheelEncoders {

@@ -26,7 +26,8 @@ struct PpmHeader {
 
 /// Parses a P6 header with maxval 255 from the first bytes of a file. Returns false (with a
 /// reason) for anything else. No allocation.
-bool parse_ppm_header(const std::uint8_t* bytes, std::size_t size, PpmHeader& header, const char** reason);
+bool parse_ppm_header(const std::uint8_t* bytes, std::size_t size, PpmHeader& header,
+                      const char** reason);
 
 void write_ppm(const std::string& path, std::uint32_t width_px, std::uint32_t height_px,
                const std::uint8_t* rgb);

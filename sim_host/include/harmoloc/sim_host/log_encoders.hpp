@@ -16,7 +16,8 @@ class LogEncoders final : public hal::WheelEncoders {
   /// Throws std::runtime_error("FILE:LINE: reason") on a malformed line.
   LogEncoders(const std::string& log_path, const algorithms::EncoderFrameLayout& layout);
   /// For tests: frames already in memory.
-  LogEncoders(std::vector<algorithms::CanFrame> frames, const algorithms::EncoderFrameLayout& layout);
+  LogEncoders(std::vector<algorithms::CanFrame> frames,
+              const algorithms::EncoderFrameLayout& layout);
 
   hal::EncoderStatus read(std::uint64_t data_time_ns, hal::EncoderCounts& counts) override;
   hal::EncoderCounters counters() const override { return counters_; }

@@ -12,9 +12,9 @@
 namespace harmoloc::sim_host {
 
 struct MotionSample {
-  double t_s;  ///< from the start of the run
+  double t_s;              ///< from the start of the run
   algorithms::Pose2 pose;  ///< axle centre, heading
-  double left_m;   ///< cumulative true travel of each wheel (signed)
+  double left_m;           ///< cumulative true travel of each wheel (signed)
   double right_m;
 };
 
@@ -25,7 +25,7 @@ struct RouteStats {
 };
 
 /// Samples the whole run at @p step_s. @p rng draws this run's smooth sideways wander.
-std::vector<MotionSample> simulate_motion(const Scenario& scenario, double step_s, algorithms::Pcg32& rng,
-                                          RouteStats* stats);
+std::vector<MotionSample> simulate_motion(const Scenario& scenario, double step_s,
+                                          algorithms::Pcg32& rng, RouteStats* stats);
 
 }  // namespace harmoloc::sim_host

@@ -32,27 +32,27 @@ struct CameraSpec {
   double horizontal_fov_deg = 76.0;  ///< of the undistorted pinhole, across the width
   /// Radial distortion of seed 000: x_d = x_u + k x_u (x_u^2 + y_u^2), normalised coordinates.
   double radial_k = -0.15;
-  double height_m = 0.35;  ///< optical centre above the floor
-  double pitch_deg = 15.0;  ///< up is positive
-  double mount_yaw_deg = 0.0;  ///< relative to the robot's forward axis
+  double height_m = 0.35;          ///< optical centre above the floor
+  double pitch_deg = 15.0;         ///< up is positive
+  double mount_yaw_deg = 0.0;      ///< relative to the robot's forward axis
   double forward_offset_m = 0.10;  ///< ahead of the wheel axle centre
   double rate_hz = 30.0;
   double pixel_noise = 3.0;  ///< standard deviation per channel, 8-bit units
-  double light_gain = 1.0;  ///< global brightness factor (lighting changes)
+  double light_gain = 1.0;   ///< global brightness factor (lighting changes)
 };
 
 struct RouteSpec {
   std::vector<std::array<double, 2>> waypoints_m;  ///< the robot's axle centre passes these
   double speed_mps = 0.10;
   double acceleration_mps2 = 0.10;
-  double pause_s = 0.5;  ///< standstill at each end of the route
-  int laps = 1;  ///< forward then back is one lap
+  double pause_s = 0.5;    ///< standstill at each end of the route
+  int laps = 1;            ///< forward then back is one lap
   double wander_m = 0.01;  ///< how far a run strays sideways from the route (smooth)
 };
 
 struct EncoderSpec {
   double rate_hz = 100.0;
-  double slip_sigma = 0.01;  ///< random relative error of each wheel's travel, per step
+  double slip_sigma = 0.01;         ///< random relative error of each wheel's travel, per step
   double left_scale_error = 0.003;  ///< systematic relative error (wheel radius mismatch)
   double right_scale_error = -0.002;
   std::uint32_t initial_left = 0;  ///< first counter values (set near the wrap to test wrap)

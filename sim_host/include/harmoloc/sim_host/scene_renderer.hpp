@@ -17,7 +17,8 @@ class SceneRenderer {
   explicit SceneRenderer(const Scenario& scenario);
 
   /// Renders RGB24 (width * height * 3 bytes) for the robot at @p robot_pose.
-  void render(const algorithms::Pose2& robot_pose, algorithms::Pcg32& rng, std::vector<std::uint8_t>& rgb) const;
+  void render(const algorithms::Pose2& robot_pose, algorithms::Pcg32& rng,
+              std::vector<std::uint8_t>& rgb) const;
 
   /// How many pixels of each board are visible (before noise): the true areas, for tests.
   std::vector<std::uint32_t> visible_board_pixels(const algorithms::Pose2& robot_pose) const;

@@ -19,7 +19,8 @@ struct SimulationSummary {
 };
 
 /// @p progress is called with (frames done, frames total) now and then.
-SimulationSummary simulate_dataset(const Scenario& scenario, std::uint64_t seed, const std::string& out_dir,
+SimulationSummary simulate_dataset(const Scenario& scenario, std::uint64_t seed,
+                                   const std::string& out_dir,
                                    const std::function<void(std::size_t, std::size_t)>& progress);
 
 }  // namespace harmoloc::sim_host

@@ -18,9 +18,9 @@ struct TrainOptions {
   std::string labels_path;
   algorithms::ThresholdSet thresholds;
   std::vector<std::string> board_names;
-  int unlabelled = -1;           ///< how many unlabelled frames; -1: ratio x labelled
+  int unlabelled = -1;            ///< how many unlabelled frames; -1: ratio x labelled
   double unlabelled_ratio = 2.2;  ///< seed 000's best: 64 labelled + 140 unlabelled
-  std::vector<int> boards;       ///< 0-based board indices used as features; empty: every board
+  std::vector<int> boards;        ///< 0-based board indices used as features; empty: every board
   int folds = 5;
 };
 

@@ -1,0 +1,319 @@
+// The firmware's TOML configuration: defaults, a full file read back, and one clear line for
+// each kind of bad input.
+#include "harmoloc/firmware/config.hpp"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <stdexcept>
+#include <string>
+
+namespace hf = harmoloc::firmware;
+namespace ha = harmoloc::algorithms;
+namespace fs = std::filesystem;
+
+namespace {
+
+// A fresh directory for one test, removed at the end.
+class TempDir {
+ public:
+  TempDir() {
+    const auto* info = testing::UnitTest::GetInstance()->current_test_info();
+    path_ = fs::temp_directory_path() / ("harmoloc_config_" + std::to_string(::getpid()) + "_" +
+                                         info->test_suite_name() + "_" + info->name());
+    fs::remove_all(path_);
+    fs::create_directories(path_);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  std::string write(const std::string& name, const std::string& text) const {
+    const std::string p = (path_ / name).string();
+    std::ofstream(p, std::ios::binary) << text;
+    return p;
+  }
+  std::string path(const std::string& name) const { return (path_ / name).string(); }
+
+ private:
+  fs::path path_;
+};
+
+// Loads @p text and returns the error message (empty if it loaded).
+std::string load_error(const TempDir& dir, const std::string& text, std::string* file = nullptr) {
+  const std::string path = dir.write("harmoloc.toml", text);
+  if (file != nullptr) *file = path;
+  try {
+    hf::load_config(path);
+  } catch (const std::runtime_error& e) {
+    return e.what();
+  }
+  return {};
+}
+
+// The message is one line, names the file first, and says what is wrong.
+void expect_one_line_error(const TempDir& dir, const std::string& text, const std::string& what,
+                           int line = 0) {
+  std::string file;
+  const std::string msg = load_error(dir, text, &file);
+  ASSERT_FALSE(msg.empty()) << "accepted:\n" << text;
+  EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
+  EXPECT_EQ(msg.rfind(file + ": ", 0), 0U) << msg;
+  EXPECT_NE(msg.find(what), std::string::npos) << "expected '" << what << "' in: " << msg;
+  if (line > 0) {
+    EXPECT_NE(msg.find("line " + std::to_string(line) + ":"), std::string::npos) << msg;
+  }
+}
+
+}  // namespace
+
+TEST(Config, DefaultsHaveSixBoards) {
+  const hf::FirmwareConfig c = hf::default_config();
+  ASSERT_EQ(c.thresholds.count, 6U);
+  const char* names[] = {"red", "green", "blue", "yellow", "magenta", "cyan"};
+  for (std::size_t i = 0; i < 6; ++i) {
+    EXPECT_EQ(c.board_names.names[i], names[i]);
+    const ha::ColourThreshold& t = c.thresholds.boards[i];
+    EXPECT_LE(t.value_min, t.value_max) << i;
+    EXPECT_GE(t.hue_min_deg, 0.0F);
+    EXPECT_LE(t.hue_max_deg, 360.0F);
+  }
+  // Red wraps through 0.
+  EXPECT_GT(c.thresholds.boards[0].hue_min_deg, c.thresholds.boards[0].hue_max_deg);
+  EXPECT_DOUBLE_EQ(c.cycle.rate_hz, 30.0);
+  EXPECT_DOUBLE_EQ(c.cycle.budget_ms, 15.0);
+  EXPECT_TRUE(ha::layout_valid(c.can_layout));
+  EXPECT_FALSE(c.has_odometry_section);
+  EXPECT_FALSE(c.has_can_section);
+}
+
+TEST(Config, FullFileRoundTripsEveryValue) {
+  TempDir dir;
+  const std::string path = dir.write("full.toml", R"(# a complete configuration
+[cycle]
+rate_hz = 25
+budget_ms = 12.5
+camera_timeout_ms = 300.0
+encoder_timeout_ms = 400
+
+[[board]]
+name = "orange"
+hue_deg = [10, 40.5]
+saturation_min = 90
+value_min = 40
+value_max = 250
+
+[[board]]
+name = "violet"
+hue_deg = [350.5, 20]
+saturation_min = 0
+value_min = 0
+value_max = 255
+
+[odometry]
+wheel_radius_m = 0.0625
+track_m = 0.42
+ticks_per_rev = 16384
+left_direction = -1
+right_direction = 1
+
+[can]
+interface = "vcan0"
+encoder_id = 0x201
+length = 4
+left_offset = 0
+right_offset = 2
+counter_bits = 16
+byte_order = "big"
+
+[filter]
+particles = 512
+seed = 42
+alpha = [0.1, 0.2, 0.3, 0]
+fix_sigma_m = 0.05
+outlier_probability = 0.1
+resample_threshold = 0.6
+init_position_sigma_m = 0.2
+vision_only_speed_mps = 0.5
+
+[link]
+system_id = 7
+component_id = 100
+baud = 57600
+heartbeat_hz = 2
+)");
+  const hf::FirmwareConfig c = hf::load_config(path);
+  EXPECT_EQ(c.source, path);
+  EXPECT_DOUBLE_EQ(c.cycle.rate_hz, 25.0);
+  EXPECT_DOUBLE_EQ(c.cycle.budget_ms, 12.5);
+  EXPECT_DOUBLE_EQ(c.cycle.camera_timeout_ms, 300.0);
+  EXPECT_DOUBLE_EQ(c.cycle.encoder_timeout_ms, 400.0);
+
+  ASSERT_EQ(c.thresholds.count, 2U);
+  EXPECT_EQ(c.board_names.names[0], "orange");
+  EXPECT_EQ(c.board_names.names[1], "violet");
+  const ha::ColourThreshold& o = c.thresholds.boards[0];
+  EXPECT_FLOAT_EQ(o.hue_min_deg, 10.0F);
+  EXPECT_FLOAT_EQ(o.hue_max_deg, 40.5F);
+  EXPECT_EQ(o.saturation_min, 90);
+  EXPECT_EQ(o.value_min, 40);
+  EXPECT_EQ(o.value_max, 250);
+  EXPECT_FLOAT_EQ(c.thresholds.boards[1].hue_min_deg, 350.5F);
+  EXPECT_FLOAT_EQ(c.thresholds.boards[1].hue_max_deg, 20.0F);
+  EXPECT_EQ(c.thresholds.boards[1].saturation_min, 0);
+
+  EXPECT_TRUE(c.has_odometry_section);
+  EXPECT_DOUBLE_EQ(c.geometry.wheel_radius_m, 0.0625);
+  EXPECT_DOUBLE_EQ(c.geometry.track_m, 0.42);
+  EXPECT_DOUBLE_EQ(c.geometry.ticks_per_rev, 16384.0);
+  EXPECT_EQ(c.geometry.left_direction, -1);
+  EXPECT_EQ(c.geometry.right_direction, 1);
+
+  EXPECT_TRUE(c.has_can_section);
+  EXPECT_EQ(c.can_interface, "vcan0");
+  EXPECT_EQ(c.can_layout.id, 0x201U);
+  EXPECT_EQ(c.can_layout.length, 4);
+  EXPECT_EQ(c.can_layout.left_offset, 0);
+  EXPECT_EQ(c.can_layout.right_offset, 2);
+  EXPECT_EQ(c.can_layout.counter_bits, 16);
+  EXPECT_EQ(c.can_layout.byte_order, ha::ByteOrder::kBigEndian);
+
+  EXPECT_EQ(c.filter.particles, 512U);
+  EXPECT_EQ(c.filter.seed, 42U);
+  EXPECT_DOUBLE_EQ(c.filter.noise.alpha1, 0.1);
+  EXPECT_DOUBLE_EQ(c.filter.noise.alpha2, 0.2);
+  EXPECT_DOUBLE_EQ(c.filter.noise.alpha3, 0.3);
+  EXPECT_DOUBLE_EQ(c.filter.noise.alpha4, 0.0);
+  EXPECT_DOUBLE_EQ(c.filter.fix_sigma_m, 0.05);
+  EXPECT_DOUBLE_EQ(c.filter.outlier_probability, 0.1);
+  EXPECT_DOUBLE_EQ(c.filter.resample_threshold, 0.6);
+  EXPECT_DOUBLE_EQ(c.filter.init_position_sigma_m, 0.2);
+  EXPECT_DOUBLE_EQ(c.filter.vision_only_speed_mps, 0.5);
+
+  EXPECT_EQ(c.link.system_id, 7);
+  EXPECT_EQ(c.link.component_id, 100);
+  EXPECT_EQ(c.link.baud, 57600U);
+  EXPECT_DOUBLE_EQ(c.link.heartbeat_hz, 2.0);
+}
+
+TEST(Config, EmptyFileGivesDefaultsAndPartialSectionsKeepTheRest) {
+  TempDir dir;
+  const hf::FirmwareConfig d = hf::default_config();
+  hf::FirmwareConfig c = hf::load_config(dir.write("empty.toml", ""));
+  EXPECT_TRUE(c.thresholds == d.thresholds);
+  EXPECT_EQ(c.filter.particles, d.filter.particles);
+  EXPECT_FALSE(c.has_odometry_section);
+  c = hf::load_config(
+      dir.write("partial.toml", "[filter]\nparticles = 256\n[odometry]\ntrack_m = 0.5\n"));
+  EXPECT_EQ(c.filter.particles, 256U);
+  EXPECT_DOUBLE_EQ(c.filter.fix_sigma_m, d.filter.fix_sigma_m);
+  EXPECT_TRUE(c.has_odometry_section);
+  EXPECT_DOUBLE_EQ(c.geometry.track_m, 0.5);
+  EXPECT_DOUBLE_EQ(c.geometry.wheel_radius_m, d.geometry.wheel_radius_m);
+  EXPECT_TRUE(c.thresholds == d.thresholds);  // no [[board]]: the defaults stay
+}
+
+TEST(Config, UnknownKey) {
+  TempDir dir;
+  expect_one_line_error(dir, "[cycle]\nrate_hz = 30\nbudget = 12\n", "unknown key 'cycle.budget'",
+                        3);
+  expect_one_line_error(dir, "[[board]]\nname = \"x\"\nhue_deg = [1, 2]\nsat_min = 3\n",
+                        "board[0].sat_min", 4);
+}
+
+TEST(Config, TypoInSectionName) {
+  TempDir dir;
+  expect_one_line_error(dir, "\n[filtr]\nparticles = 100\n", "unknown key 'filtr'", 2);
+  expect_one_line_error(dir, "verbose = true\n", "unknown key 'verbose'", 1);
+}
+
+TEST(Config, WrongType) {
+  TempDir dir;
+  expect_one_line_error(dir, "[cycle]\nrate_hz = \"fast\"\n", "cycle.rate_hz must be a number", 2);
+  expect_one_line_error(dir, "[filter]\nparticles = 512.0\n",
+                        "filter.particles must be a whole number", 2);
+  expect_one_line_error(dir, "[can]\ninterface = 0\n", "can.interface must be a string", 2);
+  expect_one_line_error(dir, "cycle = 5\n", "[cycle] must be a table", 1);
+  expect_one_line_error(dir, "[board]\nname = \"x\"\n", "[[board]]");
+}
+
+TEST(Config, OutOfRange) {
+  TempDir dir;
+  expect_one_line_error(dir, "[filter]\nparticles = 10\n",
+                        "filter.particles = 10 is outside 16..4096", 2);
+  expect_one_line_error(dir, "[filter]\nparticles = 5000\n", "outside", 2);
+  expect_one_line_error(dir, "[cycle]\n\nrate_hz = 0.5\n", "cycle.rate_hz", 3);
+  expect_one_line_error(dir, "[link]\nbaud = 1200\n", "link.baud", 2);
+  expect_one_line_error(dir, "[link]\nsystem_id = 0\n", "link.system_id", 2);
+  expect_one_line_error(dir, "[filter]\noutlier_probability = 1.0\n", "filter.outlier_probability",
+                        2);
+  expect_one_line_error(dir, "[cycle]\nrate_hz = nan\n", "cycle.rate_hz", 2);
+  expect_one_line_error(dir, "[odometry]\nleft_direction = 0\n", "direction");
+  expect_one_line_error(dir, "[can]\nbyte_order = \"middle\"\n", "byte_order", 2);
+  std::string boards;
+  for (int i = 0; i < 9; ++i) boards += "[[board]]\nhue_deg = [1, 2]\n";
+  expect_one_line_error(dir, boards, "1 to 8");
+}
+
+TEST(Config, HueOutsideCircle) {
+  TempDir dir;
+  expect_one_line_error(dir, "[[board]]\nname = \"x\"\nhue_deg = [10, 400]\n", "0..360", 3);
+  expect_one_line_error(dir, "[[board]]\nname = \"x\"\nhue_deg = [-1, 40]\n", "0..360", 3);
+  expect_one_line_error(dir, "[[board]]\nname = \"x\"\nhue_deg = [10]\n",
+                        "hue_deg must be [min, max]", 3);
+  expect_one_line_error(dir, "[[board]]\nname = \"x\"\n", "hue_deg must be [min, max]");
+  expect_one_line_error(dir, "[[board]]\nname = \"x\"\nhue_deg = [\"a\", 3]\n",
+                        "hue_deg values must be numbers", 3);
+}
+
+TEST(Config, ValueMinAboveValueMax) {
+  TempDir dir;
+  expect_one_line_error(
+      dir, "[[board]]\nname = \"x\"\nhue_deg = [10, 40]\nvalue_min = 200\nvalue_max = 100\n",
+      "value_min is above value_max");
+}
+
+TEST(Config, CanLayoutThatDoesNotFit) {
+  TempDir dir;
+  expect_one_line_error(dir, "[can]\nlength = 4\n", "fit");       // two 32-bit counters in 4 bytes
+  expect_one_line_error(dir, "[can]\nleft_offset = 2\n", "fit");  // overlaps the right counter at 4
+  expect_one_line_error(dir, "[can]\ncounter_bits = 16\nlength = 4\nright_offset = 1\n", "fit");
+}
+
+TEST(Config, AlphaOfWrongLength) {
+  TempDir dir;
+  expect_one_line_error(dir, "[filter]\nalpha = [0.1, 0.2]\n",
+                        "filter.alpha must be [alpha1, alpha2, alpha3, alpha4]", 2);
+  expect_one_line_error(dir, "[filter]\nalpha = [0.1, 0.2, 0.3, 0.4, 0.5]\n", "filter.alpha", 2);
+  expect_one_line_error(dir, "[filter]\nalpha = 0.1\n", "filter.alpha", 2);
+  expect_one_line_error(dir, "[filter]\nalpha = [0.1, 0.2, -0.3, 0.4]\n", "filter.alpha values", 2);
+  expect_one_line_error(dir, "[filter]\nalpha = [0.1, 0.2, \"x\", 0.4]\n", "filter.alpha values",
+                        2);
+}
+
+TEST(Config, MissingFile) {
+  TempDir dir;
+  const std::string path = dir.path("does-not-exist.toml");
+  try {
+    hf::load_config(path);
+    FAIL() << "no exception";
+  } catch (const std::runtime_error& e) {
+    const std::string msg = e.what();
+    EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
+    EXPECT_EQ(msg.rfind(path + ": ", 0), 0U) << msg;
+    // There is no line in a file that is not there.
+    EXPECT_EQ(msg.find("line 0"), std::string::npos) << msg;
+  }
+}
+
+TEST(Config, UnparsableToml) {
+  TempDir dir;
+  expect_one_line_error(dir, "[cycle]\nrate_hz = = 3\n", "", 2);
+  expect_one_line_error(dir, "[cycle\nrate_hz = 3\n", "", 1);
+  expect_one_line_error(dir, "[cycle]\nrate_hz = 30\nrate_hz = 31\n", "", 3);  // duplicate key
+  expect_one_line_error(dir, "# ok\n\n[link]\nbaud = 115200\nname = \"unterminated\n", "", 5);
+}

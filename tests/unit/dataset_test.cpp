@@ -1,0 +1,518 @@
+// Dataset formats: TUM trajectories, the frame index and PPM headers, candump logs, metadata.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "harmoloc/algorithms/geometry.hpp"
+#include "harmoloc/sim_host/candump_log.hpp"
+#include "harmoloc/sim_host/frame_index.hpp"
+#include "harmoloc/sim_host/metadata.hpp"
+#include "harmoloc/sim_host/tum.hpp"
+
+namespace hs = harmoloc::sim_host;
+namespace ha = harmoloc::algorithms;
+namespace fs = std::filesystem;
+using ha::kPi;
+
+namespace {
+
+class TempDir {
+ public:
+  TempDir() {
+    const auto* info = testing::UnitTest::GetInstance()->current_test_info();
+    path_ = fs::temp_directory_path() / ("harmoloc_dataset_" + std::to_string(::getpid()) + "_" +
+                                         info->test_suite_name() + "_" + info->name());
+    fs::remove_all(path_);
+    fs::create_directories(path_);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  std::string write(const std::string& name, const std::string& text) const {
+    const std::string p = (path_ / name).string();
+    std::ofstream(p, std::ios::binary) << text;
+    return p;
+  }
+  std::string path(const std::string& name = "") const { return (path_ / name).string(); }
+  std::string dir() const { return path_.string(); }
+
+ private:
+  fs::path path_;
+};
+
+// Runs @p f, which must throw std::runtime_error; returns the message.
+template <typename F>
+std::string error_of(F&& f) {
+  try {
+    f();
+  } catch (const std::runtime_error& e) {
+    return e.what();
+  }
+  return "(no exception)";
+}
+
+void expect_file_line_error(const std::string& msg, const std::string& file, int line) {
+  EXPECT_EQ(msg.rfind(file + ":" + std::to_string(line) + ": ", 0), 0U) << msg;
+  EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
+}
+
+}  // namespace
+
+// --- TUM -------------------------------------------------------------------------------------
+
+TEST(Tum, YawFromQuaternion) {
+  for (double yaw : {0.0, 0.3, -1.2, kPi / 2.0, 3.0, -3.1, kPi - 1e-9}) {
+    EXPECT_NEAR(ha::wrap_angle_rad(
+                    hs::yaw_from_quaternion(0, 0, std::sin(yaw / 2), std::cos(yaw / 2)) - yaw),
+                0.0, 1e-12)
+        << yaw;
+    // q and -q are the same rotation.
+    EXPECT_NEAR(ha::wrap_angle_rad(
+                    hs::yaw_from_quaternion(0, 0, -std::sin(yaw / 2), -std::cos(yaw / 2)) - yaw),
+                0.0, 1e-12);
+  }
+  // Yaw of q = qz(a) * qx(b): a roll of b about the body x axis does not change the heading a.
+  const double a = 0.8, b = 0.3;
+  const double cz = std::cos(a / 2), sz = std::sin(a / 2), cx = std::cos(b / 2),
+               sx = std::sin(b / 2);
+  // (cz + sz k)(cx + sx i) = cz cx + cz sx i + sz cx k + sz sx (k i = j)
+  EXPECT_NEAR(hs::yaw_from_quaternion(cz * sx, sz * sx, sz * cx, cz * cx), a, 1e-12);
+}
+
+TEST(Tum, WriteReadRoundTrip) {
+  TempDir dir;
+  std::vector<hs::StampedPose> poses;
+  for (int i = 0; i < 50; ++i) {
+    hs::StampedPose p;
+    p.t_s = 1767225600.0 + 0.033333 * i;
+    p.pose = ha::Pose2{0.1 * i - 1.0, 2.0 - 0.05 * i, ha::wrap_angle_rad(0.3 * i)};
+    poses.push_back(p);
+  }
+  const std::string path = dir.path("t.tum");
+  hs::write_tum(path, poses);
+  const std::vector<hs::StampedPose> back = hs::read_tum(path);
+  ASSERT_EQ(back.size(), poses.size());
+  for (std::size_t i = 0; i < poses.size(); ++i) {
+    EXPECT_NEAR(back[i].t_s, poses[i].t_s, 1e-6);
+    EXPECT_NEAR(back[i].pose.x_m, poses[i].pose.x_m, 1e-6);
+    EXPECT_NEAR(back[i].pose.y_m, poses[i].pose.y_m, 1e-6);
+    EXPECT_NEAR(ha::wrap_angle_rad(back[i].pose.yaw_rad - poses[i].pose.yaw_rad), 0.0, 1e-8) << i;
+  }
+  // The line format: t x y 0 0 0 qz qw.
+  char line[160];
+  const int n = hs::format_tum_line(line, sizeof line, 12.5, ha::Pose2{1.0, -2.0, kPi / 2.0});
+  EXPECT_EQ(std::string(line, static_cast<std::size_t>(n)),
+            "12.500000 1.000000 -2.000000 0 0 0 0.707106781 0.707106781\n");
+}
+
+TEST(Tum, CommentsAndBlankLinesAreSkipped) {
+  TempDir dir;
+  const std::string path =
+      dir.write("t.tum", "# t x y z qx qy qz qw\n\n1.0 1 2 0 0 0 0 1\n   \n2.0 3 4 0 0 0 1 0\n");
+  const auto poses = hs::read_tum(path);
+  ASSERT_EQ(poses.size(), 2U);
+  EXPECT_DOUBLE_EQ(poses[1].pose.x_m, 3.0);
+  EXPECT_NEAR(std::fabs(poses[1].pose.yaw_rad), kPi, 1e-12);
+}
+
+TEST(Tum, MalformedLinesNameFileAndLine) {
+  TempDir dir;
+  const std::string ok = "# header\n1.0 0 0 0 0 0 0 1\n";
+  std::string p = dir.write("seven.tum", ok + "2.0 0 0 0 0 0 1\n");
+  expect_file_line_error(error_of([&] { hs::read_tum(p); }), p, 3);
+  p = dir.write("nan.tum", ok + "2.0 nan 0 0 0 0 0 1\n");
+  expect_file_line_error(error_of([&] { hs::read_tum(p); }), p, 3);
+  p = dir.write("inf.tum", ok + "2.0 1e999 0 0 0 0 0 1\n");
+  expect_file_line_error(error_of([&] { hs::read_tum(p); }), p, 3);
+  p = dir.write("nine.tum", ok + "2.0 0 0 0 0 0 0 1 7\n");
+  expect_file_line_error(error_of([&] { hs::read_tum(p); }), p, 3);
+  p = dir.write("text.tum", ok + "2.0 0 0 zero 0 0 0 1\n");
+  expect_file_line_error(error_of([&] { hs::read_tum(p); }), p, 3);
+  p = dir.write("same.tum", ok + "1.0 0 0 0 0 0 0 1\n");
+  expect_file_line_error(error_of([&] { hs::read_tum(p); }), p, 3);
+  p = dir.write("back.tum", ok + "2.0 0 0 0 0 0 0 1\n\n0.5 0 0 0 0 0 0 1\n");
+  expect_file_line_error(error_of([&] { hs::read_tum(p); }), p, 5);
+  EXPECT_NE(error_of([&] { hs::read_tum(dir.path("missing.tum")); }).find("missing.tum"),
+            std::string::npos);
+}
+
+TEST(Tum, InterpolateAcrossPlusMinusPi) {
+  std::vector<hs::StampedPose> t(3);
+  t[0].t_s = 10.0;
+  t[0].pose = ha::Pose2{0.0, 0.0, 3.0};
+  t[1].t_s = 11.0;
+  t[1].pose = ha::Pose2{1.0, 2.0, -3.0};  // 0.283 rad further on, through pi
+  t[2].t_s = 13.0;
+  t[2].pose = ha::Pose2{3.0, 2.0, -2.0};
+  ha::Pose2 p;
+  ASSERT_TRUE(hs::interpolate(t, 10.5, p));
+  EXPECT_NEAR(p.x_m, 0.5, 1e-12);
+  EXPECT_NEAR(p.y_m, 1.0, 1e-12);
+  EXPECT_NEAR(ha::wrap_angle_rad(p.yaw_rad - kPi), 0.0, 1e-12);  // halfway: pi, not 0
+  ASSERT_TRUE(hs::interpolate(t, 10.25, p));
+  EXPECT_NEAR(ha::wrap_angle_rad(p.yaw_rad - (3.0 + 0.25 * (2.0 * kPi - 6.0))), 0.0, 1e-12);
+  ASSERT_TRUE(hs::interpolate(t, 12.0, p));
+  EXPECT_NEAR(p.x_m, 2.0, 1e-12);
+  EXPECT_NEAR(p.yaw_rad, -2.5, 1e-12);
+  // The ends are inside; outside is refused.
+  ASSERT_TRUE(hs::interpolate(t, 10.0, p));
+  EXPECT_NEAR(p.yaw_rad, 3.0, 1e-12);
+  ASSERT_TRUE(hs::interpolate(t, 13.0, p));
+  EXPECT_NEAR(p.x_m, 3.0, 1e-12);
+  EXPECT_FALSE(hs::interpolate(t, 9.999, p));
+  EXPECT_FALSE(hs::interpolate(t, 13.001, p));
+  EXPECT_FALSE(hs::interpolate({}, 1.0, p));
+}
+
+// --- frames.csv and PPM ----------------------------------------------------------------------
+
+TEST(FrameIndex, ParsesHeaderAndLines) {
+  TempDir dir;
+  const std::string p =
+      dir.write("frames.csv",
+                "timestamp_ns,file\n1000,frames/000000.ppm\r\n2000,frames/000001.ppm\n\n"
+                "9999999999999999999,frames/last.ppm\n");
+  const auto frames = hs::read_frame_index(p);
+  ASSERT_EQ(frames.size(), 3U);
+  EXPECT_EQ(frames[0].timestamp_ns, 1000U);
+  EXPECT_EQ(frames[0].file, "frames/000000.ppm");
+  EXPECT_EQ(frames[1].file, "frames/000001.ppm");             // CR stripped
+  EXPECT_EQ(frames[2].timestamp_ns, 9999999999999999999ULL);  // 19 digits
+  // Write and read back.
+  const std::string q = dir.path("copy.csv");
+  hs::write_frame_index(q, frames);
+  const auto again = hs::read_frame_index(q);
+  ASSERT_EQ(again.size(), frames.size());
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    EXPECT_EQ(again[i].timestamp_ns, frames[i].timestamp_ns);
+    EXPECT_EQ(again[i].file, frames[i].file);
+  }
+}
+
+TEST(FrameIndex, RejectsBadLinesWithFileAndLine) {
+  TempDir dir;
+  const std::string head = "timestamp_ns,file\n1000,a.ppm\n";
+  struct Case {
+    const char* name;
+    std::string body;
+    int line;
+  };
+  const Case cases[] = {
+      {"stamp", "12a0,b.ppm\n", 3},
+      {"negative", "-5,b.ppm\n", 3},
+      {"float", "1.5e3,b.ppm\n", 3},
+      {"empty_stamp", ",b.ppm\n", 3},
+      {"no_comma", "2000 b.ppm\n", 3},
+      {"empty_file", "2000,\n", 3},
+      {"dotdot", "2000,../outside.ppm\n", 3},
+      {"dotdot_inner", "2000,frames/../../x.ppm\n", 3},
+      {"absolute", "2000,/etc/passwd\n", 3},
+      {"same_time", "1000,b.ppm\n", 3},
+      {"backwards", "2000,b.ppm\n1500,c.ppm\n", 4},
+      {"too_big", "99999999999999999999,b.ppm\n", 3},
+  };
+  for (const Case& c : cases) {
+    const std::string p = dir.write(std::string(c.name) + ".csv", head + c.body);
+    expect_file_line_error(error_of([&] { hs::read_frame_index(p); }), p, c.line);
+  }
+}
+
+TEST(Ppm, ParseHeaderVariants) {
+  auto parse = [](const std::string& s, hs::PpmHeader& h, const char** why) {
+    return hs::parse_ppm_header(reinterpret_cast<const std::uint8_t*>(s.data()), s.size(), h, why);
+  };
+  hs::PpmHeader h;
+  const char* why = nullptr;
+  std::string s = "P6\n4 3\n255\n";
+  ASSERT_TRUE(parse(s + "pixels", h, &why));
+  EXPECT_EQ(h.width_px, 4U);
+  EXPECT_EQ(h.height_px, 3U);
+  EXPECT_EQ(h.data_offset, s.size());
+  s = "P6\n# made by hand\n# two comments\n640 480 # trailing comment\n255\n";
+  ASSERT_TRUE(parse(s + "x", h, &why)) << why;
+  EXPECT_EQ(h.width_px, 640U);
+  EXPECT_EQ(h.height_px, 480U);
+  EXPECT_EQ(h.data_offset, s.size());
+  s = "P6 2 2 255 ";  // single spaces are whitespace too
+  ASSERT_TRUE(parse(s + "abcdefghijkl", h, &why));
+  EXPECT_EQ(h.data_offset, s.size());
+  // The pixel data may start with a byte that looks like whitespace or a digit.
+  s = "P6\n1 1\n255\n";
+  ASSERT_TRUE(parse(s + "\n9#", h, &why));
+  EXPECT_EQ(h.data_offset, s.size());
+
+  why = nullptr;
+  EXPECT_FALSE(parse("P6\n4 3\n65535\n", h, &why));
+  ASSERT_NE(why, nullptr);
+  EXPECT_NE(std::string(why).find("maxval"), std::string::npos) << why;
+  why = nullptr;
+  EXPECT_FALSE(parse("P5\n4 3\n255\n", h, &why));
+  ASSERT_NE(why, nullptr);
+  EXPECT_NE(std::string(why).find("P6"), std::string::npos) << why;
+  for (const char* truncated : {"", "P", "P6", "P6\n", "P6\n4", "P6\n4 3", "P6\n4 3\n",
+                                "P6\n4 3\n255", "P6\n# only a comment"}) {
+    why = nullptr;
+    EXPECT_FALSE(parse(truncated, h, &why)) << "'" << truncated << "'";
+    EXPECT_NE(why, nullptr);
+  }
+  EXPECT_FALSE(parse("P6\n0 3\n255\n", h, &why));
+  EXPECT_FALSE(parse("P6\n4 -3\n255\n", h, &why));
+  EXPECT_FALSE(parse("P6\n99999999999 3\n255\n", h, &why));
+  EXPECT_FALSE(parse("P6\n4 3\n255x", h, &why));
+  EXPECT_FALSE(parse("P3\n4 3\n255\n", h, &why));
+  EXPECT_FALSE(parse("P5\n4 3\n255\n", h, nullptr));  // a null reason pointer is allowed
+}
+
+TEST(Ppm, WriteThenParseRoundTrip) {
+  TempDir dir;
+  const std::uint32_t w = 5, h = 4;
+  std::vector<std::uint8_t> rgb(w * h * 3);
+  for (std::size_t i = 0; i < rgb.size(); ++i) rgb[i] = static_cast<std::uint8_t>(i * 13U + 10U);
+  rgb[0] = '\n';  // a first pixel byte that looks like whitespace
+  const std::string path = dir.path("f.ppm");
+  hs::write_ppm(path, w, h, rgb.data());
+  std::ifstream in(path, std::ios::binary);
+  const std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)),
+                                        std::istreambuf_iterator<char>());
+  hs::PpmHeader header;
+  const char* why = nullptr;
+  ASSERT_TRUE(hs::parse_ppm_header(bytes.data(), bytes.size(), header, &why)) << why;
+  EXPECT_EQ(header.width_px, w);
+  EXPECT_EQ(header.height_px, h);
+  ASSERT_EQ(bytes.size(), header.data_offset + rgb.size());
+  EXPECT_TRUE(std::equal(rgb.begin(), rgb.end(),
+                         bytes.begin() + static_cast<std::ptrdiff_t>(header.data_offset)));
+  EXPECT_THROW(hs::write_ppm(dir.path("no/such/dir/f.ppm"), w, h, rgb.data()), std::runtime_error);
+}
+
+// --- candump logs ------------------------------------------------------------------------------
+
+TEST(Candump, ParsesStandardAndExtendedFrames) {
+  ha::CanFrame f;
+  std::string why;
+  ASSERT_TRUE(hs::parse_candump_line("(1700000000.123456) can0 181#0011223344556677", f, why))
+      << why;
+  EXPECT_EQ(f.id, 0x181U);
+  EXPECT_FALSE(f.extended);
+  EXPECT_EQ(f.length, 8);
+  for (std::uint8_t i = 0; i < 8; ++i) EXPECT_EQ(f.data[i], 0x11 * i) << int{i};
+  EXPECT_EQ(f.timestamp_ns, 1700000000123456000ULL);
+
+  ASSERT_TRUE(hs::parse_candump_line("(0000000001.000001) vcan1 18FF00a1#DeAd", f, why)) << why;
+  EXPECT_EQ(f.id, 0x18FF00A1U);
+  EXPECT_TRUE(f.extended);
+  EXPECT_EQ(f.length, 2);
+  EXPECT_EQ(f.data[0], 0xDE);
+  EXPECT_EQ(f.data[1], 0xAD);
+  EXPECT_EQ(f.data[2], 0);
+  EXPECT_EQ(f.timestamp_ns, 1000001000ULL);
+
+  ASSERT_TRUE(hs::parse_candump_line("(5.000000) can0 7FF#", f, why)) << why;  // no data
+  EXPECT_EQ(f.id, 0x7FFU);
+  EXPECT_EQ(f.length, 0);
+  ASSERT_TRUE(hs::parse_candump_line("(5.000000) can0 123#0102\r", f, why)) << why;  // CRLF file
+  EXPECT_EQ(f.length, 2);
+}
+
+TEST(Candump, RejectsMalformedLines) {
+  const char* bad[] = {
+      "1700000000.123456) can0 181#00",          // no '('
+      "(1700000000.123456 can0 181#00",          // no ')'
+      "(1700000000.12345) can0 181#00",          // 5-digit microseconds
+      "(1700000000.1234567) can0 181#00",        // 7 digits
+      "(1700000000) can0 181#00",                // no fraction
+      "(.123456) can0 181#00",                   // no seconds
+      "(17000x0000.123456) can0 181#00",         // non-digit
+      "(1.000000) can0 181#0G",                  // bad hex in data
+      "(1.000000) can0 1G1#00",                  // bad hex in ID
+      "(1.000000) can0 181#001",                 // odd data length
+      "(1.000000) can0 181#001122334455667788",  // 9 bytes
+      "(1.000000) can0 181##10011",              // CAN FD
+      "(1.000000) can0 181#R",                   // remote frame
+      "(1.000000) can0 181#r",
+      "(1.000000) can0 1810#00",      // 4-digit ID
+      "(1.000000) can0 800#00",       // 11-bit ID out of range
+      "(1.000000) can0 20000000#00",  // 29-bit ID out of range
+      "(1.000000) can0 18100",        // no '#'
+      "(1.000000) 181#00",            // no interface
+      "",
+  };
+  for (const char* line : bad) {
+    ha::CanFrame f;
+    std::string why;
+    EXPECT_FALSE(hs::parse_candump_line(line, f, why)) << "accepted: " << line;
+    EXPECT_FALSE(why.empty()) << line;
+  }
+  ha::CanFrame f;
+  std::string why;
+  hs::parse_candump_line("(1.000000) can0 181##10011", f, why);
+  EXPECT_NE(why.find("FD"), std::string::npos) << why;
+  hs::parse_candump_line("(1.000000) can0 181#R", f, why);
+  EXPECT_NE(why.find("remote"), std::string::npos) << why;
+}
+
+TEST(Candump, FormatParseRoundTrip) {
+  std::uint64_t s = 5;
+  auto next = [&s]() {
+    s = s * 6364136223846793005ULL + 1442695040888963407ULL;
+    return s >> 16;
+  };
+  for (int i = 0; i < 500; ++i) {
+    ha::CanFrame f;
+    f.extended = (i % 3) == 0;
+    f.id = static_cast<std::uint32_t>(next() % (f.extended ? 0x20000000ULL : 0x800ULL));
+    f.length = static_cast<std::uint8_t>(next() % 9);
+    for (std::uint8_t k = 0; k < f.length; ++k) f.data[k] = static_cast<std::uint8_t>(next());
+    f.timestamp_ns = (next() % 4000000000000000ULL) * 1000ULL;  // whole microseconds
+    const std::string line = hs::format_candump_line(f, "can0");
+    ha::CanFrame g;
+    std::string why;
+    ASSERT_TRUE(hs::parse_candump_line(line, g, why)) << line << ": " << why;
+    EXPECT_EQ(g.id, f.id) << line;
+    EXPECT_EQ(g.extended, f.extended) << line;
+    EXPECT_EQ(g.length, f.length) << line;
+    EXPECT_EQ(g.timestamp_ns, f.timestamp_ns) << line;
+    for (std::uint8_t k = 0; k < 8; ++k) EXPECT_EQ(g.data[k], k < f.length ? f.data[k] : 0) << line;
+  }
+  ha::CanFrame f;
+  f.id = 0x181;
+  f.length = 2;
+  f.data[0] = 0x1A;
+  f.data[1] = 0x0B;
+  f.timestamp_ns = 1767225600010000000ULL;
+  EXPECT_EQ(hs::format_candump_line(f, "can0"), "(1767225600.010000) can0 181#1A0B");
+}
+
+TEST(Candump, ReadLogNamesFileAndLine) {
+  TempDir dir;
+  std::string p = dir.write("ok.log", "(1.000000) can0 181#00\n\n(1.010000) can0 281#0102\n");
+  const auto frames = hs::read_candump_log(p);
+  ASSERT_EQ(frames.size(), 2U);
+  EXPECT_EQ(frames[1].id, 0x281U);
+  p = dir.write("bad.log", "(1.000000) can0 181#00\n(1.010000) can0 181#0\n");
+  expect_file_line_error(error_of([&] { hs::read_candump_log(p); }), p, 2);
+}
+
+// --- metadata.toml -----------------------------------------------------------------------------
+
+TEST(Metadata, WriteReadRoundTrip) {
+  TempDir dir;
+  hs::DatasetMetadata m;
+  m.name = "unit";
+  m.image_width_px = 320;
+  m.image_height_px = 240;
+  m.pixel_format = harmoloc::hal::PixelFormat::kYuyv;
+  m.frame_rate_hz = 15.0;
+  m.frames_index = "idx.csv";
+  m.encoder_log = "bus.log";
+  m.ground_truth = "gt.tum";
+  m.can_interface = "can1";
+  m.geometry.wheel_radius_m = 0.0625;
+  m.geometry.track_m = 0.42;
+  m.geometry.ticks_per_rev = 16384;
+  m.geometry.left_direction = -1;
+  m.encoder_layout.id = 0x18FF0001;
+  m.encoder_layout.length = 4;
+  m.encoder_layout.left_offset = 2;
+  m.encoder_layout.right_offset = 0;
+  m.encoder_layout.counter_bits = 16;
+  m.encoder_layout.byte_order = ha::ByteOrder::kBigEndian;
+  m.seed = 1234;
+  hs::write_metadata(dir.dir(), m);
+  const hs::DatasetMetadata r = hs::read_metadata(dir.dir());
+  EXPECT_EQ(r.name, "unit");
+  EXPECT_EQ(r.image_width_px, 320U);
+  EXPECT_EQ(r.image_height_px, 240U);
+  EXPECT_EQ(r.pixel_format, harmoloc::hal::PixelFormat::kYuyv);
+  EXPECT_DOUBLE_EQ(r.frame_rate_hz, 15.0);
+  EXPECT_EQ(r.frames_index, "idx.csv");
+  EXPECT_EQ(r.encoder_log, "bus.log");
+  EXPECT_EQ(r.ground_truth, "gt.tum");
+  EXPECT_EQ(r.can_interface, "can1");
+  EXPECT_DOUBLE_EQ(r.geometry.wheel_radius_m, 0.0625);
+  EXPECT_DOUBLE_EQ(r.geometry.track_m, 0.42);
+  EXPECT_DOUBLE_EQ(r.geometry.ticks_per_rev, 16384.0);
+  EXPECT_EQ(r.geometry.left_direction, -1);
+  EXPECT_EQ(r.geometry.right_direction, 1);
+  EXPECT_EQ(r.encoder_layout.id, 0x18FF0001U);
+  EXPECT_EQ(r.encoder_layout.length, 4);
+  EXPECT_EQ(r.encoder_layout.left_offset, 2);
+  EXPECT_EQ(r.encoder_layout.right_offset, 0);
+  EXPECT_EQ(r.encoder_layout.counter_bits, 16);
+  EXPECT_EQ(r.encoder_layout.byte_order, ha::ByteOrder::kBigEndian);
+  EXPECT_EQ(r.seed, 1234U);
+
+  // No ground truth: the key is left out and reads back empty.
+  m.ground_truth.clear();
+  hs::write_metadata(dir.dir(), m);
+  EXPECT_EQ(hs::read_metadata(dir.dir()).ground_truth, "");
+}
+
+TEST(Metadata, CalibratedGeometryKeepsItsPrecision) {
+  // A calibrated robot's numbers (and an NTSC frame rate) must survive write -> read: the host
+  // board takes the odometry geometry from the metadata when the config has no [odometry].
+  TempDir dir;
+  hs::DatasetMetadata m;
+  m.image_width_px = 160;
+  m.image_height_px = 120;
+  m.frame_rate_hz = 30000.0 / 1001.0;
+  m.geometry.wheel_radius_m = 0.0498731;
+  m.geometry.track_m = 0.3012345;
+  m.geometry.ticks_per_rev = 4096.0 * 4.0 * 19.2;  // 314572.8
+  hs::write_metadata(dir.dir(), m);
+  const hs::DatasetMetadata r = hs::read_metadata(dir.dir());
+  EXPECT_NEAR(r.geometry.wheel_radius_m, m.geometry.wheel_radius_m, 1e-12);
+  EXPECT_NEAR(r.geometry.track_m, m.geometry.track_m, 1e-12);
+  EXPECT_NEAR(r.geometry.ticks_per_rev, m.geometry.ticks_per_rev, 1e-9);
+  EXPECT_NEAR(r.frame_rate_hz, m.frame_rate_hz, 1e-9);
+}
+
+TEST(Metadata, ErrorsStartWithMetadataToml) {
+  TempDir dir;
+  auto msg_for = [&](const std::string& text) {
+    dir.write("metadata.toml", text);
+    return error_of([&] { hs::read_metadata(dir.dir()); });
+  };
+  auto expect_meta_error = [](const std::string& msg, const std::string& what) {
+    EXPECT_EQ(msg.rfind("metadata.toml: ", 0), 0U) << msg;
+    EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
+    EXPECT_NE(msg.find(what), std::string::npos) << "expected '" << what << "' in: " << msg;
+  };
+  // Missing file.
+  expect_meta_error(error_of([&] { hs::read_metadata(dir.path("nothing-here")); }), "not found");
+  const std::string good =
+      "format_version = 1\n[camera]\nwidth_px = 160\nheight_px = 120\nrate_hz = 30\n"
+      "[robot]\nwheel_radius_m = 0.05\ntrack_m = 0.3\nticks_per_rev = 4096\n";
+  dir.write("metadata.toml", good);
+  EXPECT_NO_THROW(hs::read_metadata(dir.dir()));
+  expect_meta_error(msg_for("format_version = 2\n" + good.substr(good.find('\n') + 1)),
+                    "format_version");
+  expect_meta_error(msg_for(good.substr(good.find('\n') + 1)), "format_version");
+  std::string bad_format = good;
+  bad_format.insert(bad_format.find("rate_hz"), "pixel_format = \"bgr24\"\n");
+  expect_meta_error(msg_for(bad_format), "pixel_format");
+  std::string odd_yuyv = good;
+  odd_yuyv.replace(odd_yuyv.find("width_px = 160"), 14, "width_px = 161\npixel_format = \"yuyv\"");
+  expect_meta_error(msg_for(odd_yuyv), "even");
+  std::string no_width = good;
+  no_width.erase(no_width.find("width_px = 160\n"), 15);
+  expect_meta_error(msg_for(no_width), "camera.width_px");
+  std::string zero_radius = good;
+  zero_radius.replace(zero_radius.find("0.05"), 4, "0.0");
+  expect_meta_error(msg_for(zero_radius), "robot.wheel_radius_m");
+  expect_meta_error(msg_for(good + "[encoders]\nlength = 4\n"),
+                    "encoders");  // 2 x 32 bits in 4 bytes
+  expect_meta_error(msg_for(good + "[encoders]\nbyte_order = \"pdp\"\n"), "byte_order");
+  expect_meta_error(msg_for("format_version = 1\n[camera\n"), "line 2");
+}

@@ -1,0 +1,452 @@
+// The harmonic localizer (seed 000): the offline semi-supervised solve against a dense solve built
+// here from the definitions, eq. 9 against a direct evaluation, the fixed-capacity float online
+// query against the double offline twin, the known-place test, and the parameter search.
+#include "harmoloc/algorithms/harmonic_localizer.hpp"
+#include "harmoloc/algorithms/harmonic_model.hpp"
+#include "harmoloc/algorithms/harmonic_training.hpp"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <vector>
+
+#include "harmoloc/algorithms/random.hpp"
+
+namespace ha = harmoloc::algorithms;
+
+namespace {
+
+// 30 samples along a smooth 2-D curve (an area vector that changes smoothly along a route) with a
+// little deterministic jitter; the label is the curve parameter (a coordinate along the route).
+struct Problem {
+  Eigen::MatrixXd features;
+  Eigen::VectorXd labels;  // true coordinate of every sample
+  std::vector<bool> labelled;
+};
+
+Problem make_problem(int m = 30, int every = 4) {
+  Problem p;
+  p.features.resize(m, 2);
+  p.labels.resize(m);
+  p.labelled.assign(static_cast<std::size_t>(m), false);
+  ha::Pcg32 rng(99);
+  for (int i = 0; i < m; ++i) {
+    const double t = static_cast<double>(i) / (m - 1);  // 0..1
+    p.features(i, 0) = 1.0 + 2.0 * t + 0.01 * rng.normal();
+    p.features(i, 1) = 3.0 - 1.5 * t * t + 0.01 * rng.normal();
+    p.labels(i) = 4.2 * t;  // metres along the route
+    p.labelled[static_cast<std::size_t>(i)] = (i % every) == 0;
+  }
+  return p;
+}
+
+// The dense system of eq. 8 built from its definitions with plain loops.
+Eigen::MatrixXd reference_laplacian(const Eigen::MatrixXd& o, double sigma) {
+  const Eigen::Index m = o.rows();
+  Eigen::MatrixXd w(m, m);
+  for (Eigen::Index i = 0; i < m; ++i) {
+    for (Eigen::Index j = 0; j < m; ++j) {
+      double d2 = 0.0;
+      for (Eigen::Index k = 0; k < o.cols(); ++k) d2 += (o(i, k) - o(j, k)) * (o(i, k) - o(j, k));
+      w(i, j) = std::exp(-sigma * d2);
+    }
+  }
+  Eigen::VectorXd deg(m);
+  for (Eigen::Index i = 0; i < m; ++i) {
+    double s = 0.0;
+    for (Eigen::Index j = 0; j < m; ++j) s += w(i, j);
+    deg(i) = s;
+  }
+  Eigen::MatrixXd l(m, m);
+  for (Eigen::Index i = 0; i < m; ++i) {
+    for (Eigen::Index j = 0; j < m; ++j) {
+      l(i, j) = (i == j ? 1.0 : 0.0) - w(i, j) / std::sqrt(deg(i) * deg(j));
+    }
+  }
+  return l;
+}
+
+Eigen::VectorXd reference_solve(const Eigen::MatrixXd& o, const std::vector<bool>& labelled,
+                                const Eigen::VectorXd& labels, double sigma, double gamma) {
+  const Eigen::Index m = o.rows();
+  const Eigen::MatrixXd l = reference_laplacian(o, sigma);
+  Eigen::MatrixXd a(m, m);
+  Eigen::VectorXd c = Eigen::VectorXd::Zero(m);
+  for (Eigen::Index i = 0; i < m; ++i) {
+    for (Eigen::Index j = 0; j < m; ++j) a(i, j) = gamma * l(i, j);
+    if (labelled[static_cast<std::size_t>(i)]) {
+      a(i, i) += 1.0;
+      c(i) = labels(i);
+    }
+  }
+  return Eigen::FullPivLU<Eigen::MatrixXd>(a).solve(c);
+}
+
+// Eq. 9 straight from its definition (no shift by the nearest sample), in long double.
+double reference_eq9(const Eigen::MatrixXd& o, const Eigen::VectorXd& f, double sigma,
+                     const Eigen::RowVectorXd& q) {
+  long double num = 0.0L, den = 0.0L;
+  for (Eigen::Index j = 0; j < o.rows(); ++j) {
+    long double d2 = 0.0L;
+    for (Eigen::Index k = 0; k < o.cols(); ++k) {
+      const long double t = static_cast<long double>(q(k)) - static_cast<long double>(o(j, k));
+      d2 += t * t;
+    }
+    const long double w = std::exp(-static_cast<long double>(sigma) * d2);
+    num += w * static_cast<long double>(f(j));
+    den += w;
+  }
+  return static_cast<double>(num / den);
+}
+
+}  // namespace
+
+TEST(HarmonicTraining, LaplacianMatchesDefinition) {
+  const Problem p = make_problem();
+  for (double sigma : {0.1, 2.0, 30.0}) {
+    const Eigen::MatrixXd l = ha::normalized_laplacian(p.features, sigma);
+    const Eigen::MatrixXd ref = reference_laplacian(p.features, sigma);
+    ASSERT_EQ(l.rows(), 30);
+    ASSERT_EQ(l.cols(), 30);
+    EXPECT_LT((l - ref).cwiseAbs().maxCoeff(), 1e-12) << "sigma " << sigma;
+    // Symmetric, and D^1/2 1 is in its null space.
+    EXPECT_LT((l - l.transpose()).cwiseAbs().maxCoeff(), 1e-14);
+  }
+}
+
+TEST(HarmonicTraining, SolveMatchesDenseFullPivLu) {
+  const Problem p = make_problem();
+  for (double sigma : {0.5, 2.0, 8.0}) {
+    for (double gamma : {0.001, 0.015, 0.3}) {
+      const Eigen::VectorXd f =
+          ha::solve_semi_supervised(p.features, p.labelled, p.labels, sigma, gamma);
+      const Eigen::VectorXd ref = reference_solve(p.features, p.labelled, p.labels, sigma, gamma);
+      ASSERT_EQ(f.size(), 30);
+      EXPECT_LT((f - ref).cwiseAbs().maxCoeff(), 1e-7 * (1.0 + ref.cwiseAbs().maxCoeff()))
+          << "sigma " << sigma << " gamma " << gamma;
+    }
+  }
+}
+
+TEST(HarmonicTraining, SmallGammaReproducesTheLabels) {
+  const Problem p = make_problem();
+  const Eigen::VectorXd f = ha::solve_semi_supervised(p.features, p.labelled, p.labels, 2.0, 1e-6);
+  for (Eigen::Index i = 0; i < p.features.rows(); ++i) {
+    if (p.labelled[static_cast<std::size_t>(i)]) {
+      EXPECT_NEAR(f(i), p.labels(i), 1e-4) << i;
+    }
+  }
+  // The unlabelled ones are interpolated from the graph: inside the labels' range, not 0.
+  for (Eigen::Index i = 1; i < p.features.rows(); i += 4) {
+    EXPECT_GT(f(i), -0.5) << i;
+    EXPECT_LT(f(i), 4.2 + 0.5) << i;
+  }
+}
+
+TEST(HarmonicTraining, SolveRejectsMismatchedSizes) {
+  const Problem p = make_problem();
+  std::vector<bool> short_mask(p.labelled.begin(), p.labelled.end() - 1);
+  EXPECT_THROW(ha::solve_semi_supervised(p.features, short_mask, p.labels, 2.0, 0.01),
+               std::invalid_argument);
+}
+
+TEST(HarmonicTraining, PredictIsEquationNine) {
+  const Problem p = make_problem();
+  const Eigen::VectorXd f = ha::solve_semi_supervised(p.features, p.labelled, p.labels, 2.0, 0.015);
+  Eigen::MatrixXd queries(4, 2);
+  queries << 1.5, 2.9, 2.2, 2.5, 0.0, 0.0, 3.0, 1.5;
+  for (double sigma : {0.3, 2.0, 10.0}) {
+    const Eigen::VectorXd got = ha::harmonic_predict(p.features, f, sigma, queries);
+    ASSERT_EQ(got.size(), 4);
+    for (Eigen::Index q = 0; q < queries.rows(); ++q) {
+      EXPECT_NEAR(got(q), reference_eq9(p.features, f, sigma, queries.row(q)), 1e-10)
+          << "sigma " << sigma << " q " << q;
+    }
+  }
+  // Hand-sized case: two samples at 0 and 1 with targets 0 and 10, query at 0.5 with sigma
+  // ln(2)/0.25: equal weights -> 5; query at 0: weights 1 and 1/2^4 -> 10/17.
+  Eigen::MatrixXd two(2, 1);
+  two << 0.0, 1.0;
+  Eigen::VectorXd t(2);
+  t << 0.0, 10.0;
+  Eigen::MatrixXd q(2, 1);
+  q << 0.5, 0.0;
+  const Eigen::VectorXd hand = ha::harmonic_predict(two, t, std::log(2.0) / 0.25, q);
+  EXPECT_NEAR(hand(0), 5.0, 1e-12);
+  EXPECT_NEAR(hand(1), 10.0 / 17.0, 1e-12);
+}
+
+TEST(HarmonicTraining, PredictFarFromAllSamplesIsFiniteAndNearestTarget) {
+  const Problem p = make_problem();
+  Eigen::MatrixXd far(1, 2);
+  far << 500.0, -300.0;  // exp(-sigma d^2) underflows for every sample
+  const Eigen::VectorXd got = ha::harmonic_predict(p.features, p.labels, 5.0, far);
+  ASSERT_TRUE(std::isfinite(got(0)));
+  // The nearest sample dominates completely.
+  Eigen::Index nearest = 0;
+  (p.features.rowwise() - far.row(0)).rowwise().squaredNorm().minCoeff(&nearest);
+  EXPECT_NEAR(got(0), p.labels(nearest), 1e-9);
+}
+
+TEST(HarmonicTraining, MedianSquaredDistance) {
+  Eigen::MatrixXd three(3, 1);
+  three << 0.0, 1.0, 3.0;  // pairwise d^2: 1, 9, 4 -> median 4
+  EXPECT_DOUBLE_EQ(ha::median_squared_distance(three), 4.0);
+  Eigen::MatrixXd pts(3, 2);
+  pts << 0, 0, 3, 4, 6, 8;  // d^2: 25, 100, 25 -> median 25
+  EXPECT_DOUBLE_EQ(ha::median_squared_distance(pts), 25.0);
+}
+
+namespace {
+
+void fill_model(ha::HarmonicModel& model, const Problem& p, const Eigen::VectorXd& fx,
+                const Eigen::VectorXd& fy) {
+  model.sample_count = static_cast<std::uint32_t>(p.features.rows());
+  model.feature_count = static_cast<std::uint32_t>(p.features.cols());
+  model.area_scale = 1.0F;
+  model.sigma_x = 2.0F;
+  model.sigma_y = 7.5F;
+  model.gamma_x = 0.015F;
+  model.gamma_y = 0.01F;
+  model.max_nearest_distance = 0.2F;
+  for (Eigen::Index i = 0; i < p.features.rows(); ++i) {
+    for (Eigen::Index k = 0; k < p.features.cols(); ++k) {
+      model.sample(static_cast<std::size_t>(i))[k] = static_cast<float>(p.features(i, k));
+    }
+    model.target_x_m[static_cast<std::size_t>(i)] = static_cast<float>(fx(i));
+    model.target_y_m[static_cast<std::size_t>(i)] = static_cast<float>(fy(i));
+  }
+}
+
+// The model's float contents as the double matrices harmonic_predict takes.
+void model_as_double(const ha::HarmonicModel& m, Eigen::MatrixXd& o, Eigen::VectorXd& fx,
+                     Eigen::VectorXd& fy) {
+  o.resize(m.sample_count, m.feature_count);
+  fx.resize(m.sample_count);
+  fy.resize(m.sample_count);
+  for (std::size_t i = 0; i < m.sample_count; ++i) {
+    for (std::size_t k = 0; k < m.feature_count; ++k) {
+      o(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(k)) =
+          static_cast<double>(m.sample(i)[k]);
+    }
+    fx(static_cast<Eigen::Index>(i)) = static_cast<double>(m.target_x_m[i]);
+    fy(static_cast<Eigen::Index>(i)) = static_cast<double>(m.target_y_m[i]);
+  }
+}
+
+}  // namespace
+
+TEST(HarmonicQuery, FloatOnlineMatchesDoubleOffline) {
+  const Problem p = make_problem();
+  const Eigen::VectorXd fx =
+      ha::solve_semi_supervised(p.features, p.labelled, p.labels, 2.0, 0.015);
+  Eigen::VectorXd y_labels = 0.5 * p.labels.array().square().matrix();
+  const Eigen::VectorXd fy = ha::solve_semi_supervised(p.features, p.labelled, y_labels, 7.5, 0.01);
+  auto model = std::make_unique<ha::HarmonicModel>();
+  fill_model(*model, p, fx, fy);
+  Eigen::MatrixXd o;
+  Eigen::VectorXd tx, ty;
+  model_as_double(*model, o, tx, ty);
+
+  ha::Pcg32 rng(5);
+  for (int n = 0; n < 200; ++n) {
+    std::array<float, ha::HarmonicModel::kMaxFeatures> q{};
+    q[0] = static_cast<float>(rng.uniform(0.5, 3.5));
+    q[1] = static_cast<float>(rng.uniform(1.0, 3.5));
+    q[2] = 123.0F;  // beyond feature_count: must be ignored
+    Eigen::MatrixXd qd(1, 2);
+    qd << static_cast<double>(q[0]), static_cast<double>(q[1]);
+    const ha::HarmonicFix fix = ha::harmonic_query(*model, q);
+    const double ex = ha::harmonic_predict(o, tx, 2.0, qd)(0);
+    const double ey = ha::harmonic_predict(o, ty, 7.5, qd)(0);
+    ASSERT_NEAR(fix.x_m, ex, 2e-4 * (1.0 + std::fabs(ex))) << n;
+    ASSERT_NEAR(fix.y_m, ey, 2e-4 * (1.0 + std::fabs(ey))) << n;
+    const double nearest = std::sqrt((o.rowwise() - qd.row(0)).rowwise().squaredNorm().minCoeff());
+    ASSERT_NEAR(fix.nearest_distance, nearest, 1e-4) << n;
+  }
+}
+
+TEST(HarmonicQuery, KnownPlaceFlag) {
+  const Problem p = make_problem();
+  auto model = std::make_unique<ha::HarmonicModel>();
+  fill_model(*model, p, p.labels, p.labels);
+  std::array<float, ha::HarmonicModel::kMaxFeatures> q{};
+  // A training vector: distance 0, known, and the fix is close to its own target.
+  q[0] = model->sample(7)[0];
+  q[1] = model->sample(7)[1];
+  ha::HarmonicFix fix = ha::harmonic_query(*model, q);
+  EXPECT_TRUE(fix.known_place);
+  EXPECT_NEAR(fix.nearest_distance, 0.0, 1e-6);
+  // Far away (exp(-sigma d^2) underflows for every sample): flagged, and still a finite
+  // estimate inside the range of the targets (weights relative to the nearest sample), not 0/0.
+  for (const auto& far :
+       {std::array<float, 2>{400.0F, 250.0F}, std::array<float, 2>{-300.0F, 90.0F}}) {
+    q[0] = far[0];
+    q[1] = far[1];
+    fix = ha::harmonic_query(*model, q);
+    EXPECT_FALSE(fix.known_place);
+    ASSERT_TRUE(std::isfinite(fix.x_m));
+    ASSERT_TRUE(std::isfinite(fix.y_m));
+    EXPECT_GT(fix.nearest_distance, 100.0);
+    EXPECT_GE(fix.x_m, p.labels.minCoeff() - 1e-6);
+    EXPECT_LE(fix.x_m, p.labels.maxCoeff() + 1e-6);
+  }
+  // Just inside / just outside the bound (0.2) from sample 0 along a direction away from the rest.
+  q[0] = model->sample(0)[0] - 0.15F;
+  q[1] = model->sample(0)[1];
+  EXPECT_TRUE(ha::harmonic_query(*model, q).known_place);
+  q[0] = model->sample(0)[0] - 0.25F;
+  EXPECT_FALSE(ha::harmonic_query(*model, q).known_place);
+}
+
+TEST(HarmonicQuery, NoBoardSeenIsNotAKnownPlace) {
+  // A training sample at the origin (no board visible): a black frame matches it exactly but
+  // must not count as a known place.
+  auto model = std::make_unique<ha::HarmonicModel>();
+  model->sample_count = 2;
+  model->feature_count = 2;
+  model->sigma_x = model->sigma_y = 1.0F;
+  model->max_nearest_distance = 1.0F;
+  model->area_scale = 1.0F;
+  model->sample(1)[0] = 1.0F;
+  model->target_x_m[1] = 2.0F;
+  std::array<float, ha::HarmonicModel::kMaxFeatures> q{};
+  const ha::HarmonicFix fix = ha::harmonic_query(*model, q);
+  EXPECT_FALSE(fix.known_place);
+  EXPECT_NEAR(fix.nearest_distance, 0.0, 1e-9);
+  // Eq. 9 by hand: weights 1 and e^-1.
+  EXPECT_NEAR(fix.x_m, 2.0 * std::exp(-1.0) / (1.0 + std::exp(-1.0)), 1e-6);
+}
+
+TEST(HarmonicQuery, EmptyModelGivesNoFix) {
+  auto model = std::make_unique<ha::HarmonicModel>();
+  std::array<float, ha::HarmonicModel::kMaxFeatures> q{};
+  q[0] = 1.0F;
+  const ha::HarmonicFix fix = ha::harmonic_query(*model, q);
+  EXPECT_FALSE(fix.known_place);
+  EXPECT_EQ(fix.x_m, 0.0);
+}
+
+TEST(HarmonicModel, AreasToFeaturesSelectsAndScales) {
+  auto model = std::make_unique<ha::HarmonicModel>();
+  model->feature_count = 3;
+  model->board_index = {0, 1, 4};
+  model->area_scale = 100.0F / (320.0F * 240.0F);
+  ha::AreaVector areas;
+  areas.count = 6;
+  areas.pixels = {768, 1536, 99, 99, 7680, 99, 0, 0};
+  std::array<float, ha::HarmonicModel::kMaxFeatures> f{};
+  f.fill(5.0F);
+  ha::areas_to_features(*model, areas, f);
+  EXPECT_FLOAT_EQ(f[0], 1.0F);  // 768 px of 76800 = 1 %
+  EXPECT_FLOAT_EQ(f[1], 2.0F);
+  EXPECT_FLOAT_EQ(f[2], 10.0F);
+  for (std::size_t k = 3; k < f.size(); ++k) EXPECT_EQ(f[k], 0.0F) << k;
+  // A board index beyond the frame's board count reads as 0 pixels.
+  areas.count = 2;
+  ha::areas_to_features(*model, areas, f);
+  EXPECT_EQ(f[2], 0.0F);
+}
+
+namespace {
+
+// 1-D feature along a smooth curve, label a known smooth function of position: the fit needs a
+// kernel neither much wider nor much narrower than the sample spacing.
+Problem make_curve(int m, int every) {
+  Problem p;
+  p.features.resize(m, 1);
+  p.labels.resize(m);
+  p.labelled.assign(static_cast<std::size_t>(m), false);
+  for (int i = 0; i < m; ++i) {
+    const double s = static_cast<double>(i) / (m - 1);  // position along the route, 0..1
+    p.features(i, 0) = 10.0 * s + 2.0 * s * s;          // area grows smoothly with position
+    p.labels(i) = 1.5 * std::sin(3.0 * s) + 0.5 * s;    // the coordinate, metres
+    p.labelled[static_cast<std::size_t>(i)] = (i % every) == 0;
+  }
+  return p;
+}
+
+// The documented cross-validation with one fold per labelled sample (leave-one-out: the fold
+// assignment is then unambiguous), built from reference_solve and reference_eq9.
+double reference_loo_mse(const Problem& p, double sigma, double gamma) {
+  const Eigen::Index m = p.features.rows();
+  double sq = 0.0;
+  int n = 0;
+  for (Eigen::Index held = 0; held < m; ++held) {
+    if (!p.labelled[static_cast<std::size_t>(held)]) continue;
+    Eigen::MatrixXd o(m - 1, p.features.cols());
+    Eigen::VectorXd c(m - 1);
+    std::vector<bool> mask;
+    for (Eigen::Index i = 0, r = 0; i < m; ++i) {
+      if (i == held) continue;
+      o.row(r) = p.features.row(i);
+      c(r) = p.labels(i);
+      mask.push_back(p.labelled[static_cast<std::size_t>(i)]);
+      ++r;
+    }
+    const Eigen::VectorXd f = reference_solve(o, mask, c, sigma, gamma);
+    const double e = reference_eq9(o, f, sigma, p.features.row(held)) - p.labels(held);
+    sq += e * e;
+    ++n;
+  }
+  return sq / n;
+}
+
+}  // namespace
+
+TEST(ChooseAxisParameters, PicksFromTheGivenGridAndMatchesReferenceCrossValidation) {
+  const Problem p = make_curve(40, 5);  // 8 labelled
+  ha::CrossValidationOptions options;
+  options.folds = 8;  // = labelled count: leave-one-out
+  options.sigma_grid = {0.02, 0.3, 3.0};
+  options.gamma_grid = {0.003, 0.03};
+  const ha::AxisChoice choice =
+      ha::choose_axis_parameters(p.features, p.labelled, p.labels, options);
+
+  double best = std::numeric_limits<double>::infinity(), best_sigma = 0.0, best_gamma = 0.0;
+  for (double s : options.sigma_grid) {
+    for (double g : options.gamma_grid) {
+      const double mse = reference_loo_mse(p, s, g);
+      if (mse < best) {
+        best = mse;
+        best_sigma = s;
+        best_gamma = g;
+      }
+    }
+  }
+  EXPECT_EQ(choice.sigma, best_sigma);
+  EXPECT_EQ(choice.gamma, best_gamma);
+  EXPECT_NEAR(choice.cv_mse, best, 1e-9 + 1e-6 * best);
+}
+
+TEST(ChooseAxisParameters, DefaultGridChoosesAnInteriorSigmaWithSmallError) {
+  const Problem p = make_curve(60, 4);  // 15 labelled
+  ha::CrossValidationOptions options;
+  const ha::AxisChoice choice =
+      ha::choose_axis_parameters(p.features, p.labelled, p.labels, options);
+  // The default grid is base * 2^e, e = -2..12, base = 1 / median ||O_i - O_j||^2.
+  const double base = 1.0 / ha::median_squared_distance(p.features);
+  const double e = std::log2(choice.sigma / base);
+  EXPECT_NEAR(e, std::round(e), 1e-9);
+  EXPECT_GT(e, -2.0 + 0.5) << "sigma at the wide edge of the grid: " << choice.sigma;
+  EXPECT_LT(e, 12.0 - 0.5) << "sigma at the narrow edge of the grid: " << choice.sigma;
+  const std::vector<double> gammas = {0.001, 0.003, 0.01, 0.03, 0.1};
+  EXPECT_NE(std::find(gammas.begin(), gammas.end(), choice.gamma), gammas.end());
+  // Label variance is ~0.3 m^2; a good fit of this smooth curve is far below that.
+  const double mean = p.labels.mean();
+  const double var = (p.labels.array() - mean).square().mean();
+  EXPECT_LT(choice.cv_mse, 0.1 * var) << "cv mse " << choice.cv_mse << " label variance " << var;
+  EXPECT_GT(choice.cv_mse, 0.0);
+}
+
+TEST(ChooseAxisParameters, RejectsTooFewLabels) {
+  Problem p = make_curve(20, 100);  // only sample 0 labelled
+  EXPECT_THROW(
+      ha::choose_axis_parameters(p.features, p.labelled, p.labels, ha::CrossValidationOptions{}),
+      std::invalid_argument);
+}

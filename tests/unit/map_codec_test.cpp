@@ -1,0 +1,289 @@
+// The map file: round trip, byte layout, and every kind of corruption rejected with a reason.
+#include "harmoloc/algorithms/map_codec.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "harmoloc/algorithms/crc32.hpp"
+
+namespace ha = harmoloc::algorithms;
+
+namespace {
+
+constexpr std::size_t kBoards = 6;
+constexpr std::size_t kFeatures = 3;
+constexpr std::size_t kSamples = 5;
+
+// Offsets by hand from the layout: magic 8, version 4, width 4, height 4, board count 4,
+// 12 bytes a board, sample count 4, feature count 4, one byte a feature, 6 floats, samples.
+constexpr std::size_t kOffVersion = 8;
+constexpr std::size_t kOffBoardCount = 20;
+constexpr std::size_t kOffBoards = 24;
+constexpr std::size_t kOffSampleCount = kOffBoards + 12 * kBoards;
+constexpr std::size_t kOffFeatureCount = kOffSampleCount + 4;
+constexpr std::size_t kOffBoardIndex = kOffFeatureCount + 4;
+constexpr std::size_t kOffAreaScale = kOffBoardIndex + kFeatures;
+constexpr std::size_t kOffSigmaX = kOffAreaScale + 4;
+constexpr std::size_t kOffSamples = kOffAreaScale + 6 * 4;
+constexpr std::size_t kExpectedSize = kOffSamples + kSamples * (kFeatures + 2) * 4 + 4;
+
+std::unique_ptr<ha::MapFile> make_map() {
+  auto map = std::make_unique<ha::MapFile>();
+  map->image_width_px = 640;
+  map->image_height_px = 480;
+  map->thresholds.count = kBoards;
+  const float hues[kBoards][2] = {{340, 15}, {100, 145}, {215, 250},
+                                  {45, 70},  {285, 320}, {170, 200}};
+  for (std::size_t i = 0; i < kBoards; ++i) {
+    map->thresholds.boards[i] =
+        ha::ColourThreshold{hues[i][0], hues[i][1], static_cast<std::uint8_t>(100 + i),
+                            static_cast<std::uint8_t>(50 + i), static_cast<std::uint8_t>(250 - i)};
+  }
+  ha::HarmonicModel& m = map->model;
+  m.sample_count = kSamples;
+  m.feature_count = kFeatures;
+  m.board_index = {0, 1, 4, 0, 0, 0, 0, 0};
+  m.area_scale = 100.0F / (640.0F * 480.0F);
+  m.sigma_x = 267.06F;
+  m.sigma_y = 454.16F;
+  m.gamma_x = 0.015F;
+  m.gamma_y = 0.01F;
+  m.max_nearest_distance = 0.75F;
+  for (std::size_t i = 0; i < kSamples; ++i) {
+    for (std::size_t k = 0; k < kFeatures; ++k)
+      m.sample(i)[k] = 0.25F * static_cast<float>(i + 1) + static_cast<float>(k);
+    m.target_x_m[i] = 1.5F + 0.1F * static_cast<float>(i);
+    m.target_y_m[i] = -0.25F * static_cast<float>(i);
+  }
+  return map;
+}
+
+void put_u32(std::vector<std::uint8_t>& b, std::size_t at, std::uint32_t v) {
+  for (int i = 0; i < 4; ++i)
+    b[at + static_cast<std::size_t>(i)] = static_cast<std::uint8_t>(v >> (8 * i));
+}
+std::uint32_t get_u32(const std::vector<std::uint8_t>& b, std::size_t at) {
+  std::uint32_t v = 0;
+  for (int i = 0; i < 4; ++i)
+    v |= static_cast<std::uint32_t>(b[at + static_cast<std::size_t>(i)]) << (8 * i);
+  return v;
+}
+void put_f32(std::vector<std::uint8_t>& b, std::size_t at, float f) {
+  std::uint32_t u = 0;
+  std::memcpy(&u, &f, 4);
+  put_u32(b, at, u);
+}
+// Recomputes the trailing CRC so that a check other than the checksum has to catch the edit.
+void fix_crc(std::vector<std::uint8_t>& b) {
+  put_u32(b, b.size() - 4, ha::crc32(b.data(), b.size() - 4));
+}
+
+std::string decode_error(const std::vector<std::uint8_t>& b) {
+  auto out = std::make_unique<ha::MapFile>();
+  const ha::MapError e = ha::decode_map(b.data(), b.size(), *out);
+  return e ? std::string(e.what) : std::string();
+}
+
+}  // namespace
+
+TEST(Crc32, CheckValueAndChaining) {
+  const std::string s = "123456789";
+  const auto* p = reinterpret_cast<const std::uint8_t*>(s.data());
+  EXPECT_EQ(ha::crc32(p, s.size()), 0xCBF43926U);
+  EXPECT_EQ(ha::crc32(p, 0), 0U);
+  EXPECT_EQ(ha::crc32(p + 4, s.size() - 4, ha::crc32(p, 4)), 0xCBF43926U);  // as zlib's crc32()
+  const std::uint8_t a = 'a';
+  EXPECT_EQ(ha::crc32(&a, 1), 0xE8B7BE43U);
+}
+
+TEST(MapCodec, RoundTripAndLayout) {
+  const auto map = make_map();
+  const std::vector<std::uint8_t> bytes = ha::encode_map(*map);
+  ASSERT_EQ(bytes.size(), kExpectedSize);
+  EXPECT_EQ(std::string(bytes.begin(), bytes.begin() + 8), "HARMOMAP");
+  EXPECT_EQ(get_u32(bytes, kOffVersion), ha::kMapFormatVersion);
+  EXPECT_EQ(get_u32(bytes, 12), 640U);
+  EXPECT_EQ(get_u32(bytes, 16), 480U);
+  EXPECT_EQ(get_u32(bytes, kOffBoardCount), kBoards);
+  EXPECT_EQ(get_u32(bytes, kOffSampleCount), kSamples);
+  EXPECT_EQ(get_u32(bytes, kOffFeatureCount), kFeatures);
+  EXPECT_EQ(bytes[kOffBoardIndex + 2], 4U);
+  EXPECT_EQ(get_u32(bytes, bytes.size() - 4), ha::crc32(bytes.data(), bytes.size() - 4));
+
+  auto out = std::make_unique<ha::MapFile>();
+  const ha::MapError e = ha::decode_map(bytes.data(), bytes.size(), *out);
+  ASSERT_FALSE(e) << e.what;
+  EXPECT_EQ(out->image_width_px, 640U);
+  EXPECT_EQ(out->image_height_px, 480U);
+  EXPECT_TRUE(out->thresholds == map->thresholds);
+  const ha::HarmonicModel& a = map->model;
+  const ha::HarmonicModel& b = out->model;
+  EXPECT_EQ(b.sample_count, a.sample_count);
+  EXPECT_EQ(b.feature_count, a.feature_count);
+  for (std::size_t k = 0; k < kFeatures; ++k) EXPECT_EQ(b.board_index[k], a.board_index[k]);
+  EXPECT_EQ(b.area_scale, a.area_scale);
+  EXPECT_EQ(b.sigma_x, a.sigma_x);
+  EXPECT_EQ(b.sigma_y, a.sigma_y);
+  EXPECT_EQ(b.gamma_x, a.gamma_x);
+  EXPECT_EQ(b.gamma_y, a.gamma_y);
+  EXPECT_EQ(b.max_nearest_distance, a.max_nearest_distance);
+  for (std::size_t i = 0; i < kSamples; ++i) {
+    for (std::size_t k = 0; k < kFeatures; ++k)
+      EXPECT_EQ(b.sample(i)[k], a.sample(i)[k]) << i << "," << k;
+    EXPECT_EQ(b.target_x_m[i], a.target_x_m[i]);
+    EXPECT_EQ(b.target_y_m[i], a.target_y_m[i]);
+  }
+  // Encoding the decoded map gives the same bytes.
+  EXPECT_EQ(ha::encode_map(*out), bytes);
+}
+
+TEST(MapCodec, BadMagic) {
+  std::vector<std::uint8_t> b = ha::encode_map(*make_map());
+  b[0] = 'X';
+  EXPECT_NE(decode_error(b).find("magic"), std::string::npos) << decode_error(b);
+  fix_crc(b);
+  EXPECT_NE(decode_error(b).find("magic"), std::string::npos) << decode_error(b);
+}
+
+TEST(MapCodec, UnsupportedVersion) {
+  std::vector<std::uint8_t> b = ha::encode_map(*make_map());
+  put_u32(b, kOffVersion, 2);
+  EXPECT_NE(decode_error(b).find("version"), std::string::npos) << decode_error(b);
+  fix_crc(b);
+  EXPECT_NE(decode_error(b).find("version"), std::string::npos) << decode_error(b);
+}
+
+TEST(MapCodec, EveryFlippedByteIsRejected) {
+  const std::vector<std::uint8_t> good = ha::encode_map(*make_map());
+  for (std::size_t i = 0; i < good.size(); ++i) {
+    std::vector<std::uint8_t> b = good;
+    b[i] ^= 0x10U;
+    const std::string why = decode_error(b);
+    ASSERT_FALSE(why.empty()) << "flipped byte " << i << " accepted";
+    // Past the magic and version, it is the checksum that notices.
+    if (i >= 12) {
+      EXPECT_NE(why.find("checksum"), std::string::npos) << "byte " << i << ": " << why;
+    }
+  }
+  std::vector<std::uint8_t> b = good;
+  b[kOffSamples + 5] ^= 0x01U;
+  auto out = std::make_unique<ha::MapFile>();
+  const ha::MapError e = ha::decode_map(b.data(), b.size(), *out);
+  ASSERT_TRUE(e);
+  EXPECT_EQ(e.offset, b.size() - 4);  // noticed where the stored checksum is
+}
+
+TEST(MapCodec, TruncatedAtEveryLength) {
+  const std::vector<std::uint8_t> good = ha::encode_map(*make_map());
+  for (std::size_t n = 0; n < good.size(); ++n) {
+    const std::vector<std::uint8_t> b(good.begin(), good.begin() + static_cast<std::ptrdiff_t>(n));
+    auto out = std::make_unique<ha::MapFile>();
+    const ha::MapError e = ha::decode_map(b.data(), b.size(), *out);
+    ASSERT_TRUE(e) << "truncated to " << n << " bytes and accepted";
+    ASSERT_NE(e.what, nullptr);
+    EXPECT_GT(std::strlen(e.what), 5U);
+  }
+  // A null pointer is not a map either.
+  auto out = std::make_unique<ha::MapFile>();
+  EXPECT_TRUE(ha::decode_map(nullptr, 100, *out));
+}
+
+TEST(MapCodec, TruncatedWithAValidChecksumIsStillRejected) {
+  // Cut inside the samples and re-seal: the header's counts no longer fit the data.
+  const std::vector<std::uint8_t> good = ha::encode_map(*make_map());
+  for (std::size_t cut : {std::size_t{1}, std::size_t{4}, std::size_t{20}, std::size_t{21},
+                          kSamples * (kFeatures + 2) * 4}) {
+    std::vector<std::uint8_t> b(good.begin(), good.end() - 4 - static_cast<std::ptrdiff_t>(cut));
+    b.resize(b.size() + 4);
+    fix_crc(b);
+    const std::string why = decode_error(b);
+    ASSERT_FALSE(why.empty()) << "cut " << cut;
+    EXPECT_NE(why.find("truncated"), std::string::npos) << "cut " << cut << ": " << why;
+  }
+}
+
+TEST(MapCodec, TrailingBytes) {
+  std::vector<std::uint8_t> b = ha::encode_map(*make_map());
+  // Junk after the CRC: the last 4 bytes are taken as the checksum, which does not match.
+  std::vector<std::uint8_t> junk = b;
+  junk.insert(junk.end(), {1, 2, 3});
+  EXPECT_FALSE(decode_error(junk).empty());
+  // Junk between the samples and a CRC that covers it: the length check has to catch it.
+  b.resize(b.size() - 4);
+  b.insert(b.end(), {0xAA, 0xBB, 0xCC, 0, 0, 0, 0});
+  fix_crc(b);
+  EXPECT_NE(decode_error(b).find("trailing"), std::string::npos) << decode_error(b);
+}
+
+TEST(MapCodec, SampleCountOutOfRangeWithValidChecksum) {
+  for (std::uint32_t count : {0U, 4097U, 0xFFFFFFFFU}) {
+    std::vector<std::uint8_t> b = ha::encode_map(*make_map());
+    put_u32(b, kOffSampleCount, count);
+    fix_crc(b);
+    const std::string why = decode_error(b);
+    EXPECT_NE(why.find("sample count"), std::string::npos) << count << ": " << why;
+  }
+}
+
+TEST(MapCodec, FeatureAndBoardCountsOutOfRangeWithValidChecksum) {
+  std::vector<std::uint8_t> b = ha::encode_map(*make_map());
+  put_u32(b, kOffFeatureCount, 9);
+  fix_crc(b);
+  EXPECT_NE(decode_error(b).find("feature count"), std::string::npos) << decode_error(b);
+  put_u32(b, kOffFeatureCount, 0);
+  fix_crc(b);
+  EXPECT_NE(decode_error(b).find("feature count"), std::string::npos) << decode_error(b);
+
+  b = ha::encode_map(*make_map());
+  put_u32(b, kOffBoardCount, 9);
+  fix_crc(b);
+  EXPECT_NE(decode_error(b).find("board count"), std::string::npos) << decode_error(b);
+
+  b = ha::encode_map(*make_map());
+  b[kOffBoardIndex + 1] = 6;  // board 7 of a 6-board map
+  fix_crc(b);
+  EXPECT_NE(decode_error(b).find("board"), std::string::npos) << decode_error(b);
+
+  b = ha::encode_map(*make_map());
+  put_u32(b, 12, 0);  // image width 0
+  fix_crc(b);
+  EXPECT_NE(decode_error(b).find("image size"), std::string::npos) << decode_error(b);
+}
+
+TEST(MapCodec, NonFiniteOrNonPositiveParametersWithValidChecksum) {
+  const float bad[] = {std::numeric_limits<float>::quiet_NaN(),
+                       std::numeric_limits<float>::infinity(), 0.0F, -1.0F};
+  for (std::size_t field = 0; field < 3; ++field) {  // area scale, sigma x, sigma y
+    for (float v : bad) {
+      std::vector<std::uint8_t> b = ha::encode_map(*make_map());
+      put_f32(b, kOffAreaScale + 4 * field, v);
+      fix_crc(b);
+      const std::string why = decode_error(b);
+      EXPECT_NE(why.find("parameter"), std::string::npos)
+          << "field " << field << " value " << v << ": " << why;
+    }
+  }
+  std::vector<std::uint8_t> b = ha::encode_map(*make_map());
+  put_f32(b, kOffSigmaX, std::numeric_limits<float>::quiet_NaN());
+  fix_crc(b);
+  EXPECT_FALSE(decode_error(b).empty());
+  // A hue outside 0..360 and a NaN sample feature / coordinate.
+  b = ha::encode_map(*make_map());
+  put_f32(b, kOffBoards + 12 * 2 + 4, 400.0F);
+  fix_crc(b);
+  EXPECT_NE(decode_error(b).find("hue"), std::string::npos) << decode_error(b);
+  b = ha::encode_map(*make_map());
+  put_f32(b, kOffSamples + 4, std::numeric_limits<float>::quiet_NaN());
+  fix_crc(b);
+  EXPECT_NE(decode_error(b).find("sample feature"), std::string::npos) << decode_error(b);
+  b = ha::encode_map(*make_map());
+  put_f32(b, kOffSamples + 4 * kFeatures, std::numeric_limits<float>::infinity());
+  fix_crc(b);
+  EXPECT_NE(decode_error(b).find("coordinate"), std::string::npos) << decode_error(b);
+}

@@ -1,0 +1,294 @@
+// Fixed-capacity particle filter (seed 001): determinism, the motion noise model, the fix
+// update, low-variance resampling, the estimate (weighted mean, circular yaw mean, covariance)
+// and convergence on a known trajectory from a uniform heading.
+#include "harmoloc/algorithms/particle_filter.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <map>
+#include <memory>
+#include <tuple>
+#include <vector>
+
+#include "harmoloc/algorithms/geometry.hpp"
+#include "harmoloc/algorithms/odometry.hpp"
+#include "harmoloc/algorithms/random.hpp"
+
+namespace ha = harmoloc::algorithms;
+using ha::kPi;
+
+namespace {
+
+std::unique_ptr<ha::ParticleFilter> make_filter(std::size_t n, std::uint64_t seed,
+                                                const ha::MotionNoise& noise = ha::MotionNoise{}) {
+  auto pf = std::make_unique<ha::ParticleFilter>();
+  pf->configure(n, seed, noise);
+  return pf;
+}
+
+bool same_bits(double a, double b) {
+  return std::memcmp(&a, &b, sizeof a) == 0;
+}
+
+// Weighted mean and covariance from the accessors, written out here.
+void reference_estimate(const ha::ParticleFilter& pf, double mean[3], double cov[9]) {
+  double sw = 0.0, sx = 0.0, sy = 0.0, ss = 0.0, sc = 0.0;
+  for (std::size_t i = 0; i < pf.size(); ++i) {
+    const double w = pf.weight(i);
+    sw += w;
+    sx += w * pf.particle(i).x_m;
+    sy += w * pf.particle(i).y_m;
+    ss += w * std::sin(pf.particle(i).yaw_rad);
+    sc += w * std::cos(pf.particle(i).yaw_rad);
+  }
+  mean[0] = sx / sw;
+  mean[1] = sy / sw;
+  mean[2] = std::atan2(ss, sc);
+  for (int k = 0; k < 9; ++k) cov[k] = 0.0;
+  for (std::size_t i = 0; i < pf.size(); ++i) {
+    const double w = pf.weight(i) / sw;
+    const double d[3] = {pf.particle(i).x_m - mean[0], pf.particle(i).y_m - mean[1],
+                         std::remainder(pf.particle(i).yaw_rad - mean[2], 2.0 * kPi)};
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) cov[r * 3 + c] += w * d[r] * d[c];
+    }
+  }
+}
+
+void expect_estimate_matches_reference(const ha::ParticleFilter& pf) {
+  double mean[3], cov[9];
+  reference_estimate(pf, mean, cov);
+  const ha::PoseEstimate e = pf.estimate();
+  EXPECT_NEAR(e.mean.x_m, mean[0], 1e-12);
+  EXPECT_NEAR(e.mean.y_m, mean[1], 1e-12);
+  EXPECT_NEAR(std::remainder(e.mean.yaw_rad - mean[2], 2.0 * kPi), 0.0, 1e-12);
+  for (int k = 0; k < 9; ++k)
+    EXPECT_NEAR(e.covariance.m[k], cov[k], 1e-12) << "covariance element " << k;
+  // Symmetric.
+  EXPECT_NEAR(e.covariance(0, 1), e.covariance(1, 0), 1e-15);
+  EXPECT_NEAR(e.covariance(0, 2), e.covariance(2, 0), 1e-15);
+  EXPECT_NEAR(e.covariance(1, 2), e.covariance(2, 1), 1e-15);
+}
+
+}  // namespace
+
+TEST(ParticleFilter, ConfigureClampsTheCount) {
+  auto pf = make_filter(0, 1);
+  EXPECT_EQ(pf->size(), 1U);
+  pf->configure(100000, 1, ha::MotionNoise{});
+  EXPECT_EQ(pf->size(), ha::ParticleFilter::kMaxParticles);
+  pf->configure(300, 1, ha::MotionNoise{});
+  EXPECT_EQ(pf->size(), 300U);
+  EXPECT_FALSE(pf->initialized());
+  pf->initialize(ha::Pose2{}, 0.1, 0.1, false);
+  EXPECT_TRUE(pf->initialized());
+}
+
+TEST(ParticleFilter, SameSeedSameParticlesBitForBit) {
+  auto run = [](std::uint64_t seed) {
+    auto pf = make_filter(500, seed);
+    pf->initialize(ha::Pose2{1.0, 2.0, 0.3}, 0.2, 0.5, true);
+    for (int k = 0; k < 20; ++k) {
+      pf->predict(ha::OdometryDelta{0.05, 0.01 * k});
+      pf->update_position(1.0 + 0.04 * k, 2.0 + 0.01 * k, 0.05, 0.05);
+      pf->resample_if_needed(0.5);
+      if (k % 7 == 3) pf->diffuse(0.01, 0.02);
+    }
+    return pf;
+  };
+  const auto a = run(42), b = run(42), c = run(43);
+  bool any_difference = false;
+  for (std::size_t i = 0; i < a->size(); ++i) {
+    ASSERT_TRUE(same_bits(a->particle(i).x_m, b->particle(i).x_m)) << i;
+    ASSERT_TRUE(same_bits(a->particle(i).y_m, b->particle(i).y_m)) << i;
+    ASSERT_TRUE(same_bits(a->particle(i).yaw_rad, b->particle(i).yaw_rad)) << i;
+    ASSERT_TRUE(same_bits(a->weight(i), b->weight(i))) << i;
+    any_difference = any_difference || !same_bits(a->particle(i).x_m, c->particle(i).x_m);
+  }
+  EXPECT_TRUE(any_difference) << "another seed gave the same particles";
+  const ha::PoseEstimate ea = a->estimate(), eb = b->estimate();
+  EXPECT_TRUE(same_bits(ea.mean.x_m, eb.mean.x_m));
+  EXPECT_TRUE(same_bits(ea.mean.yaw_rad, eb.mean.yaw_rad));
+  EXPECT_TRUE(same_bits(ea.covariance(0, 0), eb.covariance(0, 0)));
+}
+
+TEST(ParticleFilter, InitializeSpreadsAsAsked) {
+  auto pf = make_filter(4000, 7);
+  pf->initialize(ha::Pose2{1.0, -2.0, 0.5}, 0.2, 0.1, false);
+  const ha::PoseEstimate e = pf->estimate();
+  EXPECT_NEAR(e.mean.x_m, 1.0, 0.015);
+  EXPECT_NEAR(e.mean.y_m, -2.0, 0.015);
+  EXPECT_NEAR(e.mean.yaw_rad, 0.5, 0.008);
+  EXPECT_NEAR(e.covariance(0, 0), 0.04, 0.04 * 0.1);
+  EXPECT_NEAR(e.covariance(1, 1), 0.04, 0.04 * 0.1);
+  EXPECT_NEAR(e.covariance(2, 2), 0.01, 0.01 * 0.1);
+  EXPECT_NEAR(e.covariance(0, 1), 0.0, 0.003);
+  EXPECT_NEAR(e.covariance(0, 2), 0.0, 0.0015);
+  EXPECT_NEAR(e.effective_particles, 4000.0, 1e-6);
+  for (std::size_t i = 0; i < pf->size(); ++i) ASSERT_DOUBLE_EQ(pf->weight(i), 1.0 / 4000.0);
+  expect_estimate_matches_reference(*pf);
+
+  // Uniform yaw: every particle's yaw in [-pi, pi), spread over the whole circle.
+  pf->initialize(ha::Pose2{}, 0.1, 0.0, true);
+  int quadrant[4] = {0, 0, 0, 0};
+  for (std::size_t i = 0; i < pf->size(); ++i) {
+    const double yaw = pf->particle(i).yaw_rad;
+    ASSERT_GE(yaw, -kPi);
+    ASSERT_LT(yaw, kPi);
+    ++quadrant[static_cast<int>((yaw + kPi) / (kPi / 2.0)) % 4];
+  }
+  for (int q : quadrant) EXPECT_NEAR(q, 1000, 120);
+}
+
+TEST(ParticleFilter, PointInitialisationHasZeroCovariance) {
+  auto pf = make_filter(64, 3);
+  pf->initialize(ha::Pose2{0.5, 0.25, -1.0}, 0.0, 0.0, false);
+  const ha::PoseEstimate e = pf->estimate();
+  EXPECT_DOUBLE_EQ(e.mean.x_m, 0.5);
+  EXPECT_DOUBLE_EQ(e.mean.y_m, 0.25);
+  EXPECT_NEAR(e.mean.yaw_rad, -1.0, 1e-12);
+  for (double v : e.covariance.m) EXPECT_NEAR(v, 0.0, 1e-24);
+}
+
+TEST(ParticleFilter, CircularMeanAcrossPlusMinusPi) {
+  for (double centre : {kPi - 0.01, -kPi + 0.003, kPi - 1e-9}) {
+    auto pf = make_filter(2000, 11);
+    pf->initialize(ha::Pose2{0.0, 0.0, centre}, 0.01, 0.05, false);
+    // Particles lie on both sides of the +-pi cut.
+    int positive = 0;
+    for (std::size_t i = 0; i < pf->size(); ++i) positive += pf->particle(i).yaw_rad > 0.0 ? 1 : 0;
+    EXPECT_GT(positive, 100);
+    EXPECT_LT(positive, 1900);
+    const ha::PoseEstimate e = pf->estimate();
+    EXPECT_NEAR(std::remainder(e.mean.yaw_rad - centre, 2.0 * kPi), 0.0, 0.006) << centre;
+    // The yaw variance is that of the spread (0.05^2), not of a linear mean across the cut.
+    EXPECT_NEAR(e.covariance(2, 2), 0.0025, 0.0025 * 0.12) << centre;
+    expect_estimate_matches_reference(*pf);
+  }
+}
+
+TEST(ParticleFilter, UpdateWeightsAreGaussianPlusOutlierFloor) {
+  auto pf = make_filter(300, 5);
+  pf->initialize(ha::Pose2{0.0, 0.0, 0.0}, 0.3, 0.1, false);
+  const double fx = 0.1, fy = -0.05, sigma = 0.2, outlier = 0.05;
+  std::vector<double> expected(pf->size());
+  double sum = 0.0;
+  for (std::size_t i = 0; i < pf->size(); ++i) {
+    const double dx = pf->particle(i).x_m - fx, dy = pf->particle(i).y_m - fy;
+    expected[i] =
+        (1.0 - outlier) * std::exp(-(dx * dx + dy * dy) / (2.0 * sigma * sigma)) + outlier;
+    sum += expected[i];
+  }
+  pf->update_position(fx, fy, sigma, outlier);
+  for (std::size_t i = 0; i < pf->size(); ++i)
+    ASSERT_NEAR(pf->weight(i), expected[i] / sum, 1e-12) << i;
+  expect_estimate_matches_reference(*pf);
+  double sum_sq = 0.0;
+  for (std::size_t i = 0; i < pf->size(); ++i) sum_sq += pf->weight(i) * pf->weight(i);
+  EXPECT_NEAR(pf->estimate().effective_particles, 1.0 / sum_sq, 1e-9);
+}
+
+TEST(ParticleFilter, FixFarFromEveryParticleDoesNotProduceNaN) {
+  auto pf = make_filter(100, 5);
+  pf->initialize(ha::Pose2{0.0, 0.0, 0.0}, 0.01, 0.01, false);
+  pf->update_position(100.0, 100.0, 0.01, 0.0);  // every weight underflows to 0
+  for (std::size_t i = 0; i < pf->size(); ++i) ASSERT_DOUBLE_EQ(pf->weight(i), 0.01);
+  const ha::PoseEstimate e = pf->estimate();
+  EXPECT_TRUE(std::isfinite(e.mean.x_m));
+  EXPECT_NEAR(e.mean.x_m, 0.0, 0.01);
+  // With an outlier floor, a wild fix leaves the weights (nearly) equal.
+  pf->update_position(100.0, 100.0, 0.01, 0.05);
+  EXPECT_NEAR(pf->estimate().effective_particles, 100.0, 1e-6);
+}
+
+TEST(ParticleFilter, ResamplingIsLowVarianceAndEqualisesWeights) {
+  const std::size_t n = 400;
+  auto pf = make_filter(n, 21);
+  pf->initialize(ha::Pose2{0.0, 0.0, 0.0}, 0.5, 0.3, false);
+  // Nothing to do while the weights are equal.
+  EXPECT_FALSE(pf->resample_if_needed(0.5));
+  pf->update_position(0.3, -0.2, 0.25, 0.0);
+  std::map<std::tuple<double, double, double>, double> before;
+  for (std::size_t i = 0; i < n; ++i) {
+    before[{pf->particle(i).x_m, pf->particle(i).y_m, pf->particle(i).yaw_rad}] = pf->weight(i);
+  }
+  ASSERT_EQ(before.size(), n);
+  const double n_eff = pf->estimate().effective_particles;
+  ASSERT_LT(n_eff, 0.9 * static_cast<double>(n));
+  EXPECT_FALSE(
+      pf->resample_if_needed(n_eff / static_cast<double>(n) - 0.01));  // above the threshold
+  EXPECT_TRUE(pf->resample_if_needed(1.0));
+  EXPECT_EQ(pf->size(), n);
+  std::map<std::tuple<double, double, double>, int> copies;
+  for (std::size_t i = 0; i < n; ++i) {
+    ASSERT_DOUBLE_EQ(pf->weight(i), 1.0 / static_cast<double>(n));
+    const auto key =
+        std::make_tuple(pf->particle(i).x_m, pf->particle(i).y_m, pf->particle(i).yaw_rad);
+    ASSERT_EQ(before.count(key), 1U)
+        << "resampled particle " << i << " is not one of the originals";
+    ++copies[key];
+  }
+  // Systematic resampling: every particle gets floor(N w) or ceil(N w) copies.
+  for (const auto& [key, w] : before) {
+    const auto it = copies.find(key);
+    const int c = it == copies.end() ? 0 : it->second;
+    EXPECT_LT(std::fabs(c - static_cast<double>(n) * w), 1.0 + 1e-9)
+        << "weight " << w << " copies " << c;
+  }
+  EXPECT_NEAR(pf->estimate().effective_particles, static_cast<double>(n), 1e-6);
+}
+
+TEST(ParticleFilter, PredictFollowsTheArcWithTheDocumentedNoise) {
+  ha::MotionNoise noise;  // alpha1..4 = 0.02, 0.02, 0.02, 0.002
+  auto pf = make_filter(4000, 9, noise);
+  pf->initialize(ha::Pose2{1.0, 1.0, kPi / 2.0}, 0.0, 0.0, false);
+  pf->predict(ha::OdometryDelta{1.0, 0.0});
+  const ha::PoseEstimate e = pf->estimate();
+  // Mean moves 1 m along +y.
+  EXPECT_NEAR(e.mean.x_m, 1.0, 0.01);
+  EXPECT_NEAR(e.mean.y_m, 2.0, 0.01);
+  EXPECT_NEAR(e.mean.yaw_rad, kPi / 2.0, 0.01);
+  // Yaw variance alpha2 d^2 = 0.02; distance variance alpha3 d^2 = 0.02 (along y); the sideways
+  // spread of an arc of length 1 with yaw error e is e/2: variance 0.02 / 4.
+  EXPECT_NEAR(e.covariance(2, 2), 0.02, 0.02 * 0.12);
+  EXPECT_NEAR(e.covariance(1, 1), 0.02, 0.02 * 0.12);
+  EXPECT_NEAR(e.covariance(0, 0), 0.005, 0.005 * 0.15);
+  // Standing still: the floors keep a little diffusion going.
+  pf->initialize(ha::Pose2{}, 0.0, 0.0, false);
+  pf->predict(ha::OdometryDelta{0.0, 0.0});
+  const ha::PoseEstimate still = pf->estimate();
+  EXPECT_NEAR(std::sqrt(still.covariance(2, 2)), noise.min_yaw_sigma_rad,
+              0.1 * noise.min_yaw_sigma_rad);
+  EXPECT_NEAR(std::sqrt(still.covariance(0, 0)), noise.min_distance_sigma_m,
+              0.1 * noise.min_distance_sigma_m);
+}
+
+TEST(ParticleFilter, ConvergesOnAKnownTrajectoryFromUniformHeading) {
+  auto pf = make_filter(2000, 2024);
+  ha::Pcg32 fix_noise(77);
+  ha::Pose2 truth{0.0, 0.0, 0.6};
+  pf->initialize(ha::Pose2{0.05, -0.04, 0.0}, 0.15, 0.0, true);
+  auto step = [&](const ha::OdometryDelta& d) {
+    truth = ha::apply_arc(truth, d);
+    pf->predict(d);
+    pf->update_position(truth.x_m + 0.03 * fix_noise.normal(),
+                        truth.y_m + 0.03 * fix_noise.normal(), 0.04, 0.05);
+    pf->resample_if_needed(0.5);
+  };
+  for (int k = 0; k < 60; ++k) step(ha::OdometryDelta{0.05, 0.0});  // 3 m straight
+  ha::PoseEstimate e = pf->estimate();
+  EXPECT_LT(std::hypot(e.mean.x_m - truth.x_m, e.mean.y_m - truth.y_m), 0.05);
+  EXPECT_LT(std::fabs(ha::wrap_angle_rad(e.mean.yaw_rad - truth.yaw_rad)), 5.0 * kPi / 180.0);
+  for (int k = 0; k < 40; ++k) step(ha::OdometryDelta{0.05, 0.02});  // 2 m of arc, 0.8 rad
+  e = pf->estimate();
+  EXPECT_LT(std::hypot(e.mean.x_m - truth.x_m, e.mean.y_m - truth.y_m), 0.05)
+      << "estimate " << e.mean.x_m << "," << e.mean.y_m << " truth " << truth.x_m << ","
+      << truth.y_m;
+  EXPECT_LT(std::fabs(ha::wrap_angle_rad(e.mean.yaw_rad - truth.yaw_rad)), 5.0 * kPi / 180.0)
+      << "estimate yaw " << e.mean.yaw_rad << " truth " << truth.yaw_rad;
+  // And it is confident about it.
+  EXPECT_LT(std::sqrt(e.covariance(0, 0) + e.covariance(1, 1)), 0.06);
+  EXPECT_LT(std::sqrt(e.covariance(2, 2)), 0.1);
+}

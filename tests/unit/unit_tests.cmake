@@ -1,0 +1,35 @@
+# Unit tests (GoogleTest), one executable per area. Included from tests/CMakeLists.txt after
+# enable_testing(), find_package(GTest) and include(GoogleTest); CMAKE_CURRENT_SOURCE_DIR is tests/.
+set(HARMOLOC_UNIT_DIR ${CMAKE_CURRENT_SOURCE_DIR}/unit)
+
+# algorithms/: segmentation, harmonic localizer and its training, odometry, particle filter,
+# CAN layout, map codec.
+add_executable(algorithms_test
+  ${HARMOLOC_UNIT_DIR}/segmentation_test.cpp
+  ${HARMOLOC_UNIT_DIR}/harmonic_test.cpp
+  ${HARMOLOC_UNIT_DIR}/odometry_test.cpp
+  ${HARMOLOC_UNIT_DIR}/particle_filter_test.cpp
+  ${HARMOLOC_UNIT_DIR}/can_layout_test.cpp
+  ${HARMOLOC_UNIT_DIR}/map_codec_test.cpp)
+target_link_libraries(algorithms_test PRIVATE harmoloc_algorithms harmoloc_training GTest::gtest_main
+  harmoloc_warnings)
+gtest_discover_tests(algorithms_test DISCOVERY_TIMEOUT 60)
+
+# firmware/: configuration, MAVLink framing, latency histogram, map loading.
+add_executable(firmware_test
+  ${HARMOLOC_UNIT_DIR}/config_test.cpp
+  ${HARMOLOC_UNIT_DIR}/mavlink_test.cpp
+  ${HARMOLOC_UNIT_DIR}/latency_histogram_test.cpp
+  ${HARMOLOC_UNIT_DIR}/map_loader_test.cpp)
+target_link_libraries(firmware_test PRIVATE harmoloc_firmware harmoloc_config harmoloc_algorithms
+  GTest::gtest_main harmoloc_warnings)
+gtest_discover_tests(firmware_test DISCOVERY_TIMEOUT 60)
+
+# sim_host/ and drivers/: dataset formats, the file-backed fakes, the simulator, the serial link.
+add_executable(sim_host_test
+  ${HARMOLOC_UNIT_DIR}/dataset_test.cpp
+  ${HARMOLOC_UNIT_DIR}/fakes_test.cpp
+  ${HARMOLOC_UNIT_DIR}/simulator_test.cpp)
+target_link_libraries(sim_host_test PRIVATE harmoloc_sim_dataset harmoloc_sim_fakes harmoloc_simulator
+  harmoloc_drivers_common harmoloc_algorithms GTest::gtest_main harmoloc_warnings)
+gtest_discover_tests(sim_host_test DISCOVERY_TIMEOUT 60)
