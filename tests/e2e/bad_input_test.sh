@@ -5,15 +5,7 @@ source "$(dirname "$0")/lib.sh" "$@"
 out="$WORK/bad"
 rm -rf "$out"; mkdir -p "$out"
 
-# A small good dataset to break in different ways: the first 40 frames of the test run.
-make_dataset() {
-  local d=$1
-  rm -rf "$d"; mkdir -p "$d/frames"
-  cp "$WORK/test/metadata.toml" "$WORK/test/encoders.log" "$d/"
-  head -n 41 "$WORK/test/frames.csv" > "$d/frames.csv"
-  tail -n +2 "$d/frames.csv" | cut -d, -f2 | while read -r f; do cp "$WORK/test/$f" "$d/$f"; done
-}
-make_dataset "$out/good"
+make_dataset 40 "$out/good"
 
 cases=0
 expect_error() {  # expect_error NAME PATTERN COMMAND...
@@ -57,35 +49,35 @@ printf '[[board]]\nname = "red"\nhue_deg = [0, 20]\n' > "$out/other_thresholds.t
 expect_error "map trained with other thresholds" "retrain" run "$out/good" "$WORK/tiny.hmap" --config "$out/other_thresholds.toml"
 
 # Frames.
-make_dataset "$out/truncated_frame"
+make_dataset 40 "$out/truncated_frame"
 f=$(sed -n 10p "$out/truncated_frame/frames.csv" | cut -d, -f2)
 head -c 1000 "$WORK/test/$f" > "$out/truncated_frame/$f"
 expect_error "truncated frame" "truncated" run "$out/truncated_frame" "$WORK/tiny.hmap"
-make_dataset "$out/garbage_frame"
+make_dataset 40 "$out/garbage_frame"
 f=$(sed -n 5p "$out/garbage_frame/frames.csv" | cut -d, -f2)
 head -c "$(stat -c %s "$WORK/test/$f")" /dev/urandom > "$out/garbage_frame/$f"
 expect_error "garbage frame" "PPM" run "$out/garbage_frame" "$WORK/tiny.hmap"
-make_dataset "$out/missing_frame"
+make_dataset 40 "$out/missing_frame"
 rm "$out/missing_frame/frames/000003.ppm"
 expect_error "missing frame" "000003.ppm" run "$out/missing_frame" "$WORK/tiny.hmap"
-make_dataset "$out/bad_index"
+make_dataset 40 "$out/bad_index"
 sed -i '7s/.*/12x34,frames\/000005.ppm/' "$out/bad_index/frames.csv"
 expect_error "bad frame index" "frames.csv:7" run "$out/bad_index" "$WORK/tiny.hmap"
 
 # Encoder logs.
-make_dataset "$out/bad_log"
+make_dataset 40 "$out/bad_log"
 sed -i '20s/.*/(1767225600.190000) can0 181#00112233445566778899/' "$out/bad_log/encoders.log"
 expect_error "encoder log with an over-long frame" "encoders.log:20" run "$out/bad_log" "$WORK/tiny.hmap"
-make_dataset "$out/no_log"
+make_dataset 40 "$out/no_log"
 rm "$out/no_log/encoders.log"
 expect_error "missing encoder log" "encoders.log" run "$out/no_log" "$WORK/tiny.hmap"
 
 # Metadata and datasets.
 expect_error "missing dataset" "metadata.toml" run "$out/does_not_exist" "$WORK/tiny.hmap"
-make_dataset "$out/bad_meta"
+make_dataset 40 "$out/bad_meta"
 sed -i 's/pixel_format = "rgb24"/pixel_format = "nv12"/' "$out/bad_meta/metadata.toml"
 expect_error "unknown pixel format" "pixel_format" run "$out/bad_meta" "$WORK/tiny.hmap"
-make_dataset "$out/other_size"
+make_dataset 40 "$out/other_size"
 sed -i 's/width_px = 160/width_px = 320/' "$out/other_size/metadata.toml"
 expect_error "map for another frame size" "trained on 160x120" run "$out/other_size" "$WORK/tiny.hmap"
 
