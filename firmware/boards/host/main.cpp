@@ -18,7 +18,7 @@
 #include "harmoloc/sim_host/file_camera.hpp"
 #include "harmoloc/sim_host/log_encoders.hpp"
 #include "harmoloc/sim_host/metadata.hpp"
-#include "harmoloc/sim_host/tum.hpp"
+#include "harmoloc/sim_host/tum_writer.hpp"
 
 namespace {
 
@@ -32,34 +32,7 @@ int fail(const std::string& why) {
   return 2;
 }
 
-// A TUM output with its buffer reserved up front; each line is formatted without allocating.
-class TumSink {
- public:
-  bool open(const std::string& path) {
-    file_ = std::fopen(path.c_str(), "w");
-    if (file_ != nullptr) std::setvbuf(file_, buffer_, _IOFBF, sizeof buffer_);
-    return file_ != nullptr;
-  }
-  void write(std::uint64_t t_ns, const algorithms::Pose2& pose) {
-    if (file_ == nullptr) return;
-    char line[160];
-    const double t_s = static_cast<double>(t_ns / 1000U) * 1e-6;
-    const int n = sim_host::format_tum_line(line, sizeof line, t_s, pose);
-    if (n > 0) std::fwrite(line, 1, static_cast<std::size_t>(n), file_);
-  }
-  bool close() {
-    if (file_ == nullptr) return true;
-    const bool ok = std::fclose(file_) == 0;
-    file_ = nullptr;
-    return ok;
-  }
-
- private:
-  std::FILE* file_ = nullptr;
-  char buffer_[1 << 16];
-};
-
-TumSink g_trajectory, g_fixes;
+sim_host::TumWriter g_trajectory, g_fixes;
 
 }  // namespace
 

@@ -1,0 +1,33 @@
+#pragma once
+/// @file A TUM trajectory output for the cycle: the file and its buffer are set up at start-up,
+/// each pose is formatted into a stack buffer and appended without allocating.
+
+#include <cstdint>
+#include <cstdio>
+#include <string>
+
+#include "harmoloc/algorithms/geometry.hpp"
+
+namespace harmoloc::sim_host {
+
+class TumWriter {
+ public:
+  TumWriter() = default;
+  ~TumWriter() { close(); }
+  TumWriter(const TumWriter&) = delete;
+  TumWriter& operator=(const TumWriter&) = delete;
+
+  /// Opens (truncates) @p path; false if it cannot be written.
+  bool open(const std::string& path);
+  /// Appends one pose; does nothing when no file is open.
+  void write(std::uint64_t t_ns, const algorithms::Pose2& pose);
+  /// Flushes and closes; false if any write failed.
+  bool close();
+
+ private:
+  static constexpr std::size_t kBufferBytes = 1 << 16;
+  std::FILE* file_ = nullptr;
+  char* buffer_ = nullptr;
+};
+
+}  // namespace harmoloc::sim_host
