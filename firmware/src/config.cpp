@@ -125,7 +125,7 @@ FirmwareConfig load_config(const std::string& path) {
   }
   FirmwareConfig c = default_config();
   c.source = path;
-  check.only(root, "", {"cycle", "board", "odometry", "can", "filter", "link"});
+  check.only(root, "", {"cycle", "board", "odometry", "can", "filter", "link", "realtime"});
 
   if (const toml::table* t = check.section(root, "cycle")) {
     check.only(*t, "cycle.", {"rate_hz", "budget_ms", "camera_timeout_ms", "encoder_timeout_ms"});
@@ -265,6 +265,25 @@ FirmwareConfig load_config(const std::string& path) {
     c.link.baud =
         static_cast<unsigned>(check.integer(*t, "baud", "link.", c.link.baud, 9600, 921600));
     c.link.heartbeat_hz = check.number(*t, "heartbeat_hz", "link.", c.link.heartbeat_hz, 0.1, 50.0);
+  }
+  if (const toml::table* t = check.section(root, "realtime")) {
+    check.only(*t, "realtime.", {"enabled", "priority", "cpu", "lock_memory", "prefault_stack_kb"});
+    auto flag = [&](const char* key, bool fallback) {
+      const toml::node* n = t->get(key);
+      if (n == nullptr) return fallback;
+      auto b = n->value_exact<bool>();
+      if (!b) check.fail(n, std::string("realtime.") + key + " must be true or false");
+      return *b;
+    };
+    c.realtime.enabled = flag("enabled", c.realtime.enabled);
+    c.realtime.lock_memory = flag("lock_memory", c.realtime.lock_memory);
+    c.realtime.priority =
+        static_cast<int>(check.integer(*t, "priority", "realtime.", c.realtime.priority, 1, 99));
+    c.realtime.cpu =
+        static_cast<int>(check.integer(*t, "cpu", "realtime.", c.realtime.cpu, -1, 1023));
+    c.realtime.prefault_stack_kb = static_cast<std::size_t>(
+        check.integer(*t, "prefault_stack_kb", "realtime.",
+                      static_cast<std::int64_t>(c.realtime.prefault_stack_kb), 0, 65536));
   }
   return c;
 }

@@ -65,7 +65,15 @@ std::string stats_json(const LocalizationCycle& cycle, const RunCounters& run) {
     << ", \"bytes_sent\": " << run.link.bytes_sent << ", \"errors\": " << run.link.errors << "},\n"
     << "  \"localizer\": {\"fixes\": " << c.fixes_used << ", \"unknown_place\": " << c.unknown_place
     << "},\n"
-    << "  \"filter\": {\"resamples\": " << c.resamples << "}\n}\n";
+    << "  \"filter\": {\"resamples\": " << c.resamples << "}";
+  if (run.wakeup_latency != nullptr && run.wakeup_latency->count() > 0) {
+    const LatencyHistogram& w = *run.wakeup_latency;
+    o << ",\n  \"wakeup_latency\": {\"count\": " << w.count() << ", \"min_us\": " << us(w.min_ns())
+      << ", \"mean_us\": " << w.mean_ns() / 1000.0 << ", \"median_us\": " << us(w.quantile_ns(0.5))
+      << ", \"p99_us\": " << us(w.quantile_ns(0.99))
+      << ", \"p999_us\": " << us(w.quantile_ns(0.999)) << ", \"max_us\": " << us(w.max_ns()) << "}";
+  }
+  o << "\n}\n";
   return o.str();
 }
 

@@ -34,3 +34,5 @@ if wall < 1.5:
 PY
 node "$DECODER_DIR/decode_link.js" "$out/link.bin" "$out/est.tum"
 [ "$(json_number "$out/stats.json" link.frames_dropped)" -eq 0 ] || fail "frames dropped on an idle pty"
+python3 -c "import json,sys; w=json.load(open(sys.argv[1]))['wakeup_latency']; assert w['count'] >= 55, w; print('wake-up latency', w)" "$out/stats.json" || fail "no wake-up latency in a paced run's stats"
+"$BIN/harmoloc-budget" "$out/stats.json" | grep -q "^wake-up" || fail "harmoloc-budget does not show the wake-up latency"

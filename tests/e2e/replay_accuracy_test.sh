@@ -35,3 +35,6 @@ s="$out/flipped_report/summary.json"
 bad=$(summary estimate rmse_position_cm)
 echo "with the left wheel's direction flipped: RMSE $bad cm"
 less_than "$RMSE_BOUND_CM" "$bad" "the bound must catch a flipped wheel direction"
+# The budget command: this run fits; against an absurd budget it must not.
+"$BIN/harmoloc-budget" "$out/stats.json" --check
+if "$BIN/harmoloc-budget" "$out/stats.json" --budget-ms 0.001 --check > /dev/null; then fail "harmoloc-budget --check passed a 1 us budget"; fi

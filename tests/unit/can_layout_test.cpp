@@ -29,6 +29,15 @@ void expect_bytes(const ha::CanFrame& f, const std::array<std::uint8_t, 8>& byte
   for (std::uint8_t i = 0; i < length; ++i) EXPECT_EQ(f.data[i], bytes[i]) << "byte " << int{i};
 }
 
+// Decodes @p f with @p l: it is ours and carries the counters @p left and @p right.
+void expect_decodes_to(const ha::EncoderFrameLayout& l, const ha::CanFrame& f, std::uint32_t left,
+                       std::uint32_t right) {
+  std::uint32_t got_left = 0, got_right = 0;
+  ASSERT_EQ(ha::decode_encoder_frame(l, f, got_left, got_right), ha::CanDecode::kOk);
+  EXPECT_EQ(got_left, left);
+  EXPECT_EQ(got_right, right);
+}
+
 }  // namespace
 
 TEST(CanLayout, DefaultIsLittleEndian32BitPairIn8Bytes) {
@@ -39,10 +48,7 @@ TEST(CanLayout, DefaultIsLittleEndian32BitPairIn8Bytes) {
   EXPECT_FALSE(f.extended);
   EXPECT_EQ(f.timestamp_ns, 555U);
   expect_bytes(f, {0x78, 0x56, 0x34, 0x12, 0xF0, 0xDE, 0xBC, 0x9A}, 8);
-  std::uint32_t left = 0, right = 0;
-  ASSERT_EQ(ha::decode_encoder_frame(l, f, left, right), ha::CanDecode::kOk);
-  EXPECT_EQ(left, 0x12345678U);
-  EXPECT_EQ(right, 0x9ABCDEF0U);
+  expect_decodes_to(l, f, 0x12345678U, 0x9ABCDEF0U);
 }
 
 TEST(CanLayout, BigEndian32Bit) {
@@ -50,34 +56,24 @@ TEST(CanLayout, BigEndian32Bit) {
   ASSERT_TRUE(ha::layout_valid(l));
   const ha::CanFrame f = ha::encode_encoder_frame(l, 0x01020304U, 0xA0B0C0D0U, 0);
   expect_bytes(f, {0xA0, 0xB0, 0xC0, 0xD0, 0x01, 0x02, 0x03, 0x04}, 8);
-  std::uint32_t left = 0, right = 0;
-  ASSERT_EQ(ha::decode_encoder_frame(l, f, left, right), ha::CanDecode::kOk);
-  EXPECT_EQ(left, 0x01020304U);
-  EXPECT_EQ(right, 0xA0B0C0D0U);
+  expect_decodes_to(l, f, 0x01020304U, 0xA0B0C0D0U);
 }
 
 TEST(CanLayout, SixteenBitBothByteOrders) {
   const auto be = layout(0x181, 4, 0, 2, 16, ha::ByteOrder::kBigEndian);
   ha::CanFrame f = ha::encode_encoder_frame(be, 0x1234U, 0xABCDU, 0);
   expect_bytes(f, {0x12, 0x34, 0xAB, 0xCD, 0, 0, 0, 0}, 4);
-  std::uint32_t left = 0, right = 0;
-  ASSERT_EQ(ha::decode_encoder_frame(be, f, left, right), ha::CanDecode::kOk);
-  EXPECT_EQ(left, 0x1234U);
-  EXPECT_EQ(right, 0xABCDU);
+  expect_decodes_to(be, f, 0x1234U, 0xABCDU);
 
   // Little endian at odd offsets inside a longer frame; the other bytes stay 0.
   const auto le = layout(0x181, 8, 1, 5, 16, ha::ByteOrder::kLittleEndian);
   f = ha::encode_encoder_frame(le, 0xBEEFU, 0x0102U, 0);
   expect_bytes(f, {0x00, 0xEF, 0xBE, 0x00, 0x00, 0x02, 0x01, 0x00}, 8);
-  ASSERT_EQ(ha::decode_encoder_frame(le, f, left, right), ha::CanDecode::kOk);
-  EXPECT_EQ(left, 0xBEEFU);
-  EXPECT_EQ(right, 0x0102U);
+  expect_decodes_to(le, f, 0xBEEFU, 0x0102U);
 
   // Values wider than the counter keep their low bits only.
   f = ha::encode_encoder_frame(le, 0x1234BEEFU, 0xFFFF0102U, 0);
-  ASSERT_EQ(ha::decode_encoder_frame(le, f, left, right), ha::CanDecode::kOk);
-  EXPECT_EQ(left, 0xBEEFU);
-  EXPECT_EQ(right, 0x0102U);
+  expect_decodes_to(le, f, 0xBEEFU, 0x0102U);
 }
 
 TEST(CanLayout, TwelveBitCountersAreMasked) {
@@ -87,10 +83,7 @@ TEST(CanLayout, TwelveBitCountersAreMasked) {
   f.id = 0x181;
   f.length = 4;
   f.data = {0xFF, 0xFF, 0x34, 0x12, 0, 0, 0, 0};  // upper nibble of each pair is status bits
-  std::uint32_t left = 0, right = 0;
-  ASSERT_EQ(ha::decode_encoder_frame(l, f, left, right), ha::CanDecode::kOk);
-  EXPECT_EQ(left, 0xFFFU);
-  EXPECT_EQ(right, 0x234U);
+  expect_decodes_to(l, f, 0xFFFU, 0x234U);
 }
 
 TEST(CanLayout, RandomRoundTrips) {
@@ -141,29 +134,36 @@ TEST(CanLayout, OtherIdAndBadLength) {
 
 TEST(CanLayout, LayoutValidity) {
   using BO = ha::ByteOrder;
-  EXPECT_TRUE(ha::layout_valid(layout(0x181, 8, 0, 4, 32, BO::kLittleEndian)));
-  EXPECT_TRUE(
-      ha::layout_valid(layout(0x181, 8, 4, 0, 32, BO::kLittleEndian)));  // right before left
-  EXPECT_TRUE(ha::layout_valid(layout(0x181, 4, 0, 2, 16, BO::kLittleEndian)));
-  EXPECT_TRUE(ha::layout_valid(layout(0x181, 2, 1, 0, 8, BO::kLittleEndian)));
-  EXPECT_TRUE(ha::layout_valid(
-      layout(0x181, 8, 6, 0, 16, BO::kBigEndian)));  // ends exactly at the frame end
-  // Overlap.
-  EXPECT_FALSE(ha::layout_valid(layout(0x181, 8, 0, 2, 32, BO::kLittleEndian)));
-  EXPECT_FALSE(ha::layout_valid(layout(0x181, 8, 2, 0, 32, BO::kLittleEndian)));
-  EXPECT_FALSE(ha::layout_valid(layout(0x181, 8, 3, 3, 16, BO::kLittleEndian)));
-  EXPECT_FALSE(ha::layout_valid(layout(0x181, 4, 0, 1, 16, BO::kLittleEndian)));
-  // Out of the frame.
-  EXPECT_FALSE(ha::layout_valid(layout(0x181, 8, 0, 6, 32, BO::kLittleEndian)));
-  EXPECT_FALSE(ha::layout_valid(layout(0x181, 4, 0, 4, 16, BO::kLittleEndian)));
-  EXPECT_FALSE(ha::layout_valid(layout(0x181, 3, 0, 2, 16, BO::kLittleEndian)));
-  EXPECT_FALSE(ha::layout_valid(
-      layout(0x181, 9, 0, 4, 32, BO::kLittleEndian)));  // no classic frame has 9 bytes
-  EXPECT_FALSE(ha::layout_valid(layout(0x181, 0, 0, 0, 8, BO::kLittleEndian)));
-  // Counter widths.
-  EXPECT_FALSE(ha::layout_valid(layout(0x181, 8, 0, 4, 7, BO::kLittleEndian)));
-  EXPECT_FALSE(ha::layout_valid(layout(0x181, 8, 0, 4, 33, BO::kLittleEndian)));
-  EXPECT_FALSE(ha::layout_valid(layout(0x181, 8, 0, 4, 0, BO::kLittleEndian)));
-  EXPECT_TRUE(ha::layout_valid(layout(0x181, 8, 0, 4, 12, BO::kLittleEndian)));
-  EXPECT_TRUE(ha::layout_valid(layout(0x181, 8, 0, 4, 24, BO::kLittleEndian)));
+  struct Case {
+    ha::EncoderFrameLayout layout;
+    bool valid;
+    const char* what;
+  };
+  const Case cases[] = {
+      {layout(0x181, 8, 0, 4, 32, BO::kLittleEndian), true, "two 32-bit counters in 8 bytes"},
+      {layout(0x181, 8, 4, 0, 32, BO::kLittleEndian), true, "right before left"},
+      {layout(0x181, 4, 0, 2, 16, BO::kLittleEndian), true, "two 16-bit counters in 4 bytes"},
+      {layout(0x181, 2, 1, 0, 8, BO::kLittleEndian), true, "two 8-bit counters in 2 bytes"},
+      {layout(0x181, 8, 6, 0, 16, BO::kBigEndian), true, "ends exactly at the frame end"},
+      {layout(0x181, 8, 0, 2, 32, BO::kLittleEndian), false, "overlap"},
+      {layout(0x181, 8, 2, 0, 32, BO::kLittleEndian), false, "overlap"},
+      {layout(0x181, 8, 3, 3, 16, BO::kLittleEndian), false, "overlap"},
+      {layout(0x181, 4, 0, 1, 16, BO::kLittleEndian), false, "overlap"},
+      {layout(0x181, 8, 0, 6, 32, BO::kLittleEndian), false, "out of the frame"},
+      {layout(0x181, 4, 0, 4, 16, BO::kLittleEndian), false, "out of the frame"},
+      {layout(0x181, 3, 0, 2, 16, BO::kLittleEndian), false, "out of the frame"},
+      {layout(0x181, 9, 0, 4, 32, BO::kLittleEndian), false, "no classic frame has 9 bytes"},
+      {layout(0x181, 0, 0, 0, 8, BO::kLittleEndian), false, "no bytes"},
+      {layout(0x181, 8, 0, 4, 7, BO::kLittleEndian), false, "counter width"},
+      {layout(0x181, 8, 0, 4, 33, BO::kLittleEndian), false, "counter width"},
+      {layout(0x181, 8, 0, 4, 0, BO::kLittleEndian), false, "counter width"},
+      {layout(0x181, 8, 0, 4, 12, BO::kLittleEndian), true, "12-bit counters"},
+      {layout(0x181, 8, 0, 4, 24, BO::kLittleEndian), true, "24-bit counters"},
+  };
+  for (const Case& c : cases) {
+    const ha::EncoderFrameLayout& l = c.layout;
+    EXPECT_EQ(ha::layout_valid(l), c.valid)
+        << c.what << ": length " << int{l.length} << ", left at " << int{l.left_offset}
+        << ", right at " << int{l.right_offset} << ", " << int{l.counter_bits} << " bits";
+  }
 }

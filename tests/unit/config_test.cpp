@@ -3,67 +3,25 @@
 #include "harmoloc/firmware/config.hpp"
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
-#include <filesystem>
-#include <fstream>
-#include <stdexcept>
 #include <string>
+
+#include "test_support.hpp"
 
 namespace hf = harmoloc::firmware;
 namespace ha = harmoloc::algorithms;
-namespace fs = std::filesystem;
+namespace ht = harmoloc::test;
 
 namespace {
 
-// A fresh directory for one test, removed at the end.
-class TempDir {
- public:
-  TempDir() {
-    const auto* info = testing::UnitTest::GetInstance()->current_test_info();
-    path_ = fs::temp_directory_path() / ("harmoloc_config_" + std::to_string(::getpid()) + "_" +
-                                         info->test_suite_name() + "_" + info->name());
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-  std::string write(const std::string& name, const std::string& text) const {
-    const std::string p = (path_ / name).string();
-    std::ofstream(p, std::ios::binary) << text;
-    return p;
-  }
-  std::string path(const std::string& name) const { return (path_ / name).string(); }
-
- private:
-  fs::path path_;
-};
-
-// Loads @p text and returns the error message (empty if it loaded).
-std::string load_error(const TempDir& dir, const std::string& text, std::string* file = nullptr) {
-  const std::string path = dir.write("harmoloc.toml", text);
-  if (file != nullptr) *file = path;
-  try {
-    hf::load_config(path);
-  } catch (const std::runtime_error& e) {
-    return e.what();
-  }
-  return {};
-}
-
-// The message is one line, names the file first, and says what is wrong.
-void expect_one_line_error(const TempDir& dir, const std::string& text, const std::string& what,
+// Loads @p text from a file in @p dir and expects a one-line message that names the file first
+// and says what is wrong (@p what), at line @p line when that is given.
+void expect_one_line_error(const ht::TempDir& dir, const std::string& text, const std::string& what,
                            int line = 0) {
-  std::string file;
-  const std::string msg = load_error(dir, text, &file);
-  ASSERT_FALSE(msg.empty()) << "accepted:\n" << text;
-  EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
-  EXPECT_EQ(msg.rfind(file + ": ", 0), 0U) << msg;
-  EXPECT_NE(msg.find(what), std::string::npos) << "expected '" << what << "' in: " << msg;
+  const std::string file = dir.write("harmoloc.toml", text);
+  const std::string msg = ht::error_of([&] { hf::load_config(file); });
+  ASSERT_NE(msg, ht::kNoException) << "accepted:\n" << text;
+  ht::expect_one_line(msg, file + ": ", what);
   if (line > 0) {
     EXPECT_NE(msg.find("line " + std::to_string(line) + ":"), std::string::npos) << msg;
   }
@@ -92,7 +50,7 @@ TEST(Config, DefaultsHaveSixBoards) {
 }
 
 TEST(Config, FullFileRoundTripsEveryValue) {
-  TempDir dir;
+  ht::TempDir dir;
   const std::string path = dir.write("full.toml", R"(# a complete configuration
 [cycle]
 rate_hz = 25
@@ -201,7 +159,7 @@ heartbeat_hz = 2
 }
 
 TEST(Config, EmptyFileGivesDefaultsAndPartialSectionsKeepTheRest) {
-  TempDir dir;
+  ht::TempDir dir;
   const hf::FirmwareConfig d = hf::default_config();
   hf::FirmwareConfig c = hf::load_config(dir.write("empty.toml", ""));
   EXPECT_TRUE(c.thresholds == d.thresholds);
@@ -218,7 +176,7 @@ TEST(Config, EmptyFileGivesDefaultsAndPartialSectionsKeepTheRest) {
 }
 
 TEST(Config, UnknownKey) {
-  TempDir dir;
+  ht::TempDir dir;
   expect_one_line_error(dir, "[cycle]\nrate_hz = 30\nbudget = 12\n", "unknown key 'cycle.budget'",
                         3);
   expect_one_line_error(dir, "[[board]]\nname = \"x\"\nhue_deg = [1, 2]\nsat_min = 3\n",
@@ -226,13 +184,13 @@ TEST(Config, UnknownKey) {
 }
 
 TEST(Config, TypoInSectionName) {
-  TempDir dir;
+  ht::TempDir dir;
   expect_one_line_error(dir, "\n[filtr]\nparticles = 100\n", "unknown key 'filtr'", 2);
   expect_one_line_error(dir, "verbose = true\n", "unknown key 'verbose'", 1);
 }
 
 TEST(Config, WrongType) {
-  TempDir dir;
+  ht::TempDir dir;
   expect_one_line_error(dir, "[cycle]\nrate_hz = \"fast\"\n", "cycle.rate_hz must be a number", 2);
   expect_one_line_error(dir, "[filter]\nparticles = 512.0\n",
                         "filter.particles must be a whole number", 2);
@@ -242,7 +200,7 @@ TEST(Config, WrongType) {
 }
 
 TEST(Config, OutOfRange) {
-  TempDir dir;
+  ht::TempDir dir;
   expect_one_line_error(dir, "[filter]\nparticles = 10\n",
                         "filter.particles = 10 is outside 16..4096", 2);
   expect_one_line_error(dir, "[filter]\nparticles = 5000\n", "outside", 2);
@@ -260,7 +218,7 @@ TEST(Config, OutOfRange) {
 }
 
 TEST(Config, HueOutsideCircle) {
-  TempDir dir;
+  ht::TempDir dir;
   expect_one_line_error(dir, "[[board]]\nname = \"x\"\nhue_deg = [10, 400]\n", "0..360", 3);
   expect_one_line_error(dir, "[[board]]\nname = \"x\"\nhue_deg = [-1, 40]\n", "0..360", 3);
   expect_one_line_error(dir, "[[board]]\nname = \"x\"\nhue_deg = [10]\n",
@@ -271,21 +229,21 @@ TEST(Config, HueOutsideCircle) {
 }
 
 TEST(Config, ValueMinAboveValueMax) {
-  TempDir dir;
+  ht::TempDir dir;
   expect_one_line_error(
       dir, "[[board]]\nname = \"x\"\nhue_deg = [10, 40]\nvalue_min = 200\nvalue_max = 100\n",
       "value_min is above value_max");
 }
 
 TEST(Config, CanLayoutThatDoesNotFit) {
-  TempDir dir;
+  ht::TempDir dir;
   expect_one_line_error(dir, "[can]\nlength = 4\n", "fit");       // two 32-bit counters in 4 bytes
   expect_one_line_error(dir, "[can]\nleft_offset = 2\n", "fit");  // overlaps the right counter at 4
   expect_one_line_error(dir, "[can]\ncounter_bits = 16\nlength = 4\nright_offset = 1\n", "fit");
 }
 
 TEST(Config, AlphaOfWrongLength) {
-  TempDir dir;
+  ht::TempDir dir;
   expect_one_line_error(dir, "[filter]\nalpha = [0.1, 0.2]\n",
                         "filter.alpha must be [alpha1, alpha2, alpha3, alpha4]", 2);
   expect_one_line_error(dir, "[filter]\nalpha = [0.1, 0.2, 0.3, 0.4, 0.5]\n", "filter.alpha", 2);
@@ -296,22 +254,17 @@ TEST(Config, AlphaOfWrongLength) {
 }
 
 TEST(Config, MissingFile) {
-  TempDir dir;
+  ht::TempDir dir;
   const std::string path = dir.path("does-not-exist.toml");
-  try {
-    hf::load_config(path);
-    FAIL() << "no exception";
-  } catch (const std::runtime_error& e) {
-    const std::string msg = e.what();
-    EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
-    EXPECT_EQ(msg.rfind(path + ": ", 0), 0U) << msg;
-    // There is no line in a file that is not there.
-    EXPECT_EQ(msg.find("line 0"), std::string::npos) << msg;
-  }
+  const std::string msg = ht::error_of([&] { hf::load_config(path); });
+  ASSERT_NE(msg, ht::kNoException);
+  ht::expect_one_line(msg, path + ": ");
+  // There is no line in a file that is not there.
+  EXPECT_EQ(msg.find("line 0"), std::string::npos) << msg;
 }
 
 TEST(Config, UnparsableToml) {
-  TempDir dir;
+  ht::TempDir dir;
   expect_one_line_error(dir, "[cycle]\nrate_hz = = 3\n", "", 2);
   expect_one_line_error(dir, "[cycle\nrate_hz = 3\n", "", 1);
   expect_one_line_error(dir, "[cycle]\nrate_hz = 30\nrate_hz = 31\n", "", 3);  // duplicate key

@@ -1,12 +1,9 @@
 // Dataset formats: TUM trajectories, the frame index and PPM headers, candump logs, metadata.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
-#include <cstdio>
-#include <filesystem>
-#include <fstream>
-#include <iterator>
+#include <cstdint>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -16,55 +13,18 @@
 #include "harmoloc/sim_host/frame_index.hpp"
 #include "harmoloc/sim_host/metadata.hpp"
 #include "harmoloc/sim_host/tum.hpp"
+#include "test_support.hpp"
 
 namespace hs = harmoloc::sim_host;
 namespace ha = harmoloc::algorithms;
-namespace fs = std::filesystem;
+namespace ht = harmoloc::test;
 using ha::kPi;
 
 namespace {
 
-class TempDir {
- public:
-  TempDir() {
-    const auto* info = testing::UnitTest::GetInstance()->current_test_info();
-    path_ = fs::temp_directory_path() / ("harmoloc_dataset_" + std::to_string(::getpid()) + "_" +
-                                         info->test_suite_name() + "_" + info->name());
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-  std::string write(const std::string& name, const std::string& text) const {
-    const std::string p = (path_ / name).string();
-    std::ofstream(p, std::ios::binary) << text;
-    return p;
-  }
-  std::string path(const std::string& name = "") const { return (path_ / name).string(); }
-  std::string dir() const { return path_.string(); }
-
- private:
-  fs::path path_;
-};
-
-// Runs @p f, which must throw std::runtime_error; returns the message.
-template <typename F>
-std::string error_of(F&& f) {
-  try {
-    f();
-  } catch (const std::runtime_error& e) {
-    return e.what();
-  }
-  return "(no exception)";
-}
-
+// The message is one line that starts with "<file>:<line>: ".
 void expect_file_line_error(const std::string& msg, const std::string& file, int line) {
-  EXPECT_EQ(msg.rfind(file + ":" + std::to_string(line) + ": ", 0), 0U) << msg;
-  EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
+  ht::expect_one_line(msg, file + ":" + std::to_string(line) + ": ");
 }
 
 }  // namespace
@@ -91,7 +51,7 @@ TEST(Tum, YawFromQuaternion) {
 }
 
 TEST(Tum, WriteReadRoundTrip) {
-  TempDir dir;
+  ht::TempDir dir;
   std::vector<hs::StampedPose> poses;
   for (int i = 0; i < 50; ++i) {
     hs::StampedPose p;
@@ -117,7 +77,7 @@ TEST(Tum, WriteReadRoundTrip) {
 }
 
 TEST(Tum, CommentsAndBlankLinesAreSkipped) {
-  TempDir dir;
+  ht::TempDir dir;
   const std::string path =
       dir.write("t.tum", "# t x y z qx qy qz qw\n\n1.0 1 2 0 0 0 0 1\n   \n2.0 3 4 0 0 0 1 0\n");
   const auto poses = hs::read_tum(path);
@@ -127,23 +87,27 @@ TEST(Tum, CommentsAndBlankLinesAreSkipped) {
 }
 
 TEST(Tum, MalformedLinesNameFileAndLine) {
-  TempDir dir;
+  ht::TempDir dir;
   const std::string ok = "# header\n1.0 0 0 0 0 0 0 1\n";
-  std::string p = dir.write("seven.tum", ok + "2.0 0 0 0 0 0 1\n");
-  expect_file_line_error(error_of([&] { hs::read_tum(p); }), p, 3);
-  p = dir.write("nan.tum", ok + "2.0 nan 0 0 0 0 0 1\n");
-  expect_file_line_error(error_of([&] { hs::read_tum(p); }), p, 3);
-  p = dir.write("inf.tum", ok + "2.0 1e999 0 0 0 0 0 1\n");
-  expect_file_line_error(error_of([&] { hs::read_tum(p); }), p, 3);
-  p = dir.write("nine.tum", ok + "2.0 0 0 0 0 0 0 1 7\n");
-  expect_file_line_error(error_of([&] { hs::read_tum(p); }), p, 3);
-  p = dir.write("text.tum", ok + "2.0 0 0 zero 0 0 0 1\n");
-  expect_file_line_error(error_of([&] { hs::read_tum(p); }), p, 3);
-  p = dir.write("same.tum", ok + "1.0 0 0 0 0 0 0 1\n");
-  expect_file_line_error(error_of([&] { hs::read_tum(p); }), p, 3);
-  p = dir.write("back.tum", ok + "2.0 0 0 0 0 0 0 1\n\n0.5 0 0 0 0 0 0 1\n");
-  expect_file_line_error(error_of([&] { hs::read_tum(p); }), p, 5);
-  EXPECT_NE(error_of([&] { hs::read_tum(dir.path("missing.tum")); }).find("missing.tum"),
+  struct Case {
+    const char* name;
+    std::string body;
+    int line;
+  };
+  const Case cases[] = {
+      {"seven", "2.0 0 0 0 0 0 1\n", 3},
+      {"nan", "2.0 nan 0 0 0 0 0 1\n", 3},
+      {"inf", "2.0 1e999 0 0 0 0 0 1\n", 3},
+      {"nine", "2.0 0 0 0 0 0 0 1 7\n", 3},
+      {"text", "2.0 0 0 zero 0 0 0 1\n", 3},
+      {"same", "1.0 0 0 0 0 0 0 1\n", 3},
+      {"back", "2.0 0 0 0 0 0 0 1\n\n0.5 0 0 0 0 0 0 1\n", 5},
+  };
+  for (const Case& c : cases) {
+    const std::string p = dir.write(std::string(c.name) + ".tum", ok + c.body);
+    expect_file_line_error(ht::error_of([&] { hs::read_tum(p); }), p, c.line);
+  }
+  EXPECT_NE(ht::error_of([&] { hs::read_tum(dir.path("missing.tum")); }).find("missing.tum"),
             std::string::npos);
 }
 
@@ -178,7 +142,7 @@ TEST(Tum, InterpolateAcrossPlusMinusPi) {
 // --- frames.csv and PPM ----------------------------------------------------------------------
 
 TEST(FrameIndex, ParsesHeaderAndLines) {
-  TempDir dir;
+  ht::TempDir dir;
   const std::string p =
       dir.write("frames.csv",
                 "timestamp_ns,file\n1000,frames/000000.ppm\r\n2000,frames/000001.ppm\n\n"
@@ -201,7 +165,7 @@ TEST(FrameIndex, ParsesHeaderAndLines) {
 }
 
 TEST(FrameIndex, RejectsBadLinesWithFileAndLine) {
-  TempDir dir;
+  ht::TempDir dir;
   const std::string head = "timestamp_ns,file\n1000,a.ppm\n";
   struct Case {
     const char* name;
@@ -224,7 +188,7 @@ TEST(FrameIndex, RejectsBadLinesWithFileAndLine) {
   };
   for (const Case& c : cases) {
     const std::string p = dir.write(std::string(c.name) + ".csv", head + c.body);
-    expect_file_line_error(error_of([&] { hs::read_frame_index(p); }), p, c.line);
+    expect_file_line_error(ht::error_of([&] { hs::read_frame_index(p); }), p, c.line);
   }
 }
 
@@ -275,16 +239,14 @@ TEST(Ppm, ParseHeaderVariants) {
 }
 
 TEST(Ppm, WriteThenParseRoundTrip) {
-  TempDir dir;
+  ht::TempDir dir;
   const std::uint32_t w = 5, h = 4;
   std::vector<std::uint8_t> rgb(w * h * 3);
   for (std::size_t i = 0; i < rgb.size(); ++i) rgb[i] = static_cast<std::uint8_t>(i * 13U + 10U);
   rgb[0] = '\n';  // a first pixel byte that looks like whitespace
   const std::string path = dir.path("f.ppm");
   hs::write_ppm(path, w, h, rgb.data());
-  std::ifstream in(path, std::ios::binary);
-  const std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)),
-                                        std::istreambuf_iterator<char>());
+  const std::vector<std::uint8_t> bytes = ht::read_bytes(path);
   hs::PpmHeader header;
   const char* why = nullptr;
   ASSERT_TRUE(hs::parse_ppm_header(bytes.data(), bytes.size(), header, &why)) << why;
@@ -395,19 +357,19 @@ TEST(Candump, FormatParseRoundTrip) {
 }
 
 TEST(Candump, ReadLogNamesFileAndLine) {
-  TempDir dir;
+  ht::TempDir dir;
   std::string p = dir.write("ok.log", "(1.000000) can0 181#00\n\n(1.010000) can0 281#0102\n");
   const auto frames = hs::read_candump_log(p);
   ASSERT_EQ(frames.size(), 2U);
   EXPECT_EQ(frames[1].id, 0x281U);
   p = dir.write("bad.log", "(1.000000) can0 181#00\n(1.010000) can0 181#0\n");
-  expect_file_line_error(error_of([&] { hs::read_candump_log(p); }), p, 2);
+  expect_file_line_error(ht::error_of([&] { hs::read_candump_log(p); }), p, 2);
 }
 
 // --- metadata.toml -----------------------------------------------------------------------------
 
 TEST(Metadata, WriteReadRoundTrip) {
-  TempDir dir;
+  ht::TempDir dir;
   hs::DatasetMetadata m;
   m.name = "unit";
   m.image_width_px = 320;
@@ -462,7 +424,7 @@ TEST(Metadata, WriteReadRoundTrip) {
 TEST(Metadata, CalibratedGeometryKeepsItsPrecision) {
   // A calibrated robot's numbers (and an NTSC frame rate) must survive write -> read: the host
   // board takes the odometry geometry from the metadata when the config has no [odometry].
-  TempDir dir;
+  ht::TempDir dir;
   hs::DatasetMetadata m;
   m.image_width_px = 160;
   m.image_height_px = 120;
@@ -479,18 +441,17 @@ TEST(Metadata, CalibratedGeometryKeepsItsPrecision) {
 }
 
 TEST(Metadata, ErrorsStartWithMetadataToml) {
-  TempDir dir;
+  ht::TempDir dir;
   auto msg_for = [&](const std::string& text) {
     dir.write("metadata.toml", text);
-    return error_of([&] { hs::read_metadata(dir.dir()); });
+    return ht::error_of([&] { hs::read_metadata(dir.dir()); });
   };
   auto expect_meta_error = [](const std::string& msg, const std::string& what) {
-    EXPECT_EQ(msg.rfind("metadata.toml: ", 0), 0U) << msg;
-    EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
-    EXPECT_NE(msg.find(what), std::string::npos) << "expected '" << what << "' in: " << msg;
+    ht::expect_one_line(msg, "metadata.toml: ", what);
   };
   // Missing file.
-  expect_meta_error(error_of([&] { hs::read_metadata(dir.path("nothing-here")); }), "not found");
+  expect_meta_error(ht::error_of([&] { hs::read_metadata(dir.path("nothing-here")); }),
+                    "not found");
   const std::string good =
       "format_version = 1\n[camera]\nwidth_px = 160\nheight_px = 120\nrate_hz = 30\n"
       "[robot]\nwheel_radius_m = 0.05\ntrack_m = 0.3\nticks_per_rev = 4096\n";

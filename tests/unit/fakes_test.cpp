@@ -8,12 +8,10 @@
 #include <algorithm>
 #include <cerrno>
 #include <chrono>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
-#include <iterator>
-#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -23,46 +21,15 @@
 #include "harmoloc/sim_host/frame_index.hpp"
 #include "harmoloc/sim_host/log_encoders.hpp"
 #include "harmoloc/sim_host/metadata.hpp"
+#include "test_support.hpp"
 
 namespace hs = harmoloc::sim_host;
 namespace ha = harmoloc::algorithms;
 namespace hal = harmoloc::hal;
 namespace fs = std::filesystem;
+namespace ht = harmoloc::test;
 
 namespace {
-
-class TempDir {
- public:
-  TempDir() {
-    const auto* info = testing::UnitTest::GetInstance()->current_test_info();
-    path_ = fs::temp_directory_path() / ("harmoloc_fakes_" + std::to_string(::getpid()) + "_" +
-                                         info->test_suite_name() + "_" + info->name());
-    fs::remove_all(path_);
-    fs::create_directories(path_ / "frames");
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-  std::string path(const std::string& name = "") const { return (path_ / name).string(); }
-  std::string dir() const { return path_.string(); }
-
- private:
-  fs::path path_;
-};
-
-std::vector<std::uint8_t> read_all(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::vector<std::uint8_t>((std::istreambuf_iterator<char>(in)),
-                                   std::istreambuf_iterator<char>());
-}
-void write_all(const std::string& path, const std::vector<std::uint8_t>& bytes) {
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  out.write(reinterpret_cast<const char*>(bytes.data()),
-            static_cast<std::streamsize>(bytes.size()));
-}
 
 // The pixels of frame @p k: every byte distinct between frames.
 std::vector<std::uint8_t> frame_pixels(std::size_t k, std::size_t bytes) {
@@ -74,13 +41,14 @@ std::vector<std::uint8_t> frame_pixels(std::size_t k, std::size_t bytes) {
 constexpr std::uint32_t kW = 4, kH = 3;
 
 // A dataset of @p n frames at 1000, 2000, ... ns.
-hs::DatasetMetadata make_dataset(const TempDir& dir, std::size_t n,
+hs::DatasetMetadata make_dataset(const ht::TempDir& dir, std::size_t n,
                                  hal::PixelFormat format = hal::PixelFormat::kRgb24) {
   hs::DatasetMetadata m;
   m.name = "fake";
   m.image_width_px = kW;
   m.image_height_px = kH;
   m.pixel_format = format;
+  dir.mkdir("frames");
   std::vector<hs::FrameEntry> index;
   for (std::size_t k = 0; k < n; ++k) {
     char name[32];
@@ -89,7 +57,7 @@ hs::DatasetMetadata make_dataset(const TempDir& dir, std::size_t n,
       hs::write_ppm(dir.path(name), kW, kH, frame_pixels(k, kW * kH * 3).data());
     } else {
       std::snprintf(name, sizeof name, "frames/%06zu.yuyv", k);
-      write_all(dir.path(name), frame_pixels(k, kW * kH * 2));
+      dir.write_bytes(name, frame_pixels(k, kW * kH * 2));
     }
     index.push_back(hs::FrameEntry{1000U * (k + 1), name});
   }
@@ -98,13 +66,8 @@ hs::DatasetMetadata make_dataset(const TempDir& dir, std::size_t n,
   return hs::read_metadata(dir.dir());
 }
 
-std::string construct_error(const TempDir& dir, const hs::DatasetMetadata& m) {
-  try {
-    hs::FileCamera camera(dir.dir(), m);
-  } catch (const std::runtime_error& e) {
-    return e.what();
-  }
-  return "(no exception)";
+std::string construct_error(const ht::TempDir& dir, const hs::DatasetMetadata& m) {
+  return ht::error_of([&] { hs::FileCamera camera(dir.dir(), m); });
 }
 
 }  // namespace
@@ -112,7 +75,7 @@ std::string construct_error(const TempDir& dir, const hs::DatasetMetadata& m) {
 // --- FileCamera --------------------------------------------------------------------------------
 
 TEST(FileCamera, FramesComeOutInOrderWithTimestamps) {
-  TempDir dir;
+  ht::TempDir dir;
   const hs::DatasetMetadata m = make_dataset(dir, 3);
   hs::FileCamera camera(dir.dir(), m);
   EXPECT_EQ(camera.frame_count(), 3U);
@@ -140,7 +103,7 @@ TEST(FileCamera, FramesComeOutInOrderWithTimestamps) {
 }
 
 TEST(FileCamera, YuyvFrames) {
-  TempDir dir;
+  ht::TempDir dir;
   const hs::DatasetMetadata m = make_dataset(dir, 2, hal::PixelFormat::kYuyv);
   hs::FileCamera camera(dir.dir(), m);
   for (std::size_t k = 0; k < 2; ++k) {
@@ -152,19 +115,19 @@ TEST(FileCamera, YuyvFrames) {
     EXPECT_TRUE(std::equal(expected.begin(), expected.end(), f.data));
   }
   // A raw frame one byte short is refused at start-up.
-  auto bytes = read_all(dir.path("frames/000001.yuyv"));
+  auto bytes = ht::read_bytes(dir.path("frames/000001.yuyv"));
   bytes.pop_back();
-  write_all(dir.path("frames/000001.yuyv"), bytes);
+  ht::write_bytes(dir.path("frames/000001.yuyv"), bytes);
   const std::string msg = construct_error(dir, m);
   EXPECT_NE(msg.find("000001.yuyv"), std::string::npos) << msg;
 }
 
 TEST(FileCamera, StartupRejectsTruncatedFrame) {
-  TempDir dir;
+  ht::TempDir dir;
   const hs::DatasetMetadata m = make_dataset(dir, 3);
-  auto bytes = read_all(dir.path("frames/000001.ppm"));
+  auto bytes = ht::read_bytes(dir.path("frames/000001.ppm"));
   bytes.resize(bytes.size() - 5);
-  write_all(dir.path("frames/000001.ppm"), bytes);
+  ht::write_bytes(dir.path("frames/000001.ppm"), bytes);
   const std::string msg = construct_error(dir, m);
   EXPECT_NE(msg.find("frames/000001.ppm"), std::string::npos) << msg;
   EXPECT_NE(msg.find("truncated"), std::string::npos) << msg;
@@ -172,7 +135,7 @@ TEST(FileCamera, StartupRejectsTruncatedFrame) {
 }
 
 TEST(FileCamera, StartupRejectsWrongSizePpm) {
-  TempDir dir;
+  ht::TempDir dir;
   const hs::DatasetMetadata m = make_dataset(dir, 3);
   hs::write_ppm(dir.path("frames/000002.ppm"), kW + 1, kH,
                 frame_pixels(2, (kW + 1) * kH * 3).data());
@@ -183,40 +146,40 @@ TEST(FileCamera, StartupRejectsWrongSizePpm) {
   hs::write_ppm(dir.path("frames/000002.ppm"), kH, kW, frame_pixels(2, kW * kH * 3).data());
   EXPECT_NE(construct_error(dir, m).find("frames/000002.ppm"), std::string::npos);
   // Not a PPM at all.
-  write_all(dir.path("frames/000002.ppm"), std::vector<std::uint8_t>(60, 'x'));
+  ht::write_bytes(dir.path("frames/000002.ppm"), std::vector<std::uint8_t>(60, 'x'));
   EXPECT_NE(construct_error(dir, m).find("frames/000002.ppm"), std::string::npos);
 }
 
 TEST(FileCamera, StartupRejectsMissingFileAndEmptyIndex) {
-  TempDir dir;
+  ht::TempDir dir;
   const hs::DatasetMetadata m = make_dataset(dir, 3);
   fs::remove(dir.path("frames/000000.ppm"));
   const std::string msg = construct_error(dir, m);
   EXPECT_NE(msg.find("frames/000000.ppm"), std::string::npos) << msg;
   EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
 
-  TempDir other;
+  ht::TempDir other;
   const hs::DatasetMetadata m2 = make_dataset(other, 1);
   hs::write_frame_index(other.path("frames.csv"), {});
   EXPECT_NE(construct_error(other, m2).find("no frames"), std::string::npos);
 }
 
 TEST(FileCamera, FrameCorruptedAfterStartupIsCountedAndSkipped) {
-  TempDir dir;
+  ht::TempDir dir;
   const hs::DatasetMetadata m = make_dataset(dir, 4);
   hs::FileCamera camera(dir.dir(), m);
   // Truncate frame 1, grow frame 2, and give frame 3 a header of the same length but another shape.
-  auto bytes = read_all(dir.path("frames/000001.ppm"));
+  auto bytes = ht::read_bytes(dir.path("frames/000001.ppm"));
   bytes.resize(bytes.size() / 2);
-  write_all(dir.path("frames/000001.ppm"), bytes);
-  bytes = read_all(dir.path("frames/000002.ppm"));
+  ht::write_bytes(dir.path("frames/000001.ppm"), bytes);
+  bytes = ht::read_bytes(dir.path("frames/000002.ppm"));
   bytes.push_back(0);
-  write_all(dir.path("frames/000002.ppm"), bytes);
-  bytes = read_all(dir.path("frames/000003.ppm"));
+  ht::write_bytes(dir.path("frames/000002.ppm"), bytes);
+  bytes = ht::read_bytes(dir.path("frames/000003.ppm"));
   ASSERT_EQ(bytes[3], '4');
   bytes[3] = '3';
   bytes[5] = '4';  // "P6\n3 4\n255\n"
-  write_all(dir.path("frames/000003.ppm"), bytes);
+  ht::write_bytes(dir.path("frames/000003.ppm"), bytes);
 
   hal::FrameView f;
   ASSERT_EQ(camera.acquire(f, 0), hal::CameraStatus::kFrame);
@@ -231,7 +194,7 @@ TEST(FileCamera, FrameCorruptedAfterStartupIsCountedAndSkipped) {
 }
 
 TEST(FileCamera, NextFrameAfterACorruptOneStillWorks) {
-  TempDir dir;
+  ht::TempDir dir;
   const hs::DatasetMetadata m = make_dataset(dir, 3);
   hs::FileCamera camera(dir.dir(), m);
   fs::remove(dir.path("frames/000001.ppm"));  // vanished after start-up
@@ -311,11 +274,12 @@ TEST(LogEncoders, SixteenBitLayoutReportsItsWidth) {
 }
 
 TEST(LogEncoders, FromALogFile) {
-  TempDir dir;
-  std::ofstream(dir.path("encoders.log")) << "(1.000000) can0 181#0100000002000000\n"
-                                             "(1.005000) can0 281#0100300C00000000\n"
-                                             "(1.010000) can0 181#0300000004000000\n";
-  hs::LogEncoders enc(dir.path("encoders.log"), ha::EncoderFrameLayout{});
+  ht::TempDir dir;
+  const std::string log = dir.write("encoders.log",
+                                    "(1.000000) can0 181#0100000002000000\n"
+                                    "(1.005000) can0 281#0100300C00000000\n"
+                                    "(1.010000) can0 181#0300000004000000\n");
+  hs::LogEncoders enc(log, ha::EncoderFrameLayout{});
   EXPECT_EQ(enc.frame_count(), 3U);
   hal::EncoderCounts c;
   ASSERT_EQ(enc.read(1000000000ULL, c), hal::EncoderStatus::kFresh);
@@ -326,14 +290,11 @@ TEST(LogEncoders, FromALogFile) {
   EXPECT_EQ(enc.counters().ignored_id, 1U);
   EXPECT_EQ(enc.read(2000000000ULL, c), hal::EncoderStatus::kEnded);
 
-  std::ofstream(dir.path("bad.log"))
-      << "(1.000000) can0 181#0100000002000000\n(1.010000) can0 181#R\n";
-  try {
-    hs::LogEncoders bad(dir.path("bad.log"), ha::EncoderFrameLayout{});
-    FAIL() << "no exception";
-  } catch (const std::runtime_error& e) {
-    EXPECT_EQ(std::string(e.what()).rfind(dir.path("bad.log") + ":2: ", 0), 0U) << e.what();
-  }
+  const std::string bad =
+      dir.write("bad.log", "(1.000000) can0 181#0100000002000000\n(1.010000) can0 181#R\n");
+  const std::string msg =
+      ht::error_of([&] { hs::LogEncoders from_bad_log(bad, ha::EncoderFrameLayout{}); });
+  EXPECT_EQ(msg.rfind(bad + ":2: ", 0), 0U) << msg;
 }
 
 // --- SerialLink --------------------------------------------------------------------------------
@@ -383,9 +344,8 @@ std::vector<std::uint16_t> parse_frames(const std::vector<std::uint8_t>& s) {
 }  // namespace
 
 TEST(SerialLink, RegularFileGetsWholeFrames) {
-  TempDir dir;
-  const std::string path = dir.path("link.bin");
-  std::ofstream(path) << "old contents that must go";
+  ht::TempDir dir;
+  const std::string path = dir.write("link.bin", "old contents that must go");
   harmoloc::drivers::SerialLink link;
   ASSERT_EQ(link.open(path, 115200), "");
   EXPECT_FALSE(link.is_tty());
@@ -398,13 +358,13 @@ TEST(SerialLink, RegularFileGetsWholeFrames) {
   EXPECT_EQ(link.counters().frames_sent, 100U);
   EXPECT_EQ(link.counters().frames_dropped, 0U);
   EXPECT_EQ(link.counters().bytes_sent, expected.size());
-  EXPECT_EQ(read_all(path), expected);
-  EXPECT_EQ(parse_frames(read_all(path)).size(), 100U);
+  EXPECT_EQ(ht::read_bytes(path), expected);
+  EXPECT_EQ(parse_frames(ht::read_bytes(path)).size(), 100U);
   // A frame larger than the link's buffer is dropped whole.
   const std::vector<std::uint8_t> huge(harmoloc::drivers::SerialLink::kMaxFrameBytes + 1, 0xA5);
   EXPECT_EQ(link.write_frame(huge.data(), huge.size()), hal::LinkWrite::kDropped);
   EXPECT_EQ(link.counters().frames_dropped, 1U);
-  EXPECT_EQ(read_all(path).size(), expected.size());
+  EXPECT_EQ(ht::read_bytes(path).size(), expected.size());
 }
 
 TEST(SerialLink, OpenFailuresSayWhy) {

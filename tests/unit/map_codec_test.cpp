@@ -11,8 +11,10 @@
 #include <vector>
 
 #include "harmoloc/algorithms/crc32.hpp"
+#include "test_support.hpp"
 
 namespace ha = harmoloc::algorithms;
+namespace ht = harmoloc::test;
 
 namespace {
 
@@ -38,12 +40,11 @@ std::unique_ptr<ha::MapFile> make_map() {
   map->image_width_px = 640;
   map->image_height_px = 480;
   map->thresholds.count = kBoards;
-  const float hues[kBoards][2] = {{340, 15}, {100, 145}, {215, 250},
-                                  {45, 70},  {285, 320}, {170, 200}};
+  // The six boards' hues, each with its own saturation and value bounds.
   for (std::size_t i = 0; i < kBoards; ++i) {
-    map->thresholds.boards[i] =
-        ha::ColourThreshold{hues[i][0], hues[i][1], static_cast<std::uint8_t>(100 + i),
-                            static_cast<std::uint8_t>(50 + i), static_cast<std::uint8_t>(250 - i)};
+    map->thresholds.boards[i] = ha::ColourThreshold{
+        ht::kBoardHuesDeg[i][0], ht::kBoardHuesDeg[i][1], static_cast<std::uint8_t>(100 + i),
+        static_cast<std::uint8_t>(50 + i), static_cast<std::uint8_t>(250 - i)};
   }
   ha::HarmonicModel& m = map->model;
   m.sample_count = kSamples;

@@ -3,50 +3,21 @@
 #include "harmoloc/firmware/map_loader.hpp"
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
-#include <filesystem>
-#include <fstream>
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "harmoloc/algorithms/map_codec.hpp"
 #include "harmoloc/firmware/config.hpp"
+#include "test_support.hpp"
 
 namespace hf = harmoloc::firmware;
 namespace ha = harmoloc::algorithms;
-namespace fs = std::filesystem;
+namespace ht = harmoloc::test;
 
 namespace {
-
-class TempDir {
- public:
-  TempDir() {
-    const auto* info = testing::UnitTest::GetInstance()->current_test_info();
-    path_ = fs::temp_directory_path() / ("harmoloc_maploader_" + std::to_string(::getpid()) + "_" +
-                                         info->test_suite_name() + "_" + info->name());
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-  std::string write(const std::string& name, const std::vector<std::uint8_t>& bytes) const {
-    const std::string p = (path_ / name).string();
-    std::ofstream out(p, std::ios::binary);
-    out.write(reinterpret_cast<const char*>(bytes.data()),
-              static_cast<std::streamsize>(bytes.size()));
-    return p;
-  }
-  std::string path(const std::string& name) const { return (path_ / name).string(); }
-
- private:
-  fs::path path_;
-};
 
 // A small valid map trained with the default thresholds on 320x240 frames.
 std::unique_ptr<ha::MapFile> make_map() {
@@ -73,17 +44,15 @@ std::unique_ptr<ha::MapFile> make_map() {
 void expect_one_line_about(const std::string& msg, const std::string& path,
                            const std::string& what) {
   ASSERT_FALSE(msg.empty());
-  EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
-  EXPECT_EQ(msg.rfind("map " + path + ": ", 0), 0U) << msg;
-  EXPECT_NE(msg.find(what), std::string::npos) << "expected '" << what << "' in: " << msg;
+  ht::expect_one_line(msg, "map " + path + ": ", what);
 }
 
 }  // namespace
 
 TEST(MapLoader, LoadsAValidMap) {
-  TempDir dir;
+  ht::TempDir dir;
   const auto map = make_map();
-  const std::string path = dir.write("route.map", ha::encode_map(*map));
+  const std::string path = dir.write_bytes("route.map", ha::encode_map(*map));
   auto out = std::make_unique<ha::MapFile>();
   EXPECT_EQ(hf::load_map(path, *out), "");
   EXPECT_EQ(out->model.sample_count, 3U);
@@ -91,28 +60,28 @@ TEST(MapLoader, LoadsAValidMap) {
 }
 
 TEST(MapLoader, MissingFile) {
-  TempDir dir;
+  ht::TempDir dir;
   const std::string path = dir.path("nope.map");
   auto out = std::make_unique<ha::MapFile>();
   expect_one_line_about(hf::load_map(path, *out), path, "cannot open");
 }
 
 TEST(MapLoader, GarbageEmptyAndCorruptFiles) {
-  TempDir dir;
+  ht::TempDir dir;
   auto out = std::make_unique<ha::MapFile>();
   std::vector<std::uint8_t> garbage(300);
   for (std::size_t i = 0; i < garbage.size(); ++i)
     garbage[i] = static_cast<std::uint8_t>(i * 37U + 11U);
-  std::string path = dir.write("garbage.map", garbage);
+  std::string path = dir.write_bytes("garbage.map", garbage);
   expect_one_line_about(hf::load_map(path, *out), path, "magic");
   EXPECT_NE(hf::load_map(path, *out).find("(at byte 0)"), std::string::npos);
 
-  path = dir.write("empty.map", {});
+  path = dir.write_bytes("empty.map", {});
   expect_one_line_about(hf::load_map(path, *out), path, "short");
 
   std::vector<std::uint8_t> bytes = ha::encode_map(*make_map());
   bytes[40] ^= 0xFFU;
-  path = dir.write("corrupt.map", bytes);
+  path = dir.write_bytes("corrupt.map", bytes);
   expect_one_line_about(hf::load_map(path, *out), path, "checksum");
   EXPECT_NE(hf::load_map(path, *out).find("(at byte " + std::to_string(bytes.size() - 4) + ")"),
             std::string::npos)
@@ -120,13 +89,13 @@ TEST(MapLoader, GarbageEmptyAndCorruptFiles) {
 
   bytes = ha::encode_map(*make_map());
   bytes.resize(bytes.size() / 2);
-  path = dir.write("truncated.map", bytes);
+  path = dir.write_bytes("truncated.map", bytes);
   EXPECT_FALSE(hf::load_map(path, *out).empty());
 }
 
 TEST(MapLoader, DirectoryIsNotAMap) {
   // `--map` pointed at a folder: a one-line refusal, not an exception out of load_map.
-  TempDir dir;
+  ht::TempDir dir;
   auto out = std::make_unique<ha::MapFile>();
   std::string msg;
   EXPECT_NO_THROW(msg = hf::load_map(dir.path(""), *out));

@@ -10,8 +10,10 @@
 #include <vector>
 
 #include "harmoloc/algorithms/random.hpp"
+#include "test_support.hpp"
 
 namespace ha = harmoloc::algorithms;
+namespace ht = harmoloc::test;
 
 namespace {
 
@@ -46,25 +48,51 @@ ha::ColourThreshold window(float h0, float h1, std::uint8_t s_min, std::uint8_t 
   return ha::ColourThreshold{h0, h1, s_min, v_min, v_max};
 }
 
+// Whether the pixel (@p r, @p g, @p b) falls in the window @p t.
+bool pixel_in(const ha::ColourThreshold& t, int r, int g, int b) {
+  return ha::in_threshold(t,
+                          ha::rgb_to_hsv(static_cast<std::uint8_t>(r), static_cast<std::uint8_t>(g),
+                                         static_cast<std::uint8_t>(b)));
+}
+
 struct Rgb {
   std::uint8_t r, g, b;
 };
 
+// Rows of pixels @p stride bytes apart in one buffer, as the segmenters take them.
+class StridedImage {
+ public:
+  const std::uint8_t* data() const { return data_.data(); }
+  std::uint32_t width() const { return w_; }
+  std::uint32_t height() const { return h_; }
+  std::uint32_t stride() const { return stride_; }
+
+ protected:
+  StridedImage(std::uint32_t w, std::uint32_t h, std::uint32_t stride, std::uint8_t fill)
+      : w_(w), h_(h), stride_(stride), data_(static_cast<std::size_t>(stride) * h, fill) {}
+  // Byte @p offset of row @p y.
+  std::uint8_t* row(std::uint32_t y, std::uint32_t offset = 0) {
+    return data_.data() + static_cast<std::size_t>(y) * stride_ + offset;
+  }
+
+ private:
+  std::uint32_t w_, h_, stride_;
+  std::vector<std::uint8_t> data_;
+};
+
 // An RGB24 image with a stride, padding filled with a colour that must never be counted.
-class RgbImage {
+class RgbImage : public StridedImage {
  public:
   RgbImage(std::uint32_t w, std::uint32_t h, std::uint32_t stride, Rgb background, Rgb padding)
-      : w_(w), h_(h), stride_(stride), data_(static_cast<std::size_t>(stride) * h) {
+      : StridedImage(w, h, stride, 0) {
+    const std::uint8_t ch[3] = {padding.r, padding.g, padding.b};
     for (std::uint32_t y = 0; y < h; ++y) {
-      for (std::uint32_t b = w * 3; b < stride; ++b) {
-        const std::uint8_t ch[3] = {padding.r, padding.g, padding.b};
-        data_[static_cast<std::size_t>(y) * stride + b] = ch[(b - w * 3) % 3];
-      }
+      for (std::uint32_t b = w * 3; b < stride; ++b) *row(y, b) = ch[(b - w * 3) % 3];
     }
     fill(0, 0, w, h, background);
   }
   void set(std::uint32_t x, std::uint32_t y, Rgb c) {
-    std::uint8_t* p = data_.data() + static_cast<std::size_t>(y) * stride_ + 3U * x;
+    std::uint8_t* p = row(y, 3U * x);
     p[0] = c.r;
     p[1] = c.g;
     p[2] = c.b;
@@ -74,14 +102,25 @@ class RgbImage {
       for (std::uint32_t x = x0; x < x0 + w; ++x) set(x, y, c);
     }
   }
-  const std::uint8_t* data() const { return data_.data(); }
-  std::uint32_t width() const { return w_; }
-  std::uint32_t height() const { return h_; }
-  std::uint32_t stride() const { return stride_; }
+};
 
- private:
-  std::uint32_t w_, h_, stride_;
-  std::vector<std::uint8_t> data_;
+// A YUYV frame: macro-pixels (Y0 U Y1 V) with a stride; padding bytes are 0xEE.
+class YuyvImage : public StridedImage {
+ public:
+  YuyvImage(std::uint32_t w, std::uint32_t h, std::uint32_t stride)
+      : StridedImage(w, h, stride, 0xEE) {
+    for (std::uint32_t y = 0; y < h; ++y) {
+      for (std::uint32_t x = 0; x < w; x += 2) set_pair(x, y, 128, 128, 128, 128);  // grey
+    }
+  }
+  void set_pair(std::uint32_t x, std::uint32_t y, std::uint8_t y0, std::uint8_t u, std::uint8_t y1,
+                std::uint8_t v) {
+    std::uint8_t* p = row(y, 2U * x);
+    p[0] = y0;
+    p[1] = u;
+    p[2] = y1;
+    p[3] = v;
+  }
 };
 
 }  // namespace
@@ -171,11 +210,7 @@ TEST(InThreshold, HueWindowWrappingThroughZero) {
 
 TEST(InThreshold, HueEdgesFromRealPixels) {
   const ha::ColourThreshold red = window(340.0F, 15.0F, 100, 50, 255);
-  auto in = [&](int r, int g, int b) {
-    return ha::in_threshold(
-        red, ha::rgb_to_hsv(static_cast<std::uint8_t>(r), static_cast<std::uint8_t>(g),
-                            static_cast<std::uint8_t>(b)));
-  };
+  auto in = [&](int r, int g, int b) { return pixel_in(red, r, g, b); };
   EXPECT_TRUE(in(240, 60, 0));   // hue exactly 15
   EXPECT_FALSE(in(240, 61, 0));  // hue 15.25
   EXPECT_TRUE(in(255, 0, 85));   // hue exactly 340
@@ -184,11 +219,7 @@ TEST(InThreshold, HueEdgesFromRealPixels) {
 
 TEST(InThreshold, SaturationAndValueBoundsAreInclusive) {
   const ha::ColourThreshold t = window(340.0F, 15.0F, 100, 50, 200);
-  auto in = [&](int r, int g, int b) {
-    return ha::in_threshold(
-        t, ha::rgb_to_hsv(static_cast<std::uint8_t>(r), static_cast<std::uint8_t>(g),
-                          static_cast<std::uint8_t>(b)));
-  };
+  auto in = [&](int r, int g, int b) { return pixel_in(t, r, g, b); };
   // Saturation = 255 * (max - min) / max: (200, 121.6..) is awkward, so use max 255 where s =
   // delta.
   const ha::ColourThreshold s_only = window(340.0F, 15.0F, 100, 0, 255);
@@ -215,11 +246,8 @@ TEST(SegmentRgb24, CountsRectanglesOfKnownSizeAndIgnoresRowPadding) {
   img.fill(30, 0, 2, 2, Rgb{240, 60, 0});  // hue exactly 15, on red's edge: 4 px counted as red
   img.fill(30, 5, 3, 1, Rgb{240, 61, 0});  // hue 15.25, just outside: 3 px not red
 
-  ha::ThresholdSet set;
+  ha::ThresholdSet set = ht::board_windows(3);  // red, green, blue
   set.count = 4;
-  set.boards[0] = window(340.0F, 15.0F, 110, 60, 255);
-  set.boards[1] = window(100.0F, 145.0F, 110, 60, 255);
-  set.boards[2] = window(215.0F, 250.0F, 110, 60, 255);
   set.boards[3] = window(0.0F, 360.0F, 0, 0, 255);  // everything: boards are counted independently
 
   ha::AreaVector areas;
@@ -239,45 +267,12 @@ TEST(SegmentRgb24, EmptyThresholdSetAndEmptyImage) {
   ha::AreaVector areas;
   ha::segment_rgb24(img.data(), img.width(), img.height(), img.stride(), none, areas);
   EXPECT_EQ(areas.count, 0U);
-  ha::ThresholdSet one;
-  one.count = 1;
-  one.boards[0] = window(340.0F, 15.0F, 110, 60, 255);
+  const ha::ThresholdSet one = ht::board_windows(1);  // red
   ha::segment_rgb24(img.data(), 0, 0, img.stride(), one, areas);
   EXPECT_EQ(areas.pixels[0], 0U);
   ha::segment_rgb24(img.data(), img.width(), img.height(), img.stride(), one, areas);
   EXPECT_EQ(areas.pixels[0], 32U);
 }
-
-namespace {
-
-// A YUYV frame: macro-pixels (Y0 U Y1 V) with a stride.
-class YuyvImage {
- public:
-  YuyvImage(std::uint32_t w, std::uint32_t h, std::uint32_t stride)
-      : w_(w), h_(h), stride_(stride), data_(static_cast<std::size_t>(stride) * h, 0xEE) {
-    for (std::uint32_t y = 0; y < h; ++y) {
-      for (std::uint32_t x = 0; x < w; x += 2) set_pair(x, y, 128, 128, 128, 128);  // grey
-    }
-  }
-  void set_pair(std::uint32_t x, std::uint32_t y, std::uint8_t y0, std::uint8_t u, std::uint8_t y1,
-                std::uint8_t v) {
-    std::uint8_t* p = data_.data() + static_cast<std::size_t>(y) * stride_ + 2U * x;
-    p[0] = y0;
-    p[1] = u;
-    p[2] = y1;
-    p[3] = v;
-  }
-  const std::uint8_t* data() const { return data_.data(); }
-  std::uint32_t width() const { return w_; }
-  std::uint32_t height() const { return h_; }
-  std::uint32_t stride() const { return stride_; }
-
- private:
-  std::uint32_t w_, h_, stride_;
-  std::vector<std::uint8_t> data_;
-};
-
-}  // namespace
 
 TEST(SegmentYuyv, CountsKnownColoursWithPerPixelLuma) {
   // BT.601 limited range, by hand (R = (298 (Y-16) + 409 (V-128) + 128) >> 8, and so on):
@@ -293,11 +288,8 @@ TEST(SegmentYuyv, CountsKnownColoursWithPerPixelLuma) {
   img.set_pair(10, 2, 235, 90, 81, 240);  // shared red chroma: pink then red -> 1 red
   img.set_pair(12, 2, 81, 90, 235, 240);  // red then pink -> 1 red
 
-  ha::ThresholdSet set;
+  ha::ThresholdSet set = ht::board_windows(3);  // red, green, blue
   set.count = 4;
-  set.boards[0] = window(340.0F, 15.0F, 110, 60, 255);
-  set.boards[1] = window(100.0F, 145.0F, 110, 60, 255);
-  set.boards[2] = window(215.0F, 250.0F, 110, 60, 255);
   set.boards[3] = window(0.0F, 360.0F, 0, 125, 135);  // the grey background (v = 130) only
   ha::AreaVector areas;
   ha::segment_yuyv(img.data(), img.width(), img.height(), img.stride(), set, areas);
@@ -341,14 +333,7 @@ TEST(SegmentYuyv, AgreesWithRgbOfTheSameFrame) {
       o[2] = clamp(div256(c + 516 * u + 128));
     }
   }
-  ha::ThresholdSet set;
-  set.count = 6;
-  set.boards[0] = window(340.0F, 15.0F, 110, 60, 255);
-  set.boards[1] = window(100.0F, 145.0F, 110, 60, 255);
-  set.boards[2] = window(215.0F, 250.0F, 110, 60, 255);
-  set.boards[3] = window(45.0F, 70.0F, 110, 60, 255);
-  set.boards[4] = window(285.0F, 320.0F, 110, 60, 255);
-  set.boards[5] = window(170.0F, 200.0F, 110, 60, 255);
+  const ha::ThresholdSet set = ht::board_windows();  // the six boards
   ha::AreaVector from_yuyv, from_rgb;
   ha::segment_yuyv(img.data(), w, h, img.stride(), set, from_yuyv);
   ha::segment_rgb24(rgb.data(), w, h, w * 3, set, from_rgb);

@@ -1,12 +1,10 @@
 // The scenario simulator: scenarios and scenario files, the robot's motion along the route (closed
 // laps, heading bound, wheel travel that integrates back to the pose), and the scene renderer.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
-#include <filesystem>
-#include <fstream>
-#include <stdexcept>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -17,46 +15,17 @@
 #include "harmoloc/sim_host/route.hpp"
 #include "harmoloc/sim_host/scenario.hpp"
 #include "harmoloc/sim_host/scene_renderer.hpp"
+#include "test_support.hpp"
 
 namespace hs = harmoloc::sim_host;
 namespace ha = harmoloc::algorithms;
-namespace fs = std::filesystem;
+namespace ht = harmoloc::test;
 using ha::kPi;
 
 namespace {
 
-class TempDir {
- public:
-  TempDir() {
-    const auto* info = testing::UnitTest::GetInstance()->current_test_info();
-    path_ = fs::temp_directory_path() / ("harmoloc_sim_" + std::to_string(::getpid()) + "_" +
-                                         info->test_suite_name() + "_" + info->name());
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-  std::string write(const std::string& name, const std::string& text) const {
-    const std::string p = (path_ / name).string();
-    std::ofstream(p) << text;
-    return p;
-  }
-
- private:
-  fs::path path_;
-};
-
 std::string scenario_error(const std::string& name_or_file) {
-  try {
-    hs::load_scenario(name_or_file);
-  } catch (const std::runtime_error& e) {
-    return e.what();
-  }
-  return "(no exception)";
+  return ht::error_of([&] { hs::load_scenario(name_or_file); });
 }
 
 }  // namespace
@@ -92,7 +61,7 @@ TEST(Scenario, UnknownNameListsTheBuiltIns) {
 }
 
 TEST(Scenario, FileOverridesWhatItNames) {
-  TempDir dir;
+  ht::TempDir dir;
   const std::string path = dir.write("mine.toml", R"(base = "tiny"
 name = "mine"
 labelled_frames = 10
@@ -142,7 +111,7 @@ facing_deg = -90
 }
 
 TEST(Scenario, BadFilesGiveOneLine) {
-  TempDir dir;
+  ht::TempDir dir;
   struct Case {
     const char* name;
     const char* text;
@@ -164,11 +133,8 @@ TEST(Scenario, BadFilesGiveOneLine) {
   };
   for (const Case& c : cases) {
     const std::string path = dir.write(std::string(c.name) + ".toml", c.text);
-    const std::string msg = scenario_error(path);
-    EXPECT_EQ(msg.rfind(path + ": ", 0), 0U) << c.name << ": " << msg;
-    EXPECT_EQ(msg.find('\n'), std::string::npos) << c.name << ": " << msg;
-    EXPECT_NE(msg.find(c.what), std::string::npos)
-        << c.name << ": expected '" << c.what << "' in: " << msg;
+    SCOPED_TRACE(c.name);
+    ht::expect_one_line(scenario_error(path), path + ": ", c.what);
   }
   const std::string path = dir.write("base.toml", "base = \"nope\"\n");
   const std::string msg = scenario_error(path);
@@ -177,7 +143,7 @@ TEST(Scenario, BadFilesGiveOneLine) {
 }
 
 TEST(Scenario, WrittenScenarioIsAValidScenarioFileWithTheSameContents) {
-  TempDir dir;
+  ht::TempDir dir;
   for (const char* name : {"tiny", "tiny-wrap16", "desk-shuttle"}) {
     const hs::Scenario a = hs::load_scenario(name);
     const hs::Scenario b =
@@ -347,20 +313,6 @@ TEST(Motion, WheelTravelIntegratesBackToThePose) {
 
 // --- renderer ----------------------------------------------------------------------------------
 
-namespace {
-
-ha::ThresholdSet scene_thresholds() {
-  // The six boards' colour windows (the firmware's defaults).
-  ha::ThresholdSet t;
-  const float h[6][2] = {{340, 15}, {100, 145}, {215, 250}, {45, 70}, {285, 320}, {170, 200}};
-  t.count = 6;
-  for (std::size_t i = 0; i < 6; ++i)
-    t.boards[i] = ha::ColourThreshold{h[i][0], h[i][1], 110, 60, 255};
-  return t;
-}
-
-}  // namespace
-
 TEST(SceneRenderer, AllBoardsVisibleFromTheStartAndNoneFacingAway) {
   const hs::Scenario s = hs::load_scenario("tiny");
   const hs::SceneRenderer renderer(s);
@@ -406,7 +358,7 @@ TEST(SceneRenderer, RenderIsDeterministicAndSegmentsToTheVisibleAreas) {
   clean.render(pose, r4, rgb);
   ha::AreaVector areas;
   ha::segment_rgb24(rgb.data(), s.camera.width_px, s.camera.height_px, s.camera.width_px * 3U,
-                    scene_thresholds(), areas);
+                    ht::board_windows(), areas);
   const std::vector<std::uint32_t> truth = clean.visible_board_pixels(pose);
   for (std::size_t k = 0; k < 6; ++k) {
     EXPECT_EQ(areas.pixels[k], truth[k]) << s.boards[k].name;

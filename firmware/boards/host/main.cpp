@@ -10,6 +10,7 @@
 #include <CLI/CLI.hpp>
 
 #include "harmoloc/drivers/monotonic_clock.hpp"
+#include "harmoloc/drivers/realtime_setup.hpp"
 #include "harmoloc/drivers/serial_link.hpp"
 #include "harmoloc/firmware/config.hpp"
 #include "harmoloc/firmware/localization_cycle.hpp"
@@ -103,6 +104,13 @@ int main(int argc, char** argv) {
   }
 
   drivers::MonotonicClock clock;
+  if (realtime) {
+    const drivers::RealtimeReport rt = drivers::apply_realtime(drivers::RealtimeOptions{
+        config.realtime.enabled, config.realtime.priority, config.realtime.cpu,
+        config.realtime.lock_memory, config.realtime.prefault_stack_kb});
+    if (!quiet) std::fprintf(stderr, "harmoloc: %s\n", rt.summary.c_str());
+  }
+  static firmware::LatencyHistogram wakeup_latency;
   auto cycle =
       std::make_unique<firmware::LocalizationCycle>(config, g_map, *camera, *encoders, link, clock);
   if (!quiet) {
@@ -120,7 +128,11 @@ int main(int argc, char** argv) {
   std::size_t done = 0;
   for (;;) {
     if (realtime && camera->next_timestamp_ns() >= data_start) {
-      clock.sleep_until(wall_start + (camera->next_timestamp_ns() - data_start));
+      // Absolute deadlines from the start (clock_nanosleep TIMER_ABSTIME): no drift.
+      const std::uint64_t deadline = wall_start + (camera->next_timestamp_ns() - data_start);
+      clock.sleep_until(deadline);
+      const std::uint64_t woke = clock.now_ns();
+      wakeup_latency.record(woke > deadline ? woke - deadline : 0);
     }
     if (cycle->run_once() == firmware::CycleResult::kEnded) break;
     const firmware::PoseOutput& out = cycle->pose();
@@ -142,6 +154,7 @@ int main(int argc, char** argv) {
   run.camera = camera->counters();
   run.encoders = encoders->counters();
   run.link = link.counters();
+  if (realtime) run.wakeup_latency = &wakeup_latency;
   if (!stats_path.empty()) {
     std::ofstream out(stats_path);
     out << firmware::stats_json(*cycle, run);

@@ -39,6 +39,16 @@ struct LinkConfig {
   double heartbeat_hz = 1.0;
 };
 
+/// Real-time set-up of the cycle's thread (applied where permitted; see
+/// drivers/realtime_setup.hpp).
+struct RealtimeConfig {
+  bool enabled = true;
+  int priority = 80;
+  int cpu = -1;
+  bool lock_memory = true;
+  std::size_t prefault_stack_kb = 256;
+};
+
 struct BoardNames {
   std::array<std::string, algorithms::kMaxBoards> names;
 };
@@ -52,6 +62,7 @@ struct FirmwareConfig {
   std::string can_interface = "can0";
   FilterConfig filter;
   LinkConfig link;
+  RealtimeConfig realtime;
   /// Whether the file set these sections itself (else the host board may take them from the
   /// dataset's metadata, which describes the recorded robot).
   bool has_odometry_section = false;

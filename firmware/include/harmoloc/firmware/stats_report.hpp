@@ -14,6 +14,8 @@ struct RunCounters {
   hal::CameraCounters camera;
   hal::EncoderCounters encoders;
   hal::LinkCounters link;
+  /// How late the cycle woke after its absolute deadline (paced runs only; nullptr otherwise).
+  const LatencyHistogram* wakeup_latency = nullptr;
 };
 
 std::string stats_json(const LocalizationCycle& cycle, const RunCounters& run);

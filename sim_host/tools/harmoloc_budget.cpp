@@ -1,0 +1,69 @@
+// harmoloc-budget: the timing budget table of a run, from the firmware's stats JSON.
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include "harmoloc/sim_host/report.hpp"
+
+int main(int argc, char** argv) {
+  using namespace harmoloc::sim_host;
+  CLI::App app{
+      "harmoloc-budget: per-stage cycle time against the compute budget, from `harmoloc --stats` "
+      "output.\n"
+      "Prints median, p99, p99.9 and max of every stage and their share of the budget, the "
+      "overruns and,\n"
+      "for paced runs (--realtime), the wake-up latency. With --check, exits 1 when the run "
+      "overran or\n"
+      "its whole-cycle p99.9 is above the budget.",
+      "harmoloc-budget"};
+  std::string stats_path;
+  double budget_ms = 0.0;
+  bool check = false;
+  app.add_option("stats", stats_path, "stats JSON written by harmoloc --stats")->required();
+  app.add_option("--budget-ms", budget_ms,
+                 "budget to compare against (default: the one in the stats)");
+  app.add_flag("--check", check, "exit 1 if the run does not fit the budget");
+  CLI11_PARSE(app, argc, argv);
+
+  try {
+    const RunStats stats = read_stats(stats_path);
+    const double budget_us = budget_ms > 0.0 ? budget_ms * 1000.0 : stats.budget_us;
+    std::printf("budget %.3g ms per cycle; %s board, %llu cycles at %.0f Hz\n", budget_us / 1000.0,
+                stats.board.empty() ? "?" : stats.board.c_str(),
+                static_cast<unsigned long long>(stats.cycles.value_or(0)),
+                stats.rate_hz.value_or(0.0));
+    std::printf("%-10s %10s %10s %10s %10s %12s\n", "stage", "median us", "p99 us", "p99.9 us",
+                "max us", "max/budget");
+    for (const StageTiming& s : stats.stages) {
+      std::printf("%-10s %10.1f %10.1f %10.1f %10.1f %11.2f%%\n", s.name.c_str(), s.median_us,
+                  s.p99_us, s.p999_us, s.max_us, 100.0 * s.max_us / budget_us);
+    }
+    const std::uint64_t overruns = stats.overruns.value_or(0);
+    std::printf("overruns   %llu\n", static_cast<unsigned long long>(overruns));
+    std::ifstream in(stats_path);
+    const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
+    if (j.is_object() && j.contains("wakeup_latency") && j["wakeup_latency"].is_object()) {
+      const auto& w = j["wakeup_latency"];
+      std::printf(
+          "wake-up    min %.1f us, median %.1f us, p99 %.1f us, p99.9 %.1f us, max %.1f us over "
+          "%llu wake-ups\n",
+          w.value("min_us", 0.0), w.value("median_us", 0.0), w.value("p99_us", 0.0),
+          w.value("p999_us", 0.0), w.value("max_us", 0.0),
+          static_cast<unsigned long long>(w.value("count", 0ULL)));
+    }
+    const StageTiming* cycle = stats.stage("cycle");
+    const bool fits = overruns == 0 && cycle != nullptr && cycle->p999_us <= budget_us;
+    if (cycle != nullptr) {
+      std::printf("verdict    %s: whole cycle p99.9 %.1f us = %.1f%% of the budget, max %.1f%%\n",
+                  fits ? "fits" : "DOES NOT FIT", cycle->p999_us,
+                  100.0 * cycle->p999_us / budget_us, 100.0 * cycle->max_us / budget_us);
+    }
+    return check && !fits ? 1 : 0;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "harmoloc-budget: %s\n", e.what());
+    return 2;
+  }
+}
