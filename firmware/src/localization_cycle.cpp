@@ -42,10 +42,13 @@ LocalizationCycle::LocalizationCycle(const FirmwareConfig& config, const algorit
       encoders_(encoders),
       link_(link),
       clock_(clock),
+      classifier_(map.thresholds),
       mavlink_(config.link.system_id, config.link.component_id),
       period_ns_(static_cast<std::uint64_t>(std::llround(1e9 / config.cycle.rate_hz))),
       budget_ns_(static_cast<std::uint64_t>(std::llround(config.cycle.budget_ms * 1e6))) {
   filter_.configure(config.filter.particles, config.filter.seed, config.filter.noise);
+  colour_table_storage_.reset(new std::uint8_t[algorithms::ColourTable::kEntries]);
+  colour_table_.build(classifier_, colour_table_storage_.get());
 }
 
 namespace {
@@ -117,10 +120,10 @@ CycleResult LocalizationCycle::run_once() {
     if (usable) {
       if (frame.format == hal::PixelFormat::kRgb24) {
         algorithms::segment_rgb24(frame.data, frame.width_px, frame.height_px, frame.stride_bytes,
-                                  map_.thresholds, areas);
+                                  colour_table_, areas);
       } else {
         algorithms::segment_yuyv(frame.data, frame.width_px, frame.height_px, frame.stride_bytes,
-                                 map_.thresholds, areas);
+                                 colour_table_, areas);
       }
     }
   }

@@ -32,6 +32,9 @@ TrainReport train_map(const TrainOptions& opt, algorithms::MapFile& map) {
   const std::size_t boards = opt.thresholds.count;
 
   // Segment every frame.
+  std::vector<std::uint8_t> table_storage(algorithms::ColourTable::kEntries);
+  algorithms::ColourTable classifier;
+  classifier.build(algorithms::BoardClassifier(opt.thresholds), table_storage.data());
   const auto t_seg = std::chrono::steady_clock::now();
   std::vector<algorithms::AreaVector> areas;
   std::vector<std::uint64_t> stamps;
@@ -44,10 +47,10 @@ TrainReport train_map(const TrainOptions& opt, algorithms::MapFile& map) {
     algorithms::AreaVector a;
     if (frame.format == hal::PixelFormat::kRgb24) {
       algorithms::segment_rgb24(frame.data, frame.width_px, frame.height_px, frame.stride_bytes,
-                                opt.thresholds, a);
+                                classifier, a);
     } else {
       algorithms::segment_yuyv(frame.data, frame.width_px, frame.height_px, frame.stride_bytes,
-                               opt.thresholds, a);
+                               classifier, a);
     }
     areas.push_back(a);
     stamps.push_back(frame.timestamp_ns);

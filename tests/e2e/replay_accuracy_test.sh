@@ -3,7 +3,7 @@
 # truth (bounds justified in docs/testing.md).
 source "$(dirname "$0")/lib.sh" "$@"
 RMSE_BOUND_CM=${3:-8}
-HEADING_BOUND_DEG=${4:-10}
+HEADING_BOUND_DEG=${4:-12}
 out="$WORK/accuracy"
 mkdir -p "$out"
 "$BIN/harmoloc" --dataset "$WORK/test" --map "$WORK/tiny.hmap" --trajectory "$out/est.tum" --fixes "$out/fixes.tum" \

@@ -1,5 +1,7 @@
-// Threshold area segmentation (seed 000): HSV conversion, threshold windows (with the hue wrap
-// through 0 for reds), and pixel counts on synthetic RGB24 and YUYV frames with known contents.
+// Threshold area segmentation (seed 000): BoardClassifier's 8-bit HSV (OpenCV's units: H 0..179
+// in 2-degree steps, S and V 0..255), the mapping of degree windows onto those steps (with the
+// wrap through 0 for reds), and pixel counts on synthetic RGB24 and YUYV frames with known
+// contents. Bit-exactness against OpenCV itself is proven in segmentation_opencv_test.cpp.
 #include "harmoloc/algorithms/segmentation.hpp"
 
 #include <gtest/gtest.h>
@@ -18,9 +20,9 @@ namespace ht = harmoloc::test;
 namespace {
 
 // Reference HSV by the textbook hexcone formula in double precision, written independently
-// (hue from the sector of the maximum channel, ties resolved r > g > b as the header's H range).
+// (hue in degrees from the sector of the maximum channel, ties resolved r > g > b).
 struct RefHsv {
-  double h, s, v;
+  double h_deg, s, v;
 };
 RefHsv reference_hsv(int r, int g, int b) {
   const double rf = r / 255.0, gf = g / 255.0, bf = b / 255.0;
@@ -38,8 +40,8 @@ RefHsv reference_hsv(int r, int g, int b) {
   } else {
     hp = (rf - gf) / c + 4.0;
   }
-  out.h = 60.0 * hp;
-  if (out.h >= 360.0) out.h -= 360.0;
+  out.h_deg = 60.0 * hp;
+  if (out.h_deg >= 360.0) out.h_deg -= 360.0;
   return out;
 }
 
@@ -48,16 +50,51 @@ ha::ColourThreshold window(float h0, float h1, std::uint8_t s_min, std::uint8_t 
   return ha::ColourThreshold{h0, h1, s_min, v_min, v_max};
 }
 
-// Whether the pixel (@p r, @p g, @p b) falls in the window @p t.
-bool pixel_in(const ha::ColourThreshold& t, int r, int g, int b) {
-  return ha::in_threshold(t,
-                          ha::rgb_to_hsv(static_cast<std::uint8_t>(r), static_cast<std::uint8_t>(g),
-                                         static_cast<std::uint8_t>(b)));
+ha::ThresholdSet one_board(const ha::ColourThreshold& t) {
+  ha::ThresholdSet set;
+  set.boards[0] = t;
+  set.count = 1;
+  return set;
 }
 
 struct Rgb {
   std::uint8_t r, g, b;
 };
+
+// Whether the pixel @p c falls in board 0 of @p classifier.
+bool in_board0(const ha::BoardClassifier& classifier, Rgb c) {
+  return (classifier.classify(c.r, c.g, c.b) & 1U) != 0;
+}
+
+// The OpenCV H of @p c (to check that a test colour sits where the test says it does).
+int opencv_h(const ha::BoardClassifier& classifier, Rgb c) {
+  return classifier.to_hsv(c.r, c.g, c.b).h;
+}
+
+// The H steps (0..179) a degree window admits, by the documented rule written out directly:
+// [ceil(min / 2), floor(max / 2)], wrapping through 0 when min > max.
+bool h_in_window(int h, float min_deg, float max_deg) {
+  const double lo = std::ceil(static_cast<double>(min_deg) / 2.0);
+  const double hi = std::floor(static_cast<double>(max_deg) / 2.0);
+  if (min_deg <= max_deg) return h >= lo && h <= hi;
+  return h >= lo || h <= hi;
+}
+
+// The 1530 fully saturated, full-value colours around the hue circle (one channel 255, one 0).
+std::vector<Rgb> pure_hues() {
+  std::vector<Rgb> out;
+  for (int i = 0; i < 255; ++i) {
+    const auto u = static_cast<std::uint8_t>(i);
+    const auto d = static_cast<std::uint8_t>(255 - i);
+    out.push_back({255, u, 0});
+    out.push_back({d, 255, 0});
+    out.push_back({0, 255, u});
+    out.push_back({0, d, 255});
+    out.push_back({u, 0, 255});
+    out.push_back({255, 0, d});
+  }
+  return out;
+}
 
 // Rows of pixels @p stride bytes apart in one buffer, as the segmenters take them.
 class StridedImage {
@@ -125,112 +162,246 @@ class YuyvImage : public StridedImage {
 
 }  // namespace
 
-TEST(RgbToHsv, PrimaryAndSecondaryColours) {
+// --- HSV -----------------------------------------------------------------------------------------
+
+TEST(BoardClassifierHsv, PrimaryAndSecondaryColoursInOpencvUnits) {
   struct Case {
     Rgb c;
-    float h, s, v;
+    int h, s, v;
   };
   const Case cases[] = {
-      {{255, 0, 0}, 0.0F, 255.0F, 255.0F},      // red
-      {{0, 255, 0}, 120.0F, 255.0F, 255.0F},    // green
-      {{0, 0, 255}, 240.0F, 255.0F, 255.0F},    // blue
-      {{255, 255, 0}, 60.0F, 255.0F, 255.0F},   // yellow
-      {{0, 255, 255}, 180.0F, 255.0F, 255.0F},  // cyan
-      {{255, 0, 255}, 300.0F, 255.0F, 255.0F},  // magenta
-      {{128, 0, 0}, 0.0F, 255.0F, 128.0F},      // dark red: value is the max channel
-      {{255, 128, 128}, 0.0F, 127.0F, 255.0F},  // pink: s = 255 * 127 / 255
-      {{240, 60, 0}, 15.0F, 255.0F, 240.0F},    // h = 60 * 60 / 240
-      {{255, 0, 85}, 340.0F, 255.0F, 255.0F},   // h = 360 - 60 * 85 / 255
+      {{255, 0, 0}, 0, 255, 255},      // red
+      {{0, 255, 0}, 60, 255, 255},     // green: 120 degrees / 2
+      {{0, 0, 255}, 120, 255, 255},    // blue: 240 / 2
+      {{255, 255, 0}, 30, 255, 255},   // yellow: 60 / 2
+      {{0, 255, 255}, 90, 255, 255},   // cyan: 180 / 2
+      {{255, 0, 255}, 150, 255, 255},  // magenta: 300 / 2
+      {{128, 0, 0}, 0, 255, 128},      // dark red: value is the max channel
+      {{255, 128, 128}, 0, 127, 255},  // pink: s = 255 * 127 / 255
+      {{255, 0, 85}, 170, 255, 255},   // 340 degrees exactly
+      {{255, 63, 0}, 7, 255, 255},     // 14.82 degrees: 7.41 rounds down
+      {{240, 60, 0}, 8, 255, 240},     // 15 degrees exactly: 7.5 rounds up
+      {{220, 30, 30}, 0, 220, 220},    // the scenarios' red board: s = 255 * 190 / 220 = 220.2
+      {{30, 180, 40}, 62, 213, 180},   // green board: 124 degrees, s = 255 * 150 / 180 = 212.5
+      {{30, 60, 220}, 115, 220, 220},  // blue board: 230.5 degrees
   };
+  const ha::BoardClassifier classifier;
   for (const Case& k : cases) {
     SCOPED_TRACE(testing::Message() << int{k.c.r} << "," << int{k.c.g} << "," << int{k.c.b});
-    const ha::Hsv hsv = ha::rgb_to_hsv(k.c.r, k.c.g, k.c.b);
-    EXPECT_NEAR(hsv.hue_deg, k.h, 1e-4);
-    EXPECT_NEAR(hsv.saturation, k.s, 1e-4);
-    EXPECT_NEAR(hsv.value, k.v, 1e-4);
+    const ha::Hsv8 hsv = classifier.to_hsv(k.c.r, k.c.g, k.c.b);
+    EXPECT_EQ(int{hsv.h}, k.h);
+    EXPECT_EQ(int{hsv.s}, k.s);
+    EXPECT_EQ(int{hsv.v}, k.v);
   }
 }
 
-TEST(RgbToHsv, GreysHaveNoSaturationAndZeroHue) {
+TEST(BoardClassifierHsv, GreysHaveNoSaturationAndZeroHue) {
+  const ha::BoardClassifier classifier;
   for (int g : {0, 1, 77, 128, 254, 255}) {
     const auto u = static_cast<std::uint8_t>(g);
-    const ha::Hsv hsv = ha::rgb_to_hsv(u, u, u);
-    EXPECT_EQ(hsv.saturation, 0.0F) << g;
-    EXPECT_EQ(hsv.hue_deg, 0.0F) << g;
-    EXPECT_EQ(hsv.value, static_cast<float>(g)) << g;
+    const ha::Hsv8 hsv = classifier.to_hsv(u, u, u);
+    EXPECT_EQ(int{hsv.s}, 0) << g;
+    EXPECT_EQ(int{hsv.h}, 0) << g;
+    EXPECT_EQ(int{hsv.v}, g) << g;
   }
 }
 
-TEST(RgbToHsv, MatchesReferenceFormulaAndStaysInRange) {
+TEST(BoardClassifierHsv, RoundsTheTextbookFormulaAndStaysInRange) {
+  // OpenCV's fixed point (12-bit reciprocal tables, then round) lands within half a step of the
+  // exact value plus the tables' own rounding: at most 0.64 of an H step and 0.53 of S over all
+  // colours. A wrong sector or scale is off by far more.
+  const ha::BoardClassifier classifier;
   ha::Pcg32 rng(12345);
-  for (int i = 0; i < 20000; ++i) {
+  for (int i = 0; i < 50000; ++i) {
     const auto r = static_cast<int>(rng.next_u32() & 0xFFU);
     const auto g = static_cast<int>(rng.next_u32() & 0xFFU);
     const auto b = static_cast<int>(rng.next_u32() & 0xFFU);
-    const ha::Hsv hsv = ha::rgb_to_hsv(static_cast<std::uint8_t>(r), static_cast<std::uint8_t>(g),
-                                       static_cast<std::uint8_t>(b));
+    const ha::Hsv8 hsv = classifier.to_hsv(
+        static_cast<std::uint8_t>(r), static_cast<std::uint8_t>(g), static_cast<std::uint8_t>(b));
     const RefHsv ref = reference_hsv(r, g, b);
-    ASSERT_GE(hsv.hue_deg, 0.0F);
-    ASSERT_LT(hsv.hue_deg, 360.0F);
-    ASSERT_GE(hsv.saturation, 0.0F);
-    ASSERT_LE(hsv.saturation, 255.0F);
-    ASSERT_GE(hsv.value, 0.0F);
-    ASSERT_LE(hsv.value, 255.0F);
-    // Hue compared on the circle (359.9999 and 0 are neighbours).
-    double dh = std::fabs(static_cast<double>(hsv.hue_deg) - ref.h);
-    dh = std::min(dh, 360.0 - dh);
-    ASSERT_LT(dh, 1e-3) << r << "," << g << "," << b;
-    ASSERT_NEAR(hsv.saturation, ref.s, 1e-3) << r << "," << g << "," << b;
-    ASSERT_NEAR(hsv.value, ref.v, 1e-9) << r << "," << g << "," << b;
+    ASSERT_LT(int{hsv.h}, 180) << r << "," << g << "," << b;
+    // H compared on the circle of 180 steps (179.9 and 0 are neighbours).
+    double dh = std::fabs(hsv.h - ref.h_deg / 2.0);
+    dh = std::min(dh, 180.0 - dh);
+    ASSERT_LE(dh, 0.65) << r << "," << g << "," << b;
+    ASSERT_LE(std::fabs(hsv.s - ref.s), 0.53) << r << "," << g << "," << b;
+    ASSERT_EQ(int{hsv.v}, std::max({r, g, b})) << r << "," << g << "," << b;
   }
 }
 
-TEST(InThreshold, HueWindowWrappingThroughZero) {
-  const ha::ColourThreshold red = window(340.0F, 15.0F, 100, 50, 255);
-  auto hue = [](float h) { return ha::Hsv{h, 200.0F, 200.0F}; };
-  EXPECT_TRUE(ha::in_threshold(red, hue(0.0F)));
-  EXPECT_TRUE(ha::in_threshold(red, hue(10.0F)));
-  EXPECT_TRUE(ha::in_threshold(red, hue(350.0F)));
-  EXPECT_TRUE(ha::in_threshold(red, hue(359.9F)));
-  EXPECT_TRUE(ha::in_threshold(red, hue(340.0F)));  // edges are inclusive
-  EXPECT_TRUE(ha::in_threshold(red, hue(15.0F)));
-  EXPECT_FALSE(ha::in_threshold(red, hue(15.01F)));
-  EXPECT_FALSE(ha::in_threshold(red, hue(339.99F)));
-  EXPECT_FALSE(ha::in_threshold(red, hue(20.0F)));
-  EXPECT_FALSE(ha::in_threshold(red, hue(180.0F)));
-  EXPECT_FALSE(ha::in_threshold(red, hue(330.0F)));
-
-  // The same window without wrap: 15..340 is everything but the reds.
-  const ha::ColourThreshold not_red = window(15.0F, 340.0F, 100, 50, 255);
-  EXPECT_FALSE(ha::in_threshold(not_red, hue(0.0F)));
-  EXPECT_FALSE(ha::in_threshold(not_red, hue(350.0F)));
-  EXPECT_TRUE(ha::in_threshold(not_red, hue(180.0F)));
-  EXPECT_TRUE(ha::in_threshold(not_red, hue(15.0F)));
+TEST(BoardClassifierHsv, EveryHueStepIsReachedInOrderAroundTheCircle) {
+  // Walking the saturated colours around the circle, H never steps back (except once through
+  // 0) and takes every value 0..179.
+  const ha::BoardClassifier classifier;
+  std::vector<Rgb> hues = pure_hues();
+  std::vector<bool> seen(180, false);
+  for (const Rgb& c : hues) {
+    const ha::Hsv8 hsv = classifier.to_hsv(c.r, c.g, c.b);
+    ASSERT_LT(int{hsv.h}, 180);
+    EXPECT_EQ(int{hsv.s}, 255);
+    EXPECT_EQ(int{hsv.v}, 255);
+    seen[hsv.h] = true;
+  }
+  for (int h = 0; h < 180; ++h) EXPECT_TRUE(seen[static_cast<std::size_t>(h)]) << h;
 }
 
-TEST(InThreshold, HueEdgesFromRealPixels) {
-  const ha::ColourThreshold red = window(340.0F, 15.0F, 100, 50, 255);
-  auto in = [&](int r, int g, int b) { return pixel_in(red, r, g, b); };
-  EXPECT_TRUE(in(240, 60, 0));   // hue exactly 15
-  EXPECT_FALSE(in(240, 61, 0));  // hue 15.25
-  EXPECT_TRUE(in(255, 0, 85));   // hue exactly 340
-  EXPECT_FALSE(in(255, 0, 86));  // hue 339.76
+// --- windows -------------------------------------------------------------------------------------
+
+TEST(BoardClassifierWindow, GreenWindowIsHFiftyToSeventyTwoInclusive) {
+  // [100, 145] degrees -> H in [ceil(50), floor(72.5)] = [50, 72].
+  const ha::BoardClassifier c(one_board(window(100.0F, 145.0F, 110, 60, 255)));
+  struct Case {
+    Rgb colour;
+    int h;
+    bool in;
+  };
+  const Case cases[] = {
+      {{93, 255, 0}, 49, false},   // 98.1 degrees
+      {{90, 255, 0}, 49, false},   // 98.8 degrees: 49.41, the last colour of max 255 below 50
+      {{89, 255, 0}, 50, true},    // 99.1 degrees: 49.53 rounds to 50, inside though below 100
+      {{84, 240, 0}, 50, true},    // 99 degrees exactly: 49.5 rounds to 50
+      {{80, 240, 0}, 50, true},    // 100 degrees exactly
+      {{0, 255, 0}, 60, true},     // the middle
+      {{0, 255, 102}, 72, true},   // 144 degrees exactly
+      {{0, 255, 106}, 72, true},   // 144.9 degrees
+      {{0, 255, 107}, 73, false},  // 145.2 degrees
+      {{0, 240, 100}, 73, false},  // 145 degrees exactly: 72.5 rounds to 73, outside
+      {{0, 255, 110}, 73, false},
+  };
+  for (const Case& k : cases) {
+    SCOPED_TRACE(testing::Message()
+                 << int{k.colour.r} << "," << int{k.colour.g} << "," << int{k.colour.b});
+    ASSERT_EQ(opencv_h(c, k.colour), k.h);
+    EXPECT_EQ(in_board0(c, k.colour), k.in);
+  }
 }
 
-TEST(InThreshold, SaturationAndValueBoundsAreInclusive) {
-  const ha::ColourThreshold t = window(340.0F, 15.0F, 100, 50, 200);
-  auto in = [&](int r, int g, int b) { return pixel_in(t, r, g, b); };
-  // Saturation = 255 * (max - min) / max: (200, 121.6..) is awkward, so use max 255 where s =
-  // delta.
-  const ha::ColourThreshold s_only = window(340.0F, 15.0F, 100, 0, 255);
-  EXPECT_TRUE(ha::in_threshold(s_only, ha::rgb_to_hsv(255, 155, 155)));   // s = 100 exactly
-  EXPECT_FALSE(ha::in_threshold(s_only, ha::rgb_to_hsv(255, 156, 156)));  // s = 99
-  EXPECT_TRUE(in(50, 0, 0));                                              // v = 50 = value_min
-  EXPECT_FALSE(in(49, 0, 0));                                             // v below
-  EXPECT_TRUE(in(200, 0, 0));                                             // v = 200 = value_max
-  EXPECT_FALSE(in(201, 0, 0));                                            // v above
-  EXPECT_FALSE(in(0, 0, 0));                                              // black is no colour
+TEST(BoardClassifierWindow, RedWindowWrapsThroughZero) {
+  // [340, 15] degrees -> H >= 170 or H <= 7.
+  const ha::BoardClassifier c(one_board(window(340.0F, 15.0F, 100, 50, 255)));
+  struct Case {
+    Rgb colour;
+    int h;
+    bool in;
+  };
+  const Case cases[] = {
+      {{255, 0, 0}, 0, true},     {{255, 63, 0}, 7, true},  // 14.8 degrees
+      {{255, 64, 0}, 8, false},                             // 15.1 degrees
+      {{240, 60, 0}, 8, false},    // 15 degrees exactly: 7.5 rounds to 8, outside
+      {{255, 0, 85}, 170, true},   // 340 degrees exactly
+      {{255, 0, 89}, 170, true},   // 339.1 degrees: 169.53 rounds to 170
+      {{255, 0, 90}, 169, false},  // 338.8 degrees
+      {{255, 0, 30}, 176, true},   // 352.9 degrees
+      {{0, 255, 255}, 90, false},  // cyan, opposite
+  };
+  for (const Case& k : cases) {
+    SCOPED_TRACE(testing::Message()
+                 << int{k.colour.r} << "," << int{k.colour.g} << "," << int{k.colour.b});
+    ASSERT_EQ(opencv_h(c, k.colour), k.h);
+    EXPECT_EQ(in_board0(c, k.colour), k.in);
+  }
+
+  // The same window without the wrap, 15..340 degrees: H 8..170, everything but the reds, and
+  // 170 (340 degrees) belongs to both.
+  const ha::BoardClassifier not_red(one_board(window(15.0F, 340.0F, 100, 50, 255)));
+  EXPECT_FALSE(in_board0(not_red, {255, 0, 0}));
+  EXPECT_FALSE(in_board0(not_red, {255, 63, 0}));
+  EXPECT_TRUE(in_board0(not_red, {255, 64, 0}));
+  EXPECT_TRUE(in_board0(not_red, {0, 255, 255}));
+  EXPECT_TRUE(in_board0(not_red, {255, 0, 85}));
+  EXPECT_FALSE(in_board0(not_red, {255, 0, 30}));
 }
+
+TEST(BoardClassifierWindow, DegreeWindowsMapOntoHStepsForEveryH) {
+  // For every H step and a range of windows (odd and even ends, fractions, empty, wrapping,
+  // full circle), a saturated colour with that H is in exactly when the documented rule says.
+  const ha::BoardClassifier probe;
+  std::vector<Rgb> by_h(180, Rgb{0, 0, 0});
+  for (const Rgb& c : pure_hues()) by_h[probe.to_hsv(c.r, c.g, c.b).h] = c;
+
+  const float windows[][2] = {{100, 145},       {99, 145},       {101, 145}, {100, 144}, {100, 143},
+                              {340, 15},        {341, 14},       {339, 16},  {0, 360},   {0, 359},
+                              {0, 0},           {1, 1},          {2, 2},     {358, 2},   {359, 0},
+                              {179.5F, 180.5F}, {99.9F, 100.1F}, {200, 199}, {45, 70},   {215, 250},
+                              {285, 320},       {170, 200}};
+  for (const auto& w : windows) {
+    SCOPED_TRACE(testing::Message() << "[" << w[0] << ", " << w[1] << "]");
+    const ha::BoardClassifier c(one_board(window(w[0], w[1], 0, 0, 255)));
+    int inside = 0;
+    for (int h = 0; h < 180; ++h) {
+      const Rgb colour = by_h[static_cast<std::size_t>(h)];
+      ASSERT_EQ(opencv_h(c, colour), h);
+      EXPECT_EQ(in_board0(c, colour), h_in_window(h, w[0], w[1])) << "H " << h;
+      inside += in_board0(c, colour) ? 1 : 0;
+    }
+    if (w[0] == 0.0F && w[1] == 360.0F) {
+      EXPECT_EQ(inside, 180);
+    }
+    if (w[0] == 1.0F && w[1] == 1.0F) {
+      EXPECT_EQ(inside, 0);  // ceil(0.5) = 1 > floor(0.5) = 0
+    }
+  }
+}
+
+TEST(BoardClassifierWindow, SaturationAndValueBoundsAreInclusive) {
+  const ha::BoardClassifier t(one_board(window(340.0F, 15.0F, 100, 50, 200)));
+  const ha::BoardClassifier s_only(one_board(window(340.0F, 15.0F, 100, 0, 255)));
+  // Saturation = 255 * (max - min) / max: with max 255, s = max - min.
+  EXPECT_TRUE(in_board0(s_only, {255, 155, 155}));   // s = 100 exactly
+  EXPECT_FALSE(in_board0(s_only, {255, 156, 156}));  // s = 99
+  EXPECT_TRUE(in_board0(t, {50, 0, 0}));             // v = 50 = value_min
+  EXPECT_FALSE(in_board0(t, {49, 0, 0}));            // v below
+  EXPECT_TRUE(in_board0(t, {200, 0, 0}));            // v = 200 = value_max
+  EXPECT_FALSE(in_board0(t, {201, 0, 0}));           // v above
+  EXPECT_FALSE(in_board0(t, {0, 0, 0}));             // black is no colour
+
+  // A single admitted value, and an empty value range.
+  const ha::BoardClassifier v_one(one_board(window(340.0F, 15.0F, 0, 128, 128)));
+  EXPECT_TRUE(in_board0(v_one, {128, 0, 0}));
+  EXPECT_FALSE(in_board0(v_one, {127, 0, 0}));
+  EXPECT_FALSE(in_board0(v_one, {129, 0, 0}));
+  const ha::BoardClassifier v_none(one_board(window(340.0F, 15.0F, 0, 129, 128)));
+  EXPECT_FALSE(in_board0(v_none, {128, 0, 0}));
+  EXPECT_FALSE(in_board0(v_none, {129, 0, 0}));
+  // s_min 255 admits only colours with a zero channel; s_min 0 admits greys (H 0).
+  const ha::BoardClassifier s_full(one_board(window(340.0F, 15.0F, 255, 0, 255)));
+  EXPECT_TRUE(in_board0(s_full, {90, 0, 0}));
+  EXPECT_FALSE(in_board0(s_full, {90, 1, 1}));
+  const ha::BoardClassifier s_zero(one_board(window(340.0F, 15.0F, 0, 0, 255)));
+  EXPECT_TRUE(in_board0(s_zero, {90, 90, 90}));
+  EXPECT_TRUE(in_board0(s_zero, {0, 0, 0}));
+}
+
+TEST(BoardClassifierWindow, BoardsAreIndependentBitsAndRebuildingForgetsTheOldSet) {
+  ha::ThresholdSet set = ht::board_windows();  // red, green, blue, yellow, magenta, cyan
+  set.count = 8;
+  set.boards[6] = window(0.0F, 360.0F, 0, 0, 255);   // everything
+  set.boards[7] = window(100.0F, 145.0F, 0, 0, 40);  // dark greens only
+  ha::BoardClassifier c(set);
+  EXPECT_EQ(c.board_count(), 8U);
+  EXPECT_EQ(int{c.classify(255, 0, 0)}, 0x01 | 0x40);
+  EXPECT_EQ(int{c.classify(0, 255, 0)}, 0x02 | 0x40);
+  EXPECT_EQ(int{c.classify(0, 0, 255)}, 0x04 | 0x40);  // H 120, inside blue's 108..125
+  EXPECT_EQ(int{c.classify(30, 60, 220)}, 0x04 | 0x40);
+  EXPECT_EQ(int{c.classify(255, 255, 0)}, 0x08 | 0x40);
+  EXPECT_EQ(int{c.classify(255, 0, 255)}, 0x10 | 0x40);
+  EXPECT_EQ(int{c.classify(0, 255, 255)}, 0x20 | 0x40);
+  EXPECT_EQ(int{c.classify(0, 40, 0)}, 0x40 | 0x80);  // green but too dark for board 1
+  EXPECT_EQ(int{c.classify(128, 128, 128)}, 0x40);
+
+  c.build(ht::board_windows(1));  // red only
+  EXPECT_EQ(c.board_count(), 1U);
+  EXPECT_EQ(int{c.classify(255, 0, 0)}, 0x01);
+  EXPECT_EQ(int{c.classify(0, 255, 0)}, 0);
+  EXPECT_EQ(int{c.classify(0, 40, 0)}, 0);
+  EXPECT_EQ(int{c.classify(128, 128, 128)}, 0);
+
+  c.build(ha::ThresholdSet{});
+  EXPECT_EQ(c.board_count(), 0U);
+  EXPECT_EQ(int{c.classify(255, 0, 0)}, 0);
+}
+
+// --- segmentation --------------------------------------------------------------------------------
 
 TEST(SegmentRgb24, CountsRectanglesOfKnownSizeAndIgnoresRowPadding) {
   const Rgb grey{100, 100, 100};
@@ -243,8 +414,10 @@ TEST(SegmentRgb24, CountsRectanglesOfKnownSizeAndIgnoresRowPadding) {
   img.fill(20, 10, 7, 3, green);           // 21 px
   img.set(39, 29, blue);                   // the very last pixel: 1 px
   img.set(0, 0, blue);                     // the very first pixel: 1 px
-  img.fill(30, 0, 2, 2, Rgb{240, 60, 0});  // hue exactly 15, on red's edge: 4 px counted as red
-  img.fill(30, 5, 3, 1, Rgb{240, 61, 0});  // hue 15.25, just outside: 3 px not red
+  img.fill(30, 0, 2, 2, Rgb{255, 63, 0});  // H 7, on red's last step: 4 px counted as red
+  img.fill(30, 5, 3, 1, Rgb{240, 60, 0});  // 15 degrees exactly, H 8: 3 px not red
+  img.fill(30, 7, 3, 1, Rgb{255, 0, 85});  // 340 degrees, H 170, red's first step: 3 px red
+  img.fill(30, 9, 5, 1, Rgb{255, 0, 90});  // H 169, just outside: 5 px not red
 
   ha::ThresholdSet set = ht::board_windows(3);  // red, green, blue
   set.count = 4;
@@ -254,11 +427,19 @@ TEST(SegmentRgb24, CountsRectanglesOfKnownSizeAndIgnoresRowPadding) {
   areas.pixels.fill(777U);  // stale values must be cleared
   ha::segment_rgb24(img.data(), img.width(), img.height(), img.stride(), set, areas);
   EXPECT_EQ(areas.count, 4U);
-  EXPECT_EQ(areas.pixels[0], 50U + 4U);
+  EXPECT_EQ(areas.pixels[0], 50U + 4U + 3U);
   EXPECT_EQ(areas.pixels[1], 21U);
   EXPECT_EQ(areas.pixels[2], 2U);
   EXPECT_EQ(areas.pixels[3], 40U * 30U);
   for (std::size_t k = 4; k < ha::kMaxBoards; ++k) EXPECT_EQ(areas.pixels[k], 0U) << k;
+
+  // The classifier compiled once gives the same areas as the convenience overload.
+  const ha::BoardClassifier classifier(set);
+  ha::AreaVector again;
+  again.pixels.fill(777U);
+  ha::segment_rgb24(img.data(), img.width(), img.height(), img.stride(), classifier, again);
+  EXPECT_EQ(again.count, areas.count);
+  EXPECT_EQ(again.pixels, areas.pixels);
 }
 
 TEST(SegmentRgb24, EmptyThresholdSetAndEmptyImage) {
@@ -269,16 +450,43 @@ TEST(SegmentRgb24, EmptyThresholdSetAndEmptyImage) {
   EXPECT_EQ(areas.count, 0U);
   const ha::ThresholdSet one = ht::board_windows(1);  // red
   ha::segment_rgb24(img.data(), 0, 0, img.stride(), one, areas);
+  EXPECT_EQ(areas.count, 1U);
   EXPECT_EQ(areas.pixels[0], 0U);
   ha::segment_rgb24(img.data(), img.width(), img.height(), img.stride(), one, areas);
   EXPECT_EQ(areas.pixels[0], 32U);
 }
 
+TEST(SegmentRgb24, CountsEveryBoardForEveryHStep) {
+  // One row of all 1530 saturated colours: each board's area is the number of those colours
+  // whose H lies in its window, by the rule (the classifier's H is checked above).
+  const std::vector<Rgb> hues = pure_hues();
+  RgbImage img(static_cast<std::uint32_t>(hues.size()), 1,
+               static_cast<std::uint32_t>(hues.size() * 3), Rgb{0, 0, 0}, Rgb{0, 0, 0});
+  for (std::size_t x = 0; x < hues.size(); ++x) img.set(static_cast<std::uint32_t>(x), 0, hues[x]);
+  const ha::ThresholdSet set = ht::board_windows();
+  const ha::BoardClassifier probe;
+  ha::AreaVector areas;
+  ha::segment_rgb24(img.data(), img.width(), img.height(), img.stride(), set, areas);
+  ASSERT_EQ(areas.count, 6U);
+  for (std::size_t k = 0; k < 6; ++k) {
+    std::uint32_t expected = 0;
+    for (const Rgb& c : hues) {
+      expected += h_in_window(probe.to_hsv(c.r, c.g, c.b).h, ht::kBoardHuesDeg[k][0],
+                              ht::kBoardHuesDeg[k][1])
+                      ? 1U
+                      : 0U;
+    }
+    EXPECT_EQ(areas.pixels[k], expected) << "board " << k;
+    EXPECT_GT(expected, 50U) << "board " << k;  // every board spans 12 or more H steps
+  }
+}
+
 TEST(SegmentYuyv, CountsKnownColoursWithPerPixelLuma) {
-  // BT.601 limited range, by hand (R = (298 (Y-16) + 409 (V-128) + 128) >> 8, and so on):
-  //   Y=81  U=90  V=240 -> (255, 0, 0)    red
-  //   Y=145 U=54  V=34  -> (0, 255, 1)    green (hue 120.2)
-  //   Y=41  U=240 V=110 -> (0, 0, 255)    blue
+  // BT.601 limited range, by hand (R = (298 (Y-16) + 409 (V-128) + 128) >> 8, and so on; OpenCV's
+  // 20-bit coefficients give the same colours to within 1 and the same classes):
+  //   Y=81  U=90  V=240 -> (255, 0, 0)    red, H 0
+  //   Y=145 U=54  V=34  -> (0, 255, 1)    green, H 60
+  //   Y=41  U=240 V=110 -> (0, 0, 255)    blue, H 120
   //   Y=235 U=90  V=240 -> (255, 179, 178) a pale pink: saturation 77, not red
   //   Y=128 U=128 V=128 -> (130, 130, 130) grey
   YuyvImage img(16, 4, 16 * 2 + 4);
@@ -299,11 +507,27 @@ TEST(SegmentYuyv, CountsKnownColoursWithPerPixelLuma) {
   EXPECT_EQ(areas.pixels[2], 2U);
   // 64 pixels, of which 8 red + 4 green + 2 blue + 4 in the two mixed pairs are not grey.
   EXPECT_EQ(areas.pixels[3], 64U - 18U);
+
+  const ha::BoardClassifier classifier(set);
+  ha::AreaVector again;
+  ha::segment_yuyv(img.data(), img.width(), img.height(), img.stride(), classifier, again);
+  EXPECT_EQ(again.pixels, areas.pixels);
+}
+
+TEST(SegmentYuyv, OddWidthUsesTheLastPairsFirstPixelOnly) {
+  // Width 5: the third macro-pixel's second luma is beyond the image and must not be counted.
+  YuyvImage img(5, 2, 16);
+  img.set_pair(4, 0, 81, 90, 81, 240);   // red, red (second outside)
+  img.set_pair(4, 1, 235, 90, 81, 240);  // pink, red (second outside)
+  const ha::ThresholdSet set = ht::board_windows(1);
+  ha::AreaVector areas;
+  ha::segment_yuyv(img.data(), img.width(), img.height(), img.stride(), set, areas);
+  EXPECT_EQ(areas.pixels[0], 1U);
 }
 
 TEST(SegmentYuyv, AgreesWithRgbOfTheSameFrame) {
-  // Convert a YUYV frame to RGB with the header's formula written out independently in double
-  // precision, then segment both: counts must agree except where rounding lands on a threshold.
+  // Convert a YUYV frame to RGB with segment_yuyv's documented integer formula written out
+  // independently in double precision, then segment both: the counts must agree exactly.
   const std::uint32_t w = 32, h = 8;
   YuyvImage img(w, h, w * 2);
   ha::Pcg32 rng(7);
@@ -321,16 +545,14 @@ TEST(SegmentYuyv, AgreesWithRgbOfTheSameFrame) {
       const std::uint8_t* p =
           img.data() + static_cast<std::size_t>(y) * img.stride() + 4U * (x / 2U);
       const int yy = p[(x % 2U) * 2U], u = p[1] - 128, v = p[3] - 128;
-      const int c = 298 * (yy - 16);
+      // OpenCV's COLOR_YUV2RGB_YUYV in 20-bit fixed point, written out in double precision.
+      const double c = std::max(0, yy - 16) * 1220542.0 + 524288.0;
       auto clamp = [](int q) { return static_cast<std::uint8_t>(std::clamp(q, 0, 255)); };
-      // Floor division by 256 with rounding, as an arithmetic shift does for negatives.
-      auto div256 = [](int q) {
-        return static_cast<int>(std::floor(static_cast<double>(q) / 256.0));
-      };
+      auto div20 = [](double q) { return static_cast<int>(std::floor(q / 1048576.0)); };
       std::uint8_t* o = rgb.data() + (static_cast<std::size_t>(y) * w + x) * 3U;
-      o[0] = clamp(div256(c + 409 * v + 128));
-      o[1] = clamp(div256(c - 100 * u - 208 * v + 128));
-      o[2] = clamp(div256(c + 516 * u + 128));
+      o[0] = clamp(div20(c + 1673527.0 * v));
+      o[1] = clamp(div20(c - 852492.0 * v - 409993.0 * u));
+      o[2] = clamp(div20(c + 2116026.0 * u));
     }
   }
   const ha::ThresholdSet set = ht::board_windows();  // the six boards

@@ -33,3 +33,14 @@ add_executable(sim_host_test
 target_link_libraries(sim_host_test PRIVATE harmoloc_sim_dataset harmoloc_sim_fakes harmoloc_simulator
   harmoloc_drivers_common harmoloc_algorithms GTest::gtest_main harmoloc_warnings)
 gtest_discover_tests(sim_host_test DISCOVERY_TIMEOUT 60)
+
+# Segmentation against OpenCV itself: HSV of all 2^24 colours, board classes, simulated and
+# adversarial frames, YUYV. harmoloc_opencv_reference is defined in tests/CMakeLists.txt after
+# this file is included, so the condition is the one that defines it (HARMOLOC_HAVE_OPENCV):
+# `if(TARGET harmoloc_opencv_reference)` would still be false here.
+if(TARGET harmoloc_opencv_reference OR HARMOLOC_HAVE_OPENCV)
+  add_executable(segmentation_opencv_test ${HARMOLOC_UNIT_DIR}/segmentation_opencv_test.cpp)
+  target_link_libraries(segmentation_opencv_test PRIVATE harmoloc_opencv_reference
+    harmoloc_algorithms harmoloc_simulator GTest::gtest_main harmoloc_warnings)
+  gtest_discover_tests(segmentation_opencv_test DISCOVERY_TIMEOUT 60)
+endif()

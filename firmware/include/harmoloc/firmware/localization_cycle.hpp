@@ -5,10 +5,12 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 
 #include "harmoloc/algorithms/harmonic_localizer.hpp"
 #include "harmoloc/algorithms/map_codec.hpp"
 #include "harmoloc/algorithms/particle_filter.hpp"
+#include "harmoloc/algorithms/segmentation.hpp"
 #include "harmoloc/firmware/config.hpp"
 #include "harmoloc/firmware/latency_histogram.hpp"
 #include "harmoloc/firmware/mavlink_v2.hpp"
@@ -105,6 +107,9 @@ class LocalizationCycle {
   hal::PoseLink& link_;
   const hal::Clock& clock_;
 
+  algorithms::BoardClassifier classifier_;
+  std::unique_ptr<std::uint8_t[]> colour_table_storage_;  // 16 MiB, reserved at start-up
+  algorithms::ColourTable colour_table_;
   algorithms::ParticleFilter filter_;
   mavlink::Encoder mavlink_;
   mavlink::FrameBuffer frame_buffer_{};

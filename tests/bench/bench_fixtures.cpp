@@ -1,0 +1,94 @@
+#include "bench_fixtures.hpp"
+
+#include <algorithm>
+
+#include "harmoloc/algorithms/random.hpp"
+#include "harmoloc/sim_host/route.hpp"
+#include "harmoloc/sim_host/scenario.hpp"
+#include "harmoloc/sim_host/scene_renderer.hpp"
+
+namespace harmoloc::bench {
+
+namespace {
+
+std::uint8_t clamp_u8(double v) {
+  return static_cast<std::uint8_t>(std::clamp(v + 0.5, 0.0, 255.0));
+}
+
+}  // namespace
+
+Frames simulated_frames(std::uint32_t width_px, std::uint32_t height_px, std::size_t count) {
+  sim_host::Scenario scenario = sim_host::load_scenario("desk-shuttle");
+  scenario.camera.width_px = width_px;
+  scenario.camera.height_px = height_px;
+  algorithms::Pcg32 rng(7, 1);
+  const auto motion = sim_host::simulate_motion(scenario, 0.01, rng, nullptr);
+  const sim_host::SceneRenderer renderer(scenario);
+  Frames frames;
+  frames.width_px = width_px;
+  frames.height_px = height_px;
+  for (std::size_t i = 0; i < count; ++i) {
+    const auto& pose = motion[(i * 2 + 1) * motion.size() / (2 * count)].pose;
+    std::vector<std::uint8_t> rgb;
+    renderer.render(pose, rng, rgb);
+    // BT.601 limited range, the inverse of the decoder the firmware uses.
+    std::vector<std::uint8_t> yuyv(static_cast<std::size_t>(width_px) * height_px * 2U);
+    for (std::size_t p = 0; p + 1 < static_cast<std::size_t>(width_px) * height_px; p += 2) {
+      double u = 0, v = 0;
+      for (int k = 0; k < 2; ++k) {
+        const double r = rgb[(p + k) * 3], g = rgb[(p + k) * 3 + 1], b = rgb[(p + k) * 3 + 2];
+        yuyv[(p + k) * 2] = clamp_u8(16 + 0.257 * r + 0.504 * g + 0.098 * b);
+        u += 128 - 0.148 * r - 0.291 * g + 0.439 * b;
+        v += 128 + 0.439 * r - 0.368 * g - 0.071 * b;
+      }
+      yuyv[p * 2 + 1] = clamp_u8(u / 2);
+      yuyv[p * 2 + 3] = clamp_u8(v / 2);
+    }
+    frames.rgb.push_back(std::move(rgb));
+    frames.yuyv.push_back(std::move(yuyv));
+  }
+  return frames;
+}
+
+void synthetic_map(std::size_t samples, std::uint32_t width_px, std::uint32_t height_px,
+                   algorithms::MapFile& map) {
+  map = algorithms::MapFile{};
+  map.image_width_px = width_px;
+  map.image_height_px = height_px;
+  map.thresholds = firmware::default_config().thresholds;
+  auto& m = map.model;
+  m.sample_count = static_cast<std::uint32_t>(samples);
+  m.feature_count = 6;
+  for (std::uint8_t k = 0; k < 6; ++k) m.board_index[k] = k;
+  m.area_scale = 100.0F / static_cast<float>(width_px * height_px);
+  m.sigma_x = 0.1F;
+  m.sigma_y = 5.0F;
+  m.max_nearest_distance = 100.0F;
+  algorithms::Pcg32 rng(11, 2);
+  for (std::size_t i = 0; i < samples; ++i) {
+    for (std::size_t k = 0; k < 6; ++k) m.sample(i)[k] = static_cast<float>(rng.uniform(0.0, 3.0));
+    m.target_x_m[i] = static_cast<float>(rng.uniform(1.9, 2.3));
+    m.target_y_m[i] = static_cast<float>(rng.uniform(0.3, 1.7));
+  }
+}
+
+hal::CameraStatus MemoryCamera::acquire(hal::FrameView& frame, std::uint64_t) {
+  const std::size_t i = static_cast<std::size_t>(next_ % frames_.rgb.size());
+  frame.data = frames_.rgb[i].data();
+  frame.width_px = frames_.width_px;
+  frame.height_px = frames_.height_px;
+  frame.stride_bytes = frames_.width_px * 3U;
+  frame.format = hal::PixelFormat::kRgb24;
+  frame.timestamp_ns = 1000000000ULL + next_ * 33333333ULL;
+  frame.sequence = static_cast<std::uint32_t>(next_++);
+  return hal::CameraStatus::kFrame;
+}
+
+hal::EncoderStatus MemoryEncoders::read(std::uint64_t data_time_ns, hal::EncoderCounts& counts) {
+  left_ += 40;
+  right_ += 42;
+  counts = hal::EncoderCounts{left_, right_, 32, data_time_ns};
+  return hal::EncoderStatus::kFresh;
+}
+
+}  // namespace harmoloc::bench

@@ -1,0 +1,64 @@
+#!/usr/bin/env bash
+# Counts the instructions of each kernel with callgrind (deterministic for a given binary), prints
+# a table with instructions per pixel / per sample and the ratios to the OpenCV baseline, and with
+# --check fails if any kernel costs more than 10% over the committed baseline.
+#   instructions.sh HARMOLOC_INSTRUCTIONS BASELINE_FILE WORK_DIR [--check|--update]
+set -euo pipefail
+bin=$1 baseline=$2 work=$3 mode=${4:-}
+mkdir -p "$work"
+kernels=(
+  "seg_table 640" "seg_table_yuyv 640" "seg_rgb 320" "seg_rgb 640" "seg_rgb 1280"
+  "seg_rgb_opencv 640" "seg_yuyv 640" "seg_yuyv_opencv 640"
+  "harmonic 204" "harmonic 1024" "harmonic 4096"
+  "filter 256" "filter 1024" "filter 4096"
+  "cycle 320" "cycle 640"
+)
+repeat=4
+declare -A count
+for k in "${kernels[@]}"; do
+  set -- $k
+  out="$work/$1_$2.out"
+  valgrind --tool=callgrind --instr-atstart=no --callgrind-out-file="$out" "$bin" "$1" "$2" > /dev/null 2> "$work/$1_$2.log" \
+    || { cat "$work/$1_$2.log"; echo "FAIL: $k did not run under callgrind"; exit 1; }
+  total=$(awk '/^totals:/ {print $2; exit}' "$out")
+  count["$1 $2"]=$((total / repeat))
+done
+
+units() {  # per-pixel for frame kernels, per sample/particle otherwise
+  local name=$1 arg=$2
+  case $name in seg_*|cycle) echo $((arg * arg * 3 / 4));; *) echo "$arg";; esac
+}
+printf '%-18s %6s %14s %12s\n' kernel arg instructions per-unit
+for k in "${kernels[@]}"; do
+  set -- $k
+  n=${count["$1 $2"]}
+  printf '%-18s %6s %14d %12.2f\n' "$1" "$2" "$n" "$(echo "$n / $(units "$1" "$2")" | bc -l)"
+done
+ratio() { echo "scale=3; ${count[$1]} / ${count[$2]}" | bc -l; }
+echo "ratios (same binary, same frame, 640x480):"
+echo "  segmentation, colour table / OpenCV (RGB)   $(ratio 'seg_table 640' 'seg_rgb_opencv 640')"
+echo "  segmentation, colour table / OpenCV (YUYV)  $(ratio 'seg_table_yuyv 640' 'seg_yuyv_opencv 640')"
+echo "  segmentation, HSV arithmetic / OpenCV (RGB) $(ratio 'seg_rgb 640' 'seg_rgb_opencv 640')"
+echo "  whole cycle / OpenCV segmentation alone     $(ratio 'cycle 640' 'seg_rgb_opencv 640')"
+
+if [ "$mode" = "--update" ]; then
+  {
+    echo "# kernel arg instructions-per-run (tests/bench/instructions.sh --update; x86_64 host build)"
+    for k in "${kernels[@]}"; do echo "$k ${count[$k]}"; done
+  } > "$baseline"
+  echo "baseline written to $baseline"
+elif [ "$mode" = "--check" ]; then
+  [ -f "$baseline" ] || { echo "FAIL: no baseline $baseline"; exit 1; }
+  bad=0
+  while read -r name arg base; do
+    case $name in "#"*|"") continue;; *_opencv) continue;; esac  # OpenCV dispatches on the CPU: not ours to pin
+    now=${count["$name $arg"]:-}
+    [ -n "$now" ] || continue
+    if [ "$now" -gt $((base + base / 10)) ]; then
+      echo "REGRESSION: $name $arg costs $now instructions, baseline $base (+$(( (now - base) * 100 / base ))%)"
+      bad=1
+    fi
+  done < "$baseline"
+  [ $bad -eq 0 ] || exit 1
+  echo "OK: no kernel more than 10% above the baseline"
+fi
