@@ -1,6 +1,7 @@
 // harmoloc-train: trains the harmonic map from a recorded (or simulated) run and a few labels.
 #include <cstdio>
 #include <fstream>
+#include <memory>
 #include <sstream>
 
 #include <CLI/CLI.hpp>
@@ -63,7 +64,8 @@ int main(int argc, char** argv) {
         }
       }
     }
-    algorithms::MapFile& map = *new algorithms::MapFile();  // large; freed at exit
+    const auto map_storage = std::make_unique<algorithms::MapFile>();  // large: not on the stack
+    algorithms::MapFile& map = *map_storage;
     const sim_host::TrainReport r = sim_host::train_map(opt, map);
     const std::vector<std::uint8_t> bytes = algorithms::encode_map(map);
     std::ofstream f(out, std::ios::binary);

@@ -1,0 +1,318 @@
+#!/usr/bin/env python3
+"""Writes the committed seed corpora under tests/fuzz/corpus/<target>/.
+
+Seeds are small valid and invalid examples of each input. Valid ones come from the real tools
+where they exist (the e2e datasets and map in build/host/tests/e2e/, written by `./run test`;
+pass --e2e DIR to use another folder) and are otherwise written here by hand, following
+docs/*-format.md. Re-running replaces the generated files and leaves any other file alone (the
+fuzzer's own finds may be merged in with `-merge=1`, see README.md).
+
+usage: tests/fuzz/make_seeds.py [--e2e build/host/tests/e2e]
+"""
+
+import argparse
+import os
+import shutil
+import struct
+import sys
+import zlib
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(os.path.dirname(HERE))
+CORPUS = os.path.join(HERE, "corpus")
+
+
+def put(target, name, data):
+    d = os.path.join(CORPUS, target)
+    os.makedirs(d, exist_ok=True)
+    if isinstance(data, str):
+        data = data.encode()
+    assert len(data) < 100 * 1024, (target, name)
+    with open(os.path.join(d, name), "wb") as f:
+        f.write(data)
+
+
+def head_lines(path, n):
+    with open(path, "rb") as f:
+        return b"".join(f.readlines()[:n])
+
+
+# --- map files (docs/map-format.md) -------------------------------------------------------------
+
+def encode_map(width, height, thresholds, board_index, params, samples, pad=0):
+    out = bytearray(b"HARMOMAP")
+    out += struct.pack("<IIII", 1, width, height, len(thresholds))
+    for h0, h1, s, v0, v1 in thresholds:
+        out += struct.pack("<ffBBBB", h0, h1, s, v0, v1, pad)
+    out += struct.pack("<II", len(samples), len(board_index))
+    out += bytes(board_index)
+    out += struct.pack("<6f", *params)
+    for features, x, y in samples:
+        out += struct.pack("<%df" % len(features), *features)
+        out += struct.pack("<ff", x, y)
+    out += struct.pack("<I", zlib.crc32(bytes(out)) & 0xFFFFFFFF)
+    return bytes(out)
+
+
+def map_seeds(e2e):
+    red = (340.0, 15.0, 110, 60, 255)
+    green = (100.0, 145.0, 110, 60, 255)
+    small = encode_map(160, 120, [red, green], [0, 1], [100.0 / 19200, 0.5, 0.7, 0.01, 0.02, 3.0],
+                       [([0.0, 1.5], 2.1, 0.7), ([2.25, 0.5], 2.0, 1.3)])
+    one = encode_map(2, 2, [red], [0], [1.0, 1.0, 1.0, 0.0, 0.0, 1.0], [([0.0], 0.0, 0.0)])
+    seeds = {
+        "small.hmap": small,
+        "one-sample.hmap": one,
+        "truncated.hmap": small[:40],
+        "bad-magic.hmap": b"HARMOMAX" + small[8:],
+        "bad-version.hmap": small[:8] + struct.pack("<I", 2) + small[12:],
+        "bad-crc.hmap": small[:-1] + bytes([small[-1] ^ 0xFF]),
+        "trailing.hmap": encode_map(2, 2, [red], [0], [1.0, 1.0, 1.0, 0.0, 0.0, 1.0],
+                                    [([0.0], 0.0, 0.0)])[:-4] + b"\0\0\0\0" + b"\0\0\0\0",
+        "empty.hmap": b"",
+        "text.hmap": b"this is not a map, it is a text file saying so\n",
+    }
+    tiny = os.path.join(e2e, "tiny.hmap")
+    if os.path.exists(tiny):
+        with open(tiny, "rb") as f:
+            seeds["tiny-trained.hmap"] = f.read()
+    for target in ("map_decode", "map_roundtrip"):
+        for name, data in seeds.items():
+            put(target, name, data)
+
+
+# --- firmware config (docs/config-format.md) ----------------------------------------------------
+
+def config_seeds(e2e):
+    with open(os.path.join(ROOT, "docs", "examples", "harmoloc.toml"), "rb") as f:
+        put("config", "example.toml", f.read())
+    put("config", "empty.toml", "")
+    put("config", "cycle.toml", "[cycle]\nrate_hz = 30\nbudget_ms = 15.0\n"
+        "camera_timeout_ms = 250\nencoder_timeout_ms = 250\n")
+    put("config", "boards.toml",
+        '[[board]]\nname = "red"\nhue_deg = [340, 15]\nsaturation_min = 110\nvalue_min = 60\n'
+        'value_max = 255\n\n[[board]]\nname = "cyan"\nhue_deg = [170.5, 200]\n')
+    put("config", "odometry-can.toml",
+        "[odometry]\nwheel_radius_m = 0.05\ntrack_m = 0.3\nticks_per_rev = 4096\n"
+        "left_direction = 1\nright_direction = -1\n\n"
+        '[can]\ninterface = "can1"\nencoder_id = 0x181\nlength = 4\nleft_offset = 0\n'
+        'right_offset = 2\ncounter_bits = 16\nbyte_order = "big"\n')
+    put("config", "filter-link-rt.toml",
+        "[filter]\nparticles = 512\nseed = 7\nalpha = [0.1, 0.01, 0.1, 0.01]\nfix_sigma_m = 0.4\n"
+        "outlier_probability = 0.05\nresample_threshold = 0.5\ninit_position_sigma_m = 0.05\n"
+        "vision_only_speed_mps = 0.3\n\n[link]\nsystem_id = 1\ncomponent_id = 197\n"
+        "baud = 115200\nheartbeat_hz = 1.0\n\n[realtime]\nenabled = false\npriority = 80\n"
+        "cpu = -1\nlock_memory = false\nprefault_stack_kb = 256\n")
+    bad = {
+        "syntax.toml": "[cycle\nrate_hz = 30\n",
+        "typo.toml": "[cycle]\nrate_hz = 30\nbudget_sm = 15\n",
+        "range.toml": "[filter]\nparticles = 100000\n",
+        "rt.toml": "[realtime]\npriority = 120\n",
+        "type.toml": '[cycle]\nrate_hz = "fast"\n',
+        "board-not-table.toml": "board = [1, 2]\n",
+        "hue.toml": "[[board]]\nhue_deg = [400, nan]\n",
+    }
+    for name, text in bad.items():
+        put("config", "bad-" + name, text)
+
+
+# --- dataset metadata (docs/dataset-format.md) --------------------------------------------------
+
+METADATA = """format_version = 1
+name = "seed"
+seed = 1
+
+[camera]
+width_px = 160
+height_px = 120
+pixel_format = "rgb24"
+rate_hz = 30
+frames_index = "frames.csv"
+
+[encoders]
+log = "encoders.log"
+interface = "can0"
+can_id = 0x181
+length = 8
+left_offset = 0
+right_offset = 4
+counter_bits = 32
+byte_order = "little"
+
+[robot]
+wheel_radius_m = 0.05
+track_m = 0.3
+ticks_per_rev = 4096
+left_direction = 1
+right_direction = 1
+
+[ground_truth]
+file = "groundtruth.tum"
+"""
+
+
+def metadata_seeds(e2e):
+    put("metadata", "good.toml", METADATA)
+    put("metadata", "yuyv-16bit.toml",
+        METADATA.replace('"rgb24"', '"yuyv"').replace("length = 8", "length = 4")
+        .replace("right_offset = 4", "right_offset = 2").replace("counter_bits = 32",
+                                                                  "counter_bits = 16")
+        .replace('"little"', '"big"').replace("left_direction = 1", "left_direction = -1"))
+    put("metadata", "minimal.toml", "format_version = 1\n[camera]\nwidth_px = 2\nheight_px = 2\n"
+        "rate_hz = 1\n[robot]\nwheel_radius_m = 0.001\ntrack_m = 0.001\nticks_per_rev = 1\n")
+    put("metadata", "bad-version.toml", METADATA.replace("format_version = 1", "format_version = 2"))
+    put("metadata", "bad-odd-yuyv.toml",
+        METADATA.replace('"rgb24"', '"yuyv"').replace("width_px = 160", "width_px = 161"))
+    put("metadata", "bad-layout.toml", METADATA.replace("right_offset = 4", "right_offset = 2"))
+    put("metadata", "bad-syntax.toml", "format_version = 1\n[camera\n")
+    for sub in ("train", "wrap16"):
+        p = os.path.join(e2e, sub, "metadata.toml")
+        if os.path.exists(p):
+            shutil.copyfile(p, os.path.join(CORPUS, "metadata", "e2e-%s.toml" % sub))
+
+
+# --- frame index, PPM headers -------------------------------------------------------------------
+
+def frame_index_seeds(e2e):
+    put("frame_index", "good.csv", "timestamp_ns,file\n1767225600000000000,frames/000000.ppm\n"
+        "1767225600033333333,frames/000001.ppm\n1767225600066666666,frames/000002.yuv\n")
+    put("frame_index", "crlf-comments.csv",
+        "timestamp_ns,file\r\n# a comment\r\n\r\n1,a.ppm\r\n2,b/c.ppm\r\n")
+    put("frame_index", "no-header.csv", "10,x.ppm\n20,y.ppm\n")
+    put("frame_index", "empty.csv", "")
+    put("frame_index", "bad-order.csv", "timestamp_ns,file\n2,a.ppm\n1,b.ppm\n")
+    put("frame_index", "bad-escape.csv", "timestamp_ns,file\n1,../outside.ppm\n2,/abs.ppm\n")
+    put("frame_index", "bad-stamp.csv", "timestamp_ns,file\n99999999999999999999,a.ppm\n-1,b\n")
+    put("frame_index", "bad-nocomma.csv", "timestamp_ns,file\n1 a.ppm\n")
+    p = os.path.join(e2e, "train", "frames.csv")
+    if os.path.exists(p):
+        put("frame_index", "e2e-train.csv", head_lines(p, 40))
+
+    put("ppm_header", "good.ppm", b"P6\n160 120\n255\n" + bytes(48))
+    put("ppm_header", "comments.ppm", b"P6 # made by hand\n# another\n2\t1\r255 " + bytes(6))
+    put("ppm_header", "bad-p3.ppm", b"P3\n1 1\n255\n0 0 0\n")
+    put("ppm_header", "bad-16bit.ppm", b"P6\n1 1\n65535\n" + bytes(6))
+    put("ppm_header", "bad-zero.ppm", b"P6\n0 1\n255\n")
+    put("ppm_header", "bad-huge.ppm", b"P6\n1000001 1\n255\n")
+    put("ppm_header", "bad-truncated.ppm", b"P6\n160 12")
+    put("ppm_header", "bad-nows.ppm", b"P6\n1 1\n255")
+    frame = os.path.join(e2e, "train", "frames", "000000.ppm")
+    if os.path.exists(frame):
+        with open(frame, "rb") as f:
+            put("ppm_header", "e2e-frame-head.ppm", f.read(64))
+
+
+# --- candump logs -------------------------------------------------------------------------------
+
+def candump_seeds(e2e):
+    lines = {
+        "std.txt": "(1767225600.000000) can0 181#0011223344556677",
+        "ext.txt": "(1767225600.010000) vcan1 1FFFFFFF#DEADBEEF",
+        "empty-data.txt": "(0.000001) can0 7FF#",
+        "crlf.txt": "(12.345678)  can0  123#00FF \r",
+        "bad-fd.txt": "(1.000000) can0 181##0112233",
+        "bad-rtr.txt": "(1.000000) can0 181#R",
+        "bad-odd.txt": "(1.000000) can0 181#001",
+        "bad-stamp.txt": "(1.00000) can0 181#00",
+        "bad-id.txt": "(1.000000) can0 800#00",
+        "bad-iface.txt": "(1.000000)can0",
+    }
+    for name, line in lines.items():
+        put("candump_line", name, line)
+    log = "".join(l + "\n" for n, l in lines.items() if not n.startswith("bad"))
+    put("candump_log", "mixed.log", log)
+    put("candump_log", "empty.log", "")
+    put("candump_log", "bad-line.log", log + "garbage\n")
+    for sub in ("train", "wrap16"):
+        p = os.path.join(e2e, sub, "encoders.log")
+        if os.path.exists(p):
+            put("candump_log", "e2e-%s.log" % sub, head_lines(p, 40))
+
+
+# --- TUM ----------------------------------------------------------------------------------------
+
+def tum_seeds(e2e):
+    put("tum", "good.tum", "# t x y z qx qy qz qw\n"
+        "1767225600.000000 2.106169 0.701242 0 0 0 0.773745255 0.633496867\n"
+        "1767225600.033333 2.106169 0.701242 0 0 0 0.773745255 0.633496867\n\n"
+        "1767225600.066667 2.2 0.8 0 0 0 -0.5 0.866\n")
+    put("tum", "tabs-exp.tum", "\t1e0\t-1.5E-3 2 3 0 0 0 1\r\n2 +0 -0 0 0 0 1 0\n")
+    put("tum", "empty.tum", "")
+    put("tum", "bad-fields.tum", "1 2 3 4 5 6 7\n")
+    put("tum", "bad-extra.tum", "1 2 3 4 5 6 7 8 9\n")
+    put("tum", "bad-order.tum", "2 0 0 0 0 0 0 1\n1 0 0 0 0 0 0 1\n")
+    put("tum", "bad-inf.tum", "1 inf 0 0 0 0 0 1\n2 1e999 0 0 0 0 0 1\n")
+    for name in ("groundtruth.tum", "labels.tum"):
+        p = os.path.join(e2e, "train", name)
+        if os.path.exists(p):
+            put("tum", "e2e-" + name, head_lines(p, 40))
+
+
+# --- scenario files (docs/scenarios.md) ---------------------------------------------------------
+
+def scenario_seeds(e2e):
+    with open(os.path.join(ROOT, "docs", "scenarios.md")) as f:
+        doc = f.read()
+    start = doc.index("```toml\n") + len("```toml\n")
+    put("scenario", "docs-example.toml", doc[start:doc.index("```", start)])
+    put("scenario", "empty.toml", "")
+    put("scenario", "tiny-wrap16.toml", 'base = "tiny-wrap16"\nname = "w"\n[encoders]\n'
+        "counter_bits = 16\ninitial_left = 65000\n")
+    put("scenario", "boards.toml",
+        'base = "tiny"\n[[boards]]\nname = "a"\ncolour = [1, 2, 3]\ncentre = [1, 2, 0.5]\n'
+        "size = [0.2, 0.3]\nfacing_deg = -90\n\n[[boards]]\ncolour = [255, 255, 0]\n"
+        "centre = [2, 2.5, 1]\nsize = [0.5, 0.5]\n")
+    put("scenario", "bad-typo.toml", 'base = "tiny"\n[camera]\nwidht_px = 320\n')
+    put("scenario", "bad-base.toml", 'base = "no-such-scenario"\n')
+    put("scenario", "bad-odd.toml", "[camera]\nwidth_px = 161\n")
+    put("scenario", "bad-waypoints.toml", "[route]\nwaypoints = [[1, 2]]\n")
+    put("scenario", "bad-colour.toml", "[[boards]]\ncolour = [256, 0, 0]\ncentre = [0, 0, 0]\n"
+        "size = [1, 1]\n")
+    p = os.path.join(e2e, "train", "scenario.toml")
+    if os.path.exists(p):
+        shutil.copyfile(p, os.path.join(CORPUS, "scenario", "e2e-train.toml"))
+
+
+# --- segmentation frames (layout in segment_fuzz.cpp) -------------------------------------------
+
+def segment_seed(yuyv, boards, width, height, stride, pixels):
+    head = bytes([(boards << 1) | (1 if yuyv else 0)]) + struct.pack("<HHH", width, height, stride)
+    windows = [(340, 15, 110, 60, 255), (100, 145, 110, 60, 255), (215, 250, 110, 60, 255),
+               (45, 70, 110, 60, 255), (285, 320, 110, 60, 255), (170, 200, 110, 60, 255),
+               (0, 360, 0, 0, 255), (180, 180, 255, 255, 255)]
+    for h0, h1, s, v0, v1 in windows:
+        head += struct.pack("<HHBBB", h0 * 20, h1 * 20, s, v0, v1)
+    return head + pixels
+
+
+def segment_seeds(e2e):
+    rgb = bytes([220, 30, 30, 30, 180, 40, 30, 60, 220, 230, 210, 30, 200, 40, 190, 30, 190, 200,
+                 0, 0, 0, 255, 255, 255]) * 4
+    put("segment", "rgb-8x4.bin", segment_seed(False, 6, 8, 4, 24, rgb[:96]))
+    put("segment", "rgb-odd-stride.bin", segment_seed(False, 8, 3, 5, 11, bytes(range(0, 255, 5))))
+    yuyv = bytes([81, 90, 81, 240, 145, 54, 145, 34, 41, 240, 41, 110, 16, 128, 235, 128]) * 4
+    put("segment", "yuyv-8x4.bin", segment_seed(True, 6, 8, 4, 16, yuyv))
+    put("segment", "yuyv-odd.bin", segment_seed(True, 3, 5, 2, 12, yuyv[:24]))
+    put("segment", "zero-stride.bin", segment_seed(False, 1, 4, 100, 0, rgb[:12]))
+    put("segment", "empty.bin", segment_seed(True, 0, 0, 0, 0, b""))
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--e2e", default=os.path.join(ROOT, "build", "host", "tests", "e2e"),
+                    help="folder with the e2e datasets and tiny.hmap (optional)")
+    args = ap.parse_args()
+    if not os.path.isdir(args.e2e):
+        print("note: %s not found: only the hand-written seeds" % args.e2e, file=sys.stderr)
+    for make in (map_seeds, config_seeds, metadata_seeds, frame_index_seeds, candump_seeds,
+                 tum_seeds, scenario_seeds, segment_seeds):
+        make(args.e2e)
+    total = 0
+    for d, _, files in os.walk(CORPUS):
+        for f in files:
+            total += os.path.getsize(os.path.join(d, f))
+    print("corpus: %d bytes in %s" % (total, CORPUS))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,63 @@
+// Fuzz target: the map codec's round trip. The input gets its trailing CRC-32 recomputed (so
+// the fuzzer reaches the body); when it decodes, encode_map must give back exactly the same
+// bytes, and decoding those again must give the same map. A difference means the decoder
+// accepts something the format does not define (an ignored field, a non-canonical encoding).
+
+#include <cstdint>
+#include <cstring>
+#include <vector>
+
+#include "fuzz_common.hpp"
+#include "harmoloc/algorithms/crc32.hpp"
+#include "harmoloc/algorithms/map_codec.hpp"
+
+using namespace harmoloc::algorithms;
+
+namespace {
+
+MapFile g_map;    // ~164 KiB each: static
+MapFile g_again;
+
+bool same_model(const MapFile& a, const MapFile& b) {
+  const HarmonicModel& x = a.model;
+  const HarmonicModel& y = b.model;
+  if (a.image_width_px != b.image_width_px || a.image_height_px != b.image_height_px) return false;
+  if (!(a.thresholds == b.thresholds)) return false;
+  if (x.sample_count != y.sample_count || x.feature_count != y.feature_count) return false;
+  // Bitwise, so that -0.0 and NaN payloads count (the format stores bits).
+  auto same_bits = [](const void* p, const void* q, std::size_t n) {
+    return std::memcmp(p, q, n) == 0;
+  };
+  if (!same_bits(x.board_index.data(), y.board_index.data(), x.feature_count)) return false;
+  const float xs[] = {x.area_scale, x.sigma_x, x.sigma_y, x.gamma_x, x.gamma_y,
+                      x.max_nearest_distance};
+  const float ys[] = {y.area_scale, y.sigma_x, y.sigma_y, y.gamma_x, y.gamma_y,
+                      y.max_nearest_distance};
+  if (!same_bits(xs, ys, sizeof xs)) return false;
+  for (std::size_t i = 0; i < x.sample_count; ++i) {
+    if (!same_bits(x.sample(i), y.sample(i), x.feature_count * sizeof(float))) return false;
+    if (!same_bits(&x.target_x_m[i], &y.target_x_m[i], sizeof(float))) return false;
+    if (!same_bits(&x.target_y_m[i], &y.target_y_m[i], sizeof(float))) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  if (size < 4) return 0;
+  std::vector<std::uint8_t> input(data, data + size);
+  const std::uint32_t crc = crc32(input.data(), size - 4);
+  for (int i = 0; i < 4; ++i) input[size - 4 + i] = static_cast<std::uint8_t>(crc >> (8 * i));
+  if (decode_map(input.data(), input.size(), g_map)) return 0;
+
+  const std::vector<std::uint8_t> encoded = encode_map(g_map);
+  HARMOLOC_FUZZ_CHECK(encoded.size() == input.size(),
+                      "a decoded map re-encodes to a different length");
+  HARMOLOC_FUZZ_CHECK(std::memcmp(encoded.data(), input.data(), input.size()) == 0,
+                      "a decoded map re-encodes to different bytes");
+  HARMOLOC_FUZZ_CHECK(!decode_map(encoded.data(), encoded.size(), g_again),
+                      "an encoded map does not decode");
+  HARMOLOC_FUZZ_CHECK(same_model(g_map, g_again), "decode(encode(map)) differs from map");
+  return 0;
+}
