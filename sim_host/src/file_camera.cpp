@@ -84,7 +84,17 @@ FileCamera::FileCamera(const std::string& dataset_dir, const DatasetMetadata& me
   view_.data = buffer_.data() + data_offset_;
 }
 
+std::uint64_t FileCamera::next_timestamp_ns() const {
+  if (next_ < stamps_.size()) return stamps_[next_] + loop_ * span_ns_;
+  if (loop_ + 1 < loops_ && !stamps_.empty()) return stamps_.front() + (loop_ + 1) * span_ns_;
+  return 0;
+}
+
 hal::CameraStatus FileCamera::acquire(hal::FrameView& frame, std::uint64_t /*deadline_ns*/) {
+  if (next_ >= paths_.size() && loop_ + 1 < loops_) {
+    ++loop_;
+    next_ = 0;
+  }
   if (next_ >= paths_.size()) return hal::CameraStatus::kEnded;
   const std::size_t i = next_++;
   const long n = read_file(paths_[i].c_str(), buffer_.data(), buffer_.size());
@@ -100,8 +110,8 @@ hal::CameraStatus FileCamera::acquire(hal::FrameView& frame, std::uint64_t /*dea
     return hal::CameraStatus::kCorrupt;
   }
   ++counters_.frames;
-  view_.timestamp_ns = stamps_[i];
-  view_.sequence = static_cast<std::uint32_t>(i);
+  view_.timestamp_ns = stamps_[i] + loop_ * span_ns_;
+  view_.sequence = static_cast<std::uint32_t>(loop_ * paths_.size() + i);
   frame = view_;
   return hal::CameraStatus::kFrame;
 }

@@ -38,3 +38,7 @@ less_than "$RMSE_BOUND_CM" "$bad" "the bound must catch a flipped wheel directio
 # The budget command: this run fits; against an absurd budget it must not.
 "$BIN/harmoloc-budget" "$out/stats.json" --check
 if "$BIN/harmoloc-budget" "$out/stats.json" --budget-ms 0.001 --check > /dev/null; then fail "harmoloc-budget --check passed a 1 us budget"; fi
+# --loop: two passes give twice the cycles, and the first pass is the single run, byte for byte.
+"$BIN/harmoloc" --dataset "$WORK/test" --map "$WORK/tiny.hmap" --loop 2 --trajectory "$out/loop2.tum" --stats "$out/loop2.json" --quiet > /dev/null
+[ "$(json_number "$out/loop2.json" cycles)" -eq $((2 * frames)) ] || fail "--loop 2 did not run two passes"
+[ "$(head -n "$(wc -l < "$out/est.tum")" "$out/loop2.tum" | cmp - "$out/est.tum" && echo same)" = same ] || fail "the first pass of --loop 2 differs from a single run"

@@ -27,6 +27,13 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     HARMOLOC_FUZZ_CHECK(!reason.empty(), "rejected without a reason");
     return 0;
   }
+#ifdef HARMOLOC_FUZZ_SKIP_KNOWN_FINDINGS
+  // Known finding (regressions/candump_line/seconds-overflow.txt): timestamps from 2^64 ns
+  // (18446744073.709551616 s) on wrap around silently. Skip lines with that many seconds.
+  // The line parsed, so it starts with '(' and 1..12 second digits up to the dot.
+  const std::string seconds = line.substr(1, line.find('.') - 1);
+  if (seconds.size() > 11 || (seconds.size() == 11 && seconds >= "18446744073")) return 0;
+#endif
   HARMOLOC_FUZZ_CHECK(frame.length <= 8, "more than 8 data bytes");
   HARMOLOC_FUZZ_CHECK(frame.extended ? frame.id <= 0x1FFFFFFFU : frame.id <= 0x7FFU,
                       "CAN ID out of range");

@@ -41,6 +41,11 @@ void check_decoded(const MapFile& map) {
     areas.pixels.fill(fill);
     areas_to_features(m, areas, features);
     const HarmonicFix fix = harmonic_query(m, features);
+#ifdef HARMOLOC_FUZZ_SKIP_KNOWN_FINDINGS
+    // Known finding (regressions/map_decode/nan-fix-at-known-place.hmap): when every squared
+    // distance overflows float, harmonic_query's nearest distance stays at sqrt(FLT_MAX).
+    if (fix.nearest_distance >= 1.8e19) continue;
+#endif
     if (fix.known_place) {
       HARMOLOC_FUZZ_CHECK(std::isfinite(fix.x_m) && std::isfinite(fix.y_m),
                           "known-place fix is not finite");

@@ -51,6 +51,13 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   for (int i = 0; i < 4; ++i) input[size - 4 + i] = static_cast<std::uint8_t>(crc >> (8 * i));
   if (decode_map(input.data(), input.size(), g_map)) return 0;
 
+#ifdef HARMOLOC_FUZZ_SKIP_KNOWN_FINDINGS
+  // Known finding (regressions/map_roundtrip/nonzero-pad.hmap): decode_map ignores the pad byte
+  // of each threshold, which docs/map-format.md says is 0. Compare as if it were 0.
+  for (std::size_t i = 0; i < g_map.thresholds.count; ++i) input[24 + 12 * i + 11] = 0;
+  const std::uint32_t crc0 = crc32(input.data(), size - 4);
+  for (int i = 0; i < 4; ++i) input[size - 4 + i] = static_cast<std::uint8_t>(crc0 >> (8 * i));
+#endif
   const std::vector<std::uint8_t> encoded = encode_map(g_map);
   HARMOLOC_FUZZ_CHECK(encoded.size() == input.size(),
                       "a decoded map re-encodes to a different length");

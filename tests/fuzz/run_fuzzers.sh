@@ -111,7 +111,8 @@ for t in "${TARGETS[@]}"; do
   result=""
   mapfile -t repro < <(find "$HERE/regressions/$t" -type f ! -name '*.md' 2> /dev/null | sort)
   if [ ${#repro[@]} -gt 0 ]; then
-    if ! "$bin" -timeout=5 -rss_limit_mb=2048 "${repro[@]}" >> "$log" 2>&1; then
+    if ! "$bin" -timeout=5 -rss_limit_mb=2048 -artifact_prefix="$artifacts/" "${repro[@]}" \
+      >> "$log" 2>&1; then
       result="REGRESSION $(classify "$log")"
     fi
   fi
@@ -138,12 +139,12 @@ for t in "${TARGETS[@]}"; do
     # The outer timeout only catches a fuzzer that hangs outside an input (libFuzzer's own
     # -timeout covers each input).
     timeout --signal=KILL $((seconds + 120)) "$bin" "${args[@]}" "$corpus" >> "$log" 2>&1 || status=$?
-    execs=$(grep -o 'stat::number_of_executed_units: [0-9]*' "$log" | tail -1 | awk '{print $2}')
-    rate=$(grep -o 'stat::average_exec_per_sec: [0-9]*' "$log" | tail -1 | awk '{print $2}')
-    cov=$(grep -o 'cov: [0-9]* ft: [0-9]*' "$log" | tail -1 | awk '{print $2 "/" $4}')
+    execs=$(grep -oE 'stat::number_of_executed_units: +[0-9]+' "$log" | tail -1 | awk '{print $2}' || true)
+    rate=$(grep -oE 'stat::average_exec_per_sec: +[0-9]+' "$log" | tail -1 | awk '{print $2}' || true)
+    cov=$(grep -o 'cov: [0-9]* ft: [0-9]*' "$log" | tail -1 | awk '{print $2 "/" $4}' || true)
     if [ -z "$execs" ]; then  # a crash skips the final stats; take the last status line
-      execs=$(grep -o '^#[0-9]*' "$log" | tail -1 | tr -d '#')
-      rate=$(grep -o 'exec/s: [0-9]*' "$log" | tail -1 | awk '{print $2}')
+      execs=$(grep -o '^#[0-9]*' "$log" | tail -1 | tr -d '#' || true)
+      rate=$(grep -o 'exec/s: [0-9]*' "$log" | tail -1 | awk '{print $2}' || true)
     fi
     if [ "$status" -eq 0 ]; then
       result=ok
@@ -155,10 +156,12 @@ for t in "${TARGETS[@]}"; do
   fi
   if [ "$result" != ok ]; then
     failed=1
-    unit=$(grep -o "Test unit written to [^ ]*" "$log" | tail -1 | awk '{print $5}')
+    unit=$(grep -o "Test unit written to [^ ]*" "$log" | tail -1 | awk '{print $5}' || true)
     [ -n "$unit" ] && result="$result -> ${unit#"$ROOT"/}"
-    echo "---- $t: $result (log: ${log#"$ROOT"/})" >&2
-    grep -m 12 -E 'ERROR|FINDING|runtime error|#[0-9] 0x' "$log" >&2 || true
+    echo "---- $t: $result (log: ${log#"$ROOT"/})"
+    { grep -E 'ERROR:|FINDING|runtime error|Assertion|SUMMARY' "$log" | grep -v 'deadly signal' | head -4
+      grep -E "^ +#[0-9]+ 0x[0-9a-f]+ in .* $ROOT/" "$log" | grep -v "/tests/fuzz/fuzz_common" | head -6
+    } | sed 's/^/    /' || true
   fi
   rows+=("$(printf '%-14s %12s %8s %14s  %s' "$t" "${execs:--}" "${rate:--}" "${cov:--}" "$result")")
 done

@@ -1,6 +1,7 @@
 // harmoloc for the host board: the firmware's cycle with file-backed fakes of the camera and the
 // encoder bus (a dataset folder), the pose link into a file or a serial device (a pty works).
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -35,6 +36,29 @@ int fail(const std::string& why) {
 
 sim_host::TumWriter g_trajectory, g_fixes;
 
+// Resident and peak memory (kB) from /proc/self/status; -1 where unavailable.
+void read_memory(long& rss_kb, long& peak_kb) {
+  rss_kb = peak_kb = -1;
+  std::FILE* f = std::fopen("/proc/self/status", "r");
+  if (f == nullptr) return;
+  char line[256];
+  while (std::fgets(line, sizeof line, f) != nullptr) {
+    if (std::strncmp(line, "VmRSS:", 6) == 0) rss_kb = std::strtol(line + 6, nullptr, 10);
+    if (std::strncmp(line, "VmHWM:", 6) == 0) peak_kb = std::strtol(line + 6, nullptr, 10);
+  }
+  std::fclose(f);
+}
+
+long count_open_fds() {
+  std::error_code ec;
+  long n = 0;
+  for (auto it = std::filesystem::directory_iterator("/proc/self/fd", ec); !ec && it != std::filesystem::directory_iterator();
+       it.increment(ec)) {
+    ++n;
+  }
+  return ec ? -1 : n - 1;  // the iterator's own descriptor
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -48,6 +72,7 @@ int main(int argc, char** argv) {
       "harmoloc"};
   std::string dataset, map_path, config_path, trajectory_path, link_path, stats_path, fixes_path;
   bool realtime = false, quiet = false;
+  std::uint32_t loops = 1;
   app.add_option("--dataset", dataset, "dataset folder (metadata.toml, frames.csv, encoders.log)")
       ->required();
   app.add_option("--map", map_path, "map file from harmoloc-train")->required();
@@ -62,6 +87,8 @@ int main(int argc, char** argv) {
                  "write the harmonic localizer's own fixes here (TUM), for comparison");
   app.add_flag("--realtime", realtime,
                "pace the cycle at the recording's rate instead of as fast as possible");
+  app.add_option("--loop", loops, "replay the dataset this many times back to back (soak runs); time and the\n"
+                                  "encoder counters run on across passes")->check(CLI::Range(1U, 1000000U));
   app.add_flag("--quiet", quiet, "no progress output");
   CLI11_PARSE(app, argc, argv);
 
@@ -86,6 +113,14 @@ int main(int argc, char** argv) {
     camera = std::make_unique<sim_host::FileCamera>(dataset, meta);
     encoders = std::make_unique<sim_host::LogEncoders>(
         (std::filesystem::path(dataset) / meta.encoder_log).string(), config.can_layout);
+    if (loops > 1) {
+      // One pass lasts from the first to the last record, plus one frame period.
+      const std::uint64_t first = std::min(camera->first_timestamp_ns(), encoders->first_timestamp_ns());
+      const std::uint64_t last = std::max(camera->last_timestamp_ns(), encoders->last_timestamp_ns());
+      const auto period = static_cast<std::uint64_t>(1e9 / meta.frame_rate_hz);
+      camera->set_loops(loops, last - first + period);
+      encoders->set_loops(loops, last - first + period);
+    }
     if (const std::string e =
             link.open(link_path.empty() ? "/dev/null" : link_path, config.link.baud);
         !e.empty()) {
@@ -122,6 +157,11 @@ int main(int argc, char** argv) {
                  config.filter.particles, realtime ? ", real-time pacing" : "");
   }
 
+  firmware::RunCounters run;
+  long unused_peak = 0;
+  read_memory(run.rss_kb_start, unused_peak);
+  run.open_fds_start = count_open_fds();
+
   // ---- the cycle ----
   const std::uint64_t wall_start = clock.now_ns();
   const std::uint64_t data_start = camera->first_timestamp_ns();
@@ -145,10 +185,11 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "\r  cycle %zu/%zu", done, camera->frame_count());
     }
   }
+  read_memory(run.rss_kb_end, run.peak_rss_kb);  // before the outputs are closed
+  run.open_fds_end = count_open_fds();
   if (!quiet) std::fprintf(stderr, "\r  cycle %zu/%zu\n", done, camera->frame_count());
   if (!g_trajectory.close() || !g_fixes.close()) return fail("writing the trajectory failed");
 
-  firmware::RunCounters run;
   run.board = "host";
   run.rate_hz = config.cycle.rate_hz;
   run.camera = camera->counters();

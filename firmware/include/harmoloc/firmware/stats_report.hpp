@@ -16,6 +16,9 @@ struct RunCounters {
   hal::LinkCounters link;
   /// How late the cycle woke after its absolute deadline (paced runs only; nullptr otherwise).
   const LatencyHistogram* wakeup_latency = nullptr;
+  /// Process resources after start-up and at the end (negative: not measured).
+  long rss_kb_start = -1, rss_kb_end = -1, peak_rss_kb = -1;
+  long open_fds_start = -1, open_fds_end = -1;
 };
 
 std::string stats_json(const LocalizationCycle& cycle, const RunCounters& run);

@@ -22,10 +22,17 @@ class FileCamera final : public hal::Camera {
   void release() override {}
   hal::CameraCounters counters() const override { return counters_; }
 
-  std::size_t frame_count() const { return paths_.size(); }
+  /// Frames in the recording times the number of passes.
+  std::size_t frame_count() const { return paths_.size() * loops_; }
   /// Timestamp of the next frame acquire() will return (valid while frames remain).
-  std::uint64_t next_timestamp_ns() const { return next_ < stamps_.size() ? stamps_[next_] : 0; }
+  std::uint64_t next_timestamp_ns() const;
   std::uint64_t first_timestamp_ns() const { return stamps_.empty() ? 0 : stamps_.front(); }
+  std::uint64_t last_timestamp_ns() const { return stamps_.empty() ? 0 : stamps_.back(); }
+  /// Replays the recording @p loops times; pass k is shifted by k x @p span_ns, so time runs on.
+  void set_loops(std::uint32_t loops, std::uint64_t span_ns) {
+    loops_ = loops == 0 ? 1 : loops;
+    span_ns_ = span_ns;
+  }
 
  private:
   std::vector<std::string> paths_;
@@ -34,6 +41,9 @@ class FileCamera final : public hal::Camera {
   std::size_t data_offset_ = 0;  // where pixels start in a PPM (all frames share the header size)
   std::size_t file_size_ = 0;
   std::size_t next_ = 0;
+  std::uint32_t loops_ = 1;
+  std::uint32_t loop_ = 0;
+  std::uint64_t span_ns_ = 0;
   hal::FrameView view_{};
   hal::CameraCounters counters_{};
 };
