@@ -37,10 +37,12 @@ inline const std::string& scratch_dir() {
   return dir;
 }
 
-/// Replaces @p path's content with @p data (truncating). Aborts if the write fails: a fuzzer that
+/// Replaces @p path's content with @p data. Aborts if the write fails: a fuzzer that
 /// silently tests a stale file would report nothing while testing nothing.
 inline void write_file(const std::string& path, const std::uint8_t* data, std::size_t size) {
-  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
+  // No O_TRUNC: ext4 (auto_da_alloc) flushes a file truncated to 0 and rewritten on close,
+  // which made each run wait for the disk. Overwrite, then cut to size.
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_CLOEXEC, 0600);
   if (fd < 0) {
     std::perror(path.c_str());
     std::abort();
@@ -53,6 +55,10 @@ inline void write_file(const std::string& path, const std::uint8_t* data, std::s
       std::abort();
     }
     done += static_cast<std::size_t>(n);
+  }
+  if (::ftruncate(fd, static_cast<off_t>(size)) != 0) {
+    std::perror(path.c_str());
+    std::abort();
   }
   ::close(fd);
 }
