@@ -25,11 +25,14 @@ HarmonicFix harmonic_query(const HarmonicModel& model,
   const std::size_t d = model.feature_count;
   if (n == 0 || d == 0) return fix;
 
-  float d2_min = std::numeric_limits<float>::max();
+  float d2_min = std::numeric_limits<float>::infinity();
   for (std::size_t j = 0; j < n; ++j) {
     const float d2 = squared_distance(features.data(), model.sample(j), d);
     if (d2 < d2_min) d2_min = d2;
   }
+
+  fix.nearest_distance = std::sqrt(static_cast<double>(d2_min));
+  if (!std::isfinite(d2_min)) return fix;  // distances overflowed: not a place on this map
 
   double sum_wx = 0.0, sum_wy = 0.0, sum_wx_fx = 0.0, sum_wy_fy = 0.0;
   const float sx = model.sigma_x;
@@ -46,12 +49,11 @@ HarmonicFix harmonic_query(const HarmonicModel& model,
   // The nearest sample has weight 1, so both sums are >= 1.
   fix.x_m = sum_wx_fx / sum_wx;
   fix.y_m = sum_wy_fy / sum_wy;
-  fix.nearest_distance = std::sqrt(static_cast<double>(d2_min));
 
   bool any_board = false;
   for (std::size_t k = 0; k < d; ++k) any_board = any_board || features[k] > 0.0F;
-  fix.known_place =
-      any_board && fix.nearest_distance <= static_cast<double>(model.max_nearest_distance);
+  fix.known_place = any_board && std::isfinite(fix.x_m) && std::isfinite(fix.y_m) &&
+                    fix.nearest_distance <= static_cast<double>(model.max_nearest_distance);
   return fix;
 }
 

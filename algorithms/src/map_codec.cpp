@@ -145,6 +145,7 @@ MapError decode_map(const std::uint8_t* data, std::size_t size, MapFile& map) {
         !r.u8(t.value_max, "threshold") || !r.u8(pad, "threshold")) {
       return r.error;
     }
+    if (pad != 0) return MapError{"threshold padding byte is not zero", r.pos()};
     if (!(t.hue_min_deg >= 0.0F && t.hue_min_deg <= 360.0F && t.hue_max_deg >= 0.0F &&
           t.hue_max_deg <= 360.0F)) {
       return MapError{"threshold hue outside 0..360 degrees", r.pos()};
@@ -173,6 +174,12 @@ MapError decode_map(const std::uint8_t* data, std::size_t size, MapFile& map) {
       !finite_positive(m.sigma_y) || !finite_positive(m.max_nearest_distance) ||
       !std::isfinite(m.gamma_x) || !std::isfinite(m.gamma_y)) {
     return MapError{"model parameter not a finite positive number", r.pos()};
+  }
+  // Features are percent of the frame; anything far beyond cannot come from a real camera and
+  // would overflow the distances in float.
+  if (m.area_scale > 1.0e3F || m.max_nearest_distance > 1.0e4F || m.sigma_x > 1.0e9F ||
+      m.sigma_y > 1.0e9F) {
+    return MapError{"model parameter out of range", r.pos()};
   }
   const std::size_t record = (m.feature_count + 2U) * 4U;
   if (!r.need(static_cast<std::size_t>(m.sample_count) * record, "samples")) {

@@ -74,8 +74,9 @@ std::string stats_json(const LocalizationCycle& cycle, const RunCounters& run) {
       << ", \"p999_us\": " << us(w.quantile_ns(0.999)) << ", \"max_us\": " << us(w.max_ns()) << "}";
   }
   if (run.rss_kb_end >= 0) {
-    o << ",\n  \"resources\": {\"rss_kb_start\": " << run.rss_kb_start << ", \"rss_kb_end\": " << run.rss_kb_end
-      << ", \"peak_rss_kb\": " << run.peak_rss_kb << ", \"open_fds_start\": " << run.open_fds_start
+    o << ",\n  \"resources\": {\"rss_kb_start\": " << run.rss_kb_start
+      << ", \"rss_kb_end\": " << run.rss_kb_end << ", \"peak_rss_kb\": " << run.peak_rss_kb
+      << ", \"open_fds_start\": " << run.open_fds_start
       << ", \"open_fds_end\": " << run.open_fds_end << "}";
   }
   o << "\n}\n";

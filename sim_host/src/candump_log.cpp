@@ -50,6 +50,10 @@ bool parse_candump_line(const std::string& line, CanFrame& frame, std::string& r
     else
       usec = usec * 10U + static_cast<std::uint64_t>(stamp[i] - '0');
   }
+  if (sec > 18446744072ULL) {  // sec * 1e9 must fit in 64 bits of nanoseconds
+    reason = "timestamp out of range";
+    return false;
+  }
   pos = close + 1;
   while (pos < line.size() && line[pos] == ' ') ++pos;
   const auto iface_end = line.find(' ', pos);

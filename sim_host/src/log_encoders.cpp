@@ -33,13 +33,15 @@ void LogEncoders::set_loops(std::uint32_t loops, std::uint64_t span_ns) {
 
 hal::EncoderStatus LogEncoders::read(std::uint64_t data_time_ns, hal::EncoderCounts& counts) {
   bool fresh = false;
-  const std::uint32_t mask = layout_.counter_bits >= 32 ? 0xFFFFFFFFU : (1U << layout_.counter_bits) - 1U;
+  const std::uint32_t mask =
+      layout_.counter_bits >= 32 ? 0xFFFFFFFFU : (1U << layout_.counter_bits) - 1U;
   for (;;) {
     if (next_ >= frames_.size() && loop_ + 1 < loops_) {
       ++loop_;
       next_ = 0;
     }
-    if (next_ >= frames_.size() || frames_[next_].timestamp_ns + loop_ * span_ns_ > data_time_ns) break;
+    if (next_ >= frames_.size() || frames_[next_].timestamp_ns + loop_ * span_ns_ > data_time_ns)
+      break;
     const algorithms::CanFrame& f = frames_[next_++];
     std::uint32_t left = 0, right = 0;
     switch (algorithms::decode_encoder_frame(layout_, f, left, right)) {
@@ -60,7 +62,8 @@ hal::EncoderStatus LogEncoders::read(std::uint64_t data_time_ns, hal::EncoderCou
     }
   }
   if (fresh) return hal::EncoderStatus::kFresh;
-  return next_ >= frames_.size() && loop_ + 1 >= loops_ ? hal::EncoderStatus::kEnded : hal::EncoderStatus::kNoData;
+  return next_ >= frames_.size() && loop_ + 1 >= loops_ ? hal::EncoderStatus::kEnded
+                                                        : hal::EncoderStatus::kNoData;
 }
 
 }  // namespace harmoloc::sim_host

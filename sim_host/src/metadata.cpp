@@ -8,6 +8,8 @@
 
 #include <toml++/toml.h>
 
+#include "toml_text.hpp"
+
 namespace harmoloc::sim_host {
 
 namespace {
@@ -34,7 +36,8 @@ T number(const toml::table& t, const char* section, const char* key, T lo, T hi,
   }
   if (!(v >= static_cast<double>(lo) && v <= static_cast<double>(hi))) {
     std::ostringstream s;
-    s << section << "." << key << " = " << v << " is outside " << lo << ".." << hi;
+    s << section << "." << key << " = " << v << " is outside " << static_cast<double>(lo) << ".."
+      << static_cast<double>(hi);
     fail(s.str());
   }
   return static_cast<T>(v);
@@ -69,7 +72,9 @@ DatasetMetadata read_metadata(const std::string& dataset_dir) {
   if (*version != 1)
     fail("format_version " + std::to_string(*version) + " is not supported (expected 1)");
   m.name = t["name"].value_or(std::string{});
-  m.seed = static_cast<std::uint64_t>(t["seed"].value_or(std::int64_t{0}));
+  const std::int64_t seed = t["seed"].value_or(std::int64_t{0});
+  if (seed < 0) fail("seed must not be negative");
+  m.seed = static_cast<std::uint64_t>(seed);
 
   m.image_width_px = number<std::uint32_t>(t, "camera", "width_px", 2, 8192, 0, true);
   m.image_height_px = number<std::uint32_t>(t, "camera", "height_px", 2, 8192, 0, true);
@@ -128,7 +133,7 @@ void write_metadata(const std::string& dataset_dir, const DatasetMetadata& m) {
   std::snprintf(id, sizeof id, "0x%X", m.encoder_layout.id);
   out << "# harmoloc dataset metadata (schema: docs/dataset-format.md)\n"
       << "format_version = 1\n"
-      << "name = \"" << m.name << "\"\n"
+      << "name = " << toml_string(m.name) << "\n"
       << "seed = " << m.seed << "\n\n"
       << "[camera]\n"
       << "width_px = " << m.image_width_px << "\n"
@@ -136,10 +141,10 @@ void write_metadata(const std::string& dataset_dir, const DatasetMetadata& m) {
       << "pixel_format = \"" << (m.pixel_format == hal::PixelFormat::kRgb24 ? "rgb24" : "yuyv")
       << "\"\n"
       << "rate_hz = " << m.frame_rate_hz << "\n"
-      << "frames_index = \"" << m.frames_index << "\"\n\n"
+      << "frames_index = " << toml_string(m.frames_index) << "\n\n"
       << "[encoders]\n"
-      << "log = \"" << m.encoder_log << "\"\n"
-      << "interface = \"" << m.can_interface << "\"\n"
+      << "log = " << toml_string(m.encoder_log) << "\n"
+      << "interface = " << toml_string(m.can_interface) << "\n"
       << "can_id = " << id << "\n"
       << "length = " << int{m.encoder_layout.length} << "\n"
       << "left_offset = " << int{m.encoder_layout.left_offset} << "\n"
@@ -154,7 +159,8 @@ void write_metadata(const std::string& dataset_dir, const DatasetMetadata& m) {
       << "ticks_per_rev = " << m.geometry.ticks_per_rev << "\n"
       << "left_direction = " << m.geometry.left_direction << "\n"
       << "right_direction = " << m.geometry.right_direction << "\n";
-  if (!m.ground_truth.empty()) out << "\n[ground_truth]\nfile = \"" << m.ground_truth << "\"\n";
+  if (!m.ground_truth.empty())
+    out << "\n[ground_truth]\nfile = " << toml_string(m.ground_truth) << "\n";
   if (!out) throw std::runtime_error(path + ": write failed");
 }
 

@@ -7,6 +7,8 @@
 
 #include <toml++/toml.h>
 
+#include "toml_text.hpp"
+
 namespace harmoloc::sim_host {
 
 namespace {
@@ -110,7 +112,9 @@ std::vector<double> numbers(const toml::node* n, std::size_t count, const std::s
   return out;
 }
 
-Scenario from_file(const std::string& file) {
+Scenario load_scenario_at_depth(const std::string& name_or_file, int depth);
+
+Scenario from_file(const std::string& file, int depth) {
   toml::table t;
   try {
     t = toml::parse_file(file);
@@ -125,7 +129,7 @@ Scenario from_file(const std::string& file) {
   const std::string base = t["base"].value_or(std::string("desk-shuttle"));
   Scenario s;
   try {
-    s = load_scenario(base);
+    s = load_scenario_at_depth(base, depth + 1);
   } catch (const std::runtime_error& e) {
     fail(file, std::string("base: ") + e.what());
   }
@@ -230,22 +234,35 @@ std::vector<std::pair<std::string, std::string>> builtin_scenarios() {
 }
 
 Scenario load_scenario(const std::string& name_or_file) {
+  return load_scenario_at_depth(name_or_file, 0);
+}
+
+namespace {
+
+Scenario load_scenario_at_depth(const std::string& name_or_file, int depth) {
+  constexpr int kMaxBaseDepth = 8;
+  if (depth > kMaxBaseDepth) {
+    throw std::runtime_error(
+        name_or_file + ": more than 8 scenario files chained by 'base' (does one name itself?)");
+  }
   if (name_or_file == "desk-shuttle") return desk_shuttle();
   if (name_or_file == "tiny") return tiny();
   if (name_or_file == "tiny-wrap16") return wrap_test();
-  if (std::filesystem::is_regular_file(name_or_file)) return from_file(name_or_file);
+  if (std::filesystem::is_regular_file(name_or_file)) return from_file(name_or_file, depth);
   std::string names;
   for (const auto& [name, text] : builtin_scenarios()) names += (names.empty() ? "" : ", ") + name;
   throw std::runtime_error("unknown scenario '" + name_or_file + "' (built-in: " + names +
                            "; or a .toml file)");
 }
 
+}  // namespace
+
 std::string scenario_to_toml(const Scenario& s) {
   std::ostringstream o;
   o.precision(10);
   o << "# Scenario as simulated (format: docs/scenarios.md)\n"
-    << "name = \"" << s.name << "\"\n"
-    << "description = \"" << s.description << "\"\n"
+    << "name = " << toml_string(s.name) << "\n"
+    << "description = " << toml_string(s.description) << "\n"
     << "labelled_frames = " << s.labelled_frames << "\n"
     << "start_time_s = " << s.start_time_s << "\n\n[camera]\n"
     << "width_px = " << s.camera.width_px << "\nheight_px = " << s.camera.height_px
@@ -271,7 +288,7 @@ std::string scenario_to_toml(const Scenario& s) {
     << "\n\n[robot]\nwheel_radius_m = " << s.robot.wheel_radius_m
     << "\ntrack_m = " << s.robot.track_m << "\nticks_per_rev = " << s.robot.ticks_per_rev << "\n";
   for (const BoardSpec& b : s.boards) {
-    o << "\n[[boards]]\nname = \"" << b.name << "\"\ncolour = [" << int{b.colour.r} << ", "
+    o << "\n[[boards]]\nname = " << toml_string(b.name) << "\ncolour = [" << int{b.colour.r} << ", "
       << int{b.colour.g} << ", " << int{b.colour.b} << "]\ncentre = [" << b.centre_x_m << ", "
       << b.centre_y_m << ", " << b.centre_z_m << "]\nsize = [" << b.width_m << ", " << b.height_m
       << "]\nfacing_deg = " << b.facing_yaw_rad / kDeg << "\n";

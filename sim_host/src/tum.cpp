@@ -37,7 +37,14 @@ std::vector<StampedPose> read_tum(const std::string& path) {
       throw std::runtime_error(path + ":" + std::to_string(line_no) + ": more than 8 fields");
     StampedPose p;
     p.t_s = v[0];
-    p.pose = Pose2{v[1], v[2], yaw_from_quaternion(v[4], v[5], v[6], v[7])};
+    const double norm = std::sqrt(v[4] * v[4] + v[5] * v[5] + v[6] * v[6] + v[7] * v[7]);
+    if (!(norm > 0.5 && norm < 2.0)) {
+      throw std::runtime_error(path + ":" + std::to_string(line_no) +
+                               ": quaternion is not a rotation (norm " + std::to_string(norm) +
+                               ")");
+    }
+    p.pose =
+        Pose2{v[1], v[2], yaw_from_quaternion(v[4] / norm, v[5] / norm, v[6] / norm, v[7] / norm)};
     if (!out.empty() && p.t_s <= out.back().t_s) {
       throw std::runtime_error(path + ":" + std::to_string(line_no) + ": timestamps must increase");
     }

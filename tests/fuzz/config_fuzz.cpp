@@ -32,8 +32,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
                       "board count out of range");
   for (std::size_t i = 0; i < c.thresholds.count; ++i) {
     const auto& t = c.thresholds.boards[i];
-    HARMOLOC_FUZZ_CHECK(t.hue_min_deg >= 0.0F && t.hue_min_deg <= 360.0F &&
-                            t.hue_max_deg >= 0.0F && t.hue_max_deg <= 360.0F,
+    HARMOLOC_FUZZ_CHECK(t.hue_min_deg >= 0.0F && t.hue_min_deg <= 360.0F && t.hue_max_deg >= 0.0F &&
+                            t.hue_max_deg <= 360.0F,
                         "hue out of range");
     HARMOLOC_FUZZ_CHECK(t.value_min <= t.value_max, "value window inverted");
   }

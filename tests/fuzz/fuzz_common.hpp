@@ -20,8 +20,8 @@ namespace harmoloc::fuzz {
 inline const std::string& scratch_dir() {
   static const std::string dir = [] {
     const char* tmp = std::getenv("TMPDIR");
-    std::string pattern = std::string(tmp != nullptr && *tmp != '\0' ? tmp : "/tmp") +
-                          "/harmoloc-fuzz-XXXXXX";
+    std::string pattern =
+        std::string(tmp != nullptr && *tmp != '\0' ? tmp : "/tmp") + "/harmoloc-fuzz-XXXXXX";
     if (::mkdtemp(pattern.data()) == nullptr) {
       std::perror("mkdtemp");
       std::abort();
@@ -70,8 +70,8 @@ inline void write_file(const std::string& path, const std::uint8_t* data, std::s
   std::abort();
 }
 
-#define HARMOLOC_FUZZ_CHECK(cond, what) \
-  do {                                  \
+#define HARMOLOC_FUZZ_CHECK(cond, what)                          \
+  do {                                                           \
     if (!(cond)) ::harmoloc::fuzz::finding(what " (" #cond ")"); \
   } while (0)
 

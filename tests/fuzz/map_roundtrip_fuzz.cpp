@@ -15,7 +15,7 @@ using namespace harmoloc::algorithms;
 
 namespace {
 
-MapFile g_map;    // ~164 KiB each: static
+MapFile g_map;  // ~164 KiB each: static
 MapFile g_again;
 
 bool same_model(const MapFile& a, const MapFile& b) {
@@ -29,10 +29,10 @@ bool same_model(const MapFile& a, const MapFile& b) {
     return std::memcmp(p, q, n) == 0;
   };
   if (!same_bits(x.board_index.data(), y.board_index.data(), x.feature_count)) return false;
-  const float xs[] = {x.area_scale, x.sigma_x, x.sigma_y, x.gamma_x, x.gamma_y,
-                      x.max_nearest_distance};
-  const float ys[] = {y.area_scale, y.sigma_x, y.sigma_y, y.gamma_x, y.gamma_y,
-                      y.max_nearest_distance};
+  const float xs[] = {x.area_scale, x.sigma_x, x.sigma_y,
+                      x.gamma_x,    x.gamma_y, x.max_nearest_distance};
+  const float ys[] = {y.area_scale, y.sigma_x, y.sigma_y,
+                      y.gamma_x,    y.gamma_y, y.max_nearest_distance};
   if (!same_bits(xs, ys, sizeof xs)) return false;
   for (std::size_t i = 0; i < x.sample_count; ++i) {
     if (!same_bits(x.sample(i), y.sample(i), x.feature_count * sizeof(float))) return false;

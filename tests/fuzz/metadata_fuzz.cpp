@@ -26,8 +26,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     HARMOLOC_FUZZ_CHECK(e.what() != nullptr && e.what()[0] != '\0', "empty error message");
     return 0;
   }
-  HARMOLOC_FUZZ_CHECK(m.image_width_px >= 2 && m.image_width_px <= 8192 &&
-                          m.image_height_px >= 2 && m.image_height_px <= 8192,
+  HARMOLOC_FUZZ_CHECK(m.image_width_px >= 2 && m.image_width_px <= 8192 && m.image_height_px >= 2 &&
+                          m.image_height_px <= 8192,
                       "image size out of range");
   HARMOLOC_FUZZ_CHECK(m.pixel_format != hal::PixelFormat::kYuyv || m.image_width_px % 2 == 0,
                       "odd YUYV width accepted");
@@ -39,13 +39,14 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   HARMOLOC_FUZZ_CHECK((m.geometry.left_direction == 1 || m.geometry.left_direction == -1) &&
                           (m.geometry.right_direction == 1 || m.geometry.right_direction == -1),
                       "wheel direction not +-1");
+
   // Round trip through the writer.
 #ifdef HARMOLOC_FUZZ_SKIP_KNOWN_FINDINGS
   // Known findings: write_metadata writes strings without TOML escaping
   // (regressions/metadata/quote-in-name.toml) and a negative seed, read as a uint64 above
   // INT64_MAX, as an integer TOML cannot hold (regressions/metadata/negative-seed.toml).
-  for (const std::string* text : {&m.name, &m.frames_index, &m.encoder_log, &m.can_interface,
-                                  &m.ground_truth}) {
+  for (const std::string* text :
+       {&m.name, &m.frames_index, &m.encoder_log, &m.can_interface, &m.ground_truth}) {
     for (const char c : *text) {
       if (c == '"' || c == '\\' || static_cast<unsigned char>(c) < 0x20 || c == 0x7F) return 0;
     }
@@ -61,25 +62,24 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   sim_host::DatasetMetadata back;
   try {
     back = sim_host::read_metadata(dir2);
-  } catch (const std::runtime_error& e) {
+  } catch (const std::runtime_error&) {
     fuzz::finding("metadata written by write_metadata does not read back");
   }
   const auto& a = m.encoder_layout;
   const auto& b = back.encoder_layout;
-  const bool same =
-      back.name == m.name && back.image_width_px == m.image_width_px &&
-      back.image_height_px == m.image_height_px && back.pixel_format == m.pixel_format &&
-      back.frame_rate_hz == m.frame_rate_hz && back.frames_index == m.frames_index &&
-      back.encoder_log == m.encoder_log && back.ground_truth == m.ground_truth &&
-      back.can_interface == m.can_interface && back.seed == m.seed && a.id == b.id &&
-      a.length == b.length && a.left_offset == b.left_offset &&
-      a.right_offset == b.right_offset && a.counter_bits == b.counter_bits &&
-      a.byte_order == b.byte_order &&
-      back.geometry.wheel_radius_m == m.geometry.wheel_radius_m &&
-      back.geometry.track_m == m.geometry.track_m &&
-      back.geometry.ticks_per_rev == m.geometry.ticks_per_rev &&
-      back.geometry.left_direction == m.geometry.left_direction &&
-      back.geometry.right_direction == m.geometry.right_direction;
+  const bool same = back.name == m.name && back.image_width_px == m.image_width_px &&
+                    back.image_height_px == m.image_height_px &&
+                    back.pixel_format == m.pixel_format && back.frame_rate_hz == m.frame_rate_hz &&
+                    back.frames_index == m.frames_index && back.encoder_log == m.encoder_log &&
+                    back.ground_truth == m.ground_truth && back.can_interface == m.can_interface &&
+                    back.seed == m.seed && a.id == b.id && a.length == b.length &&
+                    a.left_offset == b.left_offset && a.right_offset == b.right_offset &&
+                    a.counter_bits == b.counter_bits && a.byte_order == b.byte_order &&
+                    back.geometry.wheel_radius_m == m.geometry.wheel_radius_m &&
+                    back.geometry.track_m == m.geometry.track_m &&
+                    back.geometry.ticks_per_rev == m.geometry.ticks_per_rev &&
+                    back.geometry.left_direction == m.geometry.left_direction &&
+                    back.geometry.right_direction == m.geometry.right_direction;
   HARMOLOC_FUZZ_CHECK(same, "metadata written by write_metadata reads back different");
   return 0;
 }

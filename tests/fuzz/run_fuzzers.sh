@@ -78,6 +78,8 @@ export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1:symbolize=1}
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
 work_root=$(mktemp -d "${TMPDIR:-/tmp}/harmoloc-fuzz-run-XXXXXX")
 trap 'rm -rf "$work_root"' EXIT
+# The targets' scratch files (fuzz_common.hpp) go here too, so a crashed fuzzer leaves nothing.
+mkdir -p "$work_root/tmp"
 
 # Classifies a failed run from its log.
 classify() {
@@ -111,7 +113,7 @@ for t in "${TARGETS[@]}"; do
   result=""
   mapfile -t repro < <(find "$HERE/regressions/$t" -type f ! -name '*.md' 2> /dev/null | sort)
   if [ ${#repro[@]} -gt 0 ]; then
-    if ! "$bin" -timeout=5 -rss_limit_mb=2048 -artifact_prefix="$artifacts/" "${repro[@]}" \
+    if ! TMPDIR="$work_root/tmp" "$bin" -timeout=5 -rss_limit_mb=2048 -artifact_prefix="$artifacts/" "${repro[@]}" \
       >> "$log" 2>&1; then
       result="REGRESSION $(classify "$log")"
     fi
@@ -138,7 +140,8 @@ for t in "${TARGETS[@]}"; do
     status=0
     # The outer timeout only catches a fuzzer that hangs outside an input (libFuzzer's own
     # -timeout covers each input).
-    timeout --signal=KILL $((seconds + 120)) "$bin" "${args[@]}" "$corpus" >> "$log" 2>&1 || status=$?
+    TMPDIR="$work_root/tmp" timeout --signal=KILL $((seconds + 120)) "$bin" "${args[@]}" "$corpus" \
+      >> "$log" 2>&1 || status=$?
     execs=$(grep -oE 'stat::number_of_executed_units: +[0-9]+' "$log" | tail -1 | awk '{print $2}' || true)
     rate=$(grep -oE 'stat::average_exec_per_sec: +[0-9]+' "$log" | tail -1 | awk '{print $2}' || true)
     cov=$(grep -o 'cov: [0-9]* ft: [0-9]*' "$log" | tail -1 | awk '{print $2 "/" $4}' || true)

@@ -53,7 +53,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (row > avail) return 0;
   if (height > 1 && stride > 0)
     height = std::min<std::uint64_t>(height, (avail - row) / stride + 1U);
-  if (std::uint64_t{width} * height > kMaxPixels) height = static_cast<std::uint32_t>(kMaxPixels / std::max(width, 1U));
+  if (std::uint64_t{width} * height > kMaxPixels)
+    height = static_cast<std::uint32_t>(kMaxPixels / std::max(width, 1U));
   const std::size_t need = height == 0 ? 0 : std::size_t{height - 1U} * stride + row;
   if (need > avail) return 0;
   const std::uint8_t* frame = pixels + (avail - need);  // the frame ends where the input ends

@@ -26,9 +26,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   }
   for (std::size_t i = 0; i < poses.size(); ++i) {
     const sim_host::StampedPose& p = poses[i];
-    HARMOLOC_FUZZ_CHECK(std::isfinite(p.t_s) && std::isfinite(p.pose.x_m) &&
-                            std::isfinite(p.pose.y_m),
-                        "non-finite pose accepted");
+    HARMOLOC_FUZZ_CHECK(
+        std::isfinite(p.t_s) && std::isfinite(p.pose.x_m) && std::isfinite(p.pose.y_m),
+        "non-finite pose accepted");
     if (i > 0) HARMOLOC_FUZZ_CHECK(p.t_s > poses[i - 1].t_s, "timestamps not increasing");
   }
   if (poses.size() >= 2) {

@@ -52,8 +52,8 @@ void read_memory(long& rss_kb, long& peak_kb) {
 long count_open_fds() {
   std::error_code ec;
   long n = 0;
-  for (auto it = std::filesystem::directory_iterator("/proc/self/fd", ec); !ec && it != std::filesystem::directory_iterator();
-       it.increment(ec)) {
+  for (auto it = std::filesystem::directory_iterator("/proc/self/fd", ec);
+       !ec && it != std::filesystem::directory_iterator(); it.increment(ec)) {
     ++n;
   }
   return ec ? -1 : n - 1;  // the iterator's own descriptor
@@ -87,8 +87,10 @@ int main(int argc, char** argv) {
                  "write the harmonic localizer's own fixes here (TUM), for comparison");
   app.add_flag("--realtime", realtime,
                "pace the cycle at the recording's rate instead of as fast as possible");
-  app.add_option("--loop", loops, "replay the dataset this many times back to back (soak runs); time and the\n"
-                                  "encoder counters run on across passes")->check(CLI::Range(1U, 1000000U));
+  app.add_option("--loop", loops,
+                 "replay the dataset this many times back to back (soak runs); time and the\n"
+                 "encoder counters run on across passes")
+      ->check(CLI::Range(1U, 1000000U));
   app.add_flag("--quiet", quiet, "no progress output");
   CLI11_PARSE(app, argc, argv);
 
@@ -115,8 +117,10 @@ int main(int argc, char** argv) {
         (std::filesystem::path(dataset) / meta.encoder_log).string(), config.can_layout);
     if (loops > 1) {
       // One pass lasts from the first to the last record, plus one frame period.
-      const std::uint64_t first = std::min(camera->first_timestamp_ns(), encoders->first_timestamp_ns());
-      const std::uint64_t last = std::max(camera->last_timestamp_ns(), encoders->last_timestamp_ns());
+      const std::uint64_t first =
+          std::min(camera->first_timestamp_ns(), encoders->first_timestamp_ns());
+      const std::uint64_t last =
+          std::max(camera->last_timestamp_ns(), encoders->last_timestamp_ns());
       const auto period = static_cast<std::uint64_t>(1e9 / meta.frame_rate_hz);
       camera->set_loops(loops, last - first + period);
       encoders->set_loops(loops, last - first + period);

@@ -114,7 +114,8 @@ void segment_rgb24(const std::uint8_t* data, std::uint32_t width_px, std::uint32
 
 /// Counts board pixels in a YUYV image (BT.601 limited range, decoded exactly as OpenCV's
 /// COLOR_YUV2RGB_YUYV, each pixel with its own luma and the chroma it shares with its
-/// neighbour): one pass, no allocation.
+/// neighbour): one pass, no allocation. YUYV comes in pixel pairs: @p width_px must be even
+/// (the metadata and the V4L2 driver ensure it), else the last pair's chroma lies past the row.
 void segment_yuyv(const std::uint8_t* data, std::uint32_t width_px, std::uint32_t height_px,
                   std::uint32_t stride_bytes, const BoardClassifier& classifier, AreaVector& areas);
 void segment_yuyv(const std::uint8_t* data, std::uint32_t width_px, std::uint32_t height_px,
