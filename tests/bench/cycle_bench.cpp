@@ -31,77 +31,78 @@ void set_pixels(benchmark::State& state, const bench::Frames& f) {
   state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()) * f.width_px * f.height_px);
 }
 
-void BM_SegmentRgb24(benchmark::State& state) {
+// Runs @p segment(frame bytes, areas) over the frames of the benchmark's resolution, one frame
+// per iteration, and reports pixels per second.
+template <typename Segment>
+void segment_frames(benchmark::State& state, bool yuyv, Segment&& segment) {
   const bench::Frames& f = frames_at(static_cast<std::uint32_t>(state.range(0)));
-  const algorithms::BoardClassifier classifier(firmware::default_config().thresholds);
+  const auto& images = yuyv ? f.yuyv : f.rgb;
   algorithms::AreaVector areas;
   std::size_t i = 0;
   for (auto _ : state) {
-    algorithms::segment_rgb24(f.rgb[i++ % f.rgb.size()].data(), f.width_px, f.height_px,
-                              f.width_px * 3, classifier, areas);
+    segment(f, images[i++ % images.size()].data(), areas);
     benchmark::DoNotOptimize(areas);
   }
   set_pixels(state, f);
 }
 
-void BM_SegmentRgb24Table(benchmark::State& state) {
-  const bench::Frames& f = frames_at(static_cast<std::uint32_t>(state.range(0)));
+const algorithms::ColourTable& colour_table() {
   static std::vector<std::uint8_t> storage(algorithms::ColourTable::kEntries);
-  algorithms::ColourTable table;
-  table.build(algorithms::BoardClassifier(firmware::default_config().thresholds), storage.data());
-  algorithms::AreaVector areas;
-  std::size_t i = 0;
-  for (auto _ : state) {
-    algorithms::segment_rgb24(f.rgb[i++ % f.rgb.size()].data(), f.width_px, f.height_px,
-                              f.width_px * 3, table, areas);
-    benchmark::DoNotOptimize(areas);
-  }
-  set_pixels(state, f);
+  static algorithms::ColourTable table;
+  if (!table.ready())
+    table.build(algorithms::BoardClassifier(firmware::default_config().thresholds), storage.data());
+  return table;
+}
+
+void BM_SegmentRgb24(benchmark::State& state) {
+  const algorithms::BoardClassifier classifier(firmware::default_config().thresholds);
+  segment_frames(state, false,
+                 [&](const bench::Frames& f, const std::uint8_t* data, algorithms::AreaVector& a) {
+                   algorithms::segment_rgb24(data, f.width_px, f.height_px, f.width_px * 3,
+                                             classifier, a);
+                 });
+}
+
+void BM_SegmentRgb24Table(benchmark::State& state) {
+  const algorithms::ColourTable& table = colour_table();
+  segment_frames(state, false,
+                 [&](const bench::Frames& f, const std::uint8_t* data, algorithms::AreaVector& a) {
+                   algorithms::segment_rgb24(data, f.width_px, f.height_px, f.width_px * 3, table,
+                                             a);
+                 });
 }
 
 void BM_SegmentRgb24OpenCV(benchmark::State& state) {
   cv::setNumThreads(1);
-  const bench::Frames& f = frames_at(static_cast<std::uint32_t>(state.range(0)));
   const auto thresholds = firmware::default_config().thresholds;
   reference::OpencvScratch scratch;
-  algorithms::AreaVector areas;
-  std::size_t i = 0;
-  for (auto _ : state) {
-    reference::opencv_segment_rgb24(f.rgb[i++ % f.rgb.size()].data(), static_cast<int>(f.width_px),
-                                    static_cast<int>(f.height_px), static_cast<int>(f.width_px * 3),
-                                    thresholds, areas, scratch);
-    benchmark::DoNotOptimize(areas);
-  }
-  set_pixels(state, f);
+  segment_frames(state, false,
+                 [&](const bench::Frames& f, const std::uint8_t* data, algorithms::AreaVector& a) {
+                   reference::opencv_segment_rgb24(
+                       data, static_cast<int>(f.width_px), static_cast<int>(f.height_px),
+                       static_cast<int>(f.width_px * 3), thresholds, a, scratch);
+                 });
 }
 
 void BM_SegmentYuyv(benchmark::State& state) {
-  const bench::Frames& f = frames_at(static_cast<std::uint32_t>(state.range(0)));
-  const algorithms::BoardClassifier classifier(firmware::default_config().thresholds);
-  algorithms::AreaVector areas;
-  std::size_t i = 0;
-  for (auto _ : state) {
-    algorithms::segment_yuyv(f.yuyv[i++ % f.yuyv.size()].data(), f.width_px, f.height_px,
-                             f.width_px * 2, classifier, areas);
-    benchmark::DoNotOptimize(areas);
-  }
-  set_pixels(state, f);
+  const algorithms::ColourTable& table = colour_table();
+  segment_frames(state, true,
+                 [&](const bench::Frames& f, const std::uint8_t* data, algorithms::AreaVector& a) {
+                   algorithms::segment_yuyv(data, f.width_px, f.height_px, f.width_px * 2, table,
+                                            a);
+                 });
 }
 
 void BM_SegmentYuyvOpenCV(benchmark::State& state) {
   cv::setNumThreads(1);
-  const bench::Frames& f = frames_at(static_cast<std::uint32_t>(state.range(0)));
   const auto thresholds = firmware::default_config().thresholds;
   reference::OpencvScratch scratch;
-  algorithms::AreaVector areas;
-  std::size_t i = 0;
-  for (auto _ : state) {
-    reference::opencv_segment_yuyv(f.yuyv[i++ % f.yuyv.size()].data(), static_cast<int>(f.width_px),
-                                   static_cast<int>(f.height_px), static_cast<int>(f.width_px * 2),
-                                   thresholds, areas, scratch);
-    benchmark::DoNotOptimize(areas);
-  }
-  set_pixels(state, f);
+  segment_frames(state, true,
+                 [&](const bench::Frames& f, const std::uint8_t* data, algorithms::AreaVector& a) {
+                   reference::opencv_segment_yuyv(
+                       data, static_cast<int>(f.width_px), static_cast<int>(f.height_px),
+                       static_cast<int>(f.width_px * 2), thresholds, a, scratch);
+                 });
 }
 
 void BM_HarmonicQuery(benchmark::State& state) {
