@@ -25,10 +25,12 @@ HarmonicFix harmonic_query(const HarmonicModel& model,
   const std::size_t d = model.feature_count;
   if (n == 0 || d == 0) return fix;
 
+  // Each distance is computed once and kept (16 KiB of stack at full capacity).
+  std::array<float, HarmonicModel::kMaxSamples> d2;  // only the first n are written and read
   float d2_min = std::numeric_limits<float>::infinity();
   for (std::size_t j = 0; j < n; ++j) {
-    const float d2 = squared_distance(features.data(), model.sample(j), d);
-    if (d2 < d2_min) d2_min = d2;
+    d2[j] = squared_distance(features.data(), model.sample(j), d);
+    if (d2[j] < d2_min) d2_min = d2[j];
   }
 
   fix.nearest_distance = std::sqrt(static_cast<double>(d2_min));
@@ -38,7 +40,7 @@ HarmonicFix harmonic_query(const HarmonicModel& model,
   const float sx = model.sigma_x;
   const float sy = model.sigma_y;
   for (std::size_t j = 0; j < n; ++j) {
-    const float excess = squared_distance(features.data(), model.sample(j), d) - d2_min;
+    const float excess = d2[j] - d2_min;
     const double wx = std::exp(static_cast<double>(-sx * excess));
     const double wy = std::exp(static_cast<double>(-sy * excess));
     sum_wx += wx;
