@@ -26,6 +26,18 @@ endif()
 
 find_package(tomlplusplus REQUIRED)
 
+# SHA-256 for MAVLink 2 message signing: libnettle (Debian nettle-dev). Found directly, not with
+# pkg-config, which the aarch64 cross build does not have.
+find_path(HARMOLOC_NETTLE_INCLUDE_DIR nettle/sha2.h)
+find_library(HARMOLOC_NETTLE_LIB nettle)
+if(NOT HARMOLOC_NETTLE_INCLUDE_DIR OR NOT HARMOLOC_NETTLE_LIB)
+  message(FATAL_ERROR "libnettle not found (Debian: apt-get install nettle-dev; ./run setup does it)")
+endif()
+add_library(harmoloc::nettle UNKNOWN IMPORTED)
+set_target_properties(harmoloc::nettle PROPERTIES
+  IMPORTED_LOCATION ${HARMOLOC_NETTLE_LIB}
+  INTERFACE_INCLUDE_DIRECTORIES ${HARMOLOC_NETTLE_INCLUDE_DIR})
+
 if(HARMOLOC_BOARD STREQUAL "host")
   find_package(CLI11 REQUIRED)
   find_package(nlohmann_json 3 REQUIRED)

@@ -27,6 +27,22 @@ void ParticleFilter::initialize(const Pose2& centre, double position_sigma_m, do
   initialized_ = true;
 }
 
+void ParticleFilter::initialize_around_points(const float* x_m, const float* y_m, std::size_t count,
+                                              double position_sigma_m) {
+  if (count == 0) return;
+  const double w = 1.0 / static_cast<double>(count_);
+  for (std::size_t i = 0; i < count_; ++i) {
+    const auto k =
+        std::min(count - 1, static_cast<std::size_t>(rng_.uniform() * static_cast<double>(count)));
+    Particle& p = particles_[i];
+    p.x_m = rng_.normal(static_cast<double>(x_m[k]), position_sigma_m);
+    p.y_m = rng_.normal(static_cast<double>(y_m[k]), position_sigma_m);
+    p.yaw_rad = rng_.uniform(-kPi, kPi);
+    weights_[i] = w;
+  }
+  initialized_ = true;
+}
+
 void ParticleFilter::predict(const OdometryDelta& delta) {
   const double d2 = delta.distance_m * delta.distance_m;
   const double y2 = delta.yaw_rad * delta.yaw_rad;

@@ -38,6 +38,7 @@ speed_t baud_constant(unsigned baud) {
 }  // namespace
 
 SerialLink::~SerialLink() {
+  if (in_fd_ >= 0 && in_fd_ != fd_) ::close(in_fd_);
   if (fd_ >= 0) ::close(fd_);
 }
 
@@ -45,10 +46,18 @@ std::string SerialLink::open(const std::string& path, unsigned baud) {
   struct stat st {};
   const bool exists = ::stat(path.c_str(), &st) == 0;
   if (exists && S_ISCHR(st.st_mode)) {
-    fd_ = ::open(path.c_str(), O_WRONLY | O_NOCTTY | O_NONBLOCK | O_CLOEXEC);
+    // Read-write so that a peer's commands can come back on the same line; a device this user
+    // may only write to still carries the pose.
+    bool readable = true;
+    fd_ = ::open(path.c_str(), O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC);
+    if (fd_ < 0 && (errno == EACCES || errno == EPERM || errno == EROFS)) {
+      readable = false;
+      fd_ = ::open(path.c_str(), O_WRONLY | O_NOCTTY | O_NONBLOCK | O_CLOEXEC);
+    }
     if (fd_ < 0) return path + ": " + std::strerror(errno);
     if (::isatty(fd_) != 0) {
       is_tty_ = true;
+      if (readable && in_fd_ < 0) in_fd_ = fd_;
       const speed_t speed = baud_constant(baud);
       if (speed == B0) return "unsupported baud rate " + std::to_string(baud);
       termios tio{};
@@ -64,6 +73,31 @@ std::string SerialLink::open(const std::string& path, unsigned baud) {
   fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC | O_NONBLOCK, 0644);
   if (fd_ < 0) return path + ": " + std::strerror(errno);
   return {};
+}
+
+std::string SerialLink::open_input(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) return path + ": " + std::strerror(errno);
+  if (in_fd_ >= 0 && in_fd_ != fd_) ::close(in_fd_);
+  in_fd_ = fd;
+  input_failed_ = false;
+  return {};
+}
+
+std::size_t SerialLink::read_bytes(std::uint8_t* dst, std::size_t max) {
+  if (in_fd_ < 0 || max == 0 || input_failed_) return 0;
+  for (;;) {
+    const ssize_t n = ::read(in_fd_, dst, max);
+    if (n > 0) return static_cast<std::size_t>(n);
+    if (n == 0) return 0;  // end of a file, or a FIFO with no writer
+    if (errno == EINTR) continue;
+    if (errno != EAGAIN && errno != EWOULDBLOCK) {
+      // A hung-up line fails every read; one count says so, and output goes on as before.
+      ++counters_.errors;
+      input_failed_ = true;
+    }
+    return 0;
+  }
 }
 
 bool SerialLink::flush_pending() {

@@ -35,7 +35,8 @@ const char* health_name(Health health) {
 
 LocalizationCycle::LocalizationCycle(const FirmwareConfig& config, const algorithms::MapFile& map,
                                      hal::Camera& camera, hal::WheelEncoders& encoders,
-                                     hal::PoseLink& link, const hal::Clock& clock)
+                                     hal::PoseLink& link, const hal::Clock& clock,
+                                     hal::PixelFormat pixel_format)
     : config_(config),
       map_(map),
       camera_(camera),
@@ -44,11 +45,17 @@ LocalizationCycle::LocalizationCycle(const FirmwareConfig& config, const algorit
       clock_(clock),
       classifier_(map.thresholds),
       mavlink_(config.link.system_id, config.link.component_id),
+      receiver_(config.link, &signer_),
       period_ns_(static_cast<std::uint64_t>(std::llround(1e9 / config.cycle.rate_hz))),
       budget_ns_(static_cast<std::uint64_t>(std::llround(config.cycle.budget_ms * 1e6))) {
   filter_.configure(config.filter.particles, config.filter.seed, config.filter.noise);
-  colour_table_storage_.reset(new std::uint8_t[algorithms::ColourTable::kEntries]);
-  colour_table_.build(classifier_, colour_table_storage_.get());
+  if (config.link.has_signing_key) signer_.configure(config.link.signing_key, config.link.link_id);
+  mavlink_.set_signer(&signer_);
+  colour_table_storage_.reset(new std::uint8_t[algorithms::MaskTable::kStorageBytes]);
+  if (pixel_format == hal::PixelFormat::kYuyv)
+    yuyv_table_.build(classifier_, colour_table_storage_.get());
+  else
+    colour_table_.build(classifier_, colour_table_storage_.get());
 }
 
 namespace {
@@ -118,12 +125,23 @@ CycleResult LocalizationCycle::run_once() {
   {
     StageTimer t(clock_, at(Stage::kSegment));
     if (usable) {
-      if (frame.format == hal::PixelFormat::kRgb24) {
-        algorithms::segment_rgb24(frame.data, frame.width_px, frame.height_px, frame.stride_bytes,
-                                  colour_table_, areas);
+      // A frame of the format the table was not built for (the camera changed format) is
+      // segmented exactly without it: by the HSV arithmetic, or decoding YUYV to RGB per pixel.
+      const hal::FrameView& f = frame;
+      if (f.format == hal::PixelFormat::kRgb24) {
+        if (colour_table_.ready()) {
+          algorithms::segment_rgb24(f.data, f.width_px, f.height_px, f.stride_bytes, colour_table_,
+                                    areas);
+        } else {
+          algorithms::segment_rgb24(f.data, f.width_px, f.height_px, f.stride_bytes, classifier_,
+                                    areas);
+        }
+      } else if (yuyv_table_.ready()) {
+        algorithms::segment_yuyv(f.data, f.width_px, f.height_px, f.stride_bytes, yuyv_table_,
+                                 areas);
       } else {
-        algorithms::segment_yuyv(frame.data, frame.width_px, frame.height_px, frame.stride_bytes,
-                                 colour_table_, areas);
+        algorithms::segment_yuyv(f.data, f.width_px, f.height_px, f.stride_bytes, colour_table_,
+                                 areas);
       }
     }
   }
@@ -192,6 +210,7 @@ CycleResult LocalizationCycle::run_once() {
         ++counters_.fixes_used;
         last_fix_ns_ = data_time_ns_;
         ever_fix_ = true;
+        last_known_fix_ = fix_.fix;
         if (!filter_.initialized()) {
           filter_.initialize(Pose2{fix_.fix.x_m, fix_.fix.y_m, 0.0},
                              config_.filter.init_position_sigma_m, 0.0, true);
@@ -219,6 +238,7 @@ CycleResult LocalizationCycle::run_once() {
   // publish
   {
     StageTimer t(clock_, at(Stage::kPublish));
+    service_link();
     publish();
   }
 
@@ -235,7 +255,9 @@ void LocalizationCycle::send(std::size_t size) {
 
 void LocalizationCycle::publish() {
   const Health health = pose_.health;
-  if (data_time_ns_ >= next_heartbeat_ns_) {
+  const bool heartbeat_due = data_time_ns_ >= next_heartbeat_ns_;
+  if (heartbeat_due || heartbeat_requested_) {
+    heartbeat_requested_ = false;
     mavlink::Heartbeat hb;
     switch (health) {
       case Health::kNotInitialized:
@@ -253,6 +275,8 @@ void LocalizationCycle::publish() {
         break;
     }
     send(mavlink_.heartbeat(hb, frame_buffer_));
+  }
+  if (heartbeat_due) {  // a requested one leaves the schedule alone
     const auto step = static_cast<std::uint64_t>(std::llround(1e9 / config_.link.heartbeat_hz));
     next_heartbeat_ns_ = (next_heartbeat_ns_ == 0 ? data_time_ns_ : next_heartbeat_ns_) + step;
     if (next_heartbeat_ns_ <= data_time_ns_) next_heartbeat_ns_ = data_time_ns_ + step;

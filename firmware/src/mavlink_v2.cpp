@@ -2,6 +2,8 @@
 
 #include <cstring>
 
+#include "harmoloc/firmware/mavlink_signing.hpp"
+
 namespace harmoloc::firmware::mavlink {
 
 namespace {
@@ -53,10 +55,11 @@ std::size_t Encoder::finish(std::uint32_t msg_id, std::uint8_t crc_extra, std::s
                             FrameBuffer& out) {
   // MAVLink 2 drops trailing zero bytes of the payload (at least one byte stays).
   while (payload_len > 1 && out[kHeaderBytes + payload_len - 1] == 0) --payload_len;
+  const bool sign = signer_ != nullptr && signer_->enabled();
   out[0] = kStx;
   out[1] = static_cast<std::uint8_t>(payload_len);
-  out[2] = 0;  // incompat flags: unsigned
-  out[3] = 0;  // compat flags
+  out[2] = sign ? kIncompatSigned : 0;  // the flag is covered by the checksum
+  out[3] = 0;                           // compat flags
   out[4] = sequence_++;
   out[5] = system_id_;
   out[6] = component_id_;
@@ -67,7 +70,8 @@ std::size_t Encoder::finish(std::uint32_t msg_id, std::uint8_t crc_extra, std::s
   crc = crc_x25(&crc_extra, 1, crc);
   out[kHeaderBytes + payload_len] = static_cast<std::uint8_t>(crc);
   out[kHeaderBytes + payload_len + 1] = static_cast<std::uint8_t>(crc >> 8U);
-  return kHeaderBytes + payload_len + kChecksumBytes;
+  const std::size_t size = kHeaderBytes + payload_len + kChecksumBytes;
+  return sign ? size + signer_->sign(out.data(), size) : size;
 }
 
 std::size_t Encoder::heartbeat(const Heartbeat& m, FrameBuffer& out) {
@@ -103,6 +107,17 @@ std::size_t Encoder::odometry(const Odometry& m, FrameBuffer& out) {
   p.u8(m.estimator_type);
   p.u8(static_cast<std::uint8_t>(m.quality));
   return finish(kMsgOdometry, kCrcExtraOdometry, p.size(), out);
+}
+
+std::size_t Encoder::command_ack(const CommandAck& m, FrameBuffer& out) {
+  Payload p(out.data() + kHeaderBytes);
+  p.u16(m.command);
+  p.u8(static_cast<std::uint8_t>(m.result));
+  p.u8(m.progress);  // extensions from here on, in declaration order
+  p.u32(static_cast<std::uint32_t>(m.result_param2));
+  p.u8(m.target_system);
+  p.u8(m.target_component);
+  return finish(kMsgCommandAck, kCrcExtraCommandAck, p.size(), out);
 }
 
 std::size_t Encoder::statustext(std::uint8_t severity, const char* text, FrameBuffer& out) {

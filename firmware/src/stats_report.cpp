@@ -66,6 +66,18 @@ std::string stats_json(const LocalizationCycle& cycle, const RunCounters& run) {
     << "  \"localizer\": {\"fixes\": " << c.fixes_used << ", \"unknown_place\": " << c.unknown_place
     << "},\n"
     << "  \"filter\": {\"resamples\": " << c.resamples << "}";
+  const mavlink::InboundCounters in = cycle.inbound_counters();
+  o << ",\n  \"inbound\": {\"bytes_in\": " << in.bytes_in << ", \"frames_in\": " << in.frames_in
+    << ", \"crc_errors\": " << in.crc_errors << ", \"bad_headers\": " << in.bad_headers
+    << ", \"garbage_bytes\": " << in.garbage_bytes
+    << ", \"commands_accepted\": " << in.commands_accepted
+    << ", \"commands_refused\": " << in.commands_refused
+    << ", \"rejected_unsigned\": " << in.rejected_unsigned
+    << ", \"rejected_bad_signature\": " << in.rejected_bad_signature
+    << ", \"rejected_replay\": " << in.rejected_replay
+    << ", \"rejected_source\": " << in.rejected_source
+    << ", \"ignored_messages\": " << in.ignored_messages
+    << ", \"saturated_cycles\": " << in.saturated_cycles << "}";
   if (run.wakeup_latency != nullptr && run.wakeup_latency->count() > 0) {
     const LatencyHistogram& w = *run.wakeup_latency;
     o << ",\n  \"wakeup_latency\": {\"count\": " << w.count() << ", \"min_us\": " << us(w.min_ns())

@@ -50,23 +50,32 @@ Frames simulated_frames(std::uint32_t width_px, std::uint32_t height_px, std::si
   return frames;
 }
 
+algorithms::ThresholdSet board_thresholds(std::size_t boards) {
+  algorithms::ThresholdSet set = firmware::default_config().thresholds;
+  set.boards[6] = algorithms::ColourThreshold{0.0F, 360.0F, 0, 180, 255};  // light greys
+  set.boards[7] = algorithms::ColourThreshold{0.0F, 360.0F, 0, 0, 50};     // dark pixels
+  set.count = std::min(boards, algorithms::kMaxBoards);
+  return set;
+}
+
 void synthetic_map(std::size_t samples, std::uint32_t width_px, std::uint32_t height_px,
-                   algorithms::MapFile& map) {
+                   algorithms::MapFile& map, std::size_t boards) {
   map = algorithms::MapFile{};
   map.image_width_px = width_px;
   map.image_height_px = height_px;
-  map.thresholds = firmware::default_config().thresholds;
+  map.thresholds = board_thresholds(boards);
   auto& m = map.model;
   m.sample_count = static_cast<std::uint32_t>(samples);
-  m.feature_count = 6;
-  for (std::uint8_t k = 0; k < 6; ++k) m.board_index[k] = k;
+  m.feature_count = static_cast<std::uint32_t>(map.thresholds.count);
+  for (std::size_t k = 0; k < m.feature_count; ++k) m.board_index[k] = static_cast<std::uint8_t>(k);
   m.area_scale = 100.0F / static_cast<float>(width_px * height_px);
   m.sigma_x = 0.1F;
   m.sigma_y = 5.0F;
   m.max_nearest_distance = 100.0F;
   algorithms::Pcg32 rng(11, 2);
   for (std::size_t i = 0; i < samples; ++i) {
-    for (std::size_t k = 0; k < 6; ++k) m.sample(i)[k] = static_cast<float>(rng.uniform(0.0, 3.0));
+    for (std::size_t k = 0; k < m.feature_count; ++k)
+      m.sample(i)[k] = static_cast<float>(rng.uniform(0.0, 3.0));
     m.target_x_m[i] = static_cast<float>(rng.uniform(1.9, 2.3));
     m.target_y_m[i] = static_cast<float>(rng.uniform(0.3, 1.7));
   }
@@ -74,11 +83,12 @@ void synthetic_map(std::size_t samples, std::uint32_t width_px, std::uint32_t he
 
 hal::CameraStatus MemoryCamera::acquire(hal::FrameView& frame, std::uint64_t) {
   const std::size_t i = static_cast<std::size_t>(next_ % frames_.rgb.size());
-  frame.data = frames_.rgb[i].data();
+  const bool yuyv = format_ == hal::PixelFormat::kYuyv;
+  frame.data = yuyv ? frames_.yuyv[i].data() : frames_.rgb[i].data();
   frame.width_px = frames_.width_px;
   frame.height_px = frames_.height_px;
-  frame.stride_bytes = frames_.width_px * 3U;
-  frame.format = hal::PixelFormat::kRgb24;
+  frame.stride_bytes = frames_.width_px * (yuyv ? 2U : 3U);
+  frame.format = format_;
   frame.timestamp_ns = 1000000000ULL + next_ * 33333333ULL;
   frame.sequence = static_cast<std::uint32_t>(next_++);
   return hal::CameraStatus::kFrame;

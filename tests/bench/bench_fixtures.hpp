@@ -23,20 +23,27 @@ struct Frames {
 /// @p count frames of the default scenario along its route, rendered at @p width x @p height.
 Frames simulated_frames(std::uint32_t width_px, std::uint32_t height_px, std::size_t count);
 
-/// A map with @p samples random samples over the default six boards (values in a plausible range).
-void synthetic_map(std::size_t samples, std::uint32_t width_px, std::uint32_t height_px,
-                   algorithms::MapFile& map);
+/// The firmware's default windows (six boards) for @p boards <= 6; 7 and 8 add a window of light
+/// greys and one of dark pixels, so that every board count 1..8 can be measured.
+algorithms::ThresholdSet board_thresholds(std::size_t boards = 6);
 
-/// Serves the frames again and again with timestamps 1/30 s apart.
+/// A map with @p samples random samples over the first @p boards boards of board_thresholds()
+/// (values in a plausible range).
+void synthetic_map(std::size_t samples, std::uint32_t width_px, std::uint32_t height_px,
+                   algorithms::MapFile& map, std::size_t boards = 6);
+
+/// Serves the frames (RGB24 or their YUYV versions) again and again, timestamps 1/30 s apart.
 class MemoryCamera final : public hal::Camera {
  public:
-  explicit MemoryCamera(const Frames& frames) : frames_(frames) {}
+  explicit MemoryCamera(const Frames& frames, hal::PixelFormat format = hal::PixelFormat::kRgb24)
+      : frames_(frames), format_(format) {}
   hal::CameraStatus acquire(hal::FrameView& frame, std::uint64_t deadline_ns) override;
   void release() override {}
   hal::CameraCounters counters() const override { return {}; }
 
  private:
   const Frames& frames_;
+  hal::PixelFormat format_;
   std::uint64_t next_ = 0;
 };
 

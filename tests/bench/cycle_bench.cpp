@@ -3,7 +3,10 @@
 // Instruction counts (deterministic) come from harmoloc-instructions under callgrind instead.
 #include <benchmark/benchmark.h>
 
+#include <map>
 #include <memory>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -19,12 +22,17 @@ namespace {
 
 using namespace harmoloc;
 
-const bench::Frames& frames_at(std::uint32_t width) {
-  static std::unique_ptr<bench::Frames> cache[3];
-  const int slot = width == 320 ? 0 : width == 640 ? 1 : 2;
-  if (!cache[slot])
-    cache[slot] = std::make_unique<bench::Frames>(bench::simulated_frames(width, width * 3 / 4, 8));
-  return *cache[slot];
+// Frames per resolution, rendered once. Segmentation benchmarks take (width, height) as args.
+const bench::Frames& frames_at(std::uint32_t width, std::uint32_t height) {
+  static std::map<std::pair<std::uint32_t, std::uint32_t>, std::unique_ptr<bench::Frames>> cache;
+  auto& slot = cache[{width, height}];
+  if (!slot) slot = std::make_unique<bench::Frames>(bench::simulated_frames(width, height, 8));
+  return *slot;
+}
+
+const bench::Frames& frames_of(const benchmark::State& state) {
+  return frames_at(static_cast<std::uint32_t>(state.range(0)),
+                   static_cast<std::uint32_t>(state.range(1)));
 }
 
 void set_pixels(benchmark::State& state, const bench::Frames& f) {
@@ -34,8 +42,7 @@ void set_pixels(benchmark::State& state, const bench::Frames& f) {
 // Runs @p segment(frame bytes, areas) over the frames of the benchmark's resolution, one frame
 // per iteration, and reports pixels per second.
 template <typename Segment>
-void segment_frames(benchmark::State& state, bool yuyv, Segment&& segment) {
-  const bench::Frames& f = frames_at(static_cast<std::uint32_t>(state.range(0)));
+void segment_frames(benchmark::State& state, const bench::Frames& f, bool yuyv, Segment&& segment) {
   const auto& images = yuyv ? f.yuyv : f.rgb;
   algorithms::AreaVector areas;
   std::size_t i = 0;
@@ -46,37 +53,118 @@ void segment_frames(benchmark::State& state, bool yuyv, Segment&& segment) {
   set_pixels(state, f);
 }
 
-const algorithms::ColourTable& colour_table() {
-  static std::vector<std::uint8_t> storage(algorithms::ColourTable::kEntries);
-  static algorithms::ColourTable table;
-  if (!table.ready())
-    table.build(algorithms::BoardClassifier(firmware::default_config().thresholds), storage.data());
+// One table of each kind, rebuilt when a benchmark asks for another board count or path.
+template <typename Table>
+const Table& table_for(std::size_t boards, algorithms::SegmentPath path) {
+  static std::vector<std::uint8_t> storage(algorithms::MaskTable::kStorageBytes);
+  static Table table;
+  static std::size_t built_for = 0;
+  if (!table.ready() || built_for != boards) {
+    table.build(algorithms::BoardClassifier(bench::board_thresholds(boards)), storage.data());
+    built_for = boards;
+  }
+  table.set_path(path);
   return table;
 }
 
-void BM_SegmentRgb24(benchmark::State& state) {
-  const algorithms::BoardClassifier classifier(firmware::default_config().thresholds);
-  segment_frames(state, false,
-                 [&](const bench::Frames& f, const std::uint8_t* data, algorithms::AreaVector& a) {
-                   algorithms::segment_rgb24(data, f.width_px, f.height_px, f.width_px * 3,
-                                             classifier, a);
-                 });
+constexpr int kBest = -1;  // path argument: best_segment_path()
+
+algorithms::SegmentPath path_arg(std::int64_t arg) {
+  return arg == kBest ? algorithms::best_segment_path() : static_cast<algorithms::SegmentPath>(arg);
+}
+
+// Args: width, height, path (kBest or a SegmentPath), boards.
+bool skip_unsupported(benchmark::State& state, algorithms::SegmentPath path) {
+  if (algorithms::segment_path_supported(path)) return false;
+  state.SkipWithError("path not supported on this CPU");
+  return true;
 }
 
 void BM_SegmentRgb24Table(benchmark::State& state) {
-  const algorithms::ColourTable& table = colour_table();
-  segment_frames(state, false,
+  const algorithms::SegmentPath path = path_arg(state.range(2));
+  if (skip_unsupported(state, path)) return;
+  state.SetLabel(algorithms::segment_path_name(path));
+  const auto& table =
+      table_for<algorithms::ColourTable>(static_cast<std::size_t>(state.range(3)), path);
+  segment_frames(state, frames_of(state), false,
                  [&](const bench::Frames& f, const std::uint8_t* data, algorithms::AreaVector& a) {
                    algorithms::segment_rgb24(data, f.width_px, f.height_px, f.width_px * 3, table,
                                              a);
                  });
 }
 
+void BM_SegmentYuyvTable(benchmark::State& state) {
+  const algorithms::SegmentPath path = path_arg(state.range(2));
+  if (skip_unsupported(state, path)) return;
+  state.SetLabel(algorithms::segment_path_name(path));
+  const auto& table =
+      table_for<algorithms::YuyvTable>(static_cast<std::size_t>(state.range(3)), path);
+  segment_frames(state, frames_of(state), true,
+                 [&](const bench::Frames& f, const std::uint8_t* data, algorithms::AreaVector& a) {
+                   algorithms::segment_yuyv(data, f.width_px, f.height_px, f.width_px * 2, table,
+                                            a);
+                 });
+}
+
+// The worst case for a table: a frame of noise, every pixel a different, random entry (a cache
+// miss a pixel). Args: path (kBest or a SegmentPath), 0 RGB24 / 1 YUYV; 640x480, 6 boards.
+void BM_SegmentNoiseTable(benchmark::State& state) {
+  const algorithms::SegmentPath path = path_arg(state.range(0));
+  if (skip_unsupported(state, path)) return;
+  const bool yuyv = state.range(1) != 0;
+  state.SetLabel(std::string(algorithms::segment_path_name(path)) + (yuyv ? " yuyv" : " rgb24"));
+  constexpr std::uint32_t kW = 640, kH = 480;
+  static std::vector<std::uint8_t> noise = [] {
+    std::vector<std::uint8_t> bytes(kW * kH * 3);
+    std::uint64_t x = 88172645463325252ULL;
+    for (auto& b : bytes) {
+      x ^= x << 13U;
+      x ^= x >> 7U;
+      x ^= x << 17U;
+      b = static_cast<std::uint8_t>(x);
+    }
+    return bytes;
+  }();
+  algorithms::AreaVector areas;
+  if (yuyv) {
+    const auto& table = table_for<algorithms::YuyvTable>(6, path);
+    for (auto _ : state) {
+      algorithms::segment_yuyv(noise.data(), kW, kH, kW * 2, table, areas);
+      benchmark::DoNotOptimize(areas);
+    }
+  } else {
+    const auto& table = table_for<algorithms::ColourTable>(6, path);
+    for (auto _ : state) {
+      algorithms::segment_rgb24(noise.data(), kW, kH, kW * 3, table, areas);
+      benchmark::DoNotOptimize(areas);
+    }
+  }
+  state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()) * kW * kH);
+}
+
+void BM_SegmentYuyvDecode(benchmark::State& state) {
+  const auto& table = table_for<algorithms::ColourTable>(6, algorithms::SegmentPath::kScalar);
+  segment_frames(state, frames_of(state), true,
+                 [&](const bench::Frames& f, const std::uint8_t* data, algorithms::AreaVector& a) {
+                   algorithms::segment_yuyv(data, f.width_px, f.height_px, f.width_px * 2, table,
+                                            a);
+                 });
+}
+
+void BM_SegmentRgb24(benchmark::State& state) {
+  const algorithms::BoardClassifier classifier(bench::board_thresholds());
+  segment_frames(state, frames_of(state), false,
+                 [&](const bench::Frames& f, const std::uint8_t* data, algorithms::AreaVector& a) {
+                   algorithms::segment_rgb24(data, f.width_px, f.height_px, f.width_px * 3,
+                                             classifier, a);
+                 });
+}
+
 void BM_SegmentRgb24OpenCV(benchmark::State& state) {
   cv::setNumThreads(1);
-  const auto thresholds = firmware::default_config().thresholds;
+  const auto thresholds = bench::board_thresholds();
   reference::OpencvScratch scratch;
-  segment_frames(state, false,
+  segment_frames(state, frames_of(state), false,
                  [&](const bench::Frames& f, const std::uint8_t* data, algorithms::AreaVector& a) {
                    reference::opencv_segment_rgb24(
                        data, static_cast<int>(f.width_px), static_cast<int>(f.height_px),
@@ -84,20 +172,11 @@ void BM_SegmentRgb24OpenCV(benchmark::State& state) {
                  });
 }
 
-void BM_SegmentYuyv(benchmark::State& state) {
-  const algorithms::ColourTable& table = colour_table();
-  segment_frames(state, true,
-                 [&](const bench::Frames& f, const std::uint8_t* data, algorithms::AreaVector& a) {
-                   algorithms::segment_yuyv(data, f.width_px, f.height_px, f.width_px * 2, table,
-                                            a);
-                 });
-}
-
 void BM_SegmentYuyvOpenCV(benchmark::State& state) {
   cv::setNumThreads(1);
-  const auto thresholds = firmware::default_config().thresholds;
+  const auto thresholds = bench::board_thresholds();
   reference::OpencvScratch scratch;
-  segment_frames(state, true,
+  segment_frames(state, frames_of(state), true,
                  [&](const bench::Frames& f, const std::uint8_t* data, algorithms::AreaVector& a) {
                    reference::opencv_segment_yuyv(
                        data, static_cast<int>(f.width_px), static_cast<int>(f.height_px),
@@ -130,29 +209,66 @@ void BM_FilterStep(benchmark::State& state) {
   state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()) * state.range(0));
 }
 
+// Args: width, height, pixel format (0 RGB24, 1 YUYV), boards, particles, map samples.
 void BM_WholeCycle(benchmark::State& state) {
-  const bench::Frames& f = frames_at(static_cast<std::uint32_t>(state.range(0)));
+  const bench::Frames& f = frames_of(state);
+  const auto format = static_cast<hal::PixelFormat>(state.range(2));
   static algorithms::MapFile map;
-  bench::synthetic_map(204, f.width_px, f.height_px, map);
-  const firmware::FirmwareConfig config = firmware::default_config();
-  bench::MemoryCamera camera(f);
+  bench::synthetic_map(static_cast<std::size_t>(state.range(5)), f.width_px, f.height_px, map,
+                       static_cast<std::size_t>(state.range(3)));
+  firmware::FirmwareConfig config = firmware::default_config();
+  config.filter.particles = static_cast<std::size_t>(state.range(4));
+  bench::MemoryCamera camera(f, format);
   bench::MemoryEncoders encoders;
   bench::NullLink link;
   bench::StepClock clock;
-  auto cycle =
-      std::make_unique<firmware::LocalizationCycle>(config, map, camera, encoders, link, clock);
+  auto cycle = std::make_unique<firmware::LocalizationCycle>(config, map, camera, encoders, link,
+                                                             clock, format);
+  for (int i = 0; i < 30; ++i) cycle->run_once();  // past initialisation into the steady state
   for (auto _ : state) benchmark::DoNotOptimize(cycle->run_once());
   set_pixels(state, f);
 }
 
-BENCHMARK(BM_SegmentRgb24)->Arg(320)->Arg(640)->Arg(1280)->Unit(benchmark::kMicrosecond);
-BENCHMARK(BM_SegmentRgb24Table)->Arg(320)->Arg(640)->Arg(1280)->Unit(benchmark::kMicrosecond);
-BENCHMARK(BM_SegmentRgb24OpenCV)->Arg(320)->Arg(640)->Arg(1280)->Unit(benchmark::kMicrosecond);
-BENCHMARK(BM_SegmentYuyv)->Arg(320)->Arg(640)->Arg(1280)->Unit(benchmark::kMicrosecond);
-BENCHMARK(BM_SegmentYuyvOpenCV)->Arg(320)->Arg(640)->Arg(1280)->Unit(benchmark::kMicrosecond);
+// Resolutions of the scaling table (docs/performance.md).
+void resolutions(benchmark::internal::Benchmark* b) {
+  for (const auto& r : {std::pair{320, 240}, std::pair{640, 480}, std::pair{1280, 720}})
+    b->Args({r.first, r.second});
+}
+
+// Segmentation with a table: the best path and the scalar one at every resolution (6 boards),
+// then the best path at 640x480 for 1..8 boards.
+void table_args(benchmark::internal::Benchmark* b) {
+  const int scalar = static_cast<int>(algorithms::SegmentPath::kScalar);
+  for (int path : {kBest, scalar}) {
+    for (const auto& r : {std::pair{320, 240}, std::pair{640, 480}, std::pair{1280, 720}})
+      b->Args({r.first, r.second, path, 6});
+  }
+  for (int boards = 1; boards <= 8; ++boards) {
+    if (boards != 6) b->Args({640, 480, kBest, boards});  // 6 is above
+  }
+}
+
+void cycle_args(benchmark::internal::Benchmark* b) {
+  for (const auto& r : {std::pair{320, 240}, std::pair{640, 480}, std::pair{1280, 720}}) {
+    for (int format : {0, 1}) b->Args({r.first, r.second, format, 6, 1024, 204});
+  }
+  for (int boards : {1, 2, 4, 8}) b->Args({640, 480, 0, boards, 1024, 204});
+  for (int particles : {256, 4096}) b->Args({640, 480, 0, 6, particles, 204});
+  for (int samples : {1024, 4096}) b->Args({640, 480, 0, 6, 1024, samples});
+}
+
+BENCHMARK(BM_SegmentRgb24Table)->Apply(table_args)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_SegmentYuyvTable)->Apply(table_args)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_SegmentNoiseTable)
+    ->ArgsProduct({{kBest, static_cast<int>(algorithms::SegmentPath::kScalar)}, {0, 1}})
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_SegmentYuyvDecode)->Apply(resolutions)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_SegmentRgb24)->Apply(resolutions)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_SegmentRgb24OpenCV)->Apply(resolutions)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_SegmentYuyvOpenCV)->Apply(resolutions)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_HarmonicQuery)->Arg(204)->Arg(1024)->Arg(4096)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_FilterStep)->Arg(256)->Arg(1024)->Arg(4096)->Unit(benchmark::kMicrosecond);
-BENCHMARK(BM_WholeCycle)->Arg(320)->Arg(640)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_WholeCycle)->Apply(cycle_args)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 

@@ -1,8 +1,23 @@
-// harmoloc-instructions KERNEL [ARG]: runs one kernel between callgrind's start/stop markers, so
+// harmoloc-instructions KERNEL ARG: runs one kernel between callgrind's start/stop markers, so
 // `valgrind --tool=callgrind --instr-atstart=no` counts exactly its instructions (deterministic,
-// unlike time). Kernels: seg_table W, seg_table_yuyv W (the cycle's colour table), seg_rgb W (HSV
-// arithmetic per pixel), seg_rgb_opencv W, seg_yuyv W, seg_yuyv_opencv W, harmonic N,
-// filter N, cycle W. Each counts REPEAT runs after one warm-up run (divide by REPEAT).
+// unlike time). Each counts REPEAT runs after one warm-up run (divide by REPEAT). RES is WxH
+// (or W alone for W x 3W/4) of a simulated frame.
+//
+//   seg_table RES              RGB24, colour table, the best path of this CPU (the cycle's)
+//   seg_table_scalar RES       the same on the portable scalar path
+//   seg_yuyv_table RES         YUYV, YUYV table, best path (the cycle's)
+//   seg_yuyv_table_scalar RES  the same on the scalar path
+//   seg_yuyv_decode RES        YUYV with the RGB table, each pixel decoded first
+//   seg_table_boards N         seg_table at 640x480 with N boards (1..8)
+//   seg_yuyv_table_boards N    seg_yuyv_table at 640x480 with N boards
+//   seg_rgb RES, seg_yuyv RES  the HSV arithmetic per pixel (BoardClassifier)
+//   seg_rgb_opencv RES, seg_yuyv_opencv RES   the OpenCV reference
+//   harmonic N                 harmonic query over N samples, 6 boards
+//   filter N                   particle filter step with N particles
+//   cycle RES, cycle_yuyv RES  the whole cycle, steady state: 6 boards, 1024 particles, 204 samples
+//   cycle_boards N, cycle_particles N, cycle_samples N   the whole cycle at 640x480 RGB24 with
+//                              one of those changed
+//   path 0                     prints the best segmentation path of this CPU (no measurement)
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -36,6 +51,46 @@ void measure(F&& run) {
 
 algorithms::MapFile g_map;
 
+bool starts_with(const std::string& s, const char* prefix) {
+  return s.rfind(prefix, 0) == 0;
+}
+
+// "640x480", or "640" for 640 x 480 (W x 3W/4).
+void parse_resolution(const char* arg, std::uint32_t& w, std::uint32_t& h) {
+  char* end = nullptr;
+  w = static_cast<std::uint32_t>(std::strtoul(arg, &end, 10));
+  h = *end == 'x' ? static_cast<std::uint32_t>(std::strtoul(end + 1, nullptr, 10)) : w * 3 / 4;
+}
+
+// A table of the kernel's kind (RGB or YUYV), built for @p boards and put on @p path.
+template <typename Table>
+const Table& table_for(std::size_t boards, algorithms::SegmentPath path) {
+  static std::vector<std::uint8_t> storage(algorithms::MaskTable::kStorageBytes);
+  static Table table;
+  table.build(algorithms::BoardClassifier(bench::board_thresholds(boards)), storage.data());
+  if (!table.set_path(path)) {
+    std::fprintf(stderr, "path %s not supported here\n", algorithms::segment_path_name(path));
+    std::exit(3);
+  }
+  return table;
+}
+
+int run_cycle(const bench::Frames& f, hal::PixelFormat format, std::size_t boards,
+              std::size_t particles, std::size_t samples) {
+  bench::synthetic_map(samples, f.width_px, f.height_px, g_map, boards);
+  firmware::FirmwareConfig config = firmware::default_config();
+  config.filter.particles = particles;
+  bench::MemoryCamera camera(f, format);
+  bench::MemoryEncoders encoders;
+  bench::NullLink link;
+  bench::StepClock clock;
+  auto cycle = std::make_unique<firmware::LocalizationCycle>(config, g_map, camera, encoders, link,
+                                                             clock, format);
+  for (int i = 0; i < 30; ++i) cycle->run_once();  // past initialisation into the steady state
+  measure([&] { cycle->run_once(); });
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -44,72 +99,79 @@ int main(int argc, char** argv) {
     return 2;
   }
   const std::string kernel = argv[1];
-  const auto arg = static_cast<std::uint32_t>(std::strtoul(argv[2], nullptr, 10));
+  if (kernel == "path") {  // not a kernel: the best segmentation path of this CPU
+    std::printf("%s\n", algorithms::segment_path_name(algorithms::best_segment_path()));
+    return 0;
+  }
+  const auto n = static_cast<std::size_t>(std::strtoul(argv[2], nullptr, 10));
   cv::setNumThreads(1);
-  const auto thresholds = firmware::default_config().thresholds;
   algorithms::AreaVector areas;
-  if (kernel.rfind("seg_", 0) == 0 || kernel == "cycle") {
-    const bench::Frames f = bench::simulated_frames(arg, arg * 3 / 4, 1);
+  const algorithms::SegmentPath best = algorithms::best_segment_path();
+  const algorithms::SegmentPath scalar = algorithms::SegmentPath::kScalar;
+
+  if (starts_with(kernel, "seg_") || starts_with(kernel, "cycle")) {
+    const bool by_count = kernel == "seg_table_boards" || kernel == "seg_yuyv_table_boards" ||
+                          kernel == "cycle_boards" || kernel == "cycle_particles" ||
+                          kernel == "cycle_samples";
+    std::uint32_t w = 640, h = 480;
+    if (!by_count) parse_resolution(argv[2], w, h);
+    const bench::Frames f = bench::simulated_frames(w, h, 1);
+    const std::size_t boards = kernel == "seg_table_boards" || kernel == "seg_yuyv_table_boards" ||
+                                       kernel == "cycle_boards"
+                                   ? n
+                                   : 6;
+    const auto thresholds = bench::board_thresholds(boards);
     const algorithms::BoardClassifier classifier(thresholds);
     reference::OpencvScratch scratch;
-    const int w = static_cast<int>(f.width_px), h = static_cast<int>(f.height_px);
-    if (kernel == "seg_table") {
-      static std::vector<std::uint8_t> storage(algorithms::ColourTable::kEntries);
-      algorithms::ColourTable table;
-      table.build(classifier, storage.data());
-      measure([&] {
-        algorithms::segment_rgb24(f.rgb[0].data(), f.width_px, f.height_px, f.width_px * 3, table,
-                                  areas);
-      });
-    } else if (kernel == "seg_table_yuyv") {
-      static std::vector<std::uint8_t> storage(algorithms::ColourTable::kEntries);
-      algorithms::ColourTable table;
-      table.build(classifier, storage.data());
-      measure([&] {
-        algorithms::segment_yuyv(f.yuyv[0].data(), f.width_px, f.height_px, f.width_px * 2, table,
-                                 areas);
-      });
+    const std::uint8_t* rgb = f.rgb[0].data();
+    const std::uint8_t* yuyv = f.yuyv[0].data();
+    const int iw = static_cast<int>(w), ih = static_cast<int>(h);
+    if (kernel == "seg_table" || kernel == "seg_table_scalar" || kernel == "seg_table_boards") {
+      const auto& table =
+          table_for<algorithms::ColourTable>(boards, kernel == "seg_table_scalar" ? scalar : best);
+      measure([&] { algorithms::segment_rgb24(rgb, w, h, w * 3, table, areas); });
+    } else if (kernel == "seg_yuyv_table" || kernel == "seg_yuyv_table_scalar" ||
+               kernel == "seg_yuyv_table_boards") {
+      const auto& table = table_for<algorithms::YuyvTable>(
+          boards, kernel == "seg_yuyv_table_scalar" ? scalar : best);
+      measure([&] { algorithms::segment_yuyv(yuyv, w, h, w * 2, table, areas); });
+    } else if (kernel == "seg_yuyv_decode") {
+      const auto& table = table_for<algorithms::ColourTable>(boards, scalar);
+      measure([&] { algorithms::segment_yuyv(yuyv, w, h, w * 2, table, areas); });
     } else if (kernel == "seg_rgb") {
-      measure([&] {
-        algorithms::segment_rgb24(f.rgb[0].data(), f.width_px, f.height_px, f.width_px * 3,
-                                  classifier, areas);
-      });
+      measure([&] { algorithms::segment_rgb24(rgb, w, h, w * 3, classifier, areas); });
     } else if (kernel == "seg_rgb_opencv") {
       measure([&] {
-        reference::opencv_segment_rgb24(f.rgb[0].data(), w, h, w * 3, thresholds, areas, scratch);
+        reference::opencv_segment_rgb24(rgb, iw, ih, iw * 3, thresholds, areas, scratch);
       });
     } else if (kernel == "seg_yuyv") {
-      measure([&] {
-        algorithms::segment_yuyv(f.yuyv[0].data(), f.width_px, f.height_px, f.width_px * 2,
-                                 classifier, areas);
-      });
+      measure([&] { algorithms::segment_yuyv(yuyv, w, h, w * 2, classifier, areas); });
     } else if (kernel == "seg_yuyv_opencv") {
       measure([&] {
-        reference::opencv_segment_yuyv(f.yuyv[0].data(), w, h, w * 2, thresholds, areas, scratch);
+        reference::opencv_segment_yuyv(yuyv, iw, ih, iw * 2, thresholds, areas, scratch);
       });
     } else if (kernel == "cycle") {
-      bench::synthetic_map(204, f.width_px, f.height_px, g_map);
-      const firmware::FirmwareConfig config = firmware::default_config();
-      bench::MemoryCamera camera(f);
-      bench::MemoryEncoders encoders;
-      bench::NullLink link;
-      bench::StepClock clock;
-      auto cycle = std::make_unique<firmware::LocalizationCycle>(config, g_map, camera, encoders,
-                                                                 link, clock);
-      for (int i = 0; i < 30; ++i) cycle->run_once();  // past initialisation into the steady state
-      measure([&] { cycle->run_once(); });
+      return run_cycle(f, hal::PixelFormat::kRgb24, 6, 1024, 204);
+    } else if (kernel == "cycle_yuyv") {
+      return run_cycle(f, hal::PixelFormat::kYuyv, 6, 1024, 204);
+    } else if (kernel == "cycle_boards") {
+      return run_cycle(f, hal::PixelFormat::kRgb24, n, 1024, 204);
+    } else if (kernel == "cycle_particles") {
+      return run_cycle(f, hal::PixelFormat::kRgb24, 6, n, 204);
+    } else if (kernel == "cycle_samples") {
+      return run_cycle(f, hal::PixelFormat::kRgb24, 6, 1024, n);
     } else {
       std::fprintf(stderr, "unknown kernel %s\n", kernel.c_str());
       return 2;
     }
   } else if (kernel == "harmonic") {
-    bench::synthetic_map(arg, 320, 240, g_map);
+    bench::synthetic_map(n, 320, 240, g_map);
     const std::array<float, algorithms::HarmonicModel::kMaxFeatures> features{0.5F, 1.0F, 0.2F,
                                                                               1.5F, 0.3F, 0.8F};
     measure([&] { (void)algorithms::harmonic_query(g_map.model, features); });
   } else if (kernel == "filter") {
     static algorithms::ParticleFilter filter;
-    filter.configure(arg, 1, algorithms::MotionNoise{});
+    filter.configure(n, 1, algorithms::MotionNoise{});
     filter.initialize(algorithms::Pose2{2.0, 1.0, 1.5}, 0.05, 0.1, false);
     measure([&] {
       filter.predict(algorithms::OdometryDelta{0.0033, 0.001});

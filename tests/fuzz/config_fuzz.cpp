@@ -49,5 +49,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
                       "fix sigma out of range");
   HARMOLOC_FUZZ_CHECK(c.link.heartbeat_hz > 0.0 && std::isfinite(c.link.heartbeat_hz),
                       "heartbeat rate out of range");
+  for (const std::uint8_t id : c.link.accept_system_ids)
+    HARMOLOC_FUZZ_CHECK(id != 0, "accepted system id 0");
+  for (const std::uint8_t id : c.link.accept_component_ids)
+    HARMOLOC_FUZZ_CHECK(id != 0, "accepted component id 0");
+  HARMOLOC_FUZZ_CHECK(c.link.has_signing_key == !c.link.signing_key_file.empty(),
+                      "a key file named but no key, or a key without a file");
   return 0;
 }

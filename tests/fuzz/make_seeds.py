@@ -11,6 +11,7 @@ usage: tests/fuzz/make_seeds.py [--e2e build/host/tests/e2e]
 """
 
 import argparse
+import hashlib
 import os
 import shutil
 import struct
@@ -297,6 +298,71 @@ def segment_seeds(e2e):
     put("segment", "empty.bin", segment_seed(True, 0, 0, 0, 0, b""))
 
 
+# --- the link's inbound side (mavlink_inbound_fuzz.cpp) ------------------------------------------
+
+FUZZ_KEY = bytes((11 + 31 * i) & 0xFF for i in range(32))  # make_key(11) in the target
+FUZZ_BASE_TS = 1000000000
+CRC_EXTRA = {0: 50, 76: 152, 77: 143, 253: 83, 331: 91}
+
+
+def x25(data, crc=0xFFFF):
+    for b in data:
+        t = (b ^ crc) & 0xFF
+        t = (t ^ (t << 4)) & 0xFF
+        crc = ((crc >> 8) ^ (t << 8) ^ (t << 3) ^ (t >> 4)) & 0xFFFF
+    return crc
+
+
+def mav_frame(msg_id, payload, sysid=255, compid=190, key=None, ts=0, link_id=0):
+    payload = payload.rstrip(b"\0") or b"\0"
+    f = bytes([0xFD, len(payload), 1 if key else 0, 0, 0, sysid, compid,
+               msg_id & 0xFF, (msg_id >> 8) & 0xFF, msg_id >> 16]) + payload
+    crc = x25(bytes([CRC_EXTRA[msg_id]]), x25(f[1:]))
+    f += struct.pack("<H", crc)
+    if key:
+        f += bytes([link_id]) + struct.pack("<Q", ts)[:6]
+        f += hashlib.sha256(key + f).digest()[:6]
+    return f
+
+
+def command_long(cmd, params=(), target=(1, 197), **kw):
+    p = struct.pack("<7fHBBB", *(list(params) + [0.0] * 7)[:7], cmd, target[0], target[1], 0)
+    return mav_frame(76, p, **kw)
+
+
+def mavlink_seeds(e2e):
+    hb = mav_frame(0, bytes([0, 0, 0, 0, 6, 8, 0, 0, 3]))
+    pose = (2.0, -1.0, 0.5, 0.01, 0.01)
+    garbage = bytes([0xFD, 33, 0, 0, 0, 255, 190, 76, 0, 0, 0x55, 0xFD, 0x00, 0x13, 0xFE]) * 3
+    # Raw mode (bit 1 clear); bits 2-4 pick how many bytes a read delivers.
+    put("mavlink_inbound", "raw-unsigned.bin", bytes([0x00 | 5 << 2]) + garbage +
+        command_long(31011, pose) + hb + command_long(512, [0]) + command_long(31010))
+    put("mavlink_inbound", "raw-signed.bin", bytes([0x01 | 4 << 2]) +
+        command_long(31011, pose, key=FUZZ_KEY, ts=FUZZ_BASE_TS + 5) + garbage +
+        command_long(512, [331], key=FUZZ_KEY, ts=FUZZ_BASE_TS + 6) +
+        command_long(512, [331], key=FUZZ_KEY, ts=FUZZ_BASE_TS + 6) +  # replayed
+        command_long(31010, key=FUZZ_KEY, ts=FUZZ_BASE_TS + 9, sysid=42) +
+        command_long(31010, key=bytes(32), ts=FUZZ_BASE_TS + 10) + command_long(400))
+    put("mavlink_inbound", "raw-one-byte-reads.bin", bytes([0x01]) +
+        command_long(31011, pose, key=FUZZ_KEY, ts=FUZZ_BASE_TS + 1, link_id=2))
+    put("mavlink_inbound", "raw-stalled-false-start.bin", bytes([0x00 | 6 << 2]) +
+        bytes([0xFD, 233, 0, 0, 0, 1, 1, 0x4B, 0x01, 0]) + command_long(31010))
+    # Structured mode: ops 0 raw, 1 command, 2 other message, 3 replay, 4 truncated, 5 false start.
+    prog = bytes([
+        1, 0x00, 0x01, 1, 0xC0, 0, 0x3F, 0, 0x00, 0x00, 0, 0, 0, 0, 0, 1, 0x10, 0x00,  # set pose
+        3,                                     # the same again
+        0, 8, 1, 2, 3, 0xFD, 5, 6, 7, 8,       # raw bytes
+        2, 0, 9, 1, 2, 3, 4, 5, 6, 7, 8, 9, 3,  # a HEARTBEAT, signed
+        1, 0x08, 0x02, 2, 0x15, 0, 0, 0, 0, 0, 0, 0x01, 0x20, 0x00,  # request message to comp 0
+        5, 3, 10, 0,                           # a false start
+        1, 0x02, 0x00, 0, 0, 0, 0, 0, 0, 0, 0x03, 0x30, 0x00,         # wrong key, from 42
+        4, 20,                                 # half of it
+        1, 0x00, 0x00, 0, 0, 0, 0, 0, 0, 0, 0x31, 0x00, 0x00,         # stale timestamp
+    ])
+    put("mavlink_inbound", "structured-signed.bin", bytes([0x03 | 3 << 2]) + prog)
+    put("mavlink_inbound", "structured-unsigned.bin", bytes([0x02 | 6 << 2]) + prog)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--e2e", default=os.path.join(ROOT, "build", "host", "tests", "e2e"),
@@ -305,7 +371,7 @@ def main():
     if not os.path.isdir(args.e2e):
         print("note: %s not found: only the hand-written seeds" % args.e2e, file=sys.stderr)
     for make in (map_seeds, config_seeds, metadata_seeds, frame_index_seeds, candump_seeds,
-                 tum_seeds, scenario_seeds, segment_seeds):
+                 tum_seeds, scenario_seeds, segment_seeds, mavlink_seeds):
         make(args.e2e)
     total = 0
     for d, _, files in os.walk(CORPUS):

@@ -19,7 +19,7 @@ HERE=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 ROOT=$(cd "$HERE/../.." && pwd)
 BUILD=${FUZZ_BUILD_DIR:-$ROOT/build/fuzz}
 TARGETS=(map_decode map_roundtrip config metadata frame_index ppm_header candump_line candump_log
-  tum scenario segment)
+  tum scenario segment mavlink_inbound)
 
 dict_for() {
   case "$1" in

@@ -1,18 +1,22 @@
 // Proof of the static-memory rule: after start-up, the cycle (with the host board's file-backed
 // fakes, the serial link and the trajectory writer) makes no heap allocation at all, over
-// thousands of cycles and through every health state. Every allocation function of the process
-// is interposed here and counted while the cycle runs.
+// thousands of cycles and through every health state, while the link brings in garbage and
+// signed, unsigned and replayed commands. Every allocation function of the process is
+// interposed here and counted while the cycle runs.
 #include <gtest/gtest.h>
 
 #include <atomic>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <memory>
 #include <new>
 #include <string>
+#include <vector>
 
 #include <malloc.h>
 
+#include "../unit/mavlink_test_frames.hpp"
 #include "harmoloc/drivers/monotonic_clock.hpp"
 #include "harmoloc/drivers/serial_link.hpp"
 #include "harmoloc/firmware/config.hpp"
@@ -116,6 +120,40 @@ struct PassResult {
 
 enum class Fault { kNone, kUnknownPlaceMidRun, kNoEncoders };
 
+// What the peer sends during a pass: garbage with every kind of command in it, signed with
+// @p key (some unsigned, one replayed), spread over the first hundred or so cycles by the
+// per-cycle read limit.
+std::vector<std::uint8_t> inbound_traffic(const test::mav::Key& key) {
+  namespace tm_ = test::mav;
+  std::vector<std::uint8_t> out;
+  std::uint32_t x = 12345;
+  const auto garbage = [&](std::size_t n) {
+    for (std::size_t i = 0; i < n; ++i) {
+      x = x * 1103515245U + 12345U;
+      out.push_back(static_cast<std::uint8_t>((x >> 16U) % 9 == 0 ? 0xFD : x >> 16U));
+    }
+  };
+  const auto add = [&](const tm_::Bytes& b) { out.insert(out.end(), b.begin(), b.end()); };
+  std::uint64_t ts = 1;  // the signing clock starts at 0 here: fresh streams are in the window
+  const std::array<float, 7> none{};
+  for (int round = 0; round < 4; ++round) {
+    garbage(30000);
+    add(tm_::command(31011, {0.5F, -0.5F, 0.1F, 0, 0, 0, 0}, 255, 190, &key, ++ts));  // set pose
+    garbage(3000);
+    const tm_::Bytes relocalize = tm_::command(31010, none, 255, 190, &key, ++ts);
+    add(relocalize);
+    add(relocalize);                                                        // replayed
+    add(tm_::command(512, {0, 0, 0, 0, 0, 0, 0}, 255, 190, &key, ++ts));    // HEARTBEAT now
+    add(tm_::command(512, {331, 0, 0, 0, 0, 0, 0}, 255, 190, &key, ++ts));  // ODOMETRY now
+    add(tm_::command(512, {42, 0, 0, 0, 0, 0, 0}, 255, 190, &key, ++ts));   // denied
+    add(tm_::command(400, none, 255, 190, &key, ++ts));                     // unsupported
+    add(tm_::command(31010, none));                                         // unsigned
+    add(tm_::command(31010, none, 42, 190, &key, ++ts));                    // other source
+    add(tm_::frame(0, {0, 0, 0, 0, 6, 8, 0, 0, 3}));                        // ignored
+  }
+  return out;
+}
+
 // One start-up (allowed to allocate) and one run of the cycle over a whole dataset (not).
 PassResult run_pass(const std::string& dataset, Fault fault) {
   const auto meta = sim_host::read_metadata(dataset);
@@ -132,8 +170,18 @@ PassResult run_pass(const std::string& dataset, Fault fault) {
   const std::string out =
       (std::filesystem::temp_directory_path() / ("harmoloc_noalloc_" + std::to_string(::getpid())))
           .string();
+  config.link.has_signing_key = true;
+  for (std::size_t i = 0; i < config.link.signing_key.size(); ++i)
+    config.link.signing_key[i] = static_cast<std::uint8_t>(i * 13 + 1);
+  const std::vector<std::uint8_t> traffic = inbound_traffic(config.link.signing_key);
+  {
+    std::ofstream in(out + ".in", std::ios::binary);
+    in.write(reinterpret_cast<const char*>(traffic.data()),
+             static_cast<std::streamsize>(traffic.size()));
+  }
   drivers::SerialLink link;
   EXPECT_EQ(link.open(out + ".link", config.link.baud), "");
+  EXPECT_EQ(link.open_input(out + ".in"), "");
   sim_host::TumWriter trajectory;
   EXPECT_TRUE(trajectory.open(out + ".tum"));
   drivers::MonotonicClock clock;
@@ -158,10 +206,18 @@ PassResult run_pass(const std::string& dataset, Fault fault) {
   g_map.model.max_nearest_distance = bound;
   r.allocations = g_allocations;
   r.first_size = g_first_size;
+  const firmware::mavlink::InboundCounters in = cycle->inbound_counters();
+  EXPECT_EQ(in.bytes_in, traffic.size());
+  EXPECT_EQ(in.commands_accepted, 16U);  // 4 rounds: set pose, relocalize, 2 requests
+  EXPECT_EQ(in.commands_refused, 8U);
+  EXPECT_EQ(in.rejected_replay, 4U);
+  EXPECT_EQ(in.rejected_unsigned, 4U);
+  EXPECT_EQ(in.rejected_source, 4U);
   for (std::size_t h = 0; h < r.health.size(); ++h)
     r.health[h] = cycle->counters().cycles_in_health[h];
   EXPECT_TRUE(trajectory.close());
   std::filesystem::remove(out + ".link");
+  std::filesystem::remove(out + ".in");
   std::filesystem::remove(out + ".tum");
   return r;
 }

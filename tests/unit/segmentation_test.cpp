@@ -6,9 +6,19 @@
 
 #include <gtest/gtest.h>
 
+#if defined(__linux__)
+#include <sys/mman.h>
+#include <unistd.h>
+#endif
+
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
+#include <iterator>
+#include <memory>
+#include <string>
 #include <vector>
 
 #include "harmoloc/algorithms/random.hpp"
@@ -566,3 +576,402 @@ TEST(SegmentYuyv, AgreesWithRgbOfTheSameFrame) {
   }
   EXPECT_GT(total, 0U);  // the random frame does hit some windows
 }
+
+// --- colour tables and SIMD paths ----------------------------------------------------------------
+// Every path a table can take (scalar everywhere, AVX2 on x86-64 CPUs that have it, NEON on ARM)
+// must give the areas the HSV arithmetic gives, on frames chosen to break the SIMD code: widths
+// around its 32-pixel blocks and 256-pixel row chunks, padded, overlapping and zero strides,
+// colours on the windows' edges, every board count (the kernels are compiled per count), and
+// counters filled past their flush points.
+
+namespace {
+
+std::vector<ha::SegmentPath> supported_paths() {
+  std::vector<ha::SegmentPath> out;
+  for (ha::SegmentPath p :
+       {ha::SegmentPath::kScalar, ha::SegmentPath::kAvx2, ha::SegmentPath::kNeon})
+    if (ha::segment_path_supported(p)) out.push_back(p);
+  return out;
+}
+
+// The six boards, then everything, then dark greens: boards overlap, so a pixel's class has up to
+// 8 bits and each counts.
+ha::ThresholdSet eight_boards() {
+  ha::ThresholdSet set = ht::board_windows();
+  set.count = 8;
+  set.boards[6] = window(0.0F, 360.0F, 0, 0, 255);
+  set.boards[7] = window(100.0F, 145.0F, 0, 0, 40);
+  return set;
+}
+
+// The first @p count of eight_boards().
+ha::ThresholdSet first_boards(std::size_t count) {
+  ha::ThresholdSet set = eight_boards();
+  set.count = count;
+  return set;
+}
+
+// Both tables of a threshold set, built once per test binary (16 MiB each).
+struct Tables {
+  ha::BoardClassifier classifier;
+  std::vector<std::uint8_t> rgb_storage, yuyv_storage;
+  ha::ColourTable rgb;
+  ha::YuyvTable yuyv;
+  explicit Tables(const ha::ThresholdSet& set)
+      : classifier(set),
+        rgb_storage(ha::MaskTable::kStorageBytes),
+        yuyv_storage(ha::MaskTable::kStorageBytes) {
+    rgb.build(classifier, rgb_storage.data());
+    yuyv.build(classifier, yuyv_storage.data());
+  }
+};
+
+Tables& tables_with_boards(std::size_t count) {
+  static std::vector<std::unique_ptr<Tables>> cache(ha::kMaxBoards + 1);
+  auto& slot = cache.at(count);
+  if (!slot) slot = std::make_unique<Tables>(first_boards(count));
+  return *slot;
+}
+
+// Colours whose HSV lies on an edge of one of @p set's windows (H on ceil(min / 2) - 1,
+// ceil(min / 2), floor(max / 2), floor(max / 2) + 1; S on s_min - 1 or s_min; V on v_min - 1,
+// v_min, v_max or v_max + 1), taken from a lattice of colours.
+std::vector<Rgb> edge_colours(const ha::ThresholdSet& set) {
+  const ha::BoardClassifier probe;
+  std::vector<bool> h_edge(180, false), s_edge(256, false), v_edge(256, false);
+  for (std::size_t k = 0; k < set.count; ++k) {
+    const ha::ColourThreshold& t = set.boards[k];
+    const int lo = static_cast<int>(std::ceil(t.hue_min_deg / 2.0F));
+    const int hi = static_cast<int>(std::floor(t.hue_max_deg / 2.0F));
+    for (int h : {lo - 1, lo, hi, hi + 1}) h_edge[static_cast<std::size_t>((h + 180) % 180)] = true;
+    for (int s : {t.saturation_min - 1, int{t.saturation_min}})
+      if (s >= 0) s_edge[static_cast<std::size_t>(s)] = true;
+    for (int v : {t.value_min - 1, int{t.value_min}, int{t.value_max}, t.value_max + 1})
+      if (v >= 0 && v < 256) v_edge[static_cast<std::size_t>(v)] = true;
+  }
+  std::vector<Rgb> out;
+  for (int r = 0; r < 256; r += 3) {
+    for (int g = 1; g < 256; g += 3) {
+      for (int b = 2; b < 256; b += 5) {
+        const Rgb c{static_cast<std::uint8_t>(r), static_cast<std::uint8_t>(g),
+                    static_cast<std::uint8_t>(b)};
+        const ha::Hsv8 hsv = probe.to_hsv(c.r, c.g, c.b);
+        if (h_edge[hsv.h] || s_edge[hsv.s] || v_edge[hsv.v]) out.push_back(c);
+      }
+    }
+  }
+  return out;
+}
+
+// (Y, U, V) triples that decode to a colour on an edge, from a lattice of triples.
+std::vector<std::array<std::uint8_t, 3>> edge_triples(const ha::ThresholdSet& set) {
+  const ha::BoardClassifier probe(set);
+  std::vector<std::array<std::uint8_t, 3>> out;
+  // A decoded colour counts as an edge when a neighbouring luma step changes its class.
+  for (int y = 0; y < 256; y += 1) {
+    for (int u = 0; u < 256; u += 7) {
+      for (int v = 3; v < 256; v += 7) {
+        const auto c0 =
+            ha::yuv_to_rgb_opencv(static_cast<std::uint8_t>(y), static_cast<std::uint8_t>(u),
+                                  static_cast<std::uint8_t>(v));
+        const auto c1 =
+            ha::yuv_to_rgb_opencv(static_cast<std::uint8_t>(std::min(y + 1, 255)),
+                                  static_cast<std::uint8_t>(u), static_cast<std::uint8_t>(v));
+        if (probe.classify(c0.r, c0.g, c0.b) != probe.classify(c1.r, c1.g, c1.b)) {
+          out.push_back({static_cast<std::uint8_t>(y), static_cast<std::uint8_t>(u),
+                         static_cast<std::uint8_t>(v)});
+        }
+      }
+    }
+  }
+  return out;
+}
+
+enum class Content { kRandom, kBlack, kWhite, kSaturated, kEdges };
+const char* content_name(Content c) {
+  switch (c) {
+    case Content::kRandom:
+      return "random";
+    case Content::kBlack:
+      return "black";
+    case Content::kWhite:
+      return "white";
+    case Content::kSaturated:
+      return "saturated";
+    case Content::kEdges:
+      return "edges";
+  }
+  return "?";
+}
+
+// Fills @p n bytes of frame (@p yuyv or RGB24) with @p content; padding bytes get random values
+// too, which a segmenter reading them would count.
+void fill_frame(std::uint8_t* bytes, std::size_t n, bool yuyv, Content content, ha::Pcg32& rng,
+                const std::vector<Rgb>& rgb_edges,
+                const std::vector<std::array<std::uint8_t, 3>>& yuv_edges) {
+  static const Rgb kSaturated[] = {{255, 0, 0},   {0, 255, 0},   {0, 0, 255},  {255, 255, 0},
+                                   {0, 255, 255}, {255, 0, 255}, {220, 30, 30}};
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::uint32_t r = rng.next_u32();
+    switch (content) {
+      case Content::kRandom:
+        bytes[i] = static_cast<std::uint8_t>(r);
+        break;
+      case Content::kBlack:  // YUYV: luma 0 (below 16, clamped) and 16 alike; neutral chroma
+        bytes[i] = yuyv ? static_cast<std::uint8_t>(i % 2 == 1 ? 128 : (r & 1U) * 16U) : 0;
+        break;
+      case Content::kWhite:
+        bytes[i] = yuyv ? static_cast<std::uint8_t>(i % 2 == 1 ? 128 : 235 + r % 21) : 255;
+        break;
+      case Content::kSaturated:
+        if (yuyv) {  // chroma at its extremes
+          bytes[i] = static_cast<std::uint8_t>(i % 2 == 1 ? ((r & 1U) ? 255 : 0) : r % 256);
+        } else {
+          const Rgb& c = kSaturated[(i / 3) % std::size(kSaturated)];
+          bytes[i] = i % 3 == 0 ? c.r : i % 3 == 1 ? c.g : c.b;
+        }
+        break;
+      case Content::kEdges:
+        if (yuyv) {
+          // Pairs Y0 U Y1 V: both lumas and the chroma from edge triples sharing it.
+          const auto& t = yuv_edges[(i / 4) % yuv_edges.size()];
+          const std::size_t k = i % 4;
+          bytes[i] = k == 1 ? t[1] : k == 3 ? t[2] : static_cast<std::uint8_t>(t[0] + (k == 2));
+        } else {
+          const Rgb& c = rgb_edges[(i / 3 * 7919) % rgb_edges.size()];
+          bytes[i] = i % 3 == 0 ? c.r : i % 3 == 1 ? c.g : c.b;
+        }
+        break;
+    }
+  }
+}
+
+// Segments the frame on every supported path of @p tables and with the HSV arithmetic; all equal.
+// Returns the pixels counted over all boards (to check that a frame does hit windows).
+std::uint64_t expect_paths_agree(const std::uint8_t* data, std::uint32_t w, std::uint32_t h,
+                                 std::uint32_t stride, bool yuyv, Tables& tables,
+                                 const std::string& what) {
+  ha::AreaVector reference;
+  if (yuyv)
+    ha::segment_yuyv(data, w, h, stride, tables.classifier, reference);
+  else
+    ha::segment_rgb24(data, w, h, stride, tables.classifier, reference);
+  for (ha::SegmentPath path : supported_paths()) {
+    ha::AreaVector areas;
+    areas.pixels.fill(12345U);  // stale values must be cleared
+    if (yuyv) {
+      EXPECT_TRUE(tables.yuyv.set_path(path));
+      ha::segment_yuyv(data, w, h, stride, tables.yuyv, areas);
+    } else {
+      EXPECT_TRUE(tables.rgb.set_path(path));
+      ha::segment_rgb24(data, w, h, stride, tables.rgb, areas);
+    }
+    EXPECT_EQ(areas.count, reference.count) << what;
+    EXPECT_EQ(areas.pixels, reference.pixels)
+        << what << ", path " << ha::segment_path_name(path) << ", areas [0] " << areas.pixels[0]
+        << " expected " << reference.pixels[0];
+  }
+  tables.rgb.set_path(ha::best_segment_path());
+  tables.yuyv.set_path(ha::best_segment_path());
+  std::uint64_t total = 0;
+  for (std::size_t k = 0; k < reference.count; ++k) total += reference.pixels[k];
+  return total;
+}
+
+std::uint32_t row_bytes(std::uint32_t w, bool yuyv) {
+  return yuyv ? 4U * ((w + 1U) / 2U) : 3U * w;
+}
+
+// Widths around the AVX2 path's 32-pixel blocks and 15-block flushes and the NEON path's
+// 256-pixel chunks and 16-byte vectors.
+const std::uint32_t kWidths[] = {1,   2,   3,   4,   5,   7,   8,   15,  16,  17,  31,  32,
+                                 33,  34,  47,  63,  64,  65,  95,  96,  97,  100, 127, 128,
+                                 129, 255, 256, 257, 479, 480, 481, 500, 513, 640, 1000};
+
+}  // namespace
+
+TEST(SegmentPaths, ScalarAlwaysAndTheBestIsSupported) {
+  EXPECT_TRUE(ha::segment_path_supported(ha::SegmentPath::kScalar));
+  EXPECT_TRUE(ha::segment_path_supported(ha::best_segment_path()));
+#if defined(__aarch64__)
+  EXPECT_EQ(ha::best_segment_path(), ha::SegmentPath::kNeon);  // every AArch64 CPU has NEON
+#endif
+#if !defined(__x86_64__)
+  EXPECT_FALSE(ha::segment_path_supported(ha::SegmentPath::kAvx2));
+#endif
+#if !defined(__ARM_NEON)
+  EXPECT_FALSE(ha::segment_path_supported(ha::SegmentPath::kNeon));
+#endif
+  std::printf("segmentation paths here:");
+  for (ha::SegmentPath p : supported_paths()) std::printf(" %s", ha::segment_path_name(p));
+  std::printf(" (best %s)\n", ha::segment_path_name(ha::best_segment_path()));
+
+  Tables& t = tables_with_boards(6);
+  EXPECT_EQ(t.rgb.path(), ha::best_segment_path());
+  EXPECT_EQ(t.yuyv.path(), ha::best_segment_path());
+  for (ha::SegmentPath p : {ha::SegmentPath::kAvx2, ha::SegmentPath::kNeon}) {
+    if (ha::segment_path_supported(p)) continue;
+    EXPECT_FALSE(t.rgb.set_path(p));  // refused, and the path stays
+    EXPECT_EQ(t.rgb.path(), ha::best_segment_path());
+  }
+  ha::ColourTable unbuilt;
+  EXPECT_FALSE(unbuilt.ready());
+  ha::AreaVector areas;
+  const std::uint8_t pixel[3] = {255, 0, 0};
+  ha::segment_rgb24(pixel, 1, 1, 3, unbuilt, areas);  // no table: no areas, no crash
+  EXPECT_EQ(areas.count, 0U);
+}
+
+TEST(ColourTables, EveryColourAndEveryTripleAsTheArithmetic) {
+  // The RGB table holds classify() of every colour; the YUYV table classify() of the colour
+  // OpenCV decodes every (Y, U, V) to.
+  Tables& t = tables_with_boards(8);
+  std::size_t rgb_mismatches = 0, yuv_mismatches = 0;
+  for (int a = 0; a < 256; ++a) {
+    for (int b = 0; b < 256; ++b) {
+      for (int c = 0; c < 256; ++c) {
+        const auto x = static_cast<std::uint8_t>(a), y = static_cast<std::uint8_t>(b),
+                   z = static_cast<std::uint8_t>(c);
+        rgb_mismatches += t.rgb.classify(x, y, z) != t.classifier.classify(x, y, z) ? 1U : 0U;
+        const ha::Rgb8 rgb = ha::yuv_to_rgb_opencv(x, y, z);
+        yuv_mismatches +=
+            t.yuyv.classify(x, y, z) != t.classifier.classify(rgb.r, rgb.g, rgb.b) ? 1U : 0U;
+      }
+    }
+  }
+  EXPECT_EQ(rgb_mismatches, 0U);
+  EXPECT_EQ(yuv_mismatches, 0U);
+  // Spot checks of the decode against BT.601 by hand (see SegmentYuyv above).
+  const ha::Rgb8 red = ha::yuv_to_rgb_opencv(81, 90, 240);
+  EXPECT_GE(int{red.r}, 254);
+  EXPECT_LE(int{red.g}, 1);
+  EXPECT_LE(int{red.b}, 1);
+  const ha::Rgb8 black = ha::yuv_to_rgb_opencv(0, 128, 128);  // luma below 16 clamps
+  EXPECT_EQ(int{black.r} + black.g + black.b, 0);
+}
+
+TEST(SegmentPaths, IdenticalOnAdversarialFramesOfEveryWidthAndStride) {
+  const std::vector<Rgb> rgb_edges = edge_colours(eight_boards());
+  const std::vector<std::array<std::uint8_t, 3>> yuv_edges = edge_triples(eight_boards());
+  ASSERT_GT(rgb_edges.size(), 1000U);
+  ASSERT_GT(yuv_edges.size(), 1000U);
+  ha::Pcg32 rng(2024);
+  std::vector<std::uint8_t> frame;
+  std::uint64_t counted[2][5] = {};
+  for (bool yuyv : {false, true}) {
+    for (Content content : {Content::kRandom, Content::kBlack, Content::kWhite, Content::kSaturated,
+                            Content::kEdges}) {
+      for (std::size_t boards : {6U, 8U}) {
+        Tables& tables = tables_with_boards(boards);
+        for (std::uint32_t w : kWidths) {
+          for (std::uint32_t pad : {0U, 1U, 7U, 64U}) {
+            const std::uint32_t h = w < 100 ? 5 : 2;
+            const std::uint32_t stride = row_bytes(w, yuyv) + pad;
+            // Exactly the frame's bytes: the last row ends at the end of the buffer.
+            frame.assign(static_cast<std::size_t>(stride) * (h - 1U) + row_bytes(w, yuyv), 0);
+            fill_frame(frame.data(), frame.size(), yuyv, content, rng, rgb_edges, yuv_edges);
+            const std::string what = std::string(yuyv ? "YUYV " : "RGB24 ") +
+                                     content_name(content) + " " + std::to_string(w) + "x" +
+                                     std::to_string(h) + " stride " + std::to_string(stride) +
+                                     ", " + std::to_string(boards) + " boards";
+            counted[yuyv][static_cast<int>(content)] +=
+                expect_paths_agree(frame.data(), w, h, stride, yuyv, tables, what);
+            if (HasFailure()) return;
+          }
+        }
+      }
+    }
+  }
+  // The frames do hit the windows (black hits the dark board, white the everything board).
+  for (int f = 0; f < 2; ++f) {
+    for (int c = 0; c < 5; ++c) EXPECT_GT(counted[f][c], 1000U) << f << " " << c;
+  }
+}
+
+TEST(SegmentPaths, IdenticalForEveryBoardCountAndUnusualStrides) {
+  // Each board count has its own compiled kernel. Strides of 0 (every row the same) and smaller
+  // than a row (rows overlap) are legal frames too.
+  ha::Pcg32 rng(77);
+  std::vector<std::uint8_t> frame;
+  for (std::size_t boards = 1; boards <= ha::kMaxBoards; ++boards) {
+    Tables& tables = tables_with_boards(boards);
+    for (bool yuyv : {false, true}) {
+      for (std::uint32_t w : {1U, 33U, 97U, 257U, 640U, 1000U}) {
+        const std::uint32_t row = row_bytes(w, yuyv);
+        for (std::uint32_t stride : {row, row + 3U, 0U, row / 2U}) {
+          const std::uint32_t h = 9;
+          frame.resize(static_cast<std::size_t>(stride) * (h - 1U) + row);
+          for (auto& b : frame) b = static_cast<std::uint8_t>(rng.next_u32());
+          expect_paths_agree(frame.data(), w, h, stride, yuyv, tables,
+                             std::string(yuyv ? "YUYV " : "RGB24 ") + std::to_string(w) +
+                                 " stride " + std::to_string(stride) + ", " +
+                                 std::to_string(boards) + " boards");
+          if (HasFailure()) return;
+        }
+      }
+    }
+  }
+}
+
+TEST(SegmentPaths, CountersDoNotOverflowOnLargeUniformFrames) {
+  // Every pixel in all 8 boards: each path's small counters are flushed often enough to count
+  // millions of pixels exactly.
+  ha::ThresholdSet all;
+  all.count = 8;
+  for (std::size_t k = 0; k < 8; ++k) all.boards[k] = window(0.0F, 360.0F, 0, 0, 255);
+  Tables tables(all);
+  for (bool yuyv : {false, true}) {
+    for (std::uint32_t w : {4096U, 1000U, 33U}) {
+      const std::uint32_t h = w == 33U ? 20000U : 700U;
+      const std::uint32_t stride = row_bytes(w, yuyv);
+      std::vector<std::uint8_t> frame(static_cast<std::size_t>(stride) * h, 200);
+      for (ha::SegmentPath path : supported_paths()) {
+        ha::AreaVector areas;
+        if (yuyv) {
+          tables.yuyv.set_path(path);
+          ha::segment_yuyv(frame.data(), w, h, stride, tables.yuyv, areas);
+        } else {
+          tables.rgb.set_path(path);
+          ha::segment_rgb24(frame.data(), w, h, stride, tables.rgb, areas);
+        }
+        for (std::size_t k = 0; k < 8; ++k) {
+          EXPECT_EQ(areas.pixels[k], w * h)
+              << (yuyv ? "YUYV " : "RGB24 ") << w << "x" << h << " board " << k << ", path "
+              << ha::segment_path_name(path);
+        }
+      }
+    }
+  }
+}
+
+#if defined(__linux__)
+TEST(SegmentPaths, NoPathReadsOutsideTheFrame) {
+  // The frame is put right before, then right after, an inaccessible page: a read past its last
+  // row or before its first byte faults.
+  const std::size_t page = static_cast<std::size_t>(::sysconf(_SC_PAGESIZE));
+  Tables& tables = tables_with_boards(6);
+  ha::Pcg32 rng(5);
+  for (bool yuyv : {false, true}) {
+    for (std::uint32_t w : kWidths) {
+      const std::uint32_t h = 3;
+      const std::uint32_t stride = row_bytes(w, yuyv) + (w % 3U);
+      const std::size_t size = static_cast<std::size_t>(stride) * (h - 1U) + row_bytes(w, yuyv);
+      const std::size_t span = (size + page - 1U) / page * page;
+      void* mem = ::mmap(nullptr, span + 2U * page, PROT_READ | PROT_WRITE,
+                         MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+      ASSERT_NE(mem, MAP_FAILED);
+      auto* base = static_cast<std::uint8_t*>(mem);
+      ASSERT_EQ(::mprotect(base, page, PROT_NONE), 0);
+      ASSERT_EQ(::mprotect(base + page + span, page, PROT_NONE), 0);
+      for (std::uint8_t* frame : {base + page + span - size, base + page}) {
+        for (std::size_t i = 0; i < size; ++i) frame[i] = static_cast<std::uint8_t>(rng.next_u32());
+        expect_paths_agree(frame, w, h, stride, yuyv, tables,
+                           std::string(yuyv ? "YUYV " : "RGB24 ") + std::to_string(w) +
+                               (frame == base + page ? " after" : " before") + " a guard page");
+      }
+      ::munmap(mem, span + 2U * page);
+      if (HasFailure()) return;
+    }
+  }
+}
+#endif

@@ -15,14 +15,18 @@ target_link_libraries(algorithms_test PRIVATE harmoloc_algorithms harmoloc_train
   harmoloc_warnings)
 gtest_discover_tests(algorithms_test DISCOVERY_TIMEOUT 60)
 
-# firmware/: configuration, MAVLink framing, latency histogram, map loading.
+# firmware/: configuration, MAVLink framing, the link's inbound side and its commands, latency
+# histogram, map loading.
 add_executable(firmware_test
   ${HARMOLOC_UNIT_DIR}/config_test.cpp
   ${HARMOLOC_UNIT_DIR}/mavlink_test.cpp
+  ${HARMOLOC_UNIT_DIR}/mavlink_inbound_test.cpp
+  ${HARMOLOC_UNIT_DIR}/mavlink_commands_test.cpp
+  ${HARMOLOC_UNIT_DIR}/mavlink_config_test.cpp
   ${HARMOLOC_UNIT_DIR}/latency_histogram_test.cpp
   ${HARMOLOC_UNIT_DIR}/map_loader_test.cpp)
 target_link_libraries(firmware_test PRIVATE harmoloc_firmware harmoloc_config harmoloc_algorithms
-  GTest::gtest_main harmoloc_warnings)
+  harmoloc::nettle GTest::gtest_main harmoloc_warnings)
 gtest_discover_tests(firmware_test DISCOVERY_TIMEOUT 60)
 
 # The rest needs the host board (sim_host/, OpenCV): not built for the Linux boards.

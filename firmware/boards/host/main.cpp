@@ -1,5 +1,6 @@
 // harmoloc for the host board: the firmware's cycle with file-backed fakes of the camera and the
 // encoder bus (a dataset folder), the pose link into a file or a serial device (a pty works).
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -70,7 +71,8 @@ int main(int argc, char** argv) {
       "MAVLink v2 on --link, as TUM on --trajectory, and timing statistics go to --stats (JSON).\n"
       "Exit status 0 on a completed run, 2 with a one-line reason on bad input.",
       "harmoloc"};
-  std::string dataset, map_path, config_path, trajectory_path, link_path, stats_path, fixes_path;
+  std::string dataset, map_path, config_path, trajectory_path, link_path, stats_path, fixes_path,
+      link_in_path;
   bool realtime = false, quiet = false;
   std::uint32_t loops = 1;
   app.add_option("--dataset", dataset, "dataset folder (metadata.toml, frames.csv, encoders.log)")
@@ -81,6 +83,9 @@ int main(int argc, char** argv) {
   app.add_option("--trajectory", trajectory_path, "write the fused pose of every cycle here (TUM)");
   app.add_option("--link", link_path,
                  "MAVLink v2 output: a file, or a serial device or pty (raw, --config link.baud)");
+  app.add_option("--link-in", link_in_path,
+                 "read the link's inbound bytes (MAVLink commands) from this file or FIFO instead\n"
+                 "of --link (a serial device or pty is read by itself)");
   app.add_option("--stats", stats_path,
                  "write run statistics here (JSON: per-stage timing, overruns, counters)");
   app.add_option("--fixes", fixes_path,
@@ -130,6 +135,10 @@ int main(int argc, char** argv) {
         !e.empty()) {
       return fail("link " + e);
     }
+    if (!link_in_path.empty()) {
+      if (const std::string e = link.open_input(link_in_path); !e.empty())
+        return fail("link input " + e);
+    }
     if (!trajectory_path.empty() && !g_trajectory.open(trajectory_path))
       return fail(trajectory_path + ": cannot write");
     if (!fixes_path.empty() && !g_fixes.open(fixes_path))
@@ -150,8 +159,13 @@ int main(int argc, char** argv) {
     if (!quiet) std::fprintf(stderr, "harmoloc: %s\n", rt.summary.c_str());
   }
   static firmware::LatencyHistogram wakeup_latency;
-  auto cycle =
-      std::make_unique<firmware::LocalizationCycle>(config, g_map, *camera, *encoders, link, clock);
+  auto cycle = std::make_unique<firmware::LocalizationCycle>(config, g_map, *camera, *encoders,
+                                                             link, clock, meta.pixel_format);
+  // The signing clock starts at the wall time (MAVLink signing timestamps are wall-clock based).
+  cycle->set_signing_time(
+      static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::microseconds>(
+                                     std::chrono::system_clock::now().time_since_epoch())
+                                     .count()));
   if (!quiet) {
     std::fprintf(stderr,
                  "harmoloc: %zu frames %ux%u, %zu encoder frames, map of %u samples on %u boards, "
@@ -159,6 +173,11 @@ int main(int argc, char** argv) {
                  camera->frame_count(), meta.image_width_px, meta.image_height_px,
                  encoders->frame_count(), g_map.model.sample_count, g_map.model.feature_count,
                  config.filter.particles, realtime ? ", real-time pacing" : "");
+    if (link.can_receive()) {
+      std::fprintf(stderr, "harmoloc: link commands %s\n",
+                   config.link.has_signing_key ? "signed only (MAVLink 2 signing key loaded)"
+                                               : "unsigned (no signing key configured)");
+    }
   }
 
   firmware::RunCounters run;

@@ -44,6 +44,13 @@ class ParticleFilter {
                   bool uniform_yaw);
   bool initialized() const { return initialized_; }
 
+  /// Spreads the particles over @p count candidate positions (each particle near one of them,
+  /// picked at random: Gaussian in x and y), yaw uniform. For relocalizing when all that is
+  /// known is that the robot is somewhere the map was trained (its training positions). Does
+  /// nothing when @p count is 0.
+  void initialize_around_points(const float* x_m, const float* y_m, std::size_t count,
+                                double position_sigma_m);
+
   /// Applies one odometry step to every particle with sampled noise.
   void predict(const OdometryDelta& delta);
 

@@ -84,31 +84,95 @@ class BoardClassifier {
   std::size_t boards_ = 0;
 };
 
-/// Every 24-bit RGB colour's board mask, tabulated once at start-up from a BoardClassifier:
-/// one load a pixel instead of the HSV arithmetic, with identical results. The 16 MiB of storage
-/// belong to the caller (reserved at start-up); images of a few dominant colours touch only a
-/// few hundred cache lines of it.
-class ColourTable {
- public:
-  static constexpr std::size_t kEntries = std::size_t{1} << 24;
+/// How a table segments a frame. Every path gives the same areas (the tests run each path this
+/// CPU has on the same frames and compare); they differ in speed only.
+enum class SegmentPath : std::uint8_t {
+  kScalar = 0,  ///< portable C++: any target, bare metal included
+  kAvx2 = 1,    ///< x86-64 with AVX2 (checked at run time): 8 table loads per vpgatherdd
+  kNeon = 2,    ///< ARM with NEON: table loads into a row buffer, counted 16 bytes at a time
+};
 
-  /// Fills @p storage (kEntries bytes) and uses it from now on.
-  void build(const BoardClassifier& classifier, std::uint8_t* storage);
+const char* segment_path_name(SegmentPath path);
+/// Whether this build and this CPU can run @p path.
+bool segment_path_supported(SegmentPath path);
+/// The fastest path this build and CPU run: what a table uses unless told otherwise.
+SegmentPath best_segment_path();
+
+/// A board mask for each of 2^24 colours, built once at start-up from a BoardClassifier: one
+/// load a pixel instead of the HSV arithmetic, with identical results. The storage belongs to the
+/// caller (reserved at start-up, kStorageBytes); images of a few dominant colours touch only a
+/// few hundred cache lines of it. ColourTable and YuyvTable differ in what indexes it.
+class MaskTable {
+ public:
+  static constexpr std::size_t kColours = std::size_t{1} << 24;
+  /// A SIMD gather reads 4 bytes around an entry, so the entries sit between zeroed guards.
+  static constexpr std::size_t kGuardBytes = 64;
+  static constexpr std::size_t kStorageBytes = kColours + 2 * kGuardBytes;
+  /// The name callers sized the storage by before the guards existed; still the right size.
+  static constexpr std::size_t kEntries = kStorageBytes;
+
   bool ready() const { return table_ != nullptr; }
   std::size_t board_count() const { return boards_; }
-  std::uint8_t classify(std::uint8_t r, std::uint8_t g, std::uint8_t b) const {
-    return table_[(static_cast<std::size_t>(r) << 16U) | (static_cast<std::size_t>(g) << 8U) | b];
-  }
+  /// The path segment_*() take with this table: best_segment_path() when built.
+  SegmentPath path() const { return path_; }
+  /// Picks another path (tests, benchmarks); false, and nothing changed, if it is not supported.
+  bool set_path(SegmentPath path);
+  /// The 2^24 entries (kGuardBytes readable on either side), indexed by index() of a subclass.
+  const std::uint8_t* entries() const { return table_; }
 
- private:
+ protected:
+  /// Zeroes the guards of @p storage (kStorageBytes) and returns where the entries start.
+  std::uint8_t* prepare(const BoardClassifier& classifier, std::uint8_t* storage);
+
   const std::uint8_t* table_ = nullptr;
   std::size_t boards_ = 0;
+  SegmentPath path_ = SegmentPath::kScalar;
 };
+
+/// Indexed by an RGB24 pixel's three bytes as they lie in memory (R | G << 8 | B << 16): a
+/// little-endian 4-byte load of the pixel, masked to 24 bits, is the index.
+class ColourTable : public MaskTable {
+ public:
+  /// Fills @p storage (kStorageBytes) and uses it from now on.
+  void build(const BoardClassifier& classifier, std::uint8_t* storage);
+  static std::uint32_t index(std::uint8_t r, std::uint8_t g, std::uint8_t b) {
+    return static_cast<std::uint32_t>(r) | (static_cast<std::uint32_t>(g) << 8U) |
+           (static_cast<std::uint32_t>(b) << 16U);
+  }
+  std::uint8_t classify(std::uint8_t r, std::uint8_t g, std::uint8_t b) const {
+    return table_[index(r, g, b)];
+  }
+};
+
+/// Indexed by a YUYV pixel's (Y, U, V): each entry holds the classes of the colour OpenCV's
+/// COLOR_YUV2RGB_YUYV decodes it to, so YUYV needs no decode per pixel and its areas still equal
+/// the OpenCV reference. Index U | Y << 8 | V << 16: the odd pixel of a Y0 U Y1 V pair is the
+/// pair's 4 bytes shifted right by 8, the even one the same with Y0 in place of Y1.
+class YuyvTable : public MaskTable {
+ public:
+  /// Fills @p storage (kStorageBytes) and uses it from now on.
+  void build(const BoardClassifier& classifier, std::uint8_t* storage);
+  static std::uint32_t index(std::uint8_t y, std::uint8_t u, std::uint8_t v) {
+    return static_cast<std::uint32_t>(u) | (static_cast<std::uint32_t>(y) << 8U) |
+           (static_cast<std::uint32_t>(v) << 16U);
+  }
+  std::uint8_t classify(std::uint8_t y, std::uint8_t u, std::uint8_t v) const {
+    return table_[index(y, u, v)];
+  }
+};
+
+/// OpenCV's COLOR_YUV2RGB_YUYV of one pixel (BT.601 limited range, 20-bit fixed point, luma
+/// below 16 clamped): what segment_yuyv classifies, exactly.
+struct Rgb8 {
+  std::uint8_t r, g, b;
+};
+Rgb8 yuv_to_rgb_opencv(std::uint8_t y, std::uint8_t u, std::uint8_t v);
 
 /// Counts board pixels in an RGB24 image (3 bytes a pixel): one pass, no allocation.
 void segment_rgb24(const std::uint8_t* data, std::uint32_t width_px, std::uint32_t height_px,
                    std::uint32_t stride_bytes, const BoardClassifier& classifier,
                    AreaVector& areas);
+/// With the colour table (the cycle's): one table load a pixel, on table.path().
 void segment_rgb24(const std::uint8_t* data, std::uint32_t width_px, std::uint32_t height_px,
                    std::uint32_t stride_bytes, const ColourTable& table, AreaVector& areas);
 
@@ -118,6 +182,11 @@ void segment_rgb24(const std::uint8_t* data, std::uint32_t width_px, std::uint32
 /// (the metadata and the V4L2 driver ensure it), else the last pair's chroma lies past the row.
 void segment_yuyv(const std::uint8_t* data, std::uint32_t width_px, std::uint32_t height_px,
                   std::uint32_t stride_bytes, const BoardClassifier& classifier, AreaVector& areas);
+/// With the YUYV table (the cycle's): one table load a pixel, on table.path().
+void segment_yuyv(const std::uint8_t* data, std::uint32_t width_px, std::uint32_t height_px,
+                  std::uint32_t stride_bytes, const YuyvTable& table, AreaVector& areas);
+/// With an RGB table: decodes each pixel first (exact but about 50 instructions a pixel), for
+/// callers that hold only the RGB table (the trainer, a camera that changed format).
 void segment_yuyv(const std::uint8_t* data, std::uint32_t width_px, std::uint32_t height_px,
                   std::uint32_t stride_bytes, const ColourTable& table, AreaVector& areas);
 

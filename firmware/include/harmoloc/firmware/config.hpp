@@ -6,6 +6,7 @@
 #include <array>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "harmoloc/algorithms/can_encoder_layout.hpp"
 #include "harmoloc/algorithms/odometry.hpp"
@@ -40,6 +41,16 @@ struct LinkConfig {
   std::uint8_t component_id = 197;  ///< MAV_COMP_ID_VISUAL_INERTIAL_ODOMETRY
   unsigned baud = 115200;
   double heartbeat_hz = 1.0;
+  /// Commands are taken only from a system and a component in these lists (both must match;
+  /// an empty list takes none). Default: a ground station (QGroundControl, Mission Planner).
+  std::vector<std::uint8_t> accept_system_ids{255};
+  std::vector<std::uint8_t> accept_component_ids{190};
+  /// MAVLink 2 signing: with a key, commands must be signed with it (and not replayed), and
+  /// every frame sent is signed. The key file holds 32 bytes, raw or as 64 hex digits.
+  std::string signing_key_file;  ///< as written in the config ("" = no signing)
+  bool has_signing_key = false;
+  std::array<std::uint8_t, 32> signing_key{};
+  std::uint8_t link_id = 0;  ///< link id in the signatures of the frames sent
 };
 
 /// Real-time set-up of the cycle's thread (applied where permitted; see

@@ -1,7 +1,9 @@
 #pragma once
 /// @file The fixed-rate cycle: acquire -> segment -> localize -> read encoders -> predict ->
 /// update -> publish -> account time. One instance holds every buffer the cycle touches; it is
-/// built at start-up and then never allocates.
+/// built at start-up and then never allocates. The publish stage also serves the link's inbound
+/// side: the commands a peer sends (relocalize, set pose, request a message) are acted on and
+/// answered there, before the cycle's own frames go out (mavlink_commands.cpp).
 
 #include <array>
 #include <cstdint>
@@ -13,6 +15,8 @@
 #include "harmoloc/algorithms/segmentation.hpp"
 #include "harmoloc/firmware/config.hpp"
 #include "harmoloc/firmware/latency_histogram.hpp"
+#include "harmoloc/firmware/mavlink_inbound.hpp"
+#include "harmoloc/firmware/mavlink_signing.hpp"
 #include "harmoloc/firmware/mavlink_v2.hpp"
 #include "harmoloc/hal/camera.hpp"
 #include "harmoloc/hal/clock.hpp"
@@ -78,10 +82,13 @@ enum class CycleResult : std::uint8_t { kRan, kEnded };
 
 class LocalizationCycle {
  public:
-  /// @p map must outlive the cycle (the firmware keeps it in static storage).
+  /// @p map must outlive the cycle (the firmware keeps it in static storage). The colour table
+  /// is built for @p pixel_format, the camera's (frames of the other format are still segmented
+  /// exactly, only more slowly).
   LocalizationCycle(const FirmwareConfig& config, const algorithms::MapFile& map,
                     hal::Camera& camera, hal::WheelEncoders& encoders, hal::PoseLink& link,
-                    const hal::Clock& clock);
+                    const hal::Clock& clock,
+                    hal::PixelFormat pixel_format = hal::PixelFormat::kRgb24);
 
   /// Runs one cycle. The data clock follows the frames; a cycle without a frame advances it
   /// by one period.
@@ -94,9 +101,20 @@ class LocalizationCycle {
     return histograms_[static_cast<std::size_t>(stage)];
   }
   std::uint64_t budget_ns() const { return budget_ns_; }
+  mavlink::InboundCounters inbound_counters() const { return receiver_.counters(); }
+
+  /// Sets the link's signing clock to the wall time @p unix_time_us (start-up; a board without
+  /// a real-time clock leaves it, and the clock follows the peers' signed frames).
+  void set_signing_time(std::uint64_t unix_time_us);
 
  private:
   void publish();
+  // The link's inbound side and the commands (mavlink_commands.cpp).
+  void service_link();
+  mavlink::MavResult execute(const mavlink::CommandLong& command, std::int32_t& result_param2);
+  mavlink::MavResult relocalize(std::int32_t& how);
+  mavlink::MavResult set_pose(const mavlink::CommandLong& command);
+  mavlink::MavResult request_message(const mavlink::CommandLong& command);
   void send(std::size_t size);
   Health assess_health() const;
 
@@ -108,10 +126,14 @@ class LocalizationCycle {
   const hal::Clock& clock_;
 
   algorithms::BoardClassifier classifier_;
-  std::unique_ptr<std::uint8_t[]> colour_table_storage_;  // 16 MiB, reserved at start-up
+  // 16 MiB reserved at start-up, holding the table of the camera's pixel format only.
+  std::unique_ptr<std::uint8_t[]> colour_table_storage_;
   algorithms::ColourTable colour_table_;
+  algorithms::YuyvTable yuyv_table_;
   algorithms::ParticleFilter filter_;
   mavlink::Encoder mavlink_;
+  mavlink::Signer signer_;
+  mavlink::CommandReceiver receiver_;
   mavlink::FrameBuffer frame_buffer_{};
   std::array<LatencyHistogram, kStageCount> histograms_{};
 
@@ -121,12 +143,24 @@ class LocalizationCycle {
   bool have_data_time_ = false;
   std::uint64_t last_fix_ns_ = 0;
   bool ever_fix_ = false;
+  algorithms::HarmonicFix last_known_fix_{};  ///< the latest fix of a known place
   std::uint64_t last_encoder_ns_ = 0;
   bool have_encoder_ = false;
   hal::EncoderCounts last_counts_{};
   std::uint64_t next_heartbeat_ns_ = 0;
   std::uint8_t reset_counter_ = 0;
   Health last_reported_health_ = Health::kNotInitialized;
+  bool heartbeat_requested_ = false;  ///< a peer asked for one: sent this cycle, off schedule
+  /// The re-seed of the filter the commands of this cycle ask for. Each replaces the whole
+  /// cloud, so only the last is carried out: a burst of commands costs one re-seed.
+  struct Reseed {
+    enum class Kind : std::uint8_t { kNone, kAround, kOverMap } kind = Kind::kNone;
+    algorithms::Pose2 centre{};
+    double position_sigma_m = 0.0;
+    double yaw_sigma_rad = 0.0;
+    bool uniform_yaw = false;
+  };
+  Reseed reseed_{};
 
   PoseOutput pose_{};
   FixOutput fix_{};

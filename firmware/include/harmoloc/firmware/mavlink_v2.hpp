@@ -1,7 +1,8 @@
 #pragma once
-/// @file MAVLink v2 framing and the three messages the firmware sends: HEARTBEAT (#0),
-/// STATUSTEXT (#253) and ODOMETRY (#331), from the common message set. Frames are built into a
-/// caller's fixed buffer; nothing allocates. Wire details in docs/wire-protocol.md.
+/// @file MAVLink v2 framing and the messages the firmware sends: HEARTBEAT (#0), STATUSTEXT
+/// (#253), ODOMETRY (#331) and COMMAND_ACK (#77), from the common message set. Frames are built
+/// into a caller's fixed buffer and signed when a Signer is set; nothing allocates. Wire details
+/// in docs/wire-protocol.md. Inbound frames: mavlink_parser.hpp, mavlink_inbound.hpp.
 
 #include <array>
 #include <cstddef>
@@ -14,10 +15,18 @@ constexpr std::size_t kHeaderBytes = 10;
 constexpr std::size_t kChecksumBytes = 2;
 constexpr std::size_t kMaxPayloadBytes = 255;
 constexpr std::size_t kMaxFrameBytes = kHeaderBytes + kMaxPayloadBytes + kChecksumBytes;
+/// Link id (1), timestamp (6) and signature (6) after the checksum of a signed frame.
+constexpr std::size_t kSignatureBytes = 13;
+constexpr std::size_t kMaxSignedFrameBytes = kMaxFrameBytes + kSignatureBytes;
+constexpr std::uint8_t kIncompatSigned = 0x01;
 
 constexpr std::uint32_t kMsgHeartbeat = 0;
+constexpr std::uint32_t kMsgCommandLong = 76;
+constexpr std::uint32_t kMsgCommandAck = 77;
 constexpr std::uint32_t kMsgStatustext = 253;
 constexpr std::uint32_t kMsgOdometry = 331;
+constexpr std::uint8_t kCrcExtraCommandLong = 152;
+constexpr std::uint8_t kCrcExtraCommandAck = 143;
 
 // Enumerations of the common set used here.
 constexpr std::uint8_t kMavTypeOnboardController = 18;
@@ -32,6 +41,15 @@ constexpr std::uint8_t kMavEstimatorTypeVision = 2;
 constexpr std::uint8_t kSeverityCritical = 2;
 constexpr std::uint8_t kSeverityWarning = 4;
 constexpr std::uint8_t kSeverityInfo = 6;
+
+/// MAV_RESULT values the firmware answers commands with.
+enum class MavResult : std::uint8_t {
+  kAccepted = 0,
+  kTemporarilyRejected = 1,
+  kDenied = 2,  ///< supported, but the parameters are invalid
+  kUnsupported = 3,
+  kFailed = 4,
+};
 
 /// CRC-16/MCRF4XX (X.25) as MAVLink uses it.
 std::uint16_t crc_x25(const std::uint8_t* data, std::size_t size, std::uint16_t crc = 0xFFFF);
@@ -60,7 +78,18 @@ struct Heartbeat {
   std::uint8_t mavlink_version = 3;
 };
 
-using FrameBuffer = std::array<std::uint8_t, kMaxFrameBytes>;
+struct CommandAck {
+  std::uint16_t command = 0;
+  MavResult result = MavResult::kAccepted;
+  std::uint8_t progress = 0;
+  std::int32_t result_param2 = 0;
+  std::uint8_t target_system = 0;  ///< the commander's system and component
+  std::uint8_t target_component = 0;
+};
+
+using FrameBuffer = std::array<std::uint8_t, kMaxSignedFrameBytes>;
+
+class Signer;
 
 /// Builds frames with one system/component identity and a running sequence number.
 class Encoder {
@@ -68,10 +97,14 @@ class Encoder {
   Encoder(std::uint8_t system_id, std::uint8_t component_id)
       : system_id_(system_id), component_id_(component_id) {}
 
+  /// Signs every frame built from now on with @p signer when it holds a key (nullptr: none).
+  void set_signer(Signer* signer) { signer_ = signer; }
+
   std::size_t heartbeat(const Heartbeat& msg, FrameBuffer& out);
   std::size_t odometry(const Odometry& msg, FrameBuffer& out);
   /// @p text is cut at 50 characters.
   std::size_t statustext(std::uint8_t severity, const char* text, FrameBuffer& out);
+  std::size_t command_ack(const CommandAck& msg, FrameBuffer& out);
 
  private:
   std::size_t finish(std::uint32_t msg_id, std::uint8_t crc_extra, std::size_t payload_len,
@@ -80,6 +113,7 @@ class Encoder {
   std::uint8_t system_id_;
   std::uint8_t component_id_;
   std::uint8_t sequence_ = 0;
+  Signer* signer_ = nullptr;
 };
 
 }  // namespace harmoloc::firmware::mavlink

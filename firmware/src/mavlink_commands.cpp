@@ -1,0 +1,113 @@
+// The link's inbound side of the cycle: the commands a peer may send and what they do. Members
+// of LocalizationCycle, kept apart from the cycle's stages. Protocol: docs/wire-protocol.md.
+#include "harmoloc/firmware/localization_cycle.hpp"
+
+namespace harmoloc::firmware {
+
+namespace {
+
+// The answer to "relocalize" in COMMAND_ACK.result_param2: where the particles went.
+constexpr std::int32_t kRelocalizedAroundFix = 1;
+constexpr std::int32_t kRelocalizedOverMap = 2;
+
+}  // namespace
+
+void LocalizationCycle::set_signing_time(std::uint64_t unix_time_us) {
+  signer_.set_time(mavlink::signing_timestamp_from_unix_us(unix_time_us), clock_.now_ns());
+}
+
+void LocalizationCycle::service_link() {
+  signer_.advance(clock_.now_ns());
+  receiver_.begin_cycle();
+  reseed_ = Reseed{};
+  mavlink::CommandLong command;
+  while (receiver_.next_command(link_, command)) {
+    mavlink::CommandAck ack;
+    ack.command = command.command;
+    ack.target_system = command.source_system;
+    ack.target_component = command.source_component;
+    ack.result = execute(command, ack.result_param2);
+    receiver_.count_result(ack.result);
+    send(mavlink_.command_ack(ack, frame_buffer_));
+  }
+  if (reseed_.kind == Reseed::Kind::kNone) return;
+  if (reseed_.kind == Reseed::Kind::kAround) {
+    filter_.initialize(reseed_.centre, reseed_.position_sigma_m, reseed_.yaw_sigma_rad,
+                       reseed_.uniform_yaw);
+  } else {
+    const algorithms::HarmonicModel& m = map_.model;
+    filter_.initialize_around_points(m.target_x_m.data(), m.target_y_m.data(), m.sample_count,
+                                     reseed_.position_sigma_m);
+  }
+  ++reset_counter_;
+  // This cycle's outputs (ODOMETRY, trajectory) show the new cloud at once.
+  const algorithms::PoseEstimate e = filter_.estimate();
+  pose_.pose = e.mean;
+  pose_.covariance = e.covariance;
+  pose_.valid = true;
+  pose_.health = assess_health();
+}
+
+mavlink::MavResult LocalizationCycle::execute(const mavlink::CommandLong& command,
+                                              std::int32_t& result_param2) {
+  switch (command.command) {
+    case mavlink::kCmdRelocalize:
+      return relocalize(result_param2);
+    case mavlink::kCmdSetPose:
+      return set_pose(command);
+    case mavlink::kCmdRequestMessage:
+      return request_message(command);
+    default:
+      return mavlink::MavResult::kUnsupported;
+  }
+}
+
+mavlink::MavResult LocalizationCycle::relocalize(std::int32_t& how) {
+  const double sigma_m = config_.filter.init_position_sigma_m;
+  const auto camera_timeout_ns = static_cast<std::uint64_t>(config_.cycle.camera_timeout_ms * 1e6);
+  if (ever_fix_ && data_time_ns_ - last_fix_ns_ <= camera_timeout_ns) {
+    // The camera sees a trained place now: that fix is a global position (seed 004's recovery,
+    // with the harmonic localizer as the global guess). The heading is unknown.
+    reseed_ = Reseed{Reseed::Kind::kAround,
+                     algorithms::Pose2{last_known_fix_.x_m, last_known_fix_.y_m, 0.0}, sigma_m, 0.0,
+                     true};
+    how = kRelocalizedAroundFix;
+  } else {
+    // No trusted fix: the robot is somewhere on the trained route, nothing more is known.
+    if (map_.model.sample_count == 0) return mavlink::MavResult::kFailed;
+    reseed_ = Reseed{Reseed::Kind::kOverMap, algorithms::Pose2{}, sigma_m, 0.0, true};
+    how = kRelocalizedOverMap;
+  }
+  return mavlink::MavResult::kAccepted;
+}
+
+mavlink::MavResult LocalizationCycle::set_pose(const mavlink::CommandLong& command) {
+  mavlink::SetPoseRequest r;
+  const mavlink::MavResult checked =
+      mavlink::read_set_pose(command, config_.filter.init_position_sigma_m, r);
+  if (checked != mavlink::MavResult::kAccepted) return checked;
+  reseed_ = Reseed{Reseed::Kind::kAround, algorithms::Pose2{r.x_m, r.y_m, r.yaw_rad},
+                   r.position_sigma_m, r.yaw_sigma_rad, false};
+  return mavlink::MavResult::kAccepted;
+}
+
+mavlink::MavResult LocalizationCycle::request_message(const mavlink::CommandLong& command) {
+  std::uint32_t id = 0;
+  if (mavlink::read_request_message(command, id) != mavlink::MavResult::kAccepted)
+    return mavlink::MavResult::kDenied;
+  switch (id) {
+    case mavlink::kMsgHeartbeat:
+      heartbeat_requested_ = true;  // sent by this cycle's publish, after the ACK
+      return mavlink::MavResult::kAccepted;
+    case mavlink::kMsgOdometry:
+      // Every cycle sends one once a pose exists (or a re-seed asked for earlier in this cycle
+      // makes one); this cycle's follows the ACKs.
+      return filter_.initialized() || reseed_.kind != Reseed::Kind::kNone
+                 ? mavlink::MavResult::kAccepted
+                 : mavlink::MavResult::kFailed;
+    default:
+      return mavlink::MavResult::kDenied;
+  }
+}
+
+}  // namespace harmoloc::firmware

@@ -1,0 +1,386 @@
+// The commands through the whole cycle: what each does to the pose, its COMMAND_ACK and what
+// follows it on the link; signed links; garbage on the line leaves the cycle's outputs exactly as
+// they are without it. The cycle runs on fakes (a camera showing one red board or nothing, no
+// encoders, a queue for the link) and a three-sample map.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+#include <random>
+
+#include "harmoloc/algorithms/map_codec.hpp"
+#include "harmoloc/firmware/config.hpp"
+#include "harmoloc/firmware/localization_cycle.hpp"
+#include "harmoloc/firmware/mavlink_inbound.hpp"
+#include "mavlink_test_frames.hpp"
+
+namespace ha = harmoloc::algorithms;
+namespace hf = harmoloc::firmware;
+namespace hh = harmoloc::hal;
+namespace mv = harmoloc::firmware::mavlink;
+namespace tf = harmoloc::test::mav;
+
+namespace {
+
+constexpr std::uint32_t kWidth = 16, kHeight = 8;
+constexpr std::array<float, 7> kNoParams{};
+// The map's training positions (map frame); sample 0 is what a frame full of red looks like.
+constexpr double kTargets[3][2] = {{1.0, 0.5}, {3.0, 0.5}, {2.0, 2.5}};
+
+class FakeCamera final : public hh::Camera {
+ public:
+  FakeCamera() : red_(kWidth * kHeight * 3) {
+    for (std::size_t i = 0; i < red_.size(); i += 3) red_[i] = 255;
+  }
+  hh::CameraStatus acquire(hh::FrameView& f, std::uint64_t) override {
+    t_ += 33'333'333;
+    if (!frames) return hh::CameraStatus::kNoFrame;
+    f.data = red_.data();
+    f.width_px = kWidth;
+    f.height_px = kHeight;
+    f.stride_bytes = kWidth * 3;
+    f.format = hh::PixelFormat::kRgb24;
+    f.timestamp_ns = t_;
+    return hh::CameraStatus::kFrame;
+  }
+  void release() override {}
+  hh::CameraCounters counters() const override { return {}; }
+  bool frames = false;
+
+ private:
+  std::vector<std::uint8_t> red_;
+  std::uint64_t t_ = 0;
+};
+
+class NoEncoders final : public hh::WheelEncoders {
+ public:
+  hh::EncoderStatus read(std::uint64_t, hh::EncoderCounts&) override {
+    return hh::EncoderStatus::kNoData;
+  }
+  hh::EncoderCounters counters() const override { return {}; }
+};
+
+class StepClock final : public hh::Clock {
+ public:
+  std::uint64_t now_ns() const override { return now_ += 1000; }
+  void sleep_until(std::uint64_t) override {}
+
+ private:
+  mutable std::uint64_t now_ = 0;
+};
+
+const ha::MapFile& test_map() {
+  static const std::unique_ptr<ha::MapFile> map = [] {
+    auto m = std::make_unique<ha::MapFile>();
+    m->image_width_px = kWidth;
+    m->image_height_px = kHeight;
+    m->thresholds = hf::default_config().thresholds;
+    ha::HarmonicModel& h = m->model;
+    h.sample_count = 3;
+    h.feature_count = 1;
+    h.board_index[0] = 0;  // red
+    h.area_scale = 100.0F / (kWidth * kHeight);
+    h.sigma_x = h.sigma_y = 1.0F;
+    h.max_nearest_distance = 5.0F;
+    const float features[3] = {100.0F, 50.0F, 25.0F};
+    for (std::size_t i = 0; i < 3; ++i) {
+      h.sample(i)[0] = features[i];
+      h.target_x_m[i] = static_cast<float>(kTargets[i][0]);
+      h.target_y_m[i] = static_cast<float>(kTargets[i][1]);
+    }
+    return m;
+  }();
+  return *map;
+}
+
+struct Odometry {
+  float x, y, yaw_frd;
+  std::uint8_t reset_counter;
+  std::int8_t quality;
+};
+Odometry odometry_of(const tf::Decoded& d) {
+  const float qw = tf::f32(d.payload, 20);
+  const float qz = tf::f32(d.payload, 32);
+  return Odometry{tf::f32(d.payload, 8), tf::f32(d.payload, 12), 2.0F * std::atan2(qz, qw),
+                  d.payload[230], static_cast<std::int8_t>(d.payload[232])};
+}
+
+struct Rig {
+  explicit Rig(const tf::Key* signing_key = nullptr) {
+    config.filter.particles = 512;
+    if (signing_key != nullptr) {
+      config.link.has_signing_key = true;
+      config.link.signing_key = *signing_key;
+      key = *signing_key;
+    }
+  }
+  void start() {
+    cycle =
+        std::make_unique<hf::LocalizationCycle>(config, test_map(), camera, encoders, link, clock);
+  }
+  // Runs one cycle and returns the frames it wrote.
+  std::vector<tf::Decoded> run() {
+    const std::size_t before = link.written.size();
+    cycle->run_once();
+    return tf::decode(
+        tf::Bytes(link.written.begin() + static_cast<std::ptrdiff_t>(before), link.written.end()),
+        config.link.has_signing_key ? &key : nullptr);
+  }
+  // The frames of one cycle after @p bytes arrived, by message id in order.
+  std::vector<tf::Decoded> send_and_run(const tf::Bytes& bytes) {
+    link.send(bytes);
+    return run();
+  }
+
+  hf::FirmwareConfig config = hf::default_config();
+  tf::Key key{};
+  FakeCamera camera;
+  NoEncoders encoders;
+  tf::QueueLink link;
+  StepClock clock;
+  std::unique_ptr<hf::LocalizationCycle> cycle;
+};
+
+std::vector<tf::Decoded> of_type(const std::vector<tf::Decoded>& frames, std::uint32_t id) {
+  std::vector<tf::Decoded> out;
+  for (const auto& f : frames)
+    if (f.msg_id == id) out.push_back(f);
+  return out;
+}
+
+}  // namespace
+
+TEST(MavlinkCommands, SetPoseMovesTheOdometryThereAndIsAcked) {
+  Rig r;
+  r.start();
+  for (int i = 0; i < 3; ++i) EXPECT_TRUE(of_type(r.run(), 331).empty());  // no pose yet
+  // x = 1.5, y = -0.5, yaw = 0.3 in LOCAL_FRD; tight spreads so the mean lands on it.
+  const auto frames =
+      r.send_and_run(tf::command(mv::kCmdSetPose, {1.5F, -0.5F, 0.3F, 0.001F, 0.001F, 0, 0}));
+  ASSERT_GE(frames.size(), 2U);
+  // The ACK comes first, then this cycle's ODOMETRY, already at the new pose.
+  ASSERT_EQ(frames[0].msg_id, 77U);
+  const tf::Ack ack = tf::ack_of(frames[0]);
+  EXPECT_EQ(ack.command, mv::kCmdSetPose);
+  EXPECT_EQ(ack.result, 0);  // MAV_RESULT_ACCEPTED
+  EXPECT_EQ(ack.target_system, 255);
+  EXPECT_EQ(ack.target_component, 190);
+  EXPECT_EQ(frames[0].system_id, 1);
+  EXPECT_EQ(frames[0].component_id, 197);
+  const auto odo = of_type(frames, 331);
+  ASSERT_EQ(odo.size(), 1U);
+  const Odometry o = odometry_of(odo[0]);
+  EXPECT_NEAR(o.x, 1.5, 2e-4);
+  EXPECT_NEAR(o.y, -0.5, 2e-4);
+  EXPECT_NEAR(o.yaw_frd, 0.3, 2e-4);
+  EXPECT_EQ(o.reset_counter, 1);
+  // The pose (map frame, z up) has y and yaw mirrored.
+  EXPECT_NEAR(r.cycle->pose().pose.x_m, 1.5, 2e-4);
+  EXPECT_NEAR(r.cycle->pose().pose.y_m, 0.5, 2e-4);
+  EXPECT_NEAR(r.cycle->pose().pose.yaw_rad, -0.3, 2e-4);
+  EXPECT_TRUE(r.cycle->pose().valid);
+  const mv::InboundCounters c = r.cycle->inbound_counters();
+  EXPECT_EQ(c.commands_accepted, 1U);
+  EXPECT_EQ(c.frames_in, 1U);
+  // Defaults for the spreads: 0 takes the config's init_position_sigma_m and 0.05 rad.
+  r.send_and_run(tf::command(mv::kCmdSetPose, {-2.0F, 1.0F, -3.0F, 0, 0, 0, 0}));
+  const double var_x = r.cycle->pose().covariance(0, 0);
+  EXPECT_NEAR(std::sqrt(var_x), r.config.filter.init_position_sigma_m, 0.01);
+  EXPECT_NEAR(r.cycle->pose().pose.x_m, -2.0, 0.02);
+  EXPECT_NEAR(r.cycle->pose().pose.y_m, -1.0, 0.02);
+}
+
+TEST(MavlinkCommands, SetPoseWithInvalidParametersIsDenied) {
+  Rig r;
+  r.start();
+  const float nan = std::nanf("");
+  const std::array<std::array<float, 7>, 6> bad = {{{nan, 0, 0, 0, 0, 0, 0},
+                                                    {0, INFINITY, 0, 0, 0, 0, 0},
+                                                    {0, 0, nan, 0, 0, 0, 0},
+                                                    {20000.0F, 0, 0, 0, 0, 0, 0},
+                                                    {0, 0, 0, -0.1F, 0, 0, 0},
+                                                    {0, 0, 0, 0, 4.0F, 0, 0}}};
+  for (const auto& params : bad) {
+    const auto frames = r.send_and_run(tf::command(mv::kCmdSetPose, params));
+    ASSERT_EQ(of_type(frames, 77).size(), 1U);
+    EXPECT_EQ(tf::ack_of(of_type(frames, 77)[0]).result, 2);  // MAV_RESULT_DENIED
+    EXPECT_TRUE(of_type(frames, 331).empty());                // the filter was not touched
+  }
+  EXPECT_FALSE(r.cycle->pose().valid);
+  EXPECT_EQ(r.cycle->inbound_counters().commands_refused, bad.size());
+}
+
+TEST(MavlinkCommands, RelocalizeWithoutAFixSpreadsOverTheTrainingPositions) {
+  Rig r;
+  r.start();
+  r.run();
+  const auto frames = r.send_and_run(tf::command(mv::kCmdRelocalize, kNoParams));
+  const auto acks = of_type(frames, 77);
+  ASSERT_EQ(acks.size(), 1U);
+  EXPECT_EQ(tf::ack_of(acks[0]).result, 0);
+  EXPECT_EQ(tf::ack_of(acks[0]).result_param2, 2);  // over the map
+  // The cloud covers the three training positions: its mean near their centroid, its spread
+  // that of the three points.
+  const auto& p = r.cycle->pose();
+  EXPECT_TRUE(p.valid);
+  EXPECT_NEAR(p.pose.x_m, 2.0, 0.15);
+  EXPECT_NEAR(p.pose.y_m, 7.0 / 6.0, 0.15);
+  EXPECT_NEAR(std::sqrt(p.covariance(0, 0)), std::sqrt(2.0 / 3.0), 0.1);
+  EXPECT_NEAR(std::sqrt(p.covariance(1, 1)), std::sqrt(8.0 / 9.0), 0.1);
+  ASSERT_EQ(of_type(frames, 331).size(), 1U);
+  EXPECT_EQ(odometry_of(of_type(frames, 331)[0]).reset_counter, 1);
+}
+
+TEST(MavlinkCommands, RelocalizeAroundTheLatestFix) {
+  Rig r;
+  r.camera.frames = true;
+  r.start();
+  for (int i = 0; i < 5; ++i) r.run();  // fixes at training sample 0
+  ASSERT_TRUE(r.cycle->pose().valid);
+  const std::uint8_t resets = 1;  // the first fix initialised the filter
+  // Throw the filter far off, then ask it to relocalize.
+  r.send_and_run(tf::command(mv::kCmdSetPose, {-5.0F, 5.0F, 0, 0.001F, 0, 0, 0}));
+  EXPECT_NEAR(r.cycle->pose().pose.x_m, -5.0, 0.01);
+  const auto frames = r.send_and_run(tf::command(mv::kCmdRelocalize, kNoParams));
+  const auto acks = of_type(frames, 77);
+  ASSERT_EQ(acks.size(), 1U);
+  EXPECT_EQ(tf::ack_of(acks[0]).result, 0);
+  EXPECT_EQ(tf::ack_of(acks[0]).result_param2, 1);  // around the fix
+  const auto& p = r.cycle->pose();
+  EXPECT_NEAR(p.pose.x_m, kTargets[0][0], 0.02);
+  EXPECT_NEAR(p.pose.y_m, kTargets[0][1], 0.02);
+  ASSERT_EQ(of_type(frames, 331).size(), 1U);
+  EXPECT_EQ(odometry_of(of_type(frames, 331)[0]).reset_counter, resets + 2);
+  // Once the camera has shown nothing for longer than its timeout, the fix is stale.
+  r.camera.frames = false;
+  for (int i = 0; i < 10; ++i) r.run();
+  const auto later = of_type(r.send_and_run(tf::command(mv::kCmdRelocalize, kNoParams)), 77);
+  ASSERT_EQ(later.size(), 1U);
+  EXPECT_EQ(tf::ack_of(later[0]).result_param2, 2);
+}
+
+TEST(MavlinkCommands, RequestMessage) {
+  Rig r;
+  r.start();
+  r.run();  // the scheduled HEARTBEAT goes out here
+  ASSERT_TRUE(of_type(r.run(), 0).empty());
+  // HEARTBEAT now: the ACK, then the HEARTBEAT, in this cycle.
+  auto frames = r.send_and_run(tf::command(mv::kCmdRequestMessage, {0, 0, 0, 0, 0, 0, 0}));
+  ASSERT_EQ(frames.size(), 2U);
+  EXPECT_EQ(frames[0].msg_id, 77U);
+  EXPECT_EQ(tf::ack_of(frames[0]).command, mv::kCmdRequestMessage);
+  EXPECT_EQ(tf::ack_of(frames[0]).result, 0);
+  EXPECT_EQ(frames[1].msg_id, 0U);
+  EXPECT_EQ(frames[1].payload[7], 3);        // system_status STANDBY: no fix yet
+  EXPECT_TRUE(of_type(r.run(), 0).empty());  // the 1 Hz schedule is unchanged
+  // ODOMETRY before there is a pose: FAILED; after: ACCEPTED and this cycle's follows.
+  frames = r.send_and_run(tf::command(mv::kCmdRequestMessage, {331, 0, 0, 0, 0, 0, 0}));
+  ASSERT_EQ(frames.size(), 1U);
+  EXPECT_EQ(tf::ack_of(frames[0]).result, 4);  // MAV_RESULT_FAILED
+  r.send_and_run(tf::command(mv::kCmdSetPose, {1, 1, 0, 0, 0, 0, 0}));
+  frames = r.send_and_run(tf::command(mv::kCmdRequestMessage, {331, 0, 0, 0, 0, 0, 0}));
+  ASSERT_EQ(frames.size(), 2U);
+  EXPECT_EQ(tf::ack_of(frames[0]).result, 0);
+  EXPECT_EQ(frames[1].msg_id, 331U);
+  // Any other message, or an id that is not a whole number: DENIED.
+  for (const float id : {1.0F, 253.0F, 999.0F, 0.5F, -1.0F, std::nanf("")}) {
+    frames = r.send_and_run(tf::command(mv::kCmdRequestMessage, {id, 0, 0, 0, 0, 0, 0}));
+    ASSERT_EQ(of_type(frames, 77).size(), 1U) << id;
+    EXPECT_EQ(tf::ack_of(of_type(frames, 77)[0]).result, 2) << id;
+    EXPECT_TRUE(of_type(frames, 0).empty());
+  }
+}
+
+TEST(MavlinkCommands, OtherCommandsAreUnsupported) {
+  Rig r;
+  r.start();
+  for (const std::uint16_t cmd : {std::uint16_t{400}, std::uint16_t{31012}, std::uint16_t{511}}) {
+    const auto acks = of_type(r.send_and_run(tf::command(cmd, kNoParams)), 77);
+    ASSERT_EQ(acks.size(), 1U);
+    EXPECT_EQ(tf::ack_of(acks[0]).command, cmd);
+    EXPECT_EQ(tf::ack_of(acks[0]).result, 3);  // MAV_RESULT_UNSUPPORTED
+  }
+  EXPECT_EQ(r.cycle->inbound_counters().commands_refused, 3U);
+}
+
+TEST(MavlinkCommands, RejectedCommandsGetNoAnswer) {
+  Rig r;
+  r.start();
+  r.run();
+  const auto frames = r.send_and_run(tf::command(mv::kCmdSetPose, kNoParams, 42, 190));
+  EXPECT_TRUE(of_type(frames, 77).empty());
+  EXPECT_FALSE(r.cycle->pose().valid);
+  EXPECT_EQ(r.cycle->inbound_counters().rejected_source, 1U);
+}
+
+TEST(MavlinkCommands, SignedLink) {
+  tf::Key key{};
+  for (std::size_t i = 0; i < key.size(); ++i) key[i] = static_cast<std::uint8_t>(200 - i);
+  Rig r(&key);
+  r.config.link.link_id = 3;
+  r.start();
+  r.cycle->set_signing_time(mv::kSigningEpochUnixUs + 3'600'000'000ULL);  // 2015-01-01 01:00
+  const std::uint64_t now = 360'000'000;  // the same, in signing units
+  auto frames = r.run();
+  ASSERT_FALSE(frames.empty());
+  for (const auto& f : frames) {
+    EXPECT_TRUE(f.is_signed);
+    EXPECT_TRUE(f.signature_ok);
+    EXPECT_EQ(f.link_id, 3);
+    EXPECT_GE(f.timestamp, now);
+  }
+  const std::array<float, 7> pose{1, 1, 0, 0, 0, 0, 0};
+  // Unsigned, wrongly signed, from before the replay window: no answer, counted.
+  tf::Key other = key;
+  other[0] ^= 1;
+  frames = r.send_and_run(tf::command(mv::kCmdSetPose, pose));
+  frames = r.send_and_run(tf::command(mv::kCmdSetPose, pose, 255, 190, &other, now + 10));
+  frames = r.send_and_run(tf::command(mv::kCmdSetPose, pose, 255, 190, &key, now - 7'000'000));
+  EXPECT_TRUE(of_type(frames, 77).empty());
+  EXPECT_FALSE(r.cycle->pose().valid);
+  // Signed and fresh: done; the same frame again: a replay.
+  const tf::Bytes good = tf::command(mv::kCmdSetPose, pose, 255, 190, &key, now + 20);
+  frames = r.send_and_run(good);
+  ASSERT_EQ(of_type(frames, 77).size(), 1U);
+  EXPECT_TRUE(of_type(frames, 77)[0].signature_ok);
+  EXPECT_TRUE(r.cycle->pose().valid);
+  frames = r.send_and_run(good);
+  EXPECT_TRUE(of_type(frames, 77).empty());
+  const mv::InboundCounters c = r.cycle->inbound_counters();
+  EXPECT_EQ(c.rejected_unsigned, 1U);
+  EXPECT_EQ(c.rejected_bad_signature, 1U);
+  EXPECT_EQ(c.rejected_replay, 2U);
+  EXPECT_EQ(c.commands_accepted, 1U);
+}
+
+TEST(MavlinkCommands, GarbageOnTheLineDoesNotDisturbTheCycle) {
+  // Two identical runs, one with a flood of garbage (random bytes, false start bytes, valid
+  // frames of other messages, commands for other systems) every cycle: the poses and the
+  // outbound frames are the same, bit for bit.
+  Rig quiet, noisy;
+  quiet.camera.frames = noisy.camera.frames = true;
+  quiet.start();
+  noisy.start();
+  std::mt19937 rng(7);
+  for (int i = 0; i < 60; ++i) {
+    tf::Bytes g(3000);
+    for (auto& b : g) b = static_cast<std::uint8_t>(rng() % 5 == 0 ? 0xFD : rng());
+    const tf::Bytes hb = tf::frame(0, {0, 0, 0, 0, 6, 8, 0, 0, 3});
+    g.insert(g.begin() + 100, hb.begin(), hb.end());
+    const tf::Bytes other = tf::command(mv::kCmdSetPose, kNoParams, 255, 190, nullptr, 0, 0, 9, 1);
+    g.insert(g.begin() + 500, other.begin(), other.end());
+    noisy.link.send(g);
+    quiet.cycle->run_once();
+    noisy.cycle->run_once();
+    ASSERT_EQ(quiet.cycle->pose().valid, noisy.cycle->pose().valid);
+    EXPECT_EQ(quiet.cycle->pose().pose.x_m, noisy.cycle->pose().pose.x_m) << i;
+    EXPECT_EQ(quiet.cycle->pose().pose.y_m, noisy.cycle->pose().pose.y_m) << i;
+    EXPECT_EQ(quiet.cycle->pose().pose.yaw_rad, noisy.cycle->pose().pose.yaw_rad) << i;
+  }
+  EXPECT_EQ(quiet.link.written, noisy.link.written);
+  const mv::InboundCounters c = noisy.cycle->inbound_counters();
+  EXPECT_EQ(c.commands_accepted + c.commands_refused, 0U);
+  EXPECT_GT(c.ignored_messages, 0U);
+  EXPECT_GT(c.saturated_cycles, 0U);
+  EXPECT_LE(noisy.link.bytes_read, 60 * mv::CommandReceiver::kMaxBytesPerCycle);
+}
