@@ -51,23 +51,24 @@ std::vector<std::pair<int, int>> spanning_tree(const Eigen::MatrixXd& d2) {
   const auto m = static_cast<int>(d2.rows());
   std::vector<std::pair<int, int>> edges;
   if (m < 2) return edges;
-  std::vector<bool> in_tree(static_cast<std::size_t>(m), false);
+  // The rows not yet in the tree, packed at the front of `rest`, with their best distance to it.
+  std::vector<int> rest(static_cast<std::size_t>(m - 1)), from(static_cast<std::size_t>(m), 0);
   std::vector<double> best(static_cast<std::size_t>(m), std::numeric_limits<double>::infinity());
-  std::vector<int> from(static_cast<std::size_t>(m), 0);
+  std::iota(rest.begin(), rest.end(), 1);
   int current = 0;
-  in_tree[0] = true;
-  for (int added = 1; added < m; ++added) {
-    int next = -1;
-    for (int j = 0; j < m; ++j) {
-      const auto uj = static_cast<std::size_t>(j);
-      if (in_tree[uj]) continue;
-      if (d2(current, j) < best[uj]) {
-        best[uj] = d2(current, j);
-        from[uj] = current;
+  for (std::size_t left = rest.size(); left > 0; --left) {
+    const double* column = d2.data() + static_cast<std::ptrdiff_t>(current) * m;  // symmetric
+    std::size_t pick = 0;
+    for (std::size_t r = 0; r < left; ++r) {
+      const auto j = static_cast<std::size_t>(rest[r]);
+      if (column[j] < best[j]) {
+        best[j] = column[j];
+        from[j] = current;
       }
-      if (next < 0 || best[uj] < best[static_cast<std::size_t>(next)]) next = j;
+      if (best[j] < best[static_cast<std::size_t>(rest[pick])]) pick = r;
     }
-    in_tree[static_cast<std::size_t>(next)] = true;
+    const int next = rest[pick];
+    rest[pick] = rest[left - 1];
     edges.emplace_back(std::min(next, from[static_cast<std::size_t>(next)]),
                        std::max(next, from[static_cast<std::size_t>(next)]));
     current = next;
@@ -205,6 +206,16 @@ std::pair<NeighbourAxisChoice, NeighbourAxisChoice> cross_validate_neighbour_mod
   const std::size_t nk = options.neighbours.size(), ng = options.gammas.size(), ns = sigmas.size();
   std::vector<double> sq_error(nk * ng * ns * 2, 0.0);
 
+  // Every row's nearest rows over the whole set, once: a fold's lists are these with its
+  // removed rows skipped. Enough are kept for the largest fold's removals.
+  std::size_t most_removed = 0;
+  for (int fold = 0; fold < folds; ++fold) {
+    const std::size_t held = (labelled_rows.size() + static_cast<std::size_t>(folds - 1 - fold)) /
+                             static_cast<std::size_t>(folds);
+    most_removed = std::max(most_removed, held * static_cast<std::size_t>(2 * options.gap + 1));
+  }
+  const auto global_nearest =
+      nearest_rows(d2_all, max_k + static_cast<int>(std::min<std::size_t>(most_removed, m)));
   std::size_t count = 0;
   for (int fold = 0; fold < folds; ++fold) {
     // Interleaved folds: labels come in route order, so every fold spans the route.
@@ -255,7 +266,17 @@ std::pair<NeighbourAxisChoice, NeighbourAxisChoice> cross_validate_neighbour_mod
     weights.push_back((-sigmas.front() * excess).array().exp().matrix());
     for (std::size_t si = 1; si < sigmas.size(); ++si)
       weights.push_back(weights.back().cwiseProduct(weights.back()));
-    const auto nearest = nearest_rows(d2, max_k);
+    std::vector<int> position(static_cast<std::size_t>(m), -1);  // row -> index in keep
+    for (std::size_t a = 0; a < keep.size(); ++a)
+      position[static_cast<std::size_t>(keep[a])] = static_cast<int>(a);
+    std::vector<std::vector<int>> nearest(keep.size());
+    for (std::size_t a = 0; a < keep.size(); ++a) {
+      for (int j : global_nearest[static_cast<std::size_t>(keep[a])]) {
+        if (static_cast<int>(nearest[a].size()) == max_k) break;
+        if (position[static_cast<std::size_t>(j)] >= 0)
+          nearest[a].push_back(position[static_cast<std::size_t>(j)]);
+      }
+    }
     const auto tree = spanning_tree(d2);
     // Every (k, gamma) solution side by side: one product per sigma predicts them all.
     Eigen::MatrixXd solutions(mk, static_cast<Eigen::Index>(nk * ng * 2));
