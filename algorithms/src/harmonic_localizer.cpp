@@ -28,9 +28,13 @@ HarmonicFix harmonic_query(const HarmonicModel& model,
   // Each distance is computed once and kept (16 KiB of stack at full capacity).
   std::array<float, HarmonicModel::kMaxSamples> d2;  // only the first n are written and read
   float d2_min = std::numeric_limits<float>::infinity();
+  std::size_t nearest = 0;
   for (std::size_t j = 0; j < n; ++j) {
     d2[j] = squared_distance(features.data(), model.sample(j), d);
-    if (d2[j] < d2_min) d2_min = d2[j];
+    if (d2[j] < d2_min) {
+      d2_min = d2[j];
+      nearest = j;
+    }
   }
 
   fix.nearest_distance = std::sqrt(static_cast<double>(d2_min));
@@ -39,10 +43,15 @@ HarmonicFix harmonic_query(const HarmonicModel& model,
   double sum_wx = 0.0, sum_wy = 0.0, sum_wx_fx = 0.0, sum_wy_fy = 0.0;
   const float sx = model.sigma_x;
   const float sy = model.sigma_y;
+  // A weight below exp(-40) (4e-18 of the nearest sample's) cannot move the sums even with 4096
+  // samples; skipping its exp saves most of the query with the narrow kernels training picks.
+  constexpr float kNegligible = 40.0F;
   for (std::size_t j = 0; j < n; ++j) {
     const float excess = d2[j] - d2_min;
-    const double wx = std::exp(static_cast<double>(-sx * excess));
-    const double wy = std::exp(static_cast<double>(-sy * excess));
+    const float ex = sx * excess, ey = sy * excess;
+    if (ex > kNegligible && ey > kNegligible) continue;
+    const double wx = ex > kNegligible ? 0.0 : std::exp(static_cast<double>(-ex));
+    const double wy = ey > kNegligible ? 0.0 : std::exp(static_cast<double>(-ey));
     sum_wx += wx;
     sum_wy += wy;
     sum_wx_fx += wx * static_cast<double>(model.target_x_m[j]);
@@ -53,9 +62,17 @@ HarmonicFix harmonic_query(const HarmonicModel& model,
   fix.y_m = sum_wy_fy / sum_wy;
 
   bool any_board = false;
-  for (std::size_t k = 0; k < d; ++k) any_board = any_board || features[k] > 0.0F;
+  double diff_sum = 0.0, sum = 0.0;
+  const float* near = model.sample(nearest);
+  for (std::size_t k = 0; k < d; ++k) {
+    any_board = any_board || features[k] > 0.0F;
+    diff_sum += std::fabs(static_cast<double>(features[k]) - static_cast<double>(near[k]));
+    sum += static_cast<double>(features[k]) + static_cast<double>(near[k]);
+  }
+  fix.dissimilarity = sum > 0.0 ? diff_sum / sum : 1.0;
   fix.known_place = any_board && std::isfinite(fix.x_m) && std::isfinite(fix.y_m) &&
-                    fix.nearest_distance <= static_cast<double>(model.max_nearest_distance);
+                    fix.nearest_distance <= static_cast<double>(model.max_nearest_distance) &&
+                    fix.dissimilarity <= static_cast<double>(model.max_dissimilarity);
   return fix;
 }
 

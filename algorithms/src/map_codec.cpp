@@ -98,6 +98,7 @@ std::vector<std::uint8_t> encode_map(const MapFile& map) {
   w.f32(m.gamma_x);
   w.f32(m.gamma_y);
   w.f32(m.max_nearest_distance);
+  w.f32(m.max_dissimilarity);
   for (std::size_t i = 0; i < m.sample_count; ++i) {
     for (std::size_t k = 0; k < m.feature_count; ++k) w.f32(m.sample(i)[k]);
     w.f32(m.target_x_m[i]);
@@ -122,8 +123,8 @@ MapError decode_map(const std::uint8_t* data, std::size_t size, MapFile& map) {
   for (std::size_t i = 0; i < sizeof kMagic; ++i) r.u8(skip, "magic");
   std::uint32_t version = 0;
   if (!r.u32(version, "version")) return r.error;
-  if (version != kMapFormatVersion)
-    return MapError{"unsupported map format version (this firmware reads version 1)", 8};
+  if (version != 1 && version != kMapFormatVersion)
+    return MapError{"unsupported map format version (this firmware reads versions 1 and 2)", 8};
   if (crc32(data, body) != stored) return MapError{"checksum mismatch: the map is corrupt", body};
 
   std::uint32_t boards = 0;
@@ -170,6 +171,11 @@ MapError decode_map(const std::uint8_t* data, std::size_t size, MapFile& map) {
       !r.f32(m.gamma_y, "gamma y") || !r.f32(m.max_nearest_distance, "known-place bound")) {
     return r.error;
   }
+  m.max_dissimilarity = 1.0F;  // version 1: no dissimilarity test (1 is the largest possible)
+  if (version >= 2 && !r.f32(m.max_dissimilarity, "known-place dissimilarity bound"))
+    return r.error;
+  if (!(m.max_dissimilarity > 0.0F && m.max_dissimilarity <= 1.0F))
+    return MapError{"known-place dissimilarity bound outside (0, 1]", r.pos()};
   if (!finite_positive(m.area_scale) || !finite_positive(m.sigma_x) ||
       !finite_positive(m.sigma_y) || !finite_positive(m.max_nearest_distance) ||
       !std::isfinite(m.gamma_x) || !std::isfinite(m.gamma_y)) {

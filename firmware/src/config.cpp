@@ -139,7 +139,7 @@ algorithms::ColourThreshold threshold(float h0, float h1, std::uint8_t s, std::u
 FirmwareConfig default_config() {
   FirmwareConfig c;
   const std::array<std::pair<const char*, algorithms::ColourThreshold>, 6> boards = {{
-      {"red", threshold(340.0F, 15.0F, 110, 60)},
+      {"red", threshold(345.0F, 10.0F, 110, 60)},
       {"green", threshold(100.0F, 145.0F, 110, 60)},
       {"blue", threshold(215.0F, 250.0F, 110, 60)},
       {"yellow", threshold(45.0F, 70.0F, 110, 60)},

@@ -155,6 +155,7 @@ CycleResult LocalizationCycle::run_once() {
       std::array<float, algorithms::HarmonicModel::kMaxFeatures> features{};
       algorithms::areas_to_features(map_.model, areas, features);
       fix_.fix = algorithms::harmonic_query(map_.model, features);
+      fix_.areas = areas;
       fix_.present = true;
     }
   }

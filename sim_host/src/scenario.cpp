@@ -35,6 +35,31 @@ Scenario desk_shuttle() {
   return s;
 }
 
+// The same desk seen from three more routes, so accuracy is not a property of one path.
+Scenario desk_route(const char* name, const char* description,
+                    std::vector<std::array<double, 2>> waypoints) {
+  Scenario s = desk_shuttle();
+  s.name = name;
+  s.description = description;
+  s.route.waypoints_m = std::move(waypoints);
+  return s;
+}
+
+Scenario desk_left() {
+  return desk_route("desk-left", "seed 000's desk, a diagonal route from the front left",
+                    {{1.40, 0.40}, {1.55, 0.80}, {1.80, 1.20}, {1.95, 1.55}});
+}
+
+Scenario desk_right() {
+  return desk_route("desk-right", "seed 000's desk, a diagonal route from the front right",
+                    {{2.90, 0.40}, {2.75, 0.80}, {2.50, 1.20}, {2.30, 1.55}});
+}
+
+Scenario desk_slalom() {
+  return desk_route("desk-slalom", "seed 000's desk, a slalom across the middle",
+                    {{2.10, 0.40}, {2.25, 0.80}, {1.95, 1.20}, {2.10, 1.60}});
+}
+
 Scenario tiny() {
   Scenario s = desk_shuttle();
   s.name = "tiny";
@@ -228,7 +253,8 @@ Scenario from_file(const std::string& file, int depth) {
 
 std::vector<std::pair<std::string, std::string>> builtin_scenarios() {
   std::vector<std::pair<std::string, std::string>> out;
-  for (const Scenario& s : {desk_shuttle(), tiny(), wrap_test()})
+  for (const Scenario& s :
+       {desk_shuttle(), desk_left(), desk_right(), desk_slalom(), tiny(), wrap_test()})
     out.emplace_back(s.name, s.description);
   return out;
 }
@@ -246,6 +272,9 @@ Scenario load_scenario_at_depth(const std::string& name_or_file, int depth) {
         name_or_file + ": more than 8 scenario files chained by 'base' (does one name itself?)");
   }
   if (name_or_file == "desk-shuttle") return desk_shuttle();
+  if (name_or_file == "desk-left") return desk_left();
+  if (name_or_file == "desk-right") return desk_right();
+  if (name_or_file == "desk-slalom") return desk_slalom();
   if (name_or_file == "tiny") return tiny();
   if (name_or_file == "tiny-wrap16") return wrap_test();
   if (std::filesystem::is_regular_file(name_or_file)) return from_file(name_or_file, depth);

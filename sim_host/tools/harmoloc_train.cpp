@@ -9,23 +9,36 @@
 #include "harmoloc/firmware/config.hpp"
 #include "harmoloc/sim_host/trainer.hpp"
 
+namespace {
+
+std::string board_list(const std::vector<int>& boards, const harmoloc::firmware::BoardNames& n) {
+  std::string out;
+  for (int b : boards) out += (out.empty() ? "" : " ") + n.names[static_cast<std::size_t>(b)];
+  return out.empty() ? "-" : out;
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
   using namespace harmoloc;
   CLI::App app{
-      "harmoloc-train: train the harmonic localizer's map (seed 000, eq. 7-8) on the host.\n"
-      "Frames whose timestamp has a label in --labels are labelled; an evenly spread subset of the "
-      "other\n"
-      "frames is used unlabelled. Kernel width (sigma) and regularisation (gamma) are chosen per "
-      "axis by\n"
-      "k-fold cross-validation over the labelled frames. The map records the colour thresholds and "
-      "the\n"
-      "frame size it was trained with; the firmware refuses a map that does not match its config.",
+      "harmoloc-train: train the harmonic localizer's map on the host (docs/training.md).\n"
+      "Input is a run the robot recorded: a dataset folder (frames) or an area log\n"
+      "(harmoloc --record-areas), plus labelled poses (TUM) for a few of its frames. Frames whose\n"
+      "timestamp has a label are labelled; an evenly spread subset of the others is used\n"
+      "unlabelled. The trainer chooses the feature boards, the neighbour graph, gamma and the\n"
+      "kernel width per axis by k-fold cross-validation over the labelled frames, and calibrates\n"
+      "the known-place test. The map records the colour thresholds and frame size it was trained\n"
+      "with; the firmware refuses a map that does not match its config.",
       "harmoloc-train"};
-  std::string dataset, labels, out, config_path, boards_text;
-  int unlabelled = -1, folds = 5;
+  std::string dataset, areas, labels, out, config_path, boards_text, method = "neighbour";
+  int unlabelled = -1, folds = 5, max_labelled = -1;
   double ratio = 2.2;
-  bool quiet = false;
-  app.add_option("--dataset", dataset, "dataset folder of the training run")->required();
+  bool quiet = false, all_boards = false;
+  auto* input = app.add_option_group("input", "the recorded run (one of)");
+  input->add_option("--dataset", dataset, "dataset folder of the training run (frames)");
+  input->add_option("--areas", areas, "area log of the training run (harmoloc --record-areas)");
+  input->require_option(1);
   app.add_option("--labels", labels, "labelled poses (TUM), timestamps equal to frame timestamps")
       ->required();
   app.add_option("--out", out, "map file to write")->required();
@@ -35,8 +48,23 @@ int main(int argc, char** argv) {
                  "number of unlabelled frames (default: --ratio x labelled)");
   app.add_option("--ratio", ratio, "unlabelled per labelled frame when --unlabelled is not given")
       ->capture_default_str();
+  app.add_option("--labelled", max_labelled,
+                 "use at most this many of the labels, evenly spread (default: all)");
   app.add_option("--boards", boards_text,
-                 "feature boards, 1-based, comma separated (e.g. 1,2,5; default: all)");
+                 "feature boards, 1-based, comma separated (e.g. 1,2,5); default: chosen by CV");
+  app.add_flag("--all-boards", all_boards, "use every board that changes; no selection");
+  app.add_option(
+         "--method", method,
+         "neighbour: k-nearest-neighbour graph (default); paper: seed 000's complete graph\n"
+         "with the normalised Laplacian, for comparison")
+      ->check(CLI::IsMember({"neighbour", "paper"}))
+      ->capture_default_str();
+  double margin = 1.5;
+  app.add_option("--known-place-margin", margin,
+                 "known-place bound: this many times the 99th percentile of the training samples'\n"
+                 "leave-one-out dissimilarity (raise it if too many on-route frames are flagged)")
+      ->capture_default_str()
+      ->check(CLI::Range(1.0, 20.0));
   app.add_option("--folds", folds, "cross-validation folds")
       ->capture_default_str()
       ->check(CLI::Range(2, 64));
@@ -48,11 +76,17 @@ int main(int argc, char** argv) {
         config_path.empty() ? firmware::default_config() : firmware::load_config(config_path);
     sim_host::TrainOptions opt;
     opt.dataset_dir = dataset;
+    opt.areas_path = areas;
     opt.labels_path = labels;
     opt.thresholds = config.thresholds;
     opt.unlabelled = unlabelled;
     opt.unlabelled_ratio = ratio;
+    opt.max_labelled = max_labelled;
     opt.folds = folds;
+    opt.select_boards = !all_boards;
+    opt.known_place_margin = margin;
+    opt.method =
+        method == "paper" ? sim_host::TrainMethod::kPaper : sim_host::TrainMethod::kNeighbourGraph;
     if (!boards_text.empty()) {
       std::stringstream ss(boards_text);
       std::string item;
@@ -73,26 +107,58 @@ int main(int argc, char** argv) {
             static_cast<std::streamsize>(bytes.size()));
     if (!f) throw std::runtime_error(out + ": cannot write");
     if (!quiet) {
-      std::string names;
-      for (std::size_t k = 0; k < map.model.feature_count; ++k) {
-        names += (k ? " " : "") + config.board_names.names[map.model.board_index[k]];
-      }
+      const auto& names = config.board_names;
       std::printf(
           "frames        %zu (%zu without any board in view); labels matched %zu, unmatched %zu\n",
           r.frames, r.empty_frames, r.labelled, r.labels_unmatched);
-      std::printf("samples       %zu labelled + %zu unlabelled (ratio 1:%.1f), features: %s\n",
-                  r.labelled, r.unlabelled,
-                  static_cast<double>(r.unlabelled) / static_cast<double>(r.labelled),
-                  names.c_str());
-      std::printf("x axis        sigma %.4g, gamma %.3g  (%d-fold CV RMSE %.2f cm)\n", r.x.sigma,
-                  r.x.gamma, folds, 100.0 * r.x.cv_rmse_m);
-      std::printf("y axis        sigma %.4g, gamma %.3g  (%d-fold CV RMSE %.2f cm)\n", r.y.sigma,
-                  r.y.gamma, folds, 100.0 * r.y.cv_rmse_m);
+      std::printf("samples       %zu labelled + %zu unlabelled (ratio 1:%.1f)\n", r.labelled,
+                  r.unlabelled,
+                  static_cast<double>(r.unlabelled) / static_cast<double>(r.labelled));
+      if (!r.constant_boards.empty()) {
+        std::printf("boards        left out, area never changes: %s\n",
+                    board_list(r.constant_boards, names).c_str());
+      }
+      for (const auto& step : r.board_steps) {
+        if (step.dropped < 0) {
+          std::printf("boards        start with %s: CV RMSE x %.2f cm, y %.2f cm\n",
+                      board_list(step.boards, names).c_str(), 100.0 * step.cv_rmse_x_m,
+                      100.0 * step.cv_rmse_y_m);
+        } else {
+          std::printf("boards        drop %s (CV improves by 25%% or more): x %.2f cm, y %.2f cm\n",
+                      names.names[static_cast<std::size_t>(step.dropped)].c_str(),
+                      100.0 * step.cv_rmse_x_m, 100.0 * step.cv_rmse_y_m);
+        }
+      }
+      std::printf("features      %s%s\n", board_list(r.boards, names).c_str(),
+                  r.board_steps.size() > 1 || !opt.boards.empty() || all_boards ||
+                          opt.method == sim_host::TrainMethod::kPaper
+                      ? ""
+                      : " (no board's removal improves CV by 25% or more)");
+      const auto axis = [&](const char* name, const sim_host::AxisReport& a) {
+        if (a.neighbours > 0) {
+          std::printf(
+              "%s axis        %d-neighbour graph, gamma %.3g, query sigma %.4g  (%d-fold CV "
+              "RMSE %.2f cm)\n",
+              name, a.neighbours, a.gamma, a.sigma, folds, 100.0 * a.cv_rmse_m);
+        } else {
+          std::printf(
+              "%s axis        complete graph, sigma %.4g, gamma %.3g  (%d-fold CV RMSE "
+              "%.2f cm)\n",
+              name, a.sigma, a.gamma, folds, 100.0 * a.cv_rmse_m);
+        }
+      };
+      axis("x", r.x);
+      axis("y", r.y);
       std::printf(
-          "known place   nearest training sample within %.3g (feature units: %% of frame)\n",
-          r.known_place_bound);
-      std::printf("time          segmentation %.0f ms, training %.0f ms\n", r.segment_ms,
-                  r.train_ms);
+          "known place   Bray-Curtis dissimilarity to the nearest sample <= %.3g, distance <= %.3g "
+          "(%% of frame)\n",
+          r.dissimilarity_bound, r.known_place_bound);
+      if (r.segment_ms > 0.0) {
+        std::printf("time          segmentation %.0f ms, training %.1f ms\n", r.segment_ms,
+                    r.train_ms);
+      } else {
+        std::printf("time          training %.1f ms\n", r.train_ms);
+      }
     }
     std::printf("wrote %s (%zu bytes, %u samples)\n", out.c_str(), bytes.size(),
                 map.model.sample_count);

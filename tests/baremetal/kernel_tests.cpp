@@ -654,7 +654,7 @@ class MapBytes {
 };
 
 struct MapSpec {
-  std::uint32_t version = 1;
+  std::uint32_t version = 2;
   std::uint32_t samples = 5;
   std::uint8_t last_board_index = 2;
   std::uint8_t pad = 0;
@@ -691,6 +691,7 @@ void write_map(MapBytes& m, const MapSpec& s) {
   m.f32(0.01F);
   m.f32(0.02F);
   m.f32(2.0F);
+  if (s.version >= 2) m.f32(0.05F);  // known-place dissimilarity bound, version 2 on
   for (std::uint32_t i = 0; i < s.samples; ++i) {
     m.f32(i == 0 ? s.first_feature : 0.25F * static_cast<float>(i));
     m.f32(1.5F);
@@ -728,6 +729,7 @@ void test_map_codec() {
   BM_CHECK(m.sigma_x == 0.5F);
   BM_CHECK(m.sigma_y == 0.6F);
   BM_CHECK(m.max_nearest_distance == 2.0F);
+  BM_CHECK(m.max_dissimilarity == 0.05F);
   BM_CHECK(m.sample(4)[2] == 0.625F);
   BM_CHECK(m.target_x_m[4] == 2.0F);
   BM_CHECK(m.target_y_m[4] == -1.0F);
@@ -759,8 +761,17 @@ void test_map_codec() {
   BM_CHECK(static_cast<bool>(ha::decode_map(nullptr, 0, g_map)));
 
   MapSpec s;
-  s.version = 2;
+  s.version = 3;
   BM_CHECK(rejected(s, "version"));
+  // Version 1 (no dissimilarity bound) is still read, with the test disabled.
+  {
+    static MapBytes v1;
+    v1 = MapBytes{};
+    s.version = 1;
+    write_map(v1, s);
+    BM_CHECK(!ha::decode_map(v1.data(), v1.size(), g_map));
+    BM_CHECK(g_map.model.max_dissimilarity == 1.0F);
+  }
   s = MapSpec{};
   s.trailing = true;
   BM_CHECK(rejected(s, "trailing"));

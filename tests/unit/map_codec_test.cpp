@@ -32,7 +32,8 @@ constexpr std::size_t kOffFeatureCount = kOffSampleCount + 4;
 constexpr std::size_t kOffBoardIndex = kOffFeatureCount + 4;
 constexpr std::size_t kOffAreaScale = kOffBoardIndex + kFeatures;
 constexpr std::size_t kOffSigmaX = kOffAreaScale + 4;
-constexpr std::size_t kOffSamples = kOffAreaScale + 6 * 4;
+constexpr std::size_t kOffDissimilarity = kOffAreaScale + 6 * 4;
+constexpr std::size_t kOffSamples = kOffAreaScale + 7 * 4;
 constexpr std::size_t kExpectedSize = kOffSamples + kSamples * (kFeatures + 2) * 4 + 4;
 
 std::unique_ptr<ha::MapFile> make_map() {
@@ -134,6 +135,7 @@ TEST(MapCodec, RoundTripAndLayout) {
   EXPECT_EQ(b.gamma_x, a.gamma_x);
   EXPECT_EQ(b.gamma_y, a.gamma_y);
   EXPECT_EQ(b.max_nearest_distance, a.max_nearest_distance);
+  EXPECT_EQ(b.max_dissimilarity, a.max_dissimilarity);
   for (std::size_t i = 0; i < kSamples; ++i) {
     for (std::size_t k = 0; k < kFeatures; ++k)
       EXPECT_EQ(b.sample(i)[k], a.sample(i)[k]) << i << "," << k;
@@ -154,10 +156,35 @@ TEST(MapCodec, BadMagic) {
 
 TEST(MapCodec, UnsupportedVersion) {
   std::vector<std::uint8_t> b = ha::encode_map(*make_map());
-  put_u32(b, kOffVersion, 2);
+  put_u32(b, kOffVersion, 3);
   EXPECT_NE(decode_error(b).find("version"), std::string::npos) << decode_error(b);
   fix_crc(b);
   EXPECT_NE(decode_error(b).find("version"), std::string::npos) << decode_error(b);
+}
+
+// Maps written before the dissimilarity bound existed (version 1) still load, without that test.
+TEST(MapCodec, ReadsVersionOne) {
+  const auto map = make_map();
+  std::vector<std::uint8_t> b = ha::encode_map(*map);
+  b.erase(b.begin() + static_cast<std::ptrdiff_t>(kOffDissimilarity),
+          b.begin() + static_cast<std::ptrdiff_t>(kOffDissimilarity + 4));
+  put_u32(b, kOffVersion, 1);
+  fix_crc(b);
+  auto out = std::make_unique<ha::MapFile>();
+  const ha::MapError e = ha::decode_map(b.data(), b.size(), *out);
+  ASSERT_FALSE(e) << e.what;
+  EXPECT_EQ(out->model.max_dissimilarity, 1.0F);
+  EXPECT_EQ(out->model.target_y_m[kSamples - 1], map->model.target_y_m[kSamples - 1]);
+}
+
+TEST(MapCodec, DissimilarityBoundOutOfRange) {
+  for (float v : {0.0F, -0.1F, 1.5F, std::numeric_limits<float>::quiet_NaN()}) {
+    std::vector<std::uint8_t> b = ha::encode_map(*make_map());
+    put_f32(b, kOffDissimilarity, v);
+    fix_crc(b);
+    EXPECT_NE(decode_error(b).find("dissimilarity"), std::string::npos)
+        << v << ": " << decode_error(b);
+  }
 }
 
 TEST(MapCodec, EveryFlippedByteIsRejected) {

@@ -45,7 +45,7 @@ TEST(Scenario, BuiltInTiny) {
   EXPECT_TRUE(ha::layout_valid(w.can_layout));
   EXPECT_GT(w.encoders.initial_left, 60000U);
   const auto list = hs::builtin_scenarios();
-  ASSERT_EQ(list.size(), 3U);
+  ASSERT_EQ(list.size(), 6U);  // four desk routes, tiny, tiny-wrap16
   for (const auto& [name, text] : list) {
     EXPECT_FALSE(text.empty()) << name;
     EXPECT_EQ(hs::load_scenario(name).name, name);

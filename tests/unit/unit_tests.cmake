@@ -7,6 +7,7 @@ set(HARMOLOC_UNIT_DIR ${CMAKE_CURRENT_SOURCE_DIR}/unit)
 add_executable(algorithms_test
   ${HARMOLOC_UNIT_DIR}/segmentation_test.cpp
   ${HARMOLOC_UNIT_DIR}/harmonic_test.cpp
+  ${HARMOLOC_UNIT_DIR}/harmonic_selection_test.cpp
   ${HARMOLOC_UNIT_DIR}/odometry_test.cpp
   ${HARMOLOC_UNIT_DIR}/particle_filter_test.cpp
   ${HARMOLOC_UNIT_DIR}/can_layout_test.cpp
@@ -36,10 +37,12 @@ endif()
 
 # sim_host/ and drivers/: dataset formats, the file-backed fakes, the simulator, the serial link.
 add_executable(sim_host_test
+  ${HARMOLOC_UNIT_DIR}/area_log_test.cpp
   ${HARMOLOC_UNIT_DIR}/dataset_test.cpp
   ${HARMOLOC_UNIT_DIR}/fakes_test.cpp
   ${HARMOLOC_UNIT_DIR}/simulator_test.cpp)
 target_link_libraries(sim_host_test PRIVATE harmoloc_sim_dataset harmoloc_sim_fakes harmoloc_simulator
+  harmoloc_trainer
   harmoloc_drivers_common harmoloc_algorithms GTest::gtest_main harmoloc_warnings)
 gtest_discover_tests(sim_host_test DISCOVERY_TIMEOUT 60)
 

@@ -18,6 +18,7 @@
 #include "harmoloc/firmware/localization_cycle.hpp"
 #include "harmoloc/firmware/map_loader.hpp"
 #include "harmoloc/firmware/stats_report.hpp"
+#include "harmoloc/sim_host/area_log.hpp"
 #include "harmoloc/sim_host/file_camera.hpp"
 #include "harmoloc/sim_host/log_encoders.hpp"
 #include "harmoloc/sim_host/metadata.hpp"
@@ -36,6 +37,7 @@ int fail(const std::string& why) {
 }
 
 sim_host::TumWriter g_trajectory, g_fixes;
+sim_host::AreaLogWriter g_areas;
 
 // Resident and peak memory (kB) from /proc/self/status; -1 where unavailable.
 void read_memory(long& rss_kb, long& peak_kb) {
@@ -72,12 +74,14 @@ int main(int argc, char** argv) {
       "Exit status 0 on a completed run, 2 with a one-line reason on bad input.",
       "harmoloc"};
   std::string dataset, map_path, config_path, trajectory_path, link_path, stats_path, fixes_path,
-      link_in_path;
+      link_in_path, areas_path;
   bool realtime = false, quiet = false;
   std::uint32_t loops = 1;
   app.add_option("--dataset", dataset, "dataset folder (metadata.toml, frames.csv, encoders.log)")
       ->required();
-  app.add_option("--map", map_path, "map file from harmoloc-train")->required();
+  app.add_option("--map", map_path,
+                 "map file from harmoloc-train (may be left out with --record-areas, to record a\n"
+                 "first run before any map exists: nothing is localised then)");
   app.add_option("--config", config_path,
                  "firmware config (TOML, docs/config-format.md); default: built-in");
   app.add_option("--trajectory", trajectory_path, "write the fused pose of every cycle here (TUM)");
@@ -90,6 +94,9 @@ int main(int argc, char** argv) {
                  "write run statistics here (JSON: per-stage timing, overruns, counters)");
   app.add_option("--fixes", fixes_path,
                  "write the harmonic localizer's own fixes here (TUM), for comparison");
+  app.add_option("--record-areas", areas_path,
+                 "write every frame's board areas here (area log, docs/dataset-format.md): with\n"
+                 "a few labelled poses, harmoloc-train --areas makes a map from it");
   app.add_flag("--realtime", realtime,
                "pace the cycle at the recording's rate instead of as fast as possible");
   app.add_option("--loop", loops,
@@ -111,7 +118,17 @@ int main(int argc, char** argv) {
     // The dataset describes the recorded robot; a config without these sections follows it.
     if (!config.has_odometry_section) config.geometry = meta.geometry;
     if (!config.has_can_section) config.can_layout = meta.encoder_layout;
-    if (const std::string e = firmware::load_map(map_path, g_map); !e.empty()) return fail(e);
+    if (!map_path.empty()) {
+      if (const std::string e = firmware::load_map(map_path, g_map); !e.empty()) return fail(e);
+    } else if (!areas_path.empty()) {
+      // Recording a first run: an empty map with the config's thresholds segments every frame
+      // and localises none.
+      g_map.image_width_px = meta.image_width_px;
+      g_map.image_height_px = meta.image_height_px;
+      g_map.thresholds = config.thresholds;
+    } else {
+      return fail("--map is required (or --record-areas to record a run before a map exists)");
+    }
     if (const std::string e =
             firmware::check_map_matches(g_map, config, meta.image_width_px, meta.image_height_px);
         !e.empty()) {
@@ -143,6 +160,14 @@ int main(int argc, char** argv) {
       return fail(trajectory_path + ": cannot write");
     if (!fixes_path.empty() && !g_fixes.open(fixes_path))
       return fail(fixes_path + ": cannot write");
+    if (!areas_path.empty()) {
+      const std::vector<std::string> names(config.board_names.names.begin(),
+                                           config.board_names.names.end());
+      if (!g_areas.open(areas_path, meta.image_width_px, meta.image_height_px, config.thresholds,
+                        names)) {
+        return fail(areas_path + ": cannot write");
+      }
+    }
   } catch (const std::exception& e) {
     return fail(e.what());
   }
@@ -201,6 +226,7 @@ int main(int argc, char** argv) {
     const firmware::PoseOutput& out = cycle->pose();
     if (out.valid) g_trajectory.write(out.data_time_ns, out.pose);
     const firmware::FixOutput& fix = cycle->last_fix();
+    if (fix.present) g_areas.write(out.data_time_ns, fix.areas);
     if (fix.present && fix.fix.known_place) {
       g_fixes.write(out.data_time_ns, algorithms::Pose2{fix.fix.x_m, fix.fix.y_m, 0.0});
     }
@@ -212,6 +238,7 @@ int main(int argc, char** argv) {
   run.open_fds_end = count_open_fds();
   if (!quiet) std::fprintf(stderr, "\r  cycle %zu/%zu\n", done, camera->frame_count());
   if (!g_trajectory.close() || !g_fixes.close()) return fail("writing the trajectory failed");
+  if (!g_areas.close()) return fail(areas_path + ": write failed");
 
   run.board = "host";
   run.rate_hz = config.cycle.rate_hz;

@@ -14,8 +14,11 @@ struct HarmonicFix {
   double y_m = 0.0;
   /// Euclidean distance (feature units) to the nearest training sample.
   double nearest_distance = 0.0;
+  /// Bray-Curtis dissimilarity (0 = identical .. 1 = nothing in common) to that sample: the
+  /// fix's confidence measure.
+  double dissimilarity = 1.0;
   /// True when the frame looks like a place the map was trained on (nearest_distance within the
-  /// model's bound) and some board was seen at all.
+  /// model's bound, dissimilarity within the model's bound) and some board was seen at all.
   bool known_place = false;
 };
 

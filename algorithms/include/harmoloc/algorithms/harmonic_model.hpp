@@ -29,6 +29,10 @@ struct HarmonicModel {
   /// Known-place test: a fix whose nearest training sample is farther than this (in feature
   /// units, Euclidean) is flagged as off the trained route.
   float max_nearest_distance = 0.0F;
+  /// Known-place test: a fix whose Bray-Curtis dissimilarity sum|O - O_j| / sum(O + O_j) to its
+  /// nearest training sample j exceeds this is flagged too. Relative, so it tells a wrong place
+  /// from a far one equally well where areas are large or small. 1 disables the test.
+  float max_dissimilarity = 1.0F;
 
   /// Row-major sample_count x feature_count.
   std::array<float, kMaxSamples * kMaxFeatures> features{};

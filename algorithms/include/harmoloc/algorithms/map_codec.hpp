@@ -12,7 +12,9 @@
 
 namespace harmoloc::algorithms {
 
-constexpr std::uint32_t kMapFormatVersion = 1;
+/// Version 2 added the known-place dissimilarity bound; version 1 maps are still read (without
+/// that test).
+constexpr std::uint32_t kMapFormatVersion = 2;
 
 struct MapFile {
   std::uint32_t image_width_px = 0;

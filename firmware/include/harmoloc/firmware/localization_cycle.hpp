@@ -60,7 +60,8 @@ struct PoseOutput {
 
 struct FixOutput {
   algorithms::HarmonicFix fix;
-  bool present = false;  ///< a frame was localised this cycle
+  algorithms::AreaVector areas;  ///< what the fix was computed from (recorded for training)
+  bool present = false;          ///< a frame was localised this cycle
 };
 
 struct CycleCounters {

@@ -1,0 +1,89 @@
+// Training speed (docs/training.md): the whole trainer on 204 samples (64 labelled + 140
+// unlabelled, 6 boards) as harmoloc-train runs it after reading the areas: board selection,
+// the cross-validated grid, the final solves and the known-place calibration; and the same
+// without board selection, and with 1024 samples.
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+#include <memory>
+
+#include "harmoloc/algorithms/map_codec.hpp"
+#include "harmoloc/algorithms/random.hpp"
+#include "harmoloc/sim_host/trainer.hpp"
+
+namespace hs = harmoloc::sim_host;
+namespace ha = harmoloc::algorithms;
+
+namespace {
+
+// A run along a route driven forth and back: six board areas that change smoothly (and
+// differently) with the position, with pixel noise; labels evenly spread.
+struct Run {
+  hs::AreaSeries areas;
+  std::vector<hs::StampedPose> labels;
+};
+
+Run make_run(std::size_t frames, std::size_t labels) {
+  Run r;
+  r.areas.image_width_px = 320;
+  r.areas.image_height_px = 240;
+  ha::Pcg32 rng(11);
+  const double t0 = 1767225600.0;
+  for (std::size_t i = 0; i < frames; ++i) {
+    const double u = static_cast<double>(i) / static_cast<double>(frames - 1);
+    const double s = u < 0.5 ? 2.0 * u : 2.0 - 2.0 * u;  // forth and back
+    const double x = 2.1 + 0.07 * std::sin(6.0 * s), y = 0.35 + 1.25 * s;
+    ha::AreaVector a;
+    a.count = 6;
+    for (std::size_t k = 0; k < 6; ++k) {
+      const double phase = 0.9 * static_cast<double>(k);
+      const double v =
+          900.0 + 700.0 * std::sin(2.5 * y + phase) * std::cos(4.0 * (x - 2.1) + phase) + 300.0 * y;
+      a.pixels[k] = static_cast<std::uint32_t>(std::max(0.0, v + 6.0 * rng.normal()));
+    }
+    const double t = t0 + static_cast<double>(i) / 30.0;
+    r.areas.timestamp_ns.push_back(static_cast<std::uint64_t>(std::llround(t * 1e6)) * 1000ULL);
+    r.areas.areas.push_back(a);
+    if ((i * labels) % frames < labels) {
+      hs::StampedPose p;
+      p.t_s = static_cast<double>(r.areas.timestamp_ns.back() / 1000U) * 1e-6;
+      p.pose = ha::Pose2{x, y, 1.57};
+      r.labels.push_back(p);
+    }
+  }
+  return r;
+}
+
+void train(benchmark::State& state, std::size_t frames, std::size_t labelled, int unlabelled,
+           bool select) {
+  const Run run = make_run(frames, labelled);
+  hs::TrainOptions opt;
+  opt.thresholds.count = 6;
+  opt.unlabelled = unlabelled;
+  opt.select_boards = select;
+  auto map = std::make_unique<ha::MapFile>();
+  for (auto _ : state) {
+    const hs::TrainReport report = hs::train_on_areas(run.areas, run.labels, opt, *map);
+    benchmark::DoNotOptimize(report.x.cv_rmse_m);
+  }
+  state.counters["samples"] = static_cast<double>(map->model.sample_count);
+  state.counters["boards"] = static_cast<double>(map->model.feature_count);
+}
+
+void BM_TrainMap204(benchmark::State& state) {
+  train(state, 898, 64, 140, true);
+}
+void BM_TrainMap204AllBoards(benchmark::State& state) {
+  train(state, 898, 64, 140, false);
+}
+void BM_TrainMap1024(benchmark::State& state) {
+  train(state, 4000, 256, 768, true);
+}
+
+}  // namespace
+
+BENCHMARK(BM_TrainMap204)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_TrainMap204AllBoards)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_TrainMap1024)->Unit(benchmark::kMillisecond)->Iterations(3);
+
+BENCHMARK_MAIN();

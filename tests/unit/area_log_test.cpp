@@ -1,0 +1,166 @@
+// The area log (what a robot records for training without its frames) and the trainer that reads
+// it: round trip, strict reading with one-line errors, the thresholds fingerprint, and a map
+// trained from the log equal to one trained from the frames themselves.
+#include "harmoloc/sim_host/area_log.hpp"
+
+#include <gtest/gtest.h>
+
+#include <memory>
+
+#include "harmoloc/algorithms/map_codec.hpp"
+#include "harmoloc/sim_host/scenario.hpp"
+#include "harmoloc/sim_host/simulate.hpp"
+#include "harmoloc/sim_host/trainer.hpp"
+#include "test_support.hpp"
+
+namespace ha = harmoloc::algorithms;
+namespace hs = harmoloc::sim_host;
+namespace ht = harmoloc::test;
+
+namespace {
+
+const std::vector<std::string> kNames{"red", "green", "blue", "yellow", "magenta", "cyan"};
+
+std::string write_log(const ht::TempDir& dir, const std::vector<ha::AreaVector>& frames) {
+  const std::string path = dir.path("areas.csv");
+  hs::AreaLogWriter w;
+  EXPECT_TRUE(w.open(path, 320, 240, ht::board_windows(), kNames));
+  std::uint64_t t = 1767225600000000000ULL;
+  for (const auto& a : frames) {
+    w.write(t, a);
+    t += 33333333;
+  }
+  EXPECT_TRUE(w.close());
+  return path;
+}
+
+}  // namespace
+
+TEST(AreaLog, RoundTrip) {
+  ht::TempDir dir;
+  std::vector<ha::AreaVector> frames(3);
+  for (std::size_t i = 0; i < 3; ++i) {
+    frames[i].count = 6;
+    for (std::size_t k = 0; k < 6; ++k)
+      frames[i].pixels[k] = static_cast<std::uint32_t>(i * 100 + k);
+  }
+  frames[2].pixels[5] = 320 * 240;  // the whole frame is still a valid area
+  const hs::AreaLog log = hs::read_area_log(write_log(dir, frames));
+  EXPECT_EQ(log.image_width_px, 320U);
+  EXPECT_EQ(log.image_height_px, 240U);
+  EXPECT_EQ(log.board_names, kNames);
+  EXPECT_EQ(log.thresholds_crc32, hs::thresholds_fingerprint(ht::board_windows()));
+  ASSERT_EQ(log.areas.size(), 3U);
+  EXPECT_EQ(log.timestamp_ns[1], 1767225600033333333ULL);
+  for (std::size_t i = 0; i < 3; ++i) {
+    EXPECT_EQ(log.areas[i].count, 6U);
+    for (std::size_t k = 0; k < 6; ++k) EXPECT_EQ(log.areas[i].pixels[k], frames[i].pixels[k]);
+  }
+}
+
+TEST(AreaLog, FingerprintFollowsEveryThresholdField) {
+  const ha::ThresholdSet base = ht::board_windows();
+  const std::uint32_t f = hs::thresholds_fingerprint(base);
+  EXPECT_EQ(f, hs::thresholds_fingerprint(ht::board_windows()));
+  for (int field = 0; field < 5; ++field) {
+    ha::ThresholdSet t = base;
+    auto& b = t.boards[2];
+    switch (field) {
+      case 0:
+        b.hue_min_deg += 1.0F;
+        break;
+      case 1:
+        b.hue_max_deg -= 1.0F;
+        break;
+      case 2:
+        b.saturation_min += 1;
+        break;
+      case 3:
+        b.value_min += 1;
+        break;
+      default:
+        b.value_max -= 1;
+        break;
+    }
+    EXPECT_NE(hs::thresholds_fingerprint(t), f) << field;
+  }
+  EXPECT_NE(hs::thresholds_fingerprint(ht::board_windows(5)), f);
+}
+
+TEST(AreaLog, BadFilesFailWithOneLine) {
+  ht::TempDir dir;
+  const std::string p = dir.path("bad.csv");
+  const std::string head =
+      "# harmoloc area log v1: pixels of each board per frame\n"
+      "# width_px=320 height_px=240 thresholds_crc32=0x0000abcd\n"
+      "timestamp_ns,red,green\n";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"", "not an area log"},
+      {"timestamp_ns,red\n1,2\n", "not an area log"},
+      {"# harmoloc area log v1\n# width_px=0 height_px=240 thresholds_crc32=0x1\nt\n", "width_px"},
+      {"# harmoloc area log v1\n# width_px=320 height_px=240 thresholds_crc32=12\nt\n",
+       "hexadecimal"},
+      {"# harmoloc area log v1\n# width_px=320 height_px=240 thresholds_crc32=0x1\nt,red\n",
+       "timestamp_ns"},
+      {"# harmoloc area log v1\n# width_px=320 height_px=240 thresholds_crc32=0x1\ntimestamp_ns\n",
+       "board columns"},
+      {head, "no frames"},
+      {head + "100,1,2\n100,1,2\n", "increase"},
+      {head + "100,1\n", "board 2"},
+      {head + "100,1,2,3\n", "more columns"},
+      {head + "100,1,-2\n", "board 2"},
+      {head + "100,1,76801\n", "board 2"},
+      {head + "1e3,1,2\n", "timestamp"},
+      {head + "99999999999999999999999,1,2\n", "timestamp"},
+  };
+  for (const auto& [text, what] : cases) {
+    ht::write_text(p, text);
+    ht::expect_one_line(ht::error_of([&] { hs::read_area_log(p); }), p + ":", what);
+  }
+  ht::expect_one_line(ht::error_of([&] { hs::read_area_log(p + ".missing"); }), p, "cannot read");
+}
+
+// The whole training workflow without frames: record areas, train from them; the map must equal
+// the one trained from the frames. A log measured with other thresholds is refused.
+TEST(Trainer, FromAreaLogEqualsFromFrames) {
+  ht::TempDir dir;
+  const std::string run = dir.path("run");
+  hs::simulate_dataset(hs::load_scenario("tiny"), 3, run, nullptr);
+  const ha::ThresholdSet thresholds = ht::board_windows();
+  const hs::AreaSeries from_frames = hs::segment_dataset(run, thresholds);
+  {
+    hs::AreaLogWriter w;
+    ASSERT_TRUE(w.open(dir.path("areas.csv"), from_frames.image_width_px,
+                       from_frames.image_height_px, thresholds, kNames));
+    for (std::size_t i = 0; i < from_frames.areas.size(); ++i)
+      w.write(from_frames.timestamp_ns[i], from_frames.areas[i]);
+    ASSERT_TRUE(w.close());
+  }
+  hs::TrainOptions opt;
+  opt.labels_path = run + "/labels.tum";
+  opt.thresholds = thresholds;
+  opt.dataset_dir = run;
+  auto a = std::make_unique<ha::MapFile>();
+  auto b = std::make_unique<ha::MapFile>();
+  const hs::TrainReport ra = hs::train_map(opt, *a);
+  opt.dataset_dir.clear();
+  opt.areas_path = dir.path("areas.csv");
+  const hs::TrainReport rb = hs::train_map(opt, *b);
+  EXPECT_EQ(ha::encode_map(*a), ha::encode_map(*b));
+  EXPECT_EQ(ra.labelled, rb.labelled);
+  EXPECT_GT(ra.labelled, 4U);
+  EXPECT_GT(a->model.max_dissimilarity, 0.0F);
+  EXPECT_LT(a->model.max_dissimilarity, 1.0F);
+
+  hs::TrainOptions other = opt;
+  other.thresholds.boards[1].saturation_min += 5;
+  ht::expect_one_line(ht::error_of([&] { hs::train_map(other, *b); }), opt.areas_path,
+                      "other colour thresholds");
+  other = opt;
+  other.thresholds = ht::board_windows(5);
+  ht::expect_one_line(ht::error_of([&] { hs::train_map(other, *b); }), opt.areas_path,
+                      "6 boards but the config has 5");
+  other = opt;
+  other.dataset_dir = run;  // both inputs at once
+  ht::expect_one_line(ht::error_of([&] { hs::train_map(other, *b); }), "give either", "area log");
+}
