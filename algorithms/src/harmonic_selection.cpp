@@ -14,14 +14,6 @@ namespace harmoloc::algorithms {
 
 namespace {
 
-Eigen::MatrixXd squared_distances(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
-  const Eigen::VectorXd an = a.rowwise().squaredNorm();
-  const Eigen::VectorXd bn = b.rowwise().squaredNorm();
-  Eigen::MatrixXd d2 = (-2.0 * a * b.transpose()).colwise() + an;
-  d2.rowwise() += bn.transpose();
-  return d2.cwiseMax(0.0);
-}
-
 // Each row's nearest other rows, closest first (at most @p count).
 std::vector<std::vector<int>> nearest_rows(const Eigen::MatrixXd& d2, int count) {
   const auto m = static_cast<int>(d2.rows());

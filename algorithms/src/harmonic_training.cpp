@@ -9,14 +9,6 @@ namespace harmoloc::algorithms {
 
 namespace {
 
-Eigen::MatrixXd squared_distances(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
-  const Eigen::VectorXd an = a.rowwise().squaredNorm();
-  const Eigen::VectorXd bn = b.rowwise().squaredNorm();
-  Eigen::MatrixXd d2 = (-2.0 * a * b.transpose()).colwise() + an;
-  d2.rowwise() += bn.transpose();
-  return d2.cwiseMax(0.0);
-}
-
 Eigen::MatrixXd select_rows(const Eigen::MatrixXd& m, const std::vector<int>& rows) {
   Eigen::MatrixXd out(static_cast<Eigen::Index>(rows.size()), m.cols());
   for (std::size_t i = 0; i < rows.size(); ++i)
@@ -25,6 +17,14 @@ Eigen::MatrixXd select_rows(const Eigen::MatrixXd& m, const std::vector<int>& ro
 }
 
 }  // namespace
+
+Eigen::MatrixXd squared_distances(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
+  const Eigen::VectorXd an = a.rowwise().squaredNorm();
+  const Eigen::VectorXd bn = b.rowwise().squaredNorm();
+  Eigen::MatrixXd d2 = (-2.0 * a * b.transpose()).colwise() + an;
+  d2.rowwise() += bn.transpose();
+  return d2.cwiseMax(0.0);
+}
 
 Eigen::MatrixXd normalized_laplacian(const Eigen::MatrixXd& features, double sigma) {
   const Eigen::MatrixXd w = (-sigma * squared_distances(features, features)).array().exp().matrix();

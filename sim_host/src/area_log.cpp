@@ -139,29 +139,26 @@ AreaLog read_area_log(const std::string& path) {
 bool AreaLogWriter::open(const std::string& path, std::uint32_t width_px, std::uint32_t height_px,
                          const algorithms::ThresholdSet& thresholds,
                          const std::vector<std::string>& board_names) {
-  close();
-  file_ = std::fopen(path.c_str(), "w");
-  if (file_ == nullptr) return false;
-  buffer_ = new char[kBufferBytes];  // start-up: stdio would otherwise allocate on the first write
-  std::setvbuf(file_, buffer_, _IOFBF, kBufferBytes);
+  if (!out_.open(path)) return false;
+  std::FILE* f = out_.file();
   boards_ = thresholds.count;
-  std::fprintf(file_, "%s: pixels of each board per frame\n", kMagic);
-  std::fprintf(file_, "# width_px=%u height_px=%u thresholds_crc32=0x%08x\n", width_px, height_px,
+  std::fprintf(f, "%s: pixels of each board per frame\n", kMagic);
+  std::fprintf(f, "# width_px=%u height_px=%u thresholds_crc32=0x%08x\n", width_px, height_px,
                thresholds_fingerprint(thresholds));
-  std::fputs("timestamp_ns", file_);
+  std::fputs("timestamp_ns", f);
   for (std::size_t k = 0; k < boards_; ++k) {
     if (k < board_names.size() && !board_names[k].empty()) {
-      std::fprintf(file_, ",%s", board_names[k].c_str());
+      std::fprintf(f, ",%s", board_names[k].c_str());
     } else {
-      std::fprintf(file_, ",board%zu", k + 1);
+      std::fprintf(f, ",board%zu", k + 1);
     }
   }
-  std::fputc('\n', file_);
-  return std::ferror(file_) == 0;
+  std::fputc('\n', f);
+  return std::ferror(f) == 0;
 }
 
 void AreaLogWriter::write(std::uint64_t t_ns, const algorithms::AreaVector& areas) {
-  if (file_ == nullptr) return;
+  if (!out_.is_open()) return;
   char line[256];
   int n = std::snprintf(line, sizeof line, "%" PRIu64, t_ns);
   for (std::size_t k = 0; k < boards_ && n > 0 && static_cast<std::size_t>(n) < sizeof line; ++k) {
@@ -170,19 +167,7 @@ void AreaLogWriter::write(std::uint64_t t_ns, const algorithms::AreaVector& area
   }
   if (n <= 0 || static_cast<std::size_t>(n) + 1 >= sizeof line) return;
   line[n++] = '\n';
-  std::fwrite(line, 1, static_cast<std::size_t>(n), file_);
-}
-
-bool AreaLogWriter::close() {
-  bool ok = true;
-  if (file_ != nullptr) {
-    ok = std::ferror(file_) == 0;
-    ok = std::fclose(file_) == 0 && ok;
-    file_ = nullptr;
-  }
-  delete[] buffer_;
-  buffer_ = nullptr;
-  return ok;
+  out_.append(line, static_cast<std::size_t>(n));
 }
 
 }  // namespace harmoloc::sim_host

@@ -45,6 +45,9 @@ AxisChoice choose_axis_parameters(const Eigen::MatrixXd& features,
                                   const std::vector<bool>& labelled, const Eigen::VectorXd& labels,
                                   const CrossValidationOptions& options);
 
+/// ||a_i - b_j||^2 for every row i of @p a and j of @p b (clamped at 0 against rounding).
+Eigen::MatrixXd squared_distances(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b);
+
 /// Median of the pairwise squared distances between rows (the usual kernel-width scale).
 double median_squared_distance(const Eigen::MatrixXd& features);
 

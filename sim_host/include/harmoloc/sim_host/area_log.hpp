@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "harmoloc/algorithms/segmentation.hpp"
+#include "harmoloc/sim_host/buffered_output.hpp"
 
 namespace harmoloc::sim_host {
 
@@ -33,11 +34,6 @@ AreaLog read_area_log(const std::string& path);
 /// start-up, each line is formatted on the stack and appended without allocating.
 class AreaLogWriter {
  public:
-  AreaLogWriter() = default;
-  ~AreaLogWriter() { close(); }
-  AreaLogWriter(const AreaLogWriter&) = delete;
-  AreaLogWriter& operator=(const AreaLogWriter&) = delete;
-
   /// Opens (truncates) @p path and writes the header; false if it cannot be written.
   bool open(const std::string& path, std::uint32_t width_px, std::uint32_t height_px,
             const algorithms::ThresholdSet& thresholds,
@@ -45,12 +41,10 @@ class AreaLogWriter {
   /// Appends one frame's areas; does nothing when no file is open.
   void write(std::uint64_t t_ns, const algorithms::AreaVector& areas);
   /// Flushes and closes; false if any write failed.
-  bool close();
+  bool close() { return out_.close(); }
 
  private:
-  static constexpr std::size_t kBufferBytes = 1 << 16;
-  std::FILE* file_ = nullptr;
-  char* buffer_ = nullptr;
+  BufferedOutput out_;
   std::size_t boards_ = 0;
 };
 

@@ -7,27 +7,21 @@
 #include <string>
 
 #include "harmoloc/algorithms/geometry.hpp"
+#include "harmoloc/sim_host/buffered_output.hpp"
 
 namespace harmoloc::sim_host {
 
 class TumWriter {
  public:
-  TumWriter() = default;
-  ~TumWriter() { close(); }
-  TumWriter(const TumWriter&) = delete;
-  TumWriter& operator=(const TumWriter&) = delete;
-
   /// Opens (truncates) @p path; false if it cannot be written.
-  bool open(const std::string& path);
+  bool open(const std::string& path) { return out_.open(path); }
   /// Appends one pose; does nothing when no file is open.
   void write(std::uint64_t t_ns, const algorithms::Pose2& pose);
   /// Flushes and closes; false if any write failed.
-  bool close();
+  bool close() { return out_.close(); }
 
  private:
-  static constexpr std::size_t kBufferBytes = 1 << 16;
-  std::FILE* file_ = nullptr;
-  char* buffer_ = nullptr;
+  BufferedOutput out_;
 };
 
 }  // namespace harmoloc::sim_host
