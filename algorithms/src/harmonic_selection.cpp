@@ -175,18 +175,7 @@ std::pair<NeighbourAxisChoice, NeighbourAxisChoice> cross_validate_neighbour_mod
   if (labelled_rows.size() < 4) throw std::invalid_argument("cross-validation needs 4 labels");
   const int folds = std::max(2, std::min(options.folds, static_cast<int>(labelled_rows.size())));
   const Eigen::MatrixXd d2_all = squared_distances(features, features);
-  double median = 1.0;
-  {
-    std::vector<double> pairs;
-    pairs.reserve(static_cast<std::size_t>(m * (m - 1) / 2));
-    for (Eigen::Index i = 0; i < m; ++i)
-      for (Eigen::Index j = i + 1; j < m; ++j) pairs.push_back(d2_all(i, j));
-    if (!pairs.empty()) {
-      auto mid = pairs.begin() + static_cast<std::ptrdiff_t>(pairs.size() / 2);
-      std::nth_element(pairs.begin(), mid, pairs.end());
-      if (*mid > 0.0) median = *mid;
-    }
-  }
+  const double median = median_off_diagonal(d2_all);
   std::vector<double> sigmas;
   for (int e = options.sigma_exponent_min;
        e <= std::max(options.sigma_exponent_min, options.sigma_exponent_max); ++e) {

@@ -67,7 +67,10 @@ Eigen::VectorXd harmonic_predict(const Eigen::MatrixXd& features, const Eigen::V
 }
 
 double median_squared_distance(const Eigen::MatrixXd& features) {
-  const Eigen::MatrixXd d2 = squared_distances(features, features);
+  return median_off_diagonal(squared_distances(features, features));
+}
+
+double median_off_diagonal(const Eigen::MatrixXd& d2) {
   std::vector<double> values;
   values.reserve(static_cast<std::size_t>(d2.rows() * (d2.rows() - 1) / 2));
   for (Eigen::Index i = 0; i < d2.rows(); ++i) {

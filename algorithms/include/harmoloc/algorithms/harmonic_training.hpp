@@ -48,6 +48,10 @@ AxisChoice choose_axis_parameters(const Eigen::MatrixXd& features,
 /// ||a_i - b_j||^2 for every row i of @p a and j of @p b (clamped at 0 against rounding).
 Eigen::MatrixXd squared_distances(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b);
 
+/// Median of the entries above the diagonal of a symmetric distance matrix (1 when there are
+/// none or the median is not positive): median_squared_distance() for a matrix already computed.
+double median_off_diagonal(const Eigen::MatrixXd& d2);
+
 /// Median of the pairwise squared distances between rows (the usual kernel-width scale).
 double median_squared_distance(const Eigen::MatrixXd& features);
 
