@@ -16,10 +16,20 @@ inline float squared_distance(const float* a, const float* b, std::size_t d) {
   return s;
 }
 
-}  // namespace
+// The same over the features whose weight is 1 (the others have 0).
+inline float squared_distance(const float* a, const float* b, std::size_t d, const float* weight) {
+  float s = 0.0F;
+  for (std::size_t k = 0; k < d; ++k) {
+    const float t = a[k] - b[k];
+    s += weight[k] * (t * t);
+  }
+  return s;
+}
 
-HarmonicFix harmonic_query(const HarmonicModel& model,
-                           const std::array<float, HarmonicModel::kMaxFeatures>& features) {
+// Eq. 9; with @p weight (0 or 1 per feature) only over the features it keeps.
+HarmonicFix query(const HarmonicModel& model,
+                  const std::array<float, HarmonicModel::kMaxFeatures>& features,
+                  const float* weight, float kernel_scale) {
   HarmonicFix fix;
   const std::size_t n = model.sample_count;
   const std::size_t d = model.feature_count;
@@ -30,7 +40,8 @@ HarmonicFix harmonic_query(const HarmonicModel& model,
   float d2_min = std::numeric_limits<float>::infinity();
   std::size_t nearest = 0;
   for (std::size_t j = 0; j < n; ++j) {
-    d2[j] = squared_distance(features.data(), model.sample(j), d);
+    d2[j] = weight == nullptr ? squared_distance(features.data(), model.sample(j), d)
+                              : squared_distance(features.data(), model.sample(j), d, weight);
     if (d2[j] < d2_min) {
       d2_min = d2[j];
       nearest = j;
@@ -41,8 +52,8 @@ HarmonicFix harmonic_query(const HarmonicModel& model,
   if (!std::isfinite(d2_min)) return fix;  // distances overflowed: not a place on this map
 
   double sum_wx = 0.0, sum_wy = 0.0, sum_wx_fx = 0.0, sum_wy_fy = 0.0;
-  const float sx = model.sigma_x;
-  const float sy = model.sigma_y;
+  const float sx = model.sigma_x * kernel_scale;
+  const float sy = model.sigma_y * kernel_scale;
   // A weight below exp(-40) (4e-18 of the nearest sample's) cannot move the sums even with 4096
   // samples; skipping its exp saves most of the query with the narrow kernels training picks.
   constexpr float kNegligible = 40.0F;
@@ -65,6 +76,7 @@ HarmonicFix harmonic_query(const HarmonicModel& model,
   double diff_sum = 0.0, sum = 0.0;
   const float* near = model.sample(nearest);
   for (std::size_t k = 0; k < d; ++k) {
+    if (weight != nullptr && weight[k] == 0.0F) continue;
     any_board = any_board || features[k] > 0.0F;
     diff_sum += std::fabs(static_cast<double>(features[k]) - static_cast<double>(near[k]));
     sum += static_cast<double>(features[k]) + static_cast<double>(near[k]);
@@ -74,6 +86,28 @@ HarmonicFix harmonic_query(const HarmonicModel& model,
                     fix.nearest_distance <= static_cast<double>(model.max_nearest_distance) &&
                     fix.dissimilarity <= static_cast<double>(model.max_dissimilarity);
   return fix;
+}
+
+}  // namespace
+
+HarmonicFix harmonic_query(const HarmonicModel& model,
+                           const std::array<float, HarmonicModel::kMaxFeatures>& features) {
+  return query(model, features, nullptr, 1.0F);
+}
+
+HarmonicFix harmonic_query(const HarmonicModel& model,
+                           const std::array<float, HarmonicModel::kMaxFeatures>& features,
+                           const FeatureMask& use) {
+  std::array<float, HarmonicModel::kMaxFeatures> weight{};
+  std::size_t used = 0;
+  for (std::size_t k = 0; k < model.feature_count; ++k) {
+    weight[k] = use[k] ? 1.0F : 0.0F;
+    used += use[k] ? 1U : 0U;
+  }
+  if (used == model.feature_count) return query(model, features, nullptr, 1.0F);
+  if (used == 0) return HarmonicFix{};
+  return query(model, features, weight.data(),
+               static_cast<float>(model.feature_count) / static_cast<float>(used));
 }
 
 }  // namespace harmoloc::algorithms

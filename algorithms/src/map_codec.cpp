@@ -70,6 +70,80 @@ bool finite_positive(float v) {
   return std::isfinite(v) && v > 0.0F;
 }
 
+// The forward map section (version 3).
+MapError decode_forward(Reader& r, std::uint32_t boards, ForwardMap& f) {
+  if (!r.u32(f.columns, "forward map size") || !r.u32(f.rows, "forward map size")) {
+    f.columns = f.rows = 0;
+    return MapError{"truncated: no room for the forward map's size", r.pos()};
+  }
+  if (f.columns == 0 && f.rows == 0) return MapError{};
+  if (f.columns == 0 || f.rows == 0 || f.columns > ForwardMap::kMaxDimension ||
+      f.rows > ForwardMap::kMaxDimension || f.cell_count() > ForwardMap::kMaxCells) {
+    f.columns = f.rows = 0;
+    return MapError{"forward map grid out of range (at most 256 x 256 and 4096 cells)", r.pos()};
+  }
+  std::uint32_t board_count = 0;
+  if (!r.f32(f.origin_x_m, "forward map origin") || !r.f32(f.origin_y_m, "forward map origin") ||
+      !r.f32(f.cell_m, "forward map cell size") || !r.u32(board_count, "forward map boards")) {
+    f.columns = f.rows = 0;
+    return MapError{"truncated: the forward map's header is cut short", r.pos()};
+  }
+  const auto fail = [&f](const char* what, std::size_t at) {
+    f.columns = f.rows = 0;
+    return MapError{what, at};
+  };
+  if (!(std::fabs(f.origin_x_m) <= 1.0e4F) || !(std::fabs(f.origin_y_m) <= 1.0e4F) ||
+      !(f.cell_m >= 1.0e-3F && f.cell_m <= 10.0F)) {
+    return fail("forward map origin or cell size out of range", r.pos());
+  }
+  if (board_count != boards)
+    return fail("forward map board count differs from the thresholds'", r.pos());
+  f.board_count = board_count;
+  bool any = false;
+  for (std::size_t b = 0; b < board_count; ++b) {
+    if (!r.f32(f.sigma[b], "forward map sigma"))
+      return fail("truncated: the forward map's sigmas are cut short", r.pos());
+    if (!(f.sigma[b] >= 0.0F && f.sigma[b] <= 1.0e3F))
+      return fail("forward map sigma not finite and in 0..1000", r.pos());
+    any = any || f.sigma[b] > 0.0F;
+  }
+  if (!any) return fail("forward map models no board (every sigma is 0)", r.pos());
+  std::uint8_t flag = 0, pad[3] = {0, 0, 0};
+  if (!r.u8(flag, "forward map flags") || !r.u8(pad[0], "forward map flags") ||
+      !r.u8(pad[1], "forward map flags") || !r.u8(pad[2], "forward map flags")) {
+    return fail("truncated: the forward map's flags are cut short", r.pos());
+  }
+  if (flag > 1U || pad[0] != 0 || pad[1] != 0 || pad[2] != 0)
+    return fail("forward map flags: unknown bits set", r.pos());
+  f.has_heading = flag == 1U;
+  const std::size_t cells = f.cell_count();
+  const std::size_t values = cells * (board_count + 1U + (f.has_heading ? 1U : 0U));
+  if (!r.need(values * 4U, "forward map"))
+    return fail("truncated: the forward map is shorter than its size says", r.pos());
+  for (std::size_t c = 0; c < cells; ++c) {
+    float* e = f.expected.data() + c * kMaxBoards;
+    for (std::size_t b = 0; b < board_count; ++b) {
+      r.f32(e[b], "forward map");
+      if (!(e[b] >= 0.0F && e[b] <= 1.0e6F))
+        return fail("forward map expected feature not finite and >= 0", r.pos());
+    }
+    for (std::size_t b = board_count; b < kMaxBoards; ++b) e[b] = 0.0F;
+  }
+  for (std::size_t c = 0; c < cells; ++c) {
+    r.f32(f.route_distance_m[c], "forward map");
+    if (!(f.route_distance_m[c] >= 0.0F && f.route_distance_m[c] <= 1.0e4F))
+      return fail("forward map route distance not finite and >= 0", r.pos());
+  }
+  if (f.has_heading) {
+    for (std::size_t c = 0; c < cells; ++c) {
+      r.f32(f.heading_rad[c], "forward map");
+      if (!(std::fabs(f.heading_rad[c]) <= 4.0F))
+        return fail("forward map heading not within -pi..pi", r.pos());
+    }
+  }
+  return MapError{};
+}
+
 }  // namespace
 
 std::vector<std::uint8_t> encode_map(const MapFile& map) {
@@ -104,6 +178,27 @@ std::vector<std::uint8_t> encode_map(const MapFile& map) {
     w.f32(m.target_x_m[i]);
     w.f32(m.target_y_m[i]);
   }
+  const ForwardMap& f = map.forward;
+  w.u32(f.present() ? f.columns : 0U);
+  w.u32(f.present() ? f.rows : 0U);
+  if (f.present()) {
+    w.f32(f.origin_x_m);
+    w.f32(f.origin_y_m);
+    w.f32(f.cell_m);
+    w.u32(f.board_count);
+    for (std::size_t b = 0; b < f.board_count; ++b) w.f32(f.sigma[b]);
+    w.u8(f.has_heading ? 1U : 0U);
+    w.u8(0);
+    w.u8(0);
+    w.u8(0);
+    for (std::size_t c = 0; c < f.cell_count(); ++c) {
+      for (std::size_t b = 0; b < f.board_count; ++b) w.f32(f.expected[c * kMaxBoards + b]);
+    }
+    for (std::size_t c = 0; c < f.cell_count(); ++c) w.f32(f.route_distance_m[c]);
+    if (f.has_heading) {
+      for (std::size_t c = 0; c < f.cell_count(); ++c) w.f32(f.heading_rad[c]);
+    }
+  }
   w.u32(crc32(w.out.data(), w.out.size()));
   return std::move(w.out);
 }
@@ -123,8 +218,8 @@ MapError decode_map(const std::uint8_t* data, std::size_t size, MapFile& map) {
   for (std::size_t i = 0; i < sizeof kMagic; ++i) r.u8(skip, "magic");
   std::uint32_t version = 0;
   if (!r.u32(version, "version")) return r.error;
-  if (version != 1 && version != kMapFormatVersion)
-    return MapError{"unsupported map format version (this firmware reads versions 1 and 2)", 8};
+  if (version < 1 || version > kMapFormatVersion)
+    return MapError{"unsupported map format version (this firmware reads versions 1 to 3)", 8};
   if (crc32(data, body) != stored) return MapError{"checksum mismatch: the map is corrupt", body};
 
   std::uint32_t boards = 0;
@@ -204,7 +299,15 @@ MapError decode_map(const std::uint8_t* data, std::size_t size, MapFile& map) {
       return MapError{"sample coordinate not finite", r.pos()};
     }
   }
-  if (r.pos() != body) return MapError{"trailing bytes after the samples", r.pos()};
+  map.forward.columns = map.forward.rows = 0;
+  if (version >= 3) {
+    if (const MapError e = decode_forward(r, boards, map.forward)) return e;
+  }
+  if (r.pos() != body) {
+    return MapError{
+        version >= 3 ? "trailing bytes after the forward map" : "trailing bytes after the samples",
+        r.pos()};
+  }
   return MapError{};
 }
 

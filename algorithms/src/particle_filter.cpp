@@ -43,6 +43,18 @@ void ParticleFilter::initialize_around_points(const float* x_m, const float* y_m
   initialized_ = true;
 }
 
+void ParticleFilter::initialize_uniform(double x0_m, double y0_m, double x1_m, double y1_m) {
+  const double w = 1.0 / static_cast<double>(count_);
+  for (std::size_t i = 0; i < count_; ++i) {
+    Particle& p = particles_[i];
+    p.x_m = rng_.uniform(x0_m, x1_m);
+    p.y_m = rng_.uniform(y0_m, y1_m);
+    p.yaw_rad = rng_.uniform(-kPi, kPi);
+    weights_[i] = w;
+  }
+  initialized_ = true;
+}
+
 void ParticleFilter::predict(const OdometryDelta& delta) {
   const double d2 = delta.distance_m * delta.distance_m;
   const double y2 = delta.yaw_rad * delta.yaw_rad;
@@ -79,6 +91,35 @@ void ParticleFilter::update_position(double x_m, double y_m, double sigma_m,
     weights_[i] *= inlier * std::exp(-(dx * dx + dy * dy) * inv_two_var) + outlier_probability;
     sum += weights_[i];
   }
+  normalize(sum);
+}
+
+double ParticleFilter::update_boards(const BoardUpdate& u) {
+  const ForwardMap& map = *u.map;
+  std::array<float, kMaxBoards> expected{};
+  double sum = 0.0;
+  for (std::size_t i = 0; i < count_; ++i) {
+    const GridPoint at = locate(map, particles_[i].x_m, particles_[i].y_m);
+    expected_features(map, at, expected.data());
+    double likelihood = 1.0;
+    for (std::size_t b = 0; b < u.boards; ++b) {
+      if (!u.use[b]) continue;
+      const float e = u.observed[b] - expected[b];
+      likelihood *=
+          static_cast<double>(u.gain[b] * std::exp(-e * e * u.inv_two_var[b]) + u.floor[b]);
+    }
+    if (u.inv_tempering != 1.0) likelihood = std::pow(likelihood, u.inv_tempering);
+    const float off_route = route_distance(map, at) - u.route_free_m;
+    if (off_route > 0.0F)
+      likelihood *= static_cast<double>(std::exp(-off_route * off_route * u.route_inv_two_var));
+    weights_[i] *= likelihood;
+    sum += weights_[i];
+  }
+  normalize(sum);
+  return sum;
+}
+
+void ParticleFilter::normalize(double sum) {
   if (!(sum > 0.0) || !std::isfinite(sum)) {
     const double w = 1.0 / static_cast<double>(count_);
     for (std::size_t i = 0; i < count_; ++i) weights_[i] = w;

@@ -130,6 +130,82 @@ std::string read_signing_key(const std::string& path, std::array<std::uint8_t, 3
   return {};
 }
 
+bool flag(const Checker& check, const toml::table& t, const char* key, const std::string& where,
+          bool fallback) {
+  const toml::node* n = t.get(key);
+  if (n == nullptr) return fallback;
+  auto b = n->value_exact<bool>();
+  if (!b) check.fail(n, where + key + " must be true or false");
+  return *b;
+}
+
+// [observation]: the robust per-board model (docs/filter.md).
+void read_observation(const Checker& check, const toml::table& root, ObservationConfig& o) {
+  const toml::table* t = check.section(root, "observation");
+  if (t == nullptr) return;
+  const std::string w = "observation.";
+  check.only(*t, w,
+             {"model", "robust", "sigma_scale", "tempering", "outlier_floor", "dcs_phi",
+              "consensus_chi2", "consensus_fraction", "motion_index_rate", "motion_index_min",
+              "motion_index_max", "route_free_m", "route_sigma_m"});
+  const std::string model = check.text(*t, "model", w, "boards");
+  if (model == "boards")
+    o.model = ObservationModel::kBoards;
+  else if (model == "fix")
+    o.model = ObservationModel::kFix;
+  else
+    check.fail(t->get("model"), "observation.model must be \"boards\" or \"fix\"");
+  auto& b = o.boards;
+  b.robust = flag(check, *t, "robust", w, b.robust);
+  b.sigma_scale = check.number(*t, "sigma_scale", w, b.sigma_scale, 0.1, 100.0);
+  b.tempering = check.number(*t, "tempering", w, b.tempering, 1.0, 1e4);
+  b.outlier_floor = check.number(*t, "outlier_floor", w, b.outlier_floor, 1e-9, 1.0);
+  b.dcs_phi = check.number(*t, "dcs_phi", w, b.dcs_phi, 1e-3, 1e3);
+  b.consensus_chi2 = check.number(*t, "consensus_chi2", w, b.consensus_chi2, 0.1, 1e4);
+  b.consensus_fraction = check.number(*t, "consensus_fraction", w, b.consensus_fraction, 0.0, 1.0);
+  b.motion_index_rate = check.number(*t, "motion_index_rate", w, b.motion_index_rate, 0.0, 1.0);
+  b.motion_index_min = check.number(*t, "motion_index_min", w, b.motion_index_min, 0.0, 1.0);
+  b.motion_index_max = check.number(*t, "motion_index_max", w, b.motion_index_max, 0.0, 1.0);
+  if (b.motion_index_min > b.motion_index_max)
+    check.fail(t, "observation.motion_index_min must not exceed motion_index_max");
+  b.route_free_m = check.number(*t, "route_free_m", w, b.route_free_m, 0.0, 10.0);
+  b.route_sigma_m = check.number(*t, "route_sigma_m", w, b.route_sigma_m, 0.0, 10.0);
+}
+
+// [kidnap]: seed 004's test, its confirmation and the re-seed (docs/filter.md).
+void read_kidnap(const Checker& check, const toml::table& root, KidnapConfig& k) {
+  const toml::table* t = check.section(root, "kidnap");
+  if (t == nullptr) return;
+  const std::string w = "kidnap.";
+  check.only(*t, w,
+             {"enabled", "change_threshold", "confirm", "window_frames", "evidence_frames",
+              "fix_distance_m", "divergence_frames", "lost_frames", "reseed", "position_sigma_m",
+              "yaw_sigma_deg"});
+  k.enabled = flag(check, *t, "enabled", w, k.enabled);
+  auto& d = k.detector;
+  d.change_threshold = check.number(*t, "change_threshold", w, d.change_threshold, 0.0, 1.0);
+  d.confirm = flag(check, *t, "confirm", w, d.confirm);
+  d.window_frames =
+      static_cast<int>(check.integer(*t, "window_frames", w, d.window_frames, 1, 1000));
+  d.evidence_frames =
+      static_cast<int>(check.integer(*t, "evidence_frames", w, d.evidence_frames, 1, 1000));
+  if (d.evidence_frames > d.window_frames)
+    check.fail(t, "kidnap.evidence_frames must not exceed window_frames");
+  d.fix_distance_m = check.number(*t, "fix_distance_m", w, d.fix_distance_m, 0.0, 100.0);
+  d.divergence_frames =
+      static_cast<int>(check.integer(*t, "divergence_frames", w, d.divergence_frames, 1, 100000));
+  d.lost_frames = static_cast<int>(check.integer(*t, "lost_frames", w, d.lost_frames, 1, 100000));
+  const std::string reseed = check.text(*t, "reseed", w, "fix");
+  if (reseed == "fix")
+    k.reseed = ReseedStrategy::kAroundFix;
+  else if (reseed == "uniform")
+    k.reseed = ReseedStrategy::kUniform;
+  else
+    check.fail(t->get("reseed"), "kidnap.reseed must be \"fix\" or \"uniform\"");
+  k.position_sigma_m = check.number(*t, "position_sigma_m", w, k.position_sigma_m, 0.001, 10.0);
+  k.yaw_sigma_deg = check.number(*t, "yaw_sigma_deg", w, k.yaw_sigma_deg, 0.0, 360.0);
+}
+
 algorithms::ColourThreshold threshold(float h0, float h1, std::uint8_t s, std::uint8_t v0) {
   return algorithms::ColourThreshold{h0, h1, s, v0, 255};
 }
@@ -167,7 +243,9 @@ FirmwareConfig load_config(const std::string& path) {
   }
   FirmwareConfig c = default_config();
   c.source = path;
-  check.only(root, "", {"cycle", "board", "odometry", "can", "filter", "link", "realtime"});
+  check.only(
+      root, "",
+      {"cycle", "board", "odometry", "can", "filter", "observation", "kidnap", "link", "realtime"});
 
   if (const toml::table* t = check.section(root, "cycle")) {
     check.only(*t, "cycle.", {"rate_hz", "budget_ms", "camera_timeout_ms", "encoder_timeout_ms"});
@@ -297,6 +375,9 @@ FirmwareConfig load_config(const std::string& path) {
     f.vision_only_speed_mps =
         check.number(*t, "vision_only_speed_mps", "filter.", f.vision_only_speed_mps, 0.0, 10.0);
   }
+
+  read_observation(check, root, c.observation);
+  read_kidnap(check, root, c.kidnap);
 
   if (const toml::table* t = check.section(root, "link")) {
     check.only(*t, "link.",

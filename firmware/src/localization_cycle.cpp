@@ -46,9 +46,11 @@ LocalizationCycle::LocalizationCycle(const FirmwareConfig& config, const algorit
       classifier_(map.thresholds),
       mavlink_(config.link.system_id, config.link.component_id),
       receiver_(config.link, &signer_),
+      use_boards_(config.observation.model == ObservationModel::kBoards && map.forward.present()),
       period_ns_(static_cast<std::uint64_t>(std::llround(1e9 / config.cycle.rate_hz))),
       budget_ns_(static_cast<std::uint64_t>(std::llround(config.cycle.budget_ms * 1e6))) {
   filter_.configure(config.filter.particles, config.filter.seed, config.filter.noise);
+  reliability_.reset(config.observation.boards);
   if (config.link.has_signing_key) signer_.configure(config.link.signing_key, config.link.link_id);
   mavlink_.set_signer(&signer_);
   colour_table_storage_.reset(new std::uint8_t[algorithms::MaskTable::kStorageBytes]);
@@ -149,10 +151,10 @@ CycleResult LocalizationCycle::run_once() {
 
   // localize
   fix_.present = false;
+  std::array<float, algorithms::HarmonicModel::kMaxFeatures> features{};
   {
     StageTimer t(clock_, at(Stage::kLocalize));
     if (usable) {
-      std::array<float, algorithms::HarmonicModel::kMaxFeatures> features{};
       algorithms::areas_to_features(map_.model, areas, features);
       fix_.fix = algorithms::harmonic_query(map_.model, features);
       fix_.areas = areas;
@@ -206,23 +208,31 @@ CycleResult LocalizationCycle::run_once() {
   // update
   {
     StageTimer t(clock_, at(Stage::kUpdate));
+    kidnap_verdict_ = algorithms::KidnapVerdict::kNone;
     if (fix_.present) {
       if (fix_.fix.known_place) {
         ++counters_.fixes_used;
-        last_fix_ns_ = data_time_ns_;
-        ever_fix_ = true;
         last_known_fix_ = fix_.fix;
-        if (!filter_.initialized()) {
-          filter_.initialize(Pose2{fix_.fix.x_m, fix_.fix.y_m, 0.0},
-                             config_.filter.init_position_sigma_m, 0.0, true);
-          ++reset_counter_;
-        } else {
-          filter_.update_position(fix_.fix.x_m, fix_.fix.y_m, config_.filter.fix_sigma_m,
-                                  config_.filter.outlier_probability);
-          if (filter_.resample_if_needed(config_.filter.resample_threshold)) ++counters_.resamples;
-        }
       } else {
         ++counters_.unknown_place;
+      }
+      bool vision = false;
+      if (!filter_.initialized()) {
+        if (fix_.fix.known_place) {
+          reseed_around(fix_.fix.x_m, fix_.fix.y_m);
+          vision = true;
+        }
+      } else if (use_boards_) {
+        vision = update_with_boards(areas, features);
+      } else if (fix_.fix.known_place) {
+        filter_.update_position(fix_.fix.x_m, fix_.fix.y_m, config_.filter.fix_sigma_m,
+                                config_.filter.outlier_probability);
+        if (filter_.resample_if_needed(config_.filter.resample_threshold)) ++counters_.resamples;
+        vision = true;
+      }
+      if (vision) {
+        last_fix_ns_ = data_time_ns_;
+        ever_fix_ = true;
       }
     }
     if (filter_.initialized()) {
@@ -247,6 +257,83 @@ CycleResult LocalizationCycle::run_once() {
   at(Stage::kCycle).record(elapsed);
   if (elapsed > budget_ns_) ++counters_.overruns;
   return CycleResult::kRan;
+}
+
+bool LocalizationCycle::update_with_boards(
+    const algorithms::AreaVector& areas,
+    const std::array<float, algorithms::HarmonicModel::kMaxFeatures>& features) {
+  const algorithms::BoardModelParams& params = config_.observation.boards;
+  const algorithms::Pose2 estimate = filter_.estimate().mean;
+  const algorithms::BoardFeatures observed =
+      algorithms::board_features(map_.model.area_scale, areas);
+  assessment_ = reliability_.assess(map_.forward, observed, estimate, params, board_update_);
+  const double match = filter_.update_boards(board_update_);
+  if (filter_.resample_if_needed(config_.filter.resample_threshold)) ++counters_.resamples;
+  if (!assessment_.consensus) ++counters_.no_consensus;
+
+  // The global fix without the boards that are not to be trusted now: those the motion index
+  // has written off, and, while the others agree with the estimate, those that do not.
+  algorithms::FeatureMask use{};
+  for (std::size_t k = 0; k < map_.model.feature_count; ++k) {
+    const std::size_t b = map_.model.board_index[k];
+    const bool outlier =
+        assessment_.consensus && static_cast<double>(assessment_.chi2[b]) >= params.consensus_chi2;
+    use[k] = !reliability_.distrusted(b) && !outlier;
+  }
+  for (std::size_t b = 0; b < board_update_.boards; ++b)
+    counters_.distrusted_boards += board_update_.use[b] && reliability_.distrusted(b) ? 1U : 0U;
+  robust_fix_ = algorithms::harmonic_query(map_.model, features, use);
+
+  if (config_.kidnap.enabled) {
+    algorithms::KidnapInput in;
+    in.match = match;
+    in.consensus = assessment_.consensus;
+    in.fix_known = robust_fix_.known_place;
+    in.fix_distance_m = std::hypot(robust_fix_.x_m - estimate.x_m, robust_fix_.y_m - estimate.y_m);
+    const std::uint64_t triggers_before = kidnap_.counters().triggers;
+    kidnap_verdict_ = kidnap_.step(in, config_.kidnap.detector);
+    counters_.kidnap_triggers += kidnap_.counters().triggers - triggers_before;
+    if (kidnap_verdict_ == algorithms::KidnapVerdict::kKidnapped) {
+      ++counters_.kidnaps;
+      if (config_.kidnap.reseed == ReseedStrategy::kAroundFix && robust_fix_.known_place)
+        reseed_around(robust_fix_.x_m, robust_fix_.y_m);
+      else
+        reseed_globally();
+      pending_text_ = "harmoloc: kidnap detected, relocalized";
+    } else if (kidnap_verdict_ == algorithms::KidnapVerdict::kLost) {
+      ++counters_.lost;
+      reseed_globally();
+      pending_text_ = "harmoloc: lost (boards disagree, no fix), relocalizing over the map";
+    }
+  }
+  return assessment_.consensus || robust_fix_.known_place;
+}
+
+void LocalizationCycle::reseed_around(double x_m, double y_m) {
+  const algorithms::ForwardMap& f = map_.forward;
+  const bool heading = use_boards_ && f.has_heading;
+  const double yaw = heading ? static_cast<double>(algorithms::route_heading(f, x_m, y_m)) : 0.0;
+  const double sigma_m = filter_.initialized() ? config_.kidnap.position_sigma_m
+                                               : config_.filter.init_position_sigma_m;
+  filter_.initialize(Pose2{x_m, y_m, yaw}, sigma_m,
+                     config_.kidnap.yaw_sigma_deg * algorithms::kPi / 180.0, !heading);
+  kidnap_.reset();
+  ++reset_counter_;
+}
+
+void LocalizationCycle::reseed_globally() {
+  const algorithms::ForwardMap& f = map_.forward;
+  if (config_.kidnap.reseed == ReseedStrategy::kUniform && f.present()) {
+    const auto x0 = static_cast<double>(f.origin_x_m), y0 = static_cast<double>(f.origin_y_m);
+    const auto cell = static_cast<double>(f.cell_m);
+    filter_.initialize_uniform(x0, y0, x0 + cell * (f.columns - 1U), y0 + cell * (f.rows - 1U));
+  } else {
+    const algorithms::HarmonicModel& m = map_.model;
+    filter_.initialize_around_points(m.target_x_m.data(), m.target_y_m.data(), m.sample_count,
+                                     config_.kidnap.position_sigma_m);
+  }
+  kidnap_.reset();
+  ++reset_counter_;
 }
 
 void LocalizationCycle::send(std::size_t size) {
@@ -292,6 +379,10 @@ void LocalizationCycle::publish() {
                                                                : mavlink::kSeverityWarning;
     send(mavlink_.statustext(severity, kText[static_cast<std::size_t>(health)], frame_buffer_));
     last_reported_health_ = health;
+  }
+  if (pending_text_ != nullptr) {
+    send(mavlink_.statustext(mavlink::kSeverityWarning, pending_text_, frame_buffer_));
+    pending_text_ = nullptr;
   }
   if (!pose_.valid) return;
 

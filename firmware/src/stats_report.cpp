@@ -65,7 +65,11 @@ std::string stats_json(const LocalizationCycle& cycle, const RunCounters& run) {
     << ", \"bytes_sent\": " << run.link.bytes_sent << ", \"errors\": " << run.link.errors << "},\n"
     << "  \"localizer\": {\"fixes\": " << c.fixes_used << ", \"unknown_place\": " << c.unknown_place
     << "},\n"
-    << "  \"filter\": {\"resamples\": " << c.resamples << "}";
+    << "  \"filter\": {\"observation\": \"" << (cycle.uses_boards() ? "boards" : "fix")
+    << "\", \"resamples\": " << c.resamples << ", \"no_consensus\": " << c.no_consensus
+    << ", \"distrusted_board_frames\": " << c.distrusted_boards
+    << ", \"kidnap_triggers\": " << c.kidnap_triggers << ", \"kidnaps\": " << c.kidnaps
+    << ", \"lost\": " << c.lost << "}";
   const mavlink::InboundCounters in = cycle.inbound_counters();
   o << ",\n  \"inbound\": {\"bytes_in\": " << in.bytes_in << ", \"frames_in\": " << in.frames_in
     << ", \"crc_errors\": " << in.crc_errors << ", \"bad_headers\": " << in.bad_headers

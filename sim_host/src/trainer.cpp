@@ -307,6 +307,19 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<StampedPose>
     model.target_x_m[i] = static_cast<float>(fx(static_cast<Eigen::Index>(i)));
     model.target_y_m[i] = static_cast<float>(fy(static_cast<Eigen::Index>(i)));
   }
+
+  if (opt.forward_map) {
+    const auto t_forward = std::chrono::steady_clock::now();
+    std::vector<std::vector<float>> all(run.areas.size(), std::vector<float>(boards, 0.0F));
+    for (std::size_t i = 0; i < run.areas.size(); ++i) {
+      for (std::size_t b = 0; b < boards; ++b)
+        all[i][b] = static_cast<float>(run.areas[i].pixels[b]) * area_scale;
+    }
+    report.forward =
+        train_forward_map(all, run.timestamp_ns, labels, model, boards, opt.forward, map.forward);
+    report.has_forward_map = true;
+    report.forward_ms = ms_since(t_forward);
+  }
   return report;
 }
 

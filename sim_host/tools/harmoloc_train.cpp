@@ -153,11 +153,30 @@ int main(int argc, char** argv) {
           "known place   Bray-Curtis dissimilarity to the nearest sample <= %.3g, distance <= %.3g "
           "(%% of frame)\n",
           r.dissimilarity_bound, r.known_place_bound);
+      if (r.has_forward_map) {
+        const auto& fw = r.forward;
+        std::string sig;
+        for (std::size_t b = 0; b < fw.sigma.size(); ++b) {
+          char item[64];
+          std::snprintf(item, sizeof item, "%s%s %.3g", sig.empty() ? "" : ", ",
+                        names.names[b].c_str(), fw.sigma[b]);
+          sig += fw.sigma[b] > 0.0 ? item : "";
+        }
+        std::printf(
+            "forward map   %ux%u cells of %.1f cm from %zu frames (%zu placed by labels, %zu by "
+            "the map), kernel %.1f cm, heading %s\n",
+            map.forward.columns, map.forward.rows, 100.0 * static_cast<double>(map.forward.cell_m),
+            fw.interpolated + fw.from_harmonic, fw.interpolated, fw.from_harmonic,
+            100.0 * fw.bandwidth_m,
+            fw.has_heading ? "from the labels" : "unknown (labels have none)");
+        std::printf("board noise   %s (%% of frame, against other passes)\n", sig.c_str());
+      }
       if (r.segment_ms > 0.0) {
-        std::printf("time          segmentation %.0f ms, training %.1f ms\n", r.segment_ms,
-                    r.train_ms);
+        std::printf("time          segmentation %.0f ms, training %.1f ms, forward map %.0f ms\n",
+                    r.segment_ms, r.train_ms, r.forward_ms);
       } else {
-        std::printf("time          training %.1f ms\n", r.train_ms);
+        std::printf("time          training %.1f ms, forward map %.0f ms\n", r.train_ms,
+                    r.forward_ms);
       }
     }
     std::printf("wrote %s (%zu bytes, %u samples)\n", out.c_str(), bytes.size(),

@@ -55,6 +55,35 @@ def encode_map(width, height, thresholds, board_index, params, samples, pad=0):
     return bytes(out)
 
 
+def encode_map_v3(width, height, thresholds, board_index, params, samples, forward):
+    """Version 3: params gains the dissimilarity bound (7 floats); forward is None or
+    (columns, rows, origin_x, origin_y, cell, sigmas, heading or None, expected rows, route)."""
+    out = bytearray(b"HARMOMAP")
+    out += struct.pack("<IIII", 3, width, height, len(thresholds))
+    for h0, h1, s, v0, v1 in thresholds:
+        out += struct.pack("<ffBBBB", h0, h1, s, v0, v1, 0)
+    out += struct.pack("<II", len(samples), len(board_index))
+    out += bytes(board_index)
+    out += struct.pack("<7f", *params)
+    for features, x, y in samples:
+        out += struct.pack("<%df" % len(features), *features)
+        out += struct.pack("<ff", x, y)
+    if forward is None:
+        out += struct.pack("<II", 0, 0)
+    else:
+        cols, rows, ox, oy, cell, sigmas, heading, expected, route = forward
+        out += struct.pack("<IIfffI", cols, rows, ox, oy, cell, len(sigmas))
+        out += struct.pack("<%df" % len(sigmas), *sigmas)
+        out += bytes([1 if heading else 0, 0, 0, 0])
+        for cell_values in expected:
+            out += struct.pack("<%df" % len(cell_values), *cell_values)
+        out += struct.pack("<%df" % len(route), *route)
+        if heading:
+            out += struct.pack("<%df" % len(heading), *heading)
+    out += struct.pack("<I", zlib.crc32(bytes(out)) & 0xFFFFFFFF)
+    return bytes(out)
+
+
 def map_seeds(e2e):
     red = (340.0, 15.0, 110, 60, 255)
     green = (100.0, 145.0, 110, 60, 255)
@@ -72,6 +101,13 @@ def map_seeds(e2e):
                                     [([0.0], 0.0, 0.0)])[:-4] + b"\0\0\0\0" + b"\0\0\0\0",
         "empty.hmap": b"",
         "text.hmap": b"this is not a map, it is a text file saying so\n",
+        "forward-v3.hmap": encode_map_v3(
+            160, 120, [red, green], [0, 1], [100.0 / 19200, 0.5, 0.7, 0.01, 0.02, 3.0, 0.1],
+            [([0.0, 1.5], 2.1, 0.7), ([2.25, 0.5], 2.0, 1.3)],
+            (2, 2, 2.0, 0.7, 0.05, [0.1, 0.2], [1.5, 1.6, 1.4, 1.7],
+             [[0.0, 1.5], [0.5, 1.2], [1.0, 1.0], [2.25, 0.5]], [0.0, 0.02, 0.03, 0.0])),
+        "no-forward-v3.hmap": encode_map_v3(
+            2, 2, [red], [0], [1.0, 1.0, 1.0, 0.0, 0.0, 1.0, 0.5], [([0.0], 0.0, 0.0)], None),
     }
     tiny = os.path.join(e2e, "tiny.hmap")
     if os.path.exists(tiny):

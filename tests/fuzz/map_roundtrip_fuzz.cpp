@@ -39,7 +39,23 @@ bool same_model(const MapFile& a, const MapFile& b) {
     if (!same_bits(&x.target_x_m[i], &y.target_x_m[i], sizeof(float))) return false;
     if (!same_bits(&x.target_y_m[i], &y.target_y_m[i], sizeof(float))) return false;
   }
-  return true;
+  const ForwardMap& f = a.forward;
+  const ForwardMap& g = b.forward;
+  if (f.present() != g.present()) return false;
+  if (!f.present()) return true;
+  if (f.columns != g.columns || f.rows != g.rows || f.board_count != g.board_count ||
+      f.has_heading != g.has_heading) {
+    return false;
+  }
+  const float fs[] = {f.origin_x_m, f.origin_y_m, f.cell_m};
+  const float gs[] = {g.origin_x_m, g.origin_y_m, g.cell_m};
+  if (!same_bits(fs, gs, sizeof fs) || !same_bits(f.sigma.data(), g.sigma.data(), sizeof f.sigma))
+    return false;
+  const std::size_t cells = f.cell_count();
+  return same_bits(f.expected.data(), g.expected.data(), cells * kMaxBoards * sizeof(float)) &&
+         same_bits(f.route_distance_m.data(), g.route_distance_m.data(), cells * sizeof(float)) &&
+         (!f.has_heading ||
+          same_bits(f.heading_rad.data(), g.heading_rad.data(), cells * sizeof(float)));
 }
 
 }  // namespace
@@ -59,14 +75,16 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   for (int i = 0; i < 4; ++i) input[size - 4 + i] = static_cast<std::uint8_t>(crc0 >> (8 * i));
 #endif
   const std::vector<std::uint8_t> encoded = encode_map(g_map);
-  if (input[8] == 1) {
-    // A version 1 map (regressions/map_roundtrip/version1.hmap) is written back as the current
-    // version, without the test it lacked: the same model, the dissimilarity bound at 1.
-    HARMOLOC_FUZZ_CHECK(g_map.model.max_dissimilarity == 1.0F,
+  if (input[8] == 1 || input[8] == 2) {
+    // An older map (regressions/map_roundtrip/version1.hmap, corpus tiny-trained-v2.hmap) is
+    // written back as the current version, without what it lacked: the same model, a version 1
+    // map's dissimilarity bound at 1, no forward map.
+    HARMOLOC_FUZZ_CHECK(input[8] == 2 || g_map.model.max_dissimilarity == 1.0F,
                         "a version 1 map decodes with a dissimilarity bound");
+    HARMOLOC_FUZZ_CHECK(!g_map.forward.present(), "a version 1 or 2 map decodes with a forward map");
     HARMOLOC_FUZZ_CHECK(!decode_map(encoded.data(), encoded.size(), g_again),
-                        "a re-encoded version 1 map does not decode");
-    HARMOLOC_FUZZ_CHECK(same_model(g_map, g_again), "decode(encode(version 1 map)) differs");
+                        "a re-encoded version 1 or 2 map does not decode");
+    HARMOLOC_FUZZ_CHECK(same_model(g_map, g_again), "decode(encode(version 1 or 2 map)) differs");
     return 0;
   }
   HARMOLOC_FUZZ_CHECK(encoded.size() == input.size(),

@@ -34,7 +34,9 @@ constexpr std::size_t kOffAreaScale = kOffBoardIndex + kFeatures;
 constexpr std::size_t kOffSigmaX = kOffAreaScale + 4;
 constexpr std::size_t kOffDissimilarity = kOffAreaScale + 6 * 4;
 constexpr std::size_t kOffSamples = kOffAreaScale + 7 * 4;
-constexpr std::size_t kExpectedSize = kOffSamples + kSamples * (kFeatures + 2) * 4 + 4;
+// Version 3: the forward map's grid size (0 x 0 here: none), then the CRC.
+constexpr std::size_t kOffForward = kOffSamples + kSamples * (kFeatures + 2) * 4;
+constexpr std::size_t kExpectedSize = kOffForward + 8 + 4;
 
 std::unique_ptr<ha::MapFile> make_map() {
   auto map = std::make_unique<ha::MapFile>();
@@ -156,16 +158,38 @@ TEST(MapCodec, BadMagic) {
 
 TEST(MapCodec, UnsupportedVersion) {
   std::vector<std::uint8_t> b = ha::encode_map(*make_map());
-  put_u32(b, kOffVersion, 3);
+  put_u32(b, kOffVersion, 4);
   EXPECT_NE(decode_error(b).find("version"), std::string::npos) << decode_error(b);
   fix_crc(b);
   EXPECT_NE(decode_error(b).find("version"), std::string::npos) << decode_error(b);
+}
+
+// Maps written before the forward map existed (version 2) still load, without it.
+TEST(MapCodec, ReadsVersionTwo) {
+  const auto map = make_map();
+  std::vector<std::uint8_t> b = ha::encode_map(*map);
+  b.erase(b.begin() + static_cast<std::ptrdiff_t>(kOffForward),
+          b.begin() + static_cast<std::ptrdiff_t>(kOffForward + 8));
+  put_u32(b, kOffVersion, 2);
+  fix_crc(b);
+  auto out = std::make_unique<ha::MapFile>();
+  out->forward.columns = 3;  // whatever the object held before is replaced
+  const ha::MapError e = ha::decode_map(b.data(), b.size(), *out);
+  ASSERT_FALSE(e) << e.what;
+  EXPECT_FALSE(out->forward.present());
+  EXPECT_EQ(out->model.max_dissimilarity, map->model.max_dissimilarity);
+  // The same bytes as version 3 miss the forward map's size.
+  put_u32(b, kOffVersion, 3);
+  fix_crc(b);
+  EXPECT_NE(decode_error(b).find("truncated"), std::string::npos) << decode_error(b);
 }
 
 // Maps written before the dissimilarity bound existed (version 1) still load, without that test.
 TEST(MapCodec, ReadsVersionOne) {
   const auto map = make_map();
   std::vector<std::uint8_t> b = ha::encode_map(*map);
+  b.erase(b.begin() + static_cast<std::ptrdiff_t>(kOffForward),
+          b.begin() + static_cast<std::ptrdiff_t>(kOffForward + 8));
   b.erase(b.begin() + static_cast<std::ptrdiff_t>(kOffDissimilarity),
           b.begin() + static_cast<std::ptrdiff_t>(kOffDissimilarity + 4));
   put_u32(b, kOffVersion, 1);
@@ -225,8 +249,8 @@ TEST(MapCodec, TruncatedAtEveryLength) {
 TEST(MapCodec, TruncatedWithAValidChecksumIsStillRejected) {
   // Cut inside the samples and re-seal: the header's counts no longer fit the data.
   const std::vector<std::uint8_t> good = ha::encode_map(*make_map());
-  for (std::size_t cut : {std::size_t{1}, std::size_t{4}, std::size_t{20}, std::size_t{21},
-                          kSamples * (kFeatures + 2) * 4}) {
+  for (std::size_t cut : {std::size_t{1}, std::size_t{4}, std::size_t{8}, std::size_t{9},
+                          std::size_t{28}, std::size_t{29}, kSamples * (kFeatures + 2) * 4 + 8}) {
     std::vector<std::uint8_t> b(good.begin(), good.end() - 4 - static_cast<std::ptrdiff_t>(cut));
     b.resize(b.size() + 4);
     fix_crc(b);
@@ -242,7 +266,7 @@ TEST(MapCodec, TrailingBytes) {
   std::vector<std::uint8_t> junk = b;
   junk.insert(junk.end(), {1, 2, 3});
   EXPECT_FALSE(decode_error(junk).empty());
-  // Junk between the samples and a CRC that covers it: the length check has to catch it.
+  // Junk between the map and a CRC that covers it: the length check has to catch it.
   b.resize(b.size() - 4);
   b.insert(b.end(), {0xAA, 0xBB, 0xCC, 0, 0, 0, 0});
   fix_crc(b);
@@ -314,4 +338,131 @@ TEST(MapCodec, NonFiniteOrNonPositiveParametersWithValidChecksum) {
   put_f32(b, kOffSamples + 4 * kFeatures, std::numeric_limits<float>::infinity());
   fix_crc(b);
   EXPECT_NE(decode_error(b).find("coordinate"), std::string::npos) << decode_error(b);
+}
+
+namespace {
+
+// A 3 x 2 grid over 6 boards, the fourth not modelled, with headings.
+std::unique_ptr<ha::MapFile> make_map_with_forward() {
+  auto map = make_map();
+  ha::ForwardMap& f = map->forward;
+  f.columns = 3;
+  f.rows = 2;
+  f.origin_x_m = 1.5F;
+  f.origin_y_m = 0.25F;
+  f.cell_m = 0.05F;
+  f.board_count = kBoards;
+  f.sigma = {0.1F, 0.2F, 0.05F, 0.0F, 0.3F, 0.01F, 0.0F, 0.0F};
+  f.has_heading = true;
+  for (std::size_t c = 0; c < f.cell_count(); ++c) {
+    for (std::size_t b = 0; b < kBoards; ++b)
+      f.expected[c * ha::kMaxBoards + b] = b == 3 ? 0.0F : 0.5F * static_cast<float>(c + b);
+    f.route_distance_m[c] = 0.01F * static_cast<float>(c);
+    f.heading_rad[c] = 1.5F - 0.1F * static_cast<float>(c);
+  }
+  return map;
+}
+
+// Offsets inside the forward section.
+constexpr std::size_t kOffGridSize = kOffForward;
+constexpr std::size_t kOffCell = kOffForward + 16;
+constexpr std::size_t kOffForwardBoards = kOffForward + 20;
+constexpr std::size_t kOffSigma = kOffForward + 24;
+constexpr std::size_t kOffFlags = kOffSigma + 4 * kBoards;
+constexpr std::size_t kOffExpected = kOffFlags + 4;
+constexpr std::size_t kOffRoute = kOffExpected + 6 * kBoards * 4;
+constexpr std::size_t kOffHeading = kOffRoute + 6 * 4;
+
+}  // namespace
+
+TEST(MapCodec, ForwardMapRoundTripAndLayout) {
+  const auto map = make_map_with_forward();
+  const std::vector<std::uint8_t> bytes = ha::encode_map(*map);
+  ASSERT_EQ(bytes.size(), kOffHeading + 6 * 4 + 4);
+  EXPECT_EQ(get_u32(bytes, kOffGridSize), 3U);
+  EXPECT_EQ(get_u32(bytes, kOffGridSize + 4), 2U);
+  EXPECT_EQ(get_u32(bytes, kOffForwardBoards), kBoards);
+  EXPECT_EQ(bytes[kOffFlags], 1U);
+  auto out = std::make_unique<ha::MapFile>();
+  const ha::MapError e = ha::decode_map(bytes.data(), bytes.size(), *out);
+  ASSERT_FALSE(e) << e.what;
+  const ha::ForwardMap& a = map->forward;
+  const ha::ForwardMap& b = out->forward;
+  ASSERT_TRUE(b.present());
+  EXPECT_EQ(b.columns, 3U);
+  EXPECT_EQ(b.rows, 2U);
+  EXPECT_EQ(b.origin_x_m, a.origin_x_m);
+  EXPECT_EQ(b.origin_y_m, a.origin_y_m);
+  EXPECT_EQ(b.cell_m, a.cell_m);
+  EXPECT_TRUE(b.has_heading);
+  EXPECT_EQ(b.sigma, a.sigma);
+  EXPECT_EQ(b.expected, a.expected);
+  EXPECT_EQ(b.route_distance_m, a.route_distance_m);
+  EXPECT_EQ(b.heading_rad, a.heading_rad);
+  EXPECT_EQ(ha::encode_map(*out), bytes);
+
+  // Without headings the section is one grid shorter.
+  map->forward.has_heading = false;
+  EXPECT_EQ(ha::encode_map(*map).size(), bytes.size() - 6 * 4);
+}
+
+TEST(MapCodec, ForwardMapCorruptionWithValidChecksum) {
+  const std::vector<std::uint8_t> good = ha::encode_map(*make_map_with_forward());
+  const auto reject = [&](const char* what, auto edit, const char* expect) {
+    std::vector<std::uint8_t> b = good;
+    edit(b);
+    fix_crc(b);
+    const std::string why = decode_error(b);
+    EXPECT_NE(why.find(expect), std::string::npos) << what << ": " << why;
+  };
+  reject(
+      "too many cells", [](auto& b) { put_u32(b, kOffGridSize, 4097); }, "grid");
+  reject(
+      "one side zero", [](auto& b) { put_u32(b, kOffGridSize + 4, 0); }, "grid");
+  reject(
+      "257 columns", [](auto& b) { put_u32(b, kOffGridSize, 257); }, "grid");
+  reject(
+      "cell size 0", [](auto& b) { put_f32(b, kOffCell, 0.0F); }, "cell size");
+  reject(
+      "origin NaN",
+      [](auto& b) { put_f32(b, kOffForward + 8, std::numeric_limits<float>::quiet_NaN()); },
+      "origin");
+  reject(
+      "board count", [](auto& b) { put_u32(b, kOffForwardBoards, 5); }, "board count");
+  reject(
+      "sigma NaN",
+      [](auto& b) { put_f32(b, kOffSigma + 4, std::numeric_limits<float>::quiet_NaN()); }, "sigma");
+  reject(
+      "sigma negative", [](auto& b) { put_f32(b, kOffSigma, -1.0F); }, "sigma");
+  reject(
+      "no board modelled",
+      [](auto& b) {
+        for (std::size_t k = 0; k < kBoards; ++k) put_f32(b, kOffSigma + 4 * k, 0.0F);
+      },
+      "models no board");
+  reject(
+      "unknown flag", [](auto& b) { b[kOffFlags] = 2; }, "flags");
+  reject(
+      "padding", [](auto& b) { b[kOffFlags + 2] = 1; }, "flags");
+  reject(
+      "expected negative", [](auto& b) { put_f32(b, kOffExpected + 8, -0.5F); }, "expected");
+  reject(
+      "expected infinite",
+      [](auto& b) { put_f32(b, kOffExpected, std::numeric_limits<float>::infinity()); },
+      "expected");
+  reject(
+      "route distance NaN",
+      [](auto& b) { put_f32(b, kOffRoute + 4, std::numeric_limits<float>::quiet_NaN()); },
+      "route distance");
+  reject(
+      "heading 5 rad", [](auto& b) { put_f32(b, kOffHeading, 5.0F); }, "heading");
+  reject(
+      "cells beyond the data", [](auto& b) { put_u32(b, kOffGridSize, 4); }, "truncated");
+  // A rejected map leaves no half-read forward map behind.
+  std::vector<std::uint8_t> b = good;
+  put_f32(b, kOffHeading, 5.0F);
+  fix_crc(b);
+  auto out = std::make_unique<ha::MapFile>();
+  EXPECT_TRUE(ha::decode_map(b.data(), b.size(), *out));
+  EXPECT_FALSE(out->forward.present());
 }

@@ -27,4 +27,15 @@ struct HarmonicFix {
 HarmonicFix harmonic_query(const HarmonicModel& model,
                            const std::array<float, HarmonicModel::kMaxFeatures>& features);
 
+/// Which of the model's features a query may use (true) or must leave out (false).
+using FeatureMask = std::array<bool, HarmonicModel::kMaxFeatures>;
+
+/// Eq. 9 over the features @p use allows only: distances, the known-place test and the kernel
+/// leave the others out (the kernel widths scaled by d / d_used, so that the weights keep their
+/// spread). For a fix that an occluded or moved board must not drag. With every feature allowed
+/// it equals the plain query; with none, it is not a known place.
+HarmonicFix harmonic_query(const HarmonicModel& model,
+                           const std::array<float, HarmonicModel::kMaxFeatures>& features,
+                           const FeatureMask& use);
+
 }  // namespace harmoloc::algorithms

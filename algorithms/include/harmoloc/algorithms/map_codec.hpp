@@ -7,20 +7,22 @@
 #include <cstdint>
 #include <vector>
 
+#include "harmoloc/algorithms/forward_map.hpp"
 #include "harmoloc/algorithms/harmonic_model.hpp"
 #include "harmoloc/algorithms/segmentation.hpp"
 
 namespace harmoloc::algorithms {
 
-/// Version 2 added the known-place dissimilarity bound; version 1 maps are still read (without
-/// that test).
-constexpr std::uint32_t kMapFormatVersion = 2;
+/// Version 2 added the known-place dissimilarity bound, version 3 the forward map; versions 1
+/// and 2 are still read (without what they lack).
+constexpr std::uint32_t kMapFormatVersion = 3;
 
 struct MapFile {
   std::uint32_t image_width_px = 0;
   std::uint32_t image_height_px = 0;
   ThresholdSet thresholds;
   HarmonicModel model;
+  ForwardMap forward;  ///< absent (columns 0) in maps before version 3
 };
 
 /// Serialises @p map (host/trainer side; allocates).

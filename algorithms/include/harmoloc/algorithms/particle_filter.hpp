@@ -1,12 +1,15 @@
 #pragma once
 /// @file Fixed-capacity particle filter over (x, y, yaw) (seed 001): differential-drive motion
-/// model with AMCL-style noise, position fixes from the harmonic localizer as the measurement,
-/// low-variance resampling. Static memory; deterministic for a given seed.
+/// model with AMCL-style noise; the measurement is either every board's area against the
+/// forward map (robust per-board likelihood, board_observation.hpp) or, for maps without a
+/// forward model, the harmonic localizer's position fix; low-variance resampling. Static
+/// memory; deterministic for a given seed.
 
 #include <array>
 #include <cstddef>
 #include <cstdint>
 
+#include "harmoloc/algorithms/board_observation.hpp"
 #include "harmoloc/algorithms/geometry.hpp"
 #include "harmoloc/algorithms/odometry.hpp"
 #include "harmoloc/algorithms/random.hpp"
@@ -54,12 +57,21 @@ class ParticleFilter {
   /// Applies one odometry step to every particle with sampled noise.
   void predict(const OdometryDelta& delta);
 
+  /// Spreads the particles uniformly over the rectangle [x0, x1] x [y0, y1], yaw uniform (the
+  /// AMCL-style global re-seed, kept as the baseline relocalization).
+  void initialize_uniform(double x0_m, double y0_m, double x1_m, double y1_m);
+
   /// Random walk of every particle (motion unknown, e.g. while odometry is missing).
   void diffuse(double position_sigma_m, double yaw_sigma_rad);
 
   /// Weights particles by a Gaussian position fix; the small @p outlier_probability mixes in a
   /// uniform floor so that one wrong fix cannot wipe out every particle.
   void update_position(double x_m, double y_m, double sigma_m, double outlier_probability);
+
+  /// Weights every particle by the per-board likelihood of @p update (and its route term).
+  /// Returns the sum of the unnormalised weights (prior weight x likelihood): the match between
+  /// the frame and the cloud, which the kidnap test watches (seed 004's d_t).
+  double update_boards(const BoardUpdate& update);
 
   /// Low-variance (systematic) resampling when the effective sample size falls below
   /// @p threshold_fraction of the particle count. Returns true if it resampled.
@@ -77,6 +89,10 @@ class ParticleFilter {
   double weight(std::size_t i) const { return weights_[i]; }
 
  private:
+  /// Divides the weights by @p sum; a sum that is 0 or not finite (every particle ruled out)
+  /// makes them uniform instead, so that no single frame can wipe out the cloud.
+  void normalize(double sum);
+
   std::array<Particle, kMaxParticles> particles_{};
   std::array<Particle, kMaxParticles> scratch_{};
   std::array<double, kMaxParticles> weights_{};

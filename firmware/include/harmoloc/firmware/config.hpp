@@ -8,7 +8,9 @@
 #include <string>
 #include <vector>
 
+#include "harmoloc/algorithms/board_observation.hpp"
 #include "harmoloc/algorithms/can_encoder_layout.hpp"
+#include "harmoloc/algorithms/kidnap_detector.hpp"
 #include "harmoloc/algorithms/odometry.hpp"
 #include "harmoloc/algorithms/particle_filter.hpp"
 #include "harmoloc/algorithms/segmentation.hpp"
@@ -34,6 +36,33 @@ struct FilterConfig {
   double resample_threshold = 0.5;    ///< resample when N_eff < this fraction of particles
   double init_position_sigma_m = 0.05;
   double vision_only_speed_mps = 0.3;  ///< how fast the robot may move when odometry is missing
+};
+
+/// What the particles are weighed by.
+enum class ObservationModel : std::uint8_t {
+  kBoards,  ///< every board against the map's forward model (robust; needs a version 3 map)
+  kFix,     ///< a Gaussian around the harmonic localizer's fix (maps without a forward model)
+};
+
+struct ObservationConfig {
+  ObservationModel model = ObservationModel::kBoards;
+  algorithms::BoardModelParams boards;
+};
+
+/// Where the particles go when the filter is re-seeded (a kidnap, the relocalize command).
+enum class ReseedStrategy : std::uint8_t {
+  kAroundFix,  ///< around the harmonic localizer's global fix (seed 004 with our global guess)
+  kUniform,    ///< uniformly over the mapped region, any heading (AMCL-style; the baseline)
+};
+
+struct KidnapConfig {
+  bool enabled = true;
+  algorithms::KidnapParams detector;
+  ReseedStrategy reseed = ReseedStrategy::kAroundFix;
+  double position_sigma_m = 0.04;  ///< spread around the fix
+  /// Spread of the heading around the training run's heading at the fix (uniform when the map
+  /// has no heading).
+  double yaw_sigma_deg = 15.0;
 };
 
 struct LinkConfig {
@@ -75,6 +104,8 @@ struct FirmwareConfig {
   algorithms::EncoderFrameLayout can_layout;
   std::string can_interface = "can0";
   FilterConfig filter;
+  ObservationConfig observation;
+  KidnapConfig kidnap;
   LinkConfig link;
   RealtimeConfig realtime;
   /// Whether the file set these sections itself (else the host board may take them from the

@@ -75,6 +75,11 @@ struct CycleCounters {
   std::uint64_t encoder_samples = 0;
   std::uint64_t overruns = 0;
   std::uint64_t resamples = 0;
+  std::uint64_t no_consensus = 0;       ///< frames whose boards mostly disagreed with the estimate
+  std::uint64_t distrusted_boards = 0;  ///< sum over frames of boards below motion index 1/2
+  std::uint64_t kidnap_triggers = 0;    ///< frames where seed 004's change rate exceeded 0.5
+  std::uint64_t kidnaps = 0;            ///< confirmed kidnaps (the filter was re-seeded)
+  std::uint64_t lost = 0;               ///< re-seeds over the whole map (no usable fix)
   std::uint64_t link_dropped = 0;
   std::array<std::uint64_t, 5> cycles_in_health{};
 };
@@ -96,6 +101,18 @@ class LocalizationCycle {
   CycleResult run_once();
 
   const PoseOutput& pose() const { return pose_; }
+  /// Whether the particles are weighed board by board (a forward map and that model chosen).
+  bool uses_boards() const { return use_boards_; }
+  /// Motion index of board @p b (probability that it is static and visible).
+  double board_static_probability(std::size_t b) const {
+    return reliability_.static_probability(b);
+  }
+  const algorithms::BoardAssessment& board_assessment() const { return assessment_; }
+  /// The global fix the kidnap test compares with (computed without distrusted boards).
+  const algorithms::HarmonicFix& robust_fix() const { return robust_fix_; }
+  /// Seed 004's P of the last frame and what the detector made of it.
+  double kidnap_probability() const { return kidnap_.probability(); }
+  algorithms::KidnapVerdict kidnap_verdict() const { return kidnap_verdict_; }
   const FixOutput& last_fix() const { return fix_; }
   const CycleCounters& counters() const { return counters_; }
   const LatencyHistogram& stage_histogram(Stage stage) const {
@@ -118,6 +135,14 @@ class LocalizationCycle {
   mavlink::MavResult request_message(const mavlink::CommandLong& command);
   void send(std::size_t size);
   Health assess_health() const;
+  // The measurement update with the per-board model; returns whether the frame counts as vision.
+  bool update_with_boards(
+      const algorithms::AreaVector& areas,
+      const std::array<float, algorithms::HarmonicModel::kMaxFeatures>& features);
+  // Re-seeds: around a global fix (heading from the map where it knows one), or over the map.
+  void reseed_around(double x_m, double y_m);
+  void reseed_globally();
+  void publish_pose_estimate();
 
   const FirmwareConfig& config_;
   const algorithms::MapFile& map_;
@@ -132,9 +157,17 @@ class LocalizationCycle {
   algorithms::ColourTable colour_table_;
   algorithms::YuyvTable yuyv_table_;
   algorithms::ParticleFilter filter_;
+  algorithms::BoardReliability reliability_;
+  algorithms::BoardUpdate board_update_{};
+  algorithms::BoardAssessment assessment_{};
+  algorithms::HarmonicFix robust_fix_{};
+  algorithms::KidnapDetector kidnap_;
+  algorithms::KidnapVerdict kidnap_verdict_ = algorithms::KidnapVerdict::kNone;
+  const char* pending_text_ = nullptr;  ///< a STATUSTEXT this cycle's publish sends
   mavlink::Encoder mavlink_;
   mavlink::Signer signer_;
   mavlink::CommandReceiver receiver_;
+  const bool use_boards_;
   mavlink::FrameBuffer frame_buffer_{};
   std::array<LatencyHistogram, kStageCount> histograms_{};
 

@@ -12,6 +12,7 @@
 #include "harmoloc/algorithms/harmonic_selection.hpp"
 #include "harmoloc/algorithms/map_codec.hpp"
 #include "harmoloc/algorithms/segmentation.hpp"
+#include "harmoloc/sim_host/forward_map_training.hpp"
 #include "harmoloc/sim_host/tum.hpp"
 
 namespace harmoloc::sim_host {
@@ -39,6 +40,8 @@ struct TrainOptions {
   /// leave-one-out dissimilarity (docs/training.md).
   double known_place_margin = 1.5;
   TrainMethod method = TrainMethod::kNeighbourGraph;
+  bool forward_map = true;  ///< also learn the forward map the particle filter weighs boards with
+  ForwardMapOptions forward;
 };
 
 struct AxisReport {
@@ -61,6 +64,9 @@ struct TrainReport {
   double known_place_bound = 0;    ///< nearest-sample distance bound, feature units
   double dissimilarity_bound = 0;  ///< Bray-Curtis bound to the nearest sample
   double segment_ms = 0, train_ms = 0;
+  bool has_forward_map = false;
+  ForwardMapReport forward;
+  double forward_ms = 0;
 };
 
 /// The board areas of every frame of a run, in time order.

@@ -1,0 +1,99 @@
+#pragma once
+/// @file The robust observation model: one likelihood term per board (seed 001 multiplies one
+/// Gaussian per landmark), each a mixture of "the board is where the map says" and "something
+/// else" (occluded, moved, lit differently) in the spirit of seed 002:
+///
+///   l_b(x, y) = w_b exp(-s_b^2 r_b^2 / 2) + (1 - w_b) c,   r_b = (o_b - mu_b(x, y)) / (k sigma_b)
+///
+/// mu_b and sigma_b come from the forward map, k inflates sigma because successive frames share
+/// most of their error, c is the floor of the "something else" component. w_b is the board's
+/// motion index (probability that it is static and visible), estimated from its recent
+/// residuals (an EM step with forgetting); s_b is seed 002's dynamic covariance scaling,
+/// s = min(1, 2 Phi / (Phi + chi2)), evaluated at the filter's estimate, but only while most
+/// boards agree with that estimate (a consensus): when most disagree, the pose is wrong, not the
+/// boards, and every board keeps its full weight so that the filter (or the kidnap test) can
+/// act on it. A route term multiplies in: the map knows only the places the training run went,
+/// so a particle far from them is unlikely (docs/filter.md).
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+
+#include "harmoloc/algorithms/forward_map.hpp"
+#include "harmoloc/algorithms/geometry.hpp"
+#include "harmoloc/algorithms/segmentation.hpp"
+
+namespace harmoloc::algorithms {
+
+/// Every board's area in one frame, in the map's feature units (area_scale x pixels).
+struct BoardFeatures {
+  std::array<float, kMaxBoards> value{};
+  std::size_t count = 0;
+};
+
+BoardFeatures board_features(float area_scale, const AreaVector& areas);
+
+struct BoardModelParams {
+  double sigma_scale = 3.0;  ///< k: inflation of the forward map's per-board sigma
+  /// The boards' joint likelihood is raised to 1 / this power: successive frames share most of
+  /// their error (the same place, the same map error), so one frame is worth a fraction of an
+  /// independent observation. The robust tests use k sigma; only the weight is tempered.
+  double tempering = 40.0;
+  double outlier_floor = 0.01;  ///< c: likelihood of "something else", relative to a perfect fit
+  double dcs_phi = 1.0;         ///< seed 002's Phi
+  double consensus_chi2 = 9.0;  ///< a board agrees with the estimate when its chi2 is below
+  double consensus_fraction = 0.5;  ///< at least this fraction of the boards must agree
+  double motion_index_rate = 0.05;  ///< weight of one frame in the motion index (forgetting)
+  double motion_index_min = 0.02;   ///< bounds, so that a board can always come back
+  double motion_index_max = 0.98;
+  double route_free_m = 0.03;   ///< distance from the training run that costs nothing
+  double route_sigma_m = 0.03;  ///< beyond it, a Gaussian fall-off of this width
+  bool robust = true;           ///< false: seed 001's plain product of Gaussians (w = 1, s = 1)
+};
+
+/// What the particle filter needs for one update: per board, the mixture's weights and the
+/// (scaled) Gaussian width; the route term.
+struct BoardUpdate {
+  const ForwardMap* map = nullptr;
+  std::size_t boards = 0;
+  std::array<float, kMaxBoards> observed{};
+  std::array<bool, kMaxBoards> use{};           ///< boards that take part (modelled ones)
+  std::array<float, kMaxBoards> gain{};         ///< w_b
+  std::array<float, kMaxBoards> floor{};        ///< (1 - w_b) c
+  std::array<float, kMaxBoards> inv_two_var{};  ///< s_b^2 / (2 k^2 sigma_b^2)
+  double inv_tempering = 1.0;                   ///< exponent of the boards' joint likelihood
+  float route_free_m = 0.0F;
+  float route_inv_two_var = 0.0F;
+};
+
+/// How the boards relate to the filter's estimate this frame.
+struct BoardAssessment {
+  std::array<float, kMaxBoards> chi2{};     ///< (o_b - mu_b(estimate))^2 / (k sigma_b)^2
+  std::array<float, kMaxBoards> scaling{};  ///< seed 002's s_b (1 without consensus)
+  std::size_t modelled = 0;                 ///< boards the map models
+  std::size_t agreeing = 0;                 ///< of those, with chi2 below the consensus bound
+  bool consensus = false;                   ///< enough boards agree with the estimate
+};
+
+/// The per-board state that lives from frame to frame: each board's motion index.
+class BoardReliability {
+ public:
+  /// Every board starts as static (motion index at its maximum).
+  void reset(const BoardModelParams& params);
+
+  /// Compares @p observed with what @p map expects at @p estimate and fills @p update for the
+  /// particle filter. With consensus, the motion indices learn from this frame first.
+  BoardAssessment assess(const ForwardMap& map, const BoardFeatures& observed,
+                         const Pose2& estimate, const BoardModelParams& params,
+                         BoardUpdate& update);
+
+  /// Motion index of board @p b: probability that it is static and visible.
+  double static_probability(std::size_t b) const { return static_probability_[b]; }
+  /// Boards whose motion index is below one half (for the masked harmonic fix).
+  bool distrusted(std::size_t b) const { return static_probability_[b] < 0.5; }
+
+ private:
+  std::array<double, kMaxBoards> static_probability_{};
+};
+
+}  // namespace harmoloc::algorithms

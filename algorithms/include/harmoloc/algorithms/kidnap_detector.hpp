@@ -1,0 +1,71 @@
+#pragma once
+/// @file Kidnap test (seed 004) made reliable. Seed 004 watches d_t, the sum of the particles'
+/// unnormalised weights (how well the frame matches the cloud), and calls the robot kidnapped
+/// when its change rate P = min(|d_t - d_t-1| / d_t-1, 1) exceeds 0.5. On its own that fires on
+/// every occluded board and on ordinary frame-to-frame noise, so here a trigger only opens a
+/// short window in which the kidnap must be confirmed by evidence that does not come from the
+/// cloud: the boards do not agree with the estimate (no consensus) and the harmonic localizer's
+/// global fix, a known place computed without the distrusted boards, lies far from it. The
+/// same evidence held for long without a trigger (a slow divergence) also counts, and a filter
+/// whose boards have disagreed for long with no usable fix at all is declared lost.
+
+#include <cstdint>
+
+namespace harmoloc::algorithms {
+
+struct KidnapParams {
+  double change_threshold = 0.5;  ///< seed 004: trigger when P = min(dw, 1) exceeds this
+  bool confirm = true;            ///< false: seed 004's test alone (a trigger is a kidnap)
+  int window_frames = 6;          ///< frames after a trigger in which to confirm it
+  int evidence_frames = 3;        ///< frames of evidence needed within the window
+  double fix_distance_m = 0.25;   ///< evidence: the global fix is at least this far away
+  int divergence_frames = 30;     ///< evidence in this many frames in a row, without a trigger
+  int lost_frames = 90;           ///< no consensus this many frames in a row, and no fix: lost
+};
+
+/// What the cycle saw this frame.
+struct KidnapInput {
+  double match = 0.0;           ///< d_t: the sum of unnormalised weights after the update
+  bool consensus = true;        ///< most boards agree with the estimate
+  bool fix_known = false;       ///< the global fix is a known place
+  double fix_distance_m = 0.0;  ///< from the global fix to the estimate
+};
+
+enum class KidnapVerdict : std::uint8_t {
+  kNone = 0,
+  kTriggered = 1,  ///< seed 004's test fired this frame; not (yet) confirmed
+  kKidnapped = 2,  ///< confirmed: re-seed around the global fix
+  kLost = 3,       ///< the boards have disagreed for long and no fix is usable: re-seed widely
+};
+
+struct KidnapCounters {
+  std::uint64_t triggers = 0;     ///< frames where seed 004's P exceeded the threshold
+  std::uint64_t kidnaps = 0;      ///< confirmed (or, without confirmation, every trigger)
+  std::uint64_t divergences = 0;  ///< of those, confirmed by long evidence without a trigger
+  std::uint64_t lost = 0;
+};
+
+class KidnapDetector {
+ public:
+  /// Forgets the previous frame (after a re-seed, so that the new cloud's first match is not
+  /// compared with the old one's).
+  void reset();
+
+  /// One frame with a measurement update.
+  KidnapVerdict step(const KidnapInput& input, const KidnapParams& params);
+
+  /// Seed 004's P of the last frame.
+  double probability() const { return probability_; }
+  const KidnapCounters& counters() const { return counters_; }
+
+ private:
+  double previous_match_ = 0.0;
+  double probability_ = 0.0;
+  int window_left_ = 0;
+  int window_evidence_ = 0;
+  int evidence_run_ = 0;
+  int disagreement_run_ = 0;
+  KidnapCounters counters_{};
+};
+
+}  // namespace harmoloc::algorithms

@@ -1,0 +1,76 @@
+#include "harmoloc/algorithms/board_observation.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace harmoloc::algorithms {
+
+BoardFeatures board_features(float area_scale, const AreaVector& areas) {
+  BoardFeatures f;
+  f.count = std::min(areas.count, kMaxBoards);
+  for (std::size_t b = 0; b < f.count; ++b)
+    f.value[b] = static_cast<float>(areas.pixels[b]) * area_scale;
+  return f;
+}
+
+void BoardReliability::reset(const BoardModelParams& params) {
+  static_probability_.fill(params.motion_index_max);
+}
+
+BoardAssessment BoardReliability::assess(const ForwardMap& map, const BoardFeatures& observed,
+                                         const Pose2& estimate, const BoardModelParams& params,
+                                         BoardUpdate& update) {
+  BoardAssessment a;
+  update.map = &map;
+  update.boards = std::min<std::size_t>(map.board_count, observed.count);
+  const GridPoint at = locate(map, estimate.x_m, estimate.y_m);
+  std::array<float, kMaxBoards> expected{};
+  expected_features(map, at, expected.data());
+
+  std::array<double, kMaxBoards> inv_var{};
+  for (std::size_t b = 0; b < update.boards; ++b) {
+    update.observed[b] = observed.value[b];
+    update.use[b] = map.sigma[b] > 0.0F;
+    if (!update.use[b]) continue;
+    const double width = params.sigma_scale * static_cast<double>(map.sigma[b]);
+    inv_var[b] = 1.0 / (width * width);
+    const double r = static_cast<double>(observed.value[b]) - static_cast<double>(expected[b]);
+    a.chi2[b] = static_cast<float>(r * r * inv_var[b]);
+    ++a.modelled;
+    if (static_cast<double>(a.chi2[b]) < params.consensus_chi2) ++a.agreeing;
+  }
+  a.consensus = a.modelled > 0 && static_cast<double>(a.agreeing) >=
+                                      params.consensus_fraction * static_cast<double>(a.modelled);
+
+  const double c = params.outlier_floor;
+  for (std::size_t b = 0; b < update.boards; ++b) {
+    if (!update.use[b]) continue;
+    const auto chi2 = static_cast<double>(a.chi2[b]);
+    double s = 1.0;
+    if (params.robust && a.consensus) {
+      if (chi2 > params.dcs_phi) s = 2.0 * params.dcs_phi / (params.dcs_phi + chi2);
+      // EM with forgetting: the posterior probability that this frame's observation came from
+      // the static board, blended into the motion index.
+      double& w = static_probability_[b];
+      const double fit = w * std::exp(-0.5 * chi2);
+      const double responsibility = fit / (fit + (1.0 - w) * c);
+      w = std::clamp(
+          (1.0 - params.motion_index_rate) * w + params.motion_index_rate * responsibility,
+          params.motion_index_min, params.motion_index_max);
+    }
+    a.scaling[b] = static_cast<float>(s);
+    const double w = params.robust ? static_probability_[b] : 1.0;
+    update.gain[b] = static_cast<float>(w);
+    update.floor[b] = static_cast<float>(params.robust ? (1.0 - w) * c : 0.0);
+    update.inv_two_var[b] = static_cast<float>(0.5 * s * s * inv_var[b]);
+  }
+  update.inv_tempering = 1.0 / params.tempering;
+  update.route_free_m = static_cast<float>(params.route_free_m);
+  update.route_inv_two_var =
+      params.route_sigma_m > 0.0
+          ? static_cast<float>(0.5 / (params.route_sigma_m * params.route_sigma_m))
+          : 0.0F;
+  return a;
+}
+
+}  // namespace harmoloc::algorithms

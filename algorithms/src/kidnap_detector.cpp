@@ -1,0 +1,60 @@
+#include "harmoloc/algorithms/kidnap_detector.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace harmoloc::algorithms {
+
+void KidnapDetector::reset() {
+  previous_match_ = 0.0;
+  probability_ = 0.0;
+  window_left_ = 0;
+  window_evidence_ = 0;
+  evidence_run_ = 0;
+  disagreement_run_ = 0;
+}
+
+KidnapVerdict KidnapDetector::step(const KidnapInput& in, const KidnapParams& p) {
+  // Seed 004: P = min(|d_t - d_t-1| / d_t-1, 1).
+  probability_ = 0.0;
+  if (previous_match_ > 0.0 && std::isfinite(in.match))
+    probability_ = std::min(std::fabs(in.match - previous_match_) / previous_match_, 1.0);
+  previous_match_ = std::isfinite(in.match) && in.match > 0.0 ? in.match : 0.0;
+  const bool triggered = probability_ > p.change_threshold;
+  if (triggered) ++counters_.triggers;
+
+  if (!p.confirm) {
+    if (!triggered) return KidnapVerdict::kNone;
+    ++counters_.kidnaps;
+    reset();
+    return KidnapVerdict::kKidnapped;
+  }
+
+  const bool evidence = !in.consensus && in.fix_known && in.fix_distance_m >= p.fix_distance_m;
+  evidence_run_ = evidence ? evidence_run_ + 1 : 0;
+  disagreement_run_ = in.consensus ? 0 : disagreement_run_ + 1;
+  if (triggered && window_left_ == 0) {
+    window_left_ = p.window_frames;
+    window_evidence_ = 0;
+  }
+  bool confirmed = false;
+  if (window_left_ > 0) {
+    if (evidence) ++window_evidence_;
+    --window_left_;
+    confirmed = window_evidence_ >= p.evidence_frames;
+  }
+  if (confirmed || evidence_run_ >= p.divergence_frames) {
+    ++counters_.kidnaps;
+    if (!confirmed) ++counters_.divergences;
+    reset();
+    return KidnapVerdict::kKidnapped;
+  }
+  if (disagreement_run_ >= p.lost_frames && !in.fix_known) {
+    ++counters_.lost;
+    reset();
+    return KidnapVerdict::kLost;
+  }
+  return triggered ? KidnapVerdict::kTriggered : KidnapVerdict::kNone;
+}
+
+}  // namespace harmoloc::algorithms

@@ -1,0 +1,46 @@
+#pragma once
+/// @file Learning the forward map (algorithms/forward_map.hpp) from a training run: each frame
+/// gets a position, from its labels where they are close in time (the robot moves smoothly
+/// between two labels half a second apart) and from the trained harmonic map elsewhere; each
+/// grid cell then takes the kernel-weighted mean of the frames' board areas around it. The
+/// kernel width is chosen, and each board's noise measured, against frames of other passes
+/// (docs/filter.md).
+
+#include <cstdint>
+#include <vector>
+
+#include "harmoloc/algorithms/forward_map.hpp"
+#include "harmoloc/algorithms/harmonic_model.hpp"
+#include "harmoloc/sim_host/tum.hpp"
+
+namespace harmoloc::sim_host {
+
+struct ForwardMapOptions {
+  double max_label_gap_s = 1.0;  ///< interpolate between labels at most this far apart in time
+  double margin_m = 0.25;        ///< grid beyond the training positions
+  double min_cell_m = 0.02;      ///< finest cell; coarser when the region needs more cells
+  std::vector<double> bandwidths_m{0.01, 0.015, 0.02, 0.03, 0.05};  ///< candidates
+  double exclude_same_pass_s = 1.0;  ///< validation leaves out frames this close in time
+};
+
+struct ForwardMapReport {
+  std::size_t frames = 0;         ///< frames with a board in view
+  std::size_t interpolated = 0;   ///< positioned from labels
+  std::size_t from_harmonic = 0;  ///< positioned by the harmonic map (known place)
+  double bandwidth_m = 0.0;
+  std::vector<double> sigma;     ///< per board (feature units), 0 = not modelled
+  double validation_rmse = 0.0;  ///< over all modelled boards, feature units
+  bool has_heading = false;
+};
+
+/// Fits @p out for @p board_count boards. @p areas_features holds every frame's board features
+/// (area_scale x pixels, all boards), @p timestamps_ns their times; @p model is the trained
+/// harmonic map (for frames no label pair covers). Throws std::runtime_error when fewer than
+/// 8 frames can be positioned.
+ForwardMapReport train_forward_map(const std::vector<std::vector<float>>& features,
+                                   const std::vector<std::uint64_t>& timestamps_ns,
+                                   const std::vector<StampedPose>& labels,
+                                   const algorithms::HarmonicModel& model, std::size_t board_count,
+                                   const ForwardMapOptions& options, algorithms::ForwardMap& out);
+
+}  // namespace harmoloc::sim_host
