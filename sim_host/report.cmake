@@ -1,7 +1,8 @@
 # The run report: evaluation numbers, SVG plots and an HTML page from a replay run's outputs.
 # Included from sim_host/CMakeLists.txt (CMAKE_CURRENT_SOURCE_DIR is sim_host/ there).
 # Needs: harmoloc_sim_dataset (tum.hpp/tum.cpp), harmoloc_warnings, nlohmann_json, CLI11.
-add_library(harmoloc_report STATIC ${CMAKE_CURRENT_SOURCE_DIR}/src/report.cpp)
+add_library(harmoloc_report STATIC ${CMAKE_CURRENT_SOURCE_DIR}/src/report.cpp
+  ${CMAKE_CURRENT_SOURCE_DIR}/src/line_chart.cpp)
 add_library(harmoloc::report ALIAS harmoloc_report)
 target_include_directories(harmoloc_report PUBLIC ${CMAKE_CURRENT_SOURCE_DIR}/include)
 target_link_libraries(harmoloc_report

@@ -1,5 +1,7 @@
 #include "bench_fixtures.hpp"
 
+#include <cmath>
+
 #include <algorithm>
 
 #include "harmoloc/algorithms/random.hpp"
@@ -78,6 +80,27 @@ void synthetic_map(std::size_t samples, std::uint32_t width_px, std::uint32_t he
       m.sample(i)[k] = static_cast<float>(rng.uniform(0.0, 3.0));
     m.target_x_m[i] = static_cast<float>(rng.uniform(1.9, 2.3));
     m.target_y_m[i] = static_cast<float>(rng.uniform(0.3, 1.7));
+  }
+  // A forward map over the same region (2 cm cells, as the trainer makes them), smooth fields.
+  auto& f = map.forward;
+  f.columns = 46;
+  f.rows = 88;
+  f.origin_x_m = 1.65F;
+  f.origin_y_m = 0.1F;
+  f.cell_m = 0.02F;
+  f.board_count = static_cast<std::uint32_t>(map.thresholds.count);
+  f.has_heading = true;
+  for (std::size_t b = 0; b < f.board_count; ++b) f.sigma[b] = 0.05F;
+  for (std::uint32_t r = 0; r < f.rows; ++r) {
+    for (std::uint32_t c = 0; c < f.columns; ++c) {
+      const float x = f.origin_x_m + f.cell_m * static_cast<float>(c);
+      const float y = f.origin_y_m + f.cell_m * static_cast<float>(r);
+      float* e = f.cell(c, r);
+      for (std::size_t b = 0; b < f.board_count; ++b)
+        e[b] = 1.5F + std::sin(1.3F * x * static_cast<float>(b + 1)) * std::cos(0.7F * y);
+      f.route_distance_m[r * f.columns + c] = std::fabs(x - 2.1F);
+      f.heading_rad[r * f.columns + c] = 1.57F;
+    }
   }
 }
 

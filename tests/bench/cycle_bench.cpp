@@ -209,6 +209,31 @@ void BM_FilterStep(benchmark::State& state) {
   state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()) * state.range(0));
 }
 
+// The default filter step: predict, the per-board robust update against the forward map (with
+// its assessment at the estimate), resampling (always: the worst case) and the estimate.
+void BM_FilterStepBoards(benchmark::State& state) {
+  static algorithms::MapFile map;
+  bench::synthetic_map(204, 320, 240, map);
+  static algorithms::ParticleFilter filter;
+  filter.configure(static_cast<std::size_t>(state.range(0)), 1, algorithms::MotionNoise{});
+  filter.initialize(algorithms::Pose2{2.1, 1.0, 1.5}, 0.05, 0.1, false);
+  const algorithms::BoardModelParams params;
+  algorithms::BoardReliability reliability;
+  reliability.reset(params);
+  algorithms::BoardFeatures observed;
+  observed.count = map.thresholds.count;
+  for (std::size_t b = 0; b < observed.count; ++b) observed.value[b] = 1.4F;
+  algorithms::BoardUpdate update;
+  for (auto _ : state) {
+    filter.predict(algorithms::OdometryDelta{0.0033, 0.001});
+    reliability.assess(map.forward, observed, filter.estimate().mean, params, update);
+    benchmark::DoNotOptimize(filter.update_boards(update));
+    filter.resample_if_needed(1.1);
+    benchmark::DoNotOptimize(filter.estimate());
+  }
+  state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()) * state.range(0));
+}
+
 // Args: width, height, pixel format (0 RGB24, 1 YUYV), boards, particles, map samples.
 void BM_WholeCycle(benchmark::State& state) {
   const bench::Frames& f = frames_of(state);
@@ -268,6 +293,7 @@ BENCHMARK(BM_SegmentRgb24OpenCV)->Apply(resolutions)->Unit(benchmark::kMicroseco
 BENCHMARK(BM_SegmentYuyvOpenCV)->Apply(resolutions)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_HarmonicQuery)->Arg(204)->Arg(1024)->Arg(4096)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_FilterStep)->Arg(256)->Arg(1024)->Arg(4096)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_FilterStepBoards)->Arg(256)->Arg(1024)->Arg(4096)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_WholeCycle)->Apply(cycle_args)->Unit(benchmark::kMicrosecond);
 
 }  // namespace

@@ -169,6 +169,26 @@ int main(int argc, char** argv) {
     const std::array<float, algorithms::HarmonicModel::kMaxFeatures> features{0.5F, 1.0F, 0.2F,
                                                                               1.5F, 0.3F, 0.8F};
     measure([&] { (void)algorithms::harmonic_query(g_map.model, features); });
+  } else if (kernel == "filter_boards") {
+    // The default measurement update: every board against the forward map, robust weights.
+    bench::synthetic_map(204, 320, 240, g_map);
+    static algorithms::ParticleFilter filter;
+    filter.configure(n, 1, algorithms::MotionNoise{});
+    filter.initialize(algorithms::Pose2{2.1, 1.0, 1.5}, 0.05, 0.1, false);
+    const algorithms::BoardModelParams params;
+    static algorithms::BoardReliability reliability;
+    reliability.reset(params);
+    algorithms::BoardFeatures observed;
+    observed.count = g_map.thresholds.count;
+    for (std::size_t b = 0; b < observed.count; ++b) observed.value[b] = 1.4F;
+    static algorithms::BoardUpdate update;
+    measure([&] {
+      filter.predict(algorithms::OdometryDelta{0.0033, 0.001});
+      reliability.assess(g_map.forward, observed, filter.estimate().mean, params, update);
+      (void)filter.update_boards(update);
+      filter.resample_if_needed(1.1);
+      (void)filter.estimate();
+    });
   } else if (kernel == "filter") {
     static algorithms::ParticleFilter filter;
     filter.configure(n, 1, algorithms::MotionNoise{});

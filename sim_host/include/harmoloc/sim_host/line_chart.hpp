@@ -1,0 +1,22 @@
+#pragma once
+/// @file A small SVG line chart for the host tools' reports: one x axis, one or more series, an
+/// optional dashed reference line (a target or a bound).
+
+#include <string>
+#include <vector>
+
+namespace harmoloc::sim_host {
+
+struct Series {
+  std::string name, colour;
+  std::vector<double> y;
+};
+
+/// The chart as a standalone SVG document. @p reference > 0 draws a dashed line at that value
+/// labelled @p reference_label; @p markers puts a dot on every point (for short series).
+std::string line_chart(const std::string& title, const std::string& x_label,
+                       const std::string& y_label, const std::vector<double>& x,
+                       const std::vector<Series>& series, double reference = -1.0,
+                       const std::string& reference_label = "", bool markers = true);
+
+}  // namespace harmoloc::sim_host
