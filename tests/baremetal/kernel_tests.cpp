@@ -15,11 +15,13 @@
 #include <cstring>
 #include <initializer_list>
 
+#include "harmoloc/algorithms/board_observation.hpp"
 #include "harmoloc/algorithms/can_encoder_layout.hpp"
 #include "harmoloc/algorithms/crc32.hpp"
 #include "harmoloc/algorithms/geometry.hpp"
 #include "harmoloc/algorithms/harmonic_localizer.hpp"
 #include "harmoloc/algorithms/harmonic_model.hpp"
+#include "harmoloc/algorithms/kidnap_detector.hpp"
 #include "harmoloc/algorithms/map_codec.hpp"
 #include "harmoloc/algorithms/odometry.hpp"
 #include "harmoloc/algorithms/particle_filter.hpp"
@@ -654,7 +656,8 @@ class MapBytes {
 };
 
 struct MapSpec {
-  std::uint32_t version = 2;
+  std::uint32_t version = 3;
+  bool forward = false;  ///< a 2 x 2 forward map over the three boards (version 3)
   std::uint32_t samples = 5;
   std::uint8_t last_board_index = 2;
   std::uint8_t pad = 0;
@@ -698,6 +701,29 @@ void write_map(MapBytes& m, const MapSpec& s) {
     m.f32(0.125F * static_cast<float>(i + 1));
     m.f32(0.5F * static_cast<float>(i));
     m.f32(-0.25F * static_cast<float>(i));
+  }
+  if (s.version >= 3 && !s.forward) {
+    m.u32(0);  // no forward map
+    m.u32(0);
+  } else if (s.version >= 3) {
+    m.u32(2);
+    m.u32(2);
+    m.f32(1.5F);  // origin
+    m.f32(0.5F);
+    m.f32(0.25F);  // cell
+    m.u32(3);
+    m.f32(0.1F);  // sigmas
+    m.f32(0.0F);
+    m.f32(0.2F);
+    m.u8(1);  // heading
+    m.u8(0);
+    m.u8(0);
+    m.u8(0);
+    for (int c = 0; c < 4; ++c) {
+      for (int b = 0; b < 3; ++b) m.f32(0.5F * static_cast<float>(c + b));
+    }
+    for (int c = 0; c < 4; ++c) m.f32(0.01F * static_cast<float>(c));
+    for (int c = 0; c < 4; ++c) m.f32(1.5F);
   }
   if (s.trailing) m.u32(0);
   m.seal();
@@ -761,8 +787,47 @@ void test_map_codec() {
   BM_CHECK(static_cast<bool>(ha::decode_map(nullptr, 0, g_map)));
 
   MapSpec s;
-  s.version = 3;
+  s.version = 4;
   BM_CHECK(rejected(s, "version"));
+  // Version 2 (no forward map) is still read, without one.
+  {
+    static MapBytes v2;
+    v2 = MapBytes{};
+    s.version = 2;
+    write_map(v2, s);
+    BM_CHECK(!ha::decode_map(v2.data(), v2.size(), g_map));
+    BM_CHECK(!g_map.forward.present());
+    BM_CHECK(g_map.model.max_dissimilarity == 0.05F);
+  }
+  // A forward map.
+  {
+    static MapBytes fw;
+    fw = MapBytes{};
+    MapSpec f;
+    f.forward = true;
+    write_map(fw, f);
+    err = ha::decode_map(fw.data(), fw.size(), g_map);
+    BM_CHECK(!err);
+    const ha::ForwardMap& fm = g_map.forward;
+    BM_CHECK(fm.present());
+    BM_CHECK_EQ(fm.cell_count(), 4U);
+    BM_CHECK(fm.has_heading);
+    BM_CHECK(fm.sigma[1] == 0.0F);
+    BM_CHECK(fm.cell(1, 1)[2] == 2.5F);
+    BM_CHECK(fm.route_distance_m[3] == 0.03F);
+    bm::value_u("forward_size", fw.size());
+#if !defined(HARMOLOC_BAREMETAL_TARGET)
+    const std::vector<std::uint8_t> again = ha::encode_map(g_map);
+    BM_CHECK(again.size() == fw.size() && std::memcmp(again.data(), fw.data(), fw.size()) == 0);
+#endif
+    // Cut inside the forward map and re-sealed: rejected.
+    fw.truncate(fw.size() - 4 - 8);
+    fw.seal();
+    err = ha::decode_map(fw.data(), fw.size(), g_map);
+    BM_CHECK(err && std::strstr(err.what, "truncated") != nullptr);
+    BM_CHECK(!g_map.forward.present());
+  }
+  s = MapSpec{};
   // Version 1 (no dissimilarity bound) is still read, with the test disabled.
   {
     static MapBytes v1;
@@ -793,6 +858,157 @@ void test_map_codec() {
   bm::info_u("sizeof_MapFile", sizeof(ha::MapFile));
 }
 
+// --- the robust filter: forward map, per-board weights, kidnap test ------------------------------
+
+ha::ForwardMap g_forward;
+ha::BoardReliability g_reliability;
+ha::BoardUpdate g_update;
+
+// Board b's expected feature at (x, y): smooth and different per board; board 3 unmodelled.
+float forward_field(std::size_t b, double x, double y) {
+  switch (b) {
+    case 0:
+      return static_cast<float>(1.0 + 2.0 * (x - 1.0));
+    case 1:
+      return static_cast<float>(3.0 - (x - 1.0) + 2.0 * (y - 0.5));
+    case 2:
+      return static_cast<float>(0.5 + 4.0 * (y - 0.5) * (y - 0.5) + 0.5 * x);
+    default:
+      return 0.0F;
+  }
+}
+
+void test_robust() {
+  ha::ForwardMap& f = g_forward;
+  f.columns = 41;
+  f.rows = 21;
+  f.origin_x_m = 1.0F;
+  f.origin_y_m = 0.5F;
+  f.cell_m = 0.025F;
+  f.board_count = 4;
+  f.sigma = {0.02F, 0.03F, 0.02F, 0.0F, 0.0F, 0.0F, 0.0F, 0.0F};
+  f.has_heading = true;
+  for (std::uint32_t r = 0; r < f.rows; ++r) {
+    for (std::uint32_t c = 0; c < f.columns; ++c) {
+      const double x = 1.0 + 0.025 * c, y = 0.5 + 0.025 * r;
+      for (std::size_t b = 0; b < 4; ++b) f.cell(c, r)[b] = forward_field(b, x, y);
+      f.route_distance_m[r * f.columns + c] = static_cast<float>(y > 0.75 ? y - 0.75 : 0.75 - y);
+      f.heading_rad[r * f.columns + c] = 1.5F;
+    }
+  }
+  // Lookup: exact on a linear field (boards 0 and 1), the border beyond the grid.
+  std::array<float, ha::kMaxBoards> e{};
+  ha::GridPoint p = ha::locate(f, 1.337, 0.611);
+  ha::expected_features(f, p, e.data());
+  BM_CHECK_NEAR(e[0], forward_field(0, 1.337, 0.611), 1e-5);
+  BM_CHECK_NEAR(e[1], forward_field(1, 1.337, 0.611), 1e-5);
+  bm::value_f("lookup_b2", e[2]);
+  p = ha::locate(f, 2.5, 0.75);
+  BM_CHECK_NEAR(p.outside_m, 0.5, 1e-5);
+  BM_CHECK_NEAR(ha::route_distance(f, p), 0.5, 1e-5);
+  BM_CHECK(ha::route_heading(f, 1.2, 0.7) == 1.5F);
+
+  // The motion index: board 1 hidden for 40 frames at the true place, then back.
+  const ha::BoardModelParams params;
+  g_reliability.reset(params);
+  const ha::Pose2 at{1.5, 0.75, 1.5};
+  ha::BoardFeatures seen;
+  seen.count = 4;
+  for (std::size_t b = 0; b < 4; ++b) seen.value[b] = forward_field(b, at.x_m, at.y_m);
+  ha::BoardFeatures hidden = seen;
+  hidden.value[1] = 0.0F;
+  ha::BoardAssessment a;
+  auto assess_hidden = [&a, &hidden, &at, &params] {
+    a = g_reliability.assess(g_forward, hidden, at, params, g_update);
+  };
+  measure_stack("stack.board_assess", assess_hidden);
+  BM_CHECK(a.consensus);
+  BM_CHECK(a.scaling[1] < 0.01F);
+  for (int i = 1; i < 40; ++i) g_reliability.assess(f, hidden, at, params, g_update);
+  BM_CHECK(g_reliability.distrusted(1));
+  BM_CHECK(!g_reliability.distrusted(0));
+  bm::value("motion_index_hidden", g_reliability.static_probability(1));
+  int back = 0;
+  while (g_reliability.distrusted(1) && back < 200) {
+    g_reliability.assess(f, seen, at, params, g_update);
+    ++back;
+  }
+  BM_CHECK(back < 60);
+  bm::value_u("frames_to_trust_again", static_cast<std::uint64_t>(back));
+  bm::value("motion_index_back", g_reliability.static_probability(1));
+
+  // The particle weights with board 0 hidden: the robust model stays at the truth.
+  g_reliability.reset(params);
+  hidden = seen;
+  hidden.value[0] = 0.2F;
+  g_reliability.assess(f, hidden, at, params, g_update);
+  g_filter.configure(1024, 11U, ha::MotionNoise{});
+  g_filter.initialize_uniform(1.0, 0.70, 2.0, 0.80);
+  double match = 0.0;
+  auto update = [&match] { match = g_filter.update_boards(g_update); };
+  measure_stack("stack.pf_update_boards", update);
+  bm::value("match", match);
+  ha::PoseEstimate est = g_filter.estimate();
+  BM_CHECK_NEAR(est.mean.x_m, at.x_m, 0.05);
+  bm::value_trig("robust_mean_x", est.mean.x_m);
+  bm::value_trig("robust_mean_y", est.mean.y_m);
+  for (int i = 0; i < 20; ++i) {
+    g_filter.predict(ha::OdometryDelta{0.0, 0.0});
+    g_reliability.assess(f, hidden, g_filter.estimate().mean, params, g_update);
+    g_filter.update_boards(g_update);
+    g_filter.resample_if_needed(0.5);
+  }
+  est = g_filter.estimate();
+  BM_CHECK_NEAR(est.mean.x_m, at.x_m, 0.03);
+  bm::value_trig("robust_tracked_x", est.mean.x_m);
+
+  // Seed 004's test and its confirmation on a fixed sequence: steady, a dip (an occlusion:
+  // no evidence), steady, then a kidnap (the boards disagree, the fix is 1.2 m away).
+  ha::KidnapDetector d;
+  const ha::KidnapParams kp;
+  int kidnapped_at = -1;
+  for (int i = 0; i < 40; ++i) {
+    ha::KidnapInput in;
+    in.match = i == 10 ? 1e-4 : (i >= 25 ? 1e-9 : 1e-2);
+    in.consensus = i < 25;
+    in.fix_known = true;
+    in.fix_distance_m = i >= 25 ? 1.2 : 0.01;
+    const ha::KidnapVerdict v = d.step(in, kp);
+    if (v == ha::KidnapVerdict::kKidnapped && kidnapped_at < 0) kidnapped_at = i;
+  }
+  BM_CHECK_EQ(kidnapped_at, 27);
+  BM_CHECK_EQ(d.counters().kidnaps, 1U);
+  bm::value_u("kidnap_triggers", d.counters().triggers);
+
+  // The masked harmonic fix: the hidden feature cannot move it.
+  ha::HarmonicModel& m = g_model;
+  m = ha::HarmonicModel{};
+  m.sample_count = 40;
+  m.feature_count = 3;
+  m.area_scale = 1.0F;
+  m.sigma_x = m.sigma_y = 20.0F;
+  m.max_nearest_distance = 1.0F;
+  m.max_dissimilarity = 0.2F;
+  for (std::size_t i = 0; i < 40; ++i) {
+    const float t = static_cast<float>(i) / 39.0F;
+    m.sample(i)[0] = 1.0F + t;
+    m.sample(i)[1] = 2.0F - t;
+    m.sample(i)[2] = 0.5F + 2.0F * t * t;
+    m.target_x_m[i] = 2.0F * t;
+    m.target_y_m[i] = 1.0F;
+  }
+  std::array<float, ha::HarmonicModel::kMaxFeatures> q = {1.4F, 1.6F, 0.0F};
+  ha::FeatureMask use{};
+  use[0] = use[1] = true;
+  const ha::HarmonicFix masked = ha::harmonic_query(m, q, use);
+  BM_CHECK(masked.known_place);
+  BM_CHECK_NEAR(masked.x_m, 0.8, 0.05);
+  q[2] = 9.0F;
+  BM_CHECK(ha::harmonic_query(m, q, use).x_m == masked.x_m);
+  bm::value("masked_fix_x", masked.x_m);
+  bm::info_u("sizeof_ForwardMap", sizeof(ha::ForwardMap));
+}
+
 struct Section {
   const char* name;
   void (*run)();
@@ -807,6 +1023,7 @@ constexpr Section kSections[] = {
     {"harmonic", test_harmonic},
     {"particle_filter", test_particle_filter},
     {"map_codec", test_map_codec},
+    {"robust", test_robust},
 };
 
 int run(const Section& s) {
@@ -831,7 +1048,7 @@ int main(int argc, char** argv) {
     if (found == nullptr) {
       bm::out(
           "unknown section (crc32 random odometry can segmentation harmonic particle_filter "
-          "map_codec)");
+          "map_codec robust)");
       return 2;
     }
     failed += run(*found);

@@ -227,6 +227,12 @@ ENTRY_POINTS = [
     ("ParticleFilter::estimate", r"^_ZNK8harmoloc10algorithms14ParticleFilter8estimateE",
      "stack.pf_estimate"),
     ("decode_map", r"^_ZN8harmoloc10algorithms10decode_mapE", "stack.decode_map"),
+    ("locate (forward map)", r"^_ZN8harmoloc10algorithms6locateE", None),
+    ("BoardReliability::assess",
+     r"^_ZN8harmoloc10algorithms16BoardReliability6assessE", "stack.board_assess"),
+    ("ParticleFilter::update_boards",
+     r"^_ZN8harmoloc10algorithms14ParticleFilter13update_boardsE", "stack.pf_update_boards"),
+    ("KidnapDetector::step", r"^_ZN8harmoloc10algorithms14KidnapDetector4stepE", None),
 ]
 
 
@@ -324,6 +330,7 @@ def main():
 
     query_stack = info.get("stack.harmonic_query_4096x8", 0)
     model = sizes.get("HarmonicModel", 0)
+    forward = sizes.get("ForwardMap", 0)
     pf = sizes.get("ParticleFilter", 0)
     cls = sizes.get("BoardClassifier", 0)
     code = total[3] + total[4] + sum(alone.get(lib, empty)["text"] + alone.get(lib, empty)["rodata"]
@@ -337,8 +344,10 @@ def main():
          model + query_stack + cls + code),
         ("particle filter (4096) + its deepest stack + code",
          pf + max(info.get(k, 0) for k in info if k.startswith("stack.pf_")) + code),
-        ("map + particle filter + classifier + query stack + code",
-         model + pf + cls + query_stack + code),
+        ("forward map (4096 cells x 8 boards) + particle filter (4096) + stack + code",
+         forward + pf + max(info.get(k, 0) for k in info if k.startswith("stack.pf_")) + code),
+        ("map + forward map + particle filter + classifier + query stack + code",
+         model + forward + pf + cls + query_stack + code),
     ]
     for label, size in configs:
         w(f"| {label} | {size} ({kib(size)}) | {'yes' if size <= TCM_BYTES else 'no'} "
