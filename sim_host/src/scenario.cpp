@@ -106,7 +106,7 @@ Scenario desk_occlusion() {
   s.route.laps = 2;
   OccluderSpec person;
   person.name = "person";
-  person.path = {{28.5, 0.20, 2.10}, {29.9, 1.57, 2.10}, {32.9, 1.57, 2.10}, {34.3, 0.20, 2.10}};
+  person.path = {{28.7, 0.20, 2.10}, {30.1, 1.57, 2.10}, {33.1, 1.57, 2.10}, {34.5, 0.20, 2.10}};
   s.occluders.push_back(person);
   return s;
 }
