@@ -1,5 +1,6 @@
 #include "harmoloc/sim_host/scenario.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <sstream>
@@ -14,6 +15,14 @@ namespace harmoloc::sim_host {
 namespace {
 
 constexpr double kDeg = algorithms::kPi / 180.0;
+constexpr double kMaxEventTime_s = 1e6;
+constexpr double kMaxCoordinate_m = 100.0;
+constexpr double kMaxKidnaps = 10000;
+// An occluder colour is taken for a board when it is saturated (8-bit HSV S >= 80), not dark
+// (V >= 40) and within 30 degrees of a board colour's hue.
+constexpr double kOccluderMaxSaturation = 80.0;
+constexpr double kOccluderMaxValue = 40.0;
+constexpr double kOccluderMinHueDistance_deg = 30.0;
 
 // Seed 000's setting: six single-colour boards of different sizes on a desk, the robot on a
 // 420 x 240 cm floor in front of it, 10 cm/s, 30 Hz, a camera with strong radial distortion.
@@ -85,6 +94,71 @@ Scenario wrap_test() {
   return s;
 }
 
+// Events on the desk-shuttle route (docs/scenarios.md gives the facts each was designed to).
+
+// Two laps; halfway, as the robot leaves the start of its route, a person walks in from the left
+// along the desk, stands in front of the red board for 3 s (from the robot's view it hides red and
+// a sliver of green) and walks back out.
+Scenario desk_occlusion() {
+  Scenario s = desk_shuttle();
+  s.name = "desk-occlusion";
+  s.description = "desk-shuttle, 2 laps; halfway a person stands in front of the red board for 3 s";
+  s.route.laps = 2;
+  OccluderSpec person;
+  person.name = "person";
+  person.path = {{28.7, 0.20, 2.10}, {30.1, 1.57, 2.10}, {33.1, 1.57, 2.10}, {34.5, 0.20, 2.10}};
+  s.occluders.push_back(person);
+  return s;
+}
+
+// Someone moves the red board 30 cm to the left along the desk halfway through two laps (while
+// the robot stands at the start of its route). Red stands in the front row with nothing behind
+// or in front of it there, so only red's area changes (and green's, by 1-2%, where red hid a
+// corner of it).
+Scenario desk_moved_board() {
+  Scenario s = desk_shuttle();
+  s.name = "desk-moved-board";
+  s.description = "desk-shuttle, 2 laps; halfway the red board is moved 30 cm along the desk";
+  s.route.laps = 2;
+  BoardMoveSpec move;
+  move.board = "red";
+  move.at_s = 29.7;
+  move.offset_m = {-0.30, 0.0, 0.0};
+  s.board_moves.push_back(move);
+  return s;
+}
+
+// The robot is lifted and put down at least 1 m away, 10 times, 15 s apart. Only the 0.2-0.25 m
+// at each end of the 1.32 m route are 1 m from anywhere (the ends are 1.25 m apart), and the robot
+// stays there 5-6 s a visit: kidnaps 1 m long need the robot near an end at every kidnap time,
+// which holds for intervals up to ~3.5 s or of 12-18 s (about half a lap, 14.7 s), not 5-10 s.
+Scenario desk_kidnap() {
+  Scenario s = desk_shuttle();
+  s.name = "desk-kidnap";
+  s.description = "desk-shuttle, 6 laps; the robot is kidnapped 10 times 15 s apart, each >= 1 m";
+  s.route.laps = 6;
+  s.kidnaps.count = 10;
+  s.kidnaps.first_s = 15.0;
+  s.kidnaps.interval_s = 15.0;
+  s.kidnaps.min_distance_m = 1.0;
+  return s;
+}
+
+// Ten simulated minutes of the nominal desk-shuttle (false alarms of kidnap and moved-board
+// tests).
+Scenario desk_long() {
+  Scenario s = desk_shuttle();
+  s.name = "desk-long";
+  s.description = "desk-shuttle for 10 minutes (21 laps), nothing happens";
+  s.route.laps = 21;
+  return s;
+}
+
+using ScenarioFactory = Scenario (*)();
+constexpr ScenarioFactory kBuiltIns[] = {desk_shuttle,   desk_left,        desk_right,  desk_slalom,
+                                         desk_occlusion, desk_moved_board, desk_kidnap, desk_long,
+                                         tiny,           wrap_test};
+
 [[noreturn]] void fail(const std::string& file, const std::string& what) {
   throw std::runtime_error(file + ": " + what);
 }
@@ -137,6 +211,144 @@ std::vector<double> numbers(const toml::node* n, std::size_t count, const std::s
   return out;
 }
 
+// A number that must be present and within lo..hi.
+double required_num(const toml::table& t, const char* key, const std::string& file,
+                    const std::string& section, double lo, double hi) {
+  if (t.get(key) == nullptr) fail(file, section + key + " is required");
+  double v = 0.0;
+  set_num(t, key, v, file, section, lo, hi);
+  return v;
+}
+
+Rgb colour_of(const toml::table& t, const std::string& file, const std::string& key) {
+  const auto c = numbers(t.get("colour"), 3, file, key);
+  for (double v : c) {
+    if (!(v >= 0 && v <= 255)) fail(file, key + " values must be 0..255");
+  }
+  return Rgb{static_cast<std::uint8_t>(c[0]), static_cast<std::uint8_t>(c[1]),
+             static_cast<std::uint8_t>(c[2])};
+}
+
+// Hue (degrees), saturation and value (0..255) as the firmware's 8-bit HSV segmentation sees them.
+void hsv_of(const Rgb& c, double& hue_deg, double& saturation, double& value) {
+  const double r = c.r, g = c.g, b = c.b;
+  const double hi = std::max({r, g, b}), lo = std::min({r, g, b});
+  value = hi;
+  saturation = hi > 0.0 ? 255.0 * (hi - lo) / hi : 0.0;
+  hue_deg = 0.0;
+  if (hi > lo) {
+    if (hi == r)
+      hue_deg = 60.0 * (g - b) / (hi - lo);
+    else if (hi == g)
+      hue_deg = 120.0 + 60.0 * (b - r) / (hi - lo);
+    else
+      hue_deg = 240.0 + 60.0 * (r - g) / (hi - lo);
+    if (hue_deg < 0.0) hue_deg += 360.0;
+  }
+}
+
+// An occluder whose colour a board's colour window could take for the board would add to that
+// board's area instead of hiding it: rejected. Saturated, not dark, within 30 degrees of hue.
+bool looks_like_a_board(const Rgb& occluder, const std::vector<BoardSpec>& boards,
+                        std::string& which) {
+  double h = 0.0, sat = 0.0, val = 0.0;
+  hsv_of(occluder, h, sat, val);
+  if (sat < kOccluderMaxSaturation || val < kOccluderMaxValue) return false;
+  for (const BoardSpec& b : boards) {
+    double bh = 0.0, bs = 0.0, bv = 0.0;
+    hsv_of(b.colour, bh, bs, bv);
+    const double d = std::fabs(std::remainder(h - bh, 360.0));
+    if (d <= kOccluderMinHueDistance_deg) {
+      which = b.name;
+      return true;
+    }
+  }
+  return false;
+}
+
+void read_events(const toml::table& t, const std::string& file, Scenario& s) {
+  if (const toml::node* n = t.get("occluders")) {
+    const toml::array* list = n->as_array();
+    if (list == nullptr) fail(file, "occluders must be an array of tables ([[occluders]])");
+    s.occluders.clear();
+    for (const toml::node& e : *list) {
+      const toml::table* o = e.as_table();
+      if (o == nullptr) fail(file, "[[occluders]] entries must be tables");
+      only(*o, file, "occluders.", {"name", "colour", "radius_m", "height_m", "path"});
+      OccluderSpec spec;
+      if (const toml::node* name = o->get("name")) {
+        const auto v = name->value_exact<std::string>();
+        if (!v) fail(file, "occluders.name must be a string");
+        spec.name = *v;
+      }
+      if (o->get("colour") != nullptr) spec.colour = colour_of(*o, file, "occluders.colour");
+      set_num(*o, "radius_m", spec.radius_m, file, "occluders.", 0.01, 5);
+      set_num(*o, "height_m", spec.height_m, file, "occluders.", 0.01, 5);
+      const toml::array* path = (*o)["path"].as_array();
+      if (path == nullptr || path->empty())
+        fail(file, "occluders.path must be an array of [t_s, x_m, y_m] keyframes");
+      for (const toml::node& k : *path) {
+        const auto p = numbers(&k, 3, file, "occluders.path[]");
+        if (!(p[0] >= 0.0 && p[0] <= kMaxEventTime_s))
+          fail(file, "occluders.path times must be 0.." + std::to_string(kMaxEventTime_s) + " s");
+        if (!(std::fabs(p[1]) <= kMaxCoordinate_m && std::fabs(p[2]) <= kMaxCoordinate_m))
+          fail(file, "occluders.path positions must be within +-100 m");
+        if (!spec.path.empty() && !(p[0] > spec.path.back()[0]))
+          fail(file, "occluders.path times must increase");
+        spec.path.push_back({p[0], p[1], p[2]});
+      }
+      s.occluders.push_back(spec);
+    }
+  }
+  if (const toml::node* n = t.get("board_moves")) {
+    const toml::array* list = n->as_array();
+    if (list == nullptr) fail(file, "board_moves must be an array of tables ([[board_moves]])");
+    s.board_moves.clear();
+    for (const toml::node& e : *list) {
+      const toml::table* m = e.as_table();
+      if (m == nullptr) fail(file, "[[board_moves]] entries must be tables");
+      only(*m, file, "board_moves.", {"board", "at_s", "offset_m", "turn_deg"});
+      BoardMoveSpec spec;
+      const auto board = (*m)["board"].value_exact<std::string>();
+      if (!board) fail(file, "board_moves.board (a board's name) is required");
+      spec.board = *board;
+      spec.at_s = required_num(*m, "at_s", file, "board_moves.", 0, kMaxEventTime_s);
+      if (const toml::node* off = m->get("offset_m")) {
+        const auto v = numbers(off, 3, file, "board_moves.offset_m");
+        for (std::size_t i = 0; i < 3; ++i) {
+          if (!(std::fabs(v[i]) <= kMaxCoordinate_m))
+            fail(file, "board_moves.offset_m must be within +-100 m");
+          spec.offset_m[i] = v[i];
+        }
+      }
+      set_num(*m, "turn_deg", spec.turn_deg, file, "board_moves.", -360, 360);
+      s.board_moves.push_back(spec);
+    }
+  }
+  if (const toml::node* n = t.get("kidnaps")) {
+    const toml::table* k = n->as_table();
+    if (k == nullptr) fail(file, "kidnaps must be a table ([kidnaps])");
+    only(*k, file, "kidnaps.", {"count", "first_s", "interval_s", "min_distance_m"});
+    set_int(*k, "count", s.kidnaps.count, file, "kidnaps.", 0, kMaxKidnaps);
+    set_num(*k, "first_s", s.kidnaps.first_s, file, "kidnaps.", 0, kMaxEventTime_s);
+    set_num(*k, "interval_s", s.kidnaps.interval_s, file, "kidnaps.", 0.1, kMaxEventTime_s);
+    set_num(*k, "min_distance_m", s.kidnaps.min_distance_m, file, "kidnaps.", 0, kMaxCoordinate_m);
+  }
+  // Checked against the final boards: a file may replace the base's boards.
+  for (const BoardMoveSpec& m : s.board_moves) {
+    bool found = false;
+    for (const BoardSpec& b : s.boards) found = found || b.name == m.board;
+    if (!found) fail(file, "board_moves.board '" + m.board + "' is not a board of this scenario");
+  }
+  for (const OccluderSpec& o : s.occluders) {
+    std::string which;
+    if (looks_like_a_board(o.colour, s.boards, which)) {
+      fail(file, "occluder '" + o.name + "': its colour is too close to board '" + which +
+                     "' (segmentation would count it as that board)");
+    }
+  }
+}
+
 Scenario load_scenario_at_depth(const std::string& name_or_file, int depth);
 
 Scenario from_file(const std::string& file, int depth) {
@@ -150,7 +362,7 @@ Scenario from_file(const std::string& file, int depth) {
   }
   only(t, file, "",
        {"base", "name", "description", "labelled_frames", "start_time_s", "camera", "route",
-        "encoders", "robot", "boards"});
+        "encoders", "robot", "boards", "occluders", "board_moves", "kidnaps"});
   const std::string base = t["base"].value_or(std::string("desk-shuttle"));
   Scenario s;
   try {
@@ -241,6 +453,7 @@ Scenario from_file(const std::string& file, int depth) {
     }
     if (s.boards.empty() || s.boards.size() > 8) fail(file, "1 to 8 boards");
   }
+  read_events(t, file, s);
   const std::uint8_t bytes = static_cast<std::uint8_t>((s.can_layout.counter_bits + 7) / 8);
   s.can_layout.left_offset = 0;
   s.can_layout.right_offset = bytes;
@@ -253,9 +466,10 @@ Scenario from_file(const std::string& file, int depth) {
 
 std::vector<std::pair<std::string, std::string>> builtin_scenarios() {
   std::vector<std::pair<std::string, std::string>> out;
-  for (const Scenario& s :
-       {desk_shuttle(), desk_left(), desk_right(), desk_slalom(), tiny(), wrap_test()})
+  for (const ScenarioFactory make : kBuiltIns) {
+    const Scenario s = make();
     out.emplace_back(s.name, s.description);
+  }
   return out;
 }
 
@@ -271,12 +485,10 @@ Scenario load_scenario_at_depth(const std::string& name_or_file, int depth) {
     throw std::runtime_error(
         name_or_file + ": more than 8 scenario files chained by 'base' (does one name itself?)");
   }
-  if (name_or_file == "desk-shuttle") return desk_shuttle();
-  if (name_or_file == "desk-left") return desk_left();
-  if (name_or_file == "desk-right") return desk_right();
-  if (name_or_file == "desk-slalom") return desk_slalom();
-  if (name_or_file == "tiny") return tiny();
-  if (name_or_file == "tiny-wrap16") return wrap_test();
+  for (const ScenarioFactory make : kBuiltIns) {
+    Scenario s = make();
+    if (s.name == name_or_file) return s;
+  }
   if (std::filesystem::is_regular_file(name_or_file)) return from_file(name_or_file, depth);
   std::string names;
   for (const auto& [name, text] : builtin_scenarios()) names += (names.empty() ? "" : ", ") + name;
@@ -322,7 +534,40 @@ std::string scenario_to_toml(const Scenario& s) {
       << b.centre_y_m << ", " << b.centre_z_m << "]\nsize = [" << b.width_m << ", " << b.height_m
       << "]\nfacing_deg = " << b.facing_yaw_rad / kDeg << "\n";
   }
+  // Events only when there are any: a scenario without them writes what it always wrote.
+  for (const OccluderSpec& oc : s.occluders) {
+    o << "\n[[occluders]]\nname = " << toml_string(oc.name) << "\ncolour = [" << int{oc.colour.r}
+      << ", " << int{oc.colour.g} << ", " << int{oc.colour.b} << "]\nradius_m = " << oc.radius_m
+      << "\nheight_m = " << oc.height_m << "\npath = [";
+    for (std::size_t i = 0; i < oc.path.size(); ++i) {
+      o << (i ? ", " : "") << "[" << oc.path[i][0] << ", " << oc.path[i][1] << ", " << oc.path[i][2]
+        << "]";
+    }
+    o << "]\n";
+  }
+  for (const BoardMoveSpec& m : s.board_moves) {
+    o << "\n[[board_moves]]\nboard = " << toml_string(m.board) << "\nat_s = " << m.at_s
+      << "\noffset_m = [" << m.offset_m[0] << ", " << m.offset_m[1] << ", " << m.offset_m[2]
+      << "]\nturn_deg = " << m.turn_deg << "\n";
+  }
+  if (s.kidnaps.count > 0) {
+    o << "\n[kidnaps]\ncount = " << s.kidnaps.count << "\nfirst_s = " << s.kidnaps.first_s
+      << "\ninterval_s = " << s.kidnaps.interval_s
+      << "\nmin_distance_m = " << s.kidnaps.min_distance_m << "\n";
+  }
   return o.str();
+}
+
+std::string describe_events(const Scenario& s) {
+  std::string out;
+  const auto add = [&out](std::size_t n, const char* what) {
+    if (n == 0) return;
+    out += (out.empty() ? "" : ", ") + std::to_string(n) + " " + what + (n == 1 ? "" : "s");
+  };
+  add(static_cast<std::size_t>(std::max(0, s.kidnaps.count)), "kidnap");
+  add(s.board_moves.size(), "board move");
+  add(s.occluders.size(), "occluder");
+  return out.empty() ? "no events" : out;
 }
 
 }  // namespace harmoloc::sim_host

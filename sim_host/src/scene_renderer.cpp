@@ -67,6 +67,37 @@ SceneRenderer::SceneRenderer(const Scenario& scenario) : scenario_(scenario) {
       ray.z = 1.0;
     }
   }
+  set_time(0.0);
+}
+
+void SceneRenderer::set_time(double t_s) {
+  time_s_ = t_s;
+  boards_ = scenario_.boards;
+  for (const BoardMoveSpec& m : scenario_.board_moves) {
+    if (m.at_s > t_s) continue;
+    for (BoardSpec& b : boards_) {
+      if (b.name != m.board) continue;
+      b.centre_x_m += m.offset_m[0];
+      b.centre_y_m += m.offset_m[1];
+      b.centre_z_m += m.offset_m[2];
+      b.facing_yaw_rad += m.turn_deg * kPi / 180.0;
+    }
+  }
+  occluders_.clear();
+  for (const OccluderSpec& o : scenario_.occluders) {
+    if (o.path.empty() || t_s < o.path.front()[0] || t_s > o.path.back()[0]) continue;
+    std::size_t k = 1;
+    while (k < o.path.size() && o.path[k][0] < t_s) ++k;
+    double x = o.path.front()[1], y = o.path.front()[2];
+    if (k < o.path.size()) {
+      const auto& a = o.path[k - 1];
+      const auto& b = o.path[k];
+      const double u = (t_s - a[0]) / (b[0] - a[0]);
+      x = a[1] + u * (b[1] - a[1]);
+      y = a[2] + u * (b[2] - a[2]);
+    }
+    occluders_.push_back(PlacedOccluder{x, y, o.radius_m, o.height_m, o.colour});
+  }
 }
 
 // Returns the index of the board hit, or kNoBoard; @p colour is what the ray sees.
@@ -123,8 +154,8 @@ int SceneRenderer::trace(const double o[3], const double d[3], Rgb& colour) cons
     }
   }
   // Boards: upright rectangles; the back is plain grey.
-  for (std::size_t b = 0; b < s.boards.size(); ++b) {
-    const BoardSpec& board = s.boards[b];
+  for (std::size_t b = 0; b < boards_.size(); ++b) {
+    const BoardSpec& board = boards_[b];
     const double nx = std::cos(board.facing_yaw_rad), ny = std::sin(board.facing_yaw_rad);
     const double denom = d[0] * nx + d[1] * ny;
     if (std::fabs(denom) < 1e-12) continue;
@@ -142,6 +173,41 @@ int SceneRenderer::trace(const double o[3], const double d[3], Rgb& colour) cons
     } else {
       colour = Rgb{80, 80, 80};
       hit_board = kNoBoard;
+    }
+  }
+  // Occluders: upright cylinders on the floor (side and top), shaded by the angle of incidence.
+  // Seen from inside (the camera within one), the far side hides everything.
+  for (const PlacedOccluder& c : occluders_) {
+    const double px = o[0] - c.x_m, py = o[1] - c.y_m;
+    const double a = d[0] * d[0] + d[1] * d[1];
+    const double b = px * d[0] + py * d[1];
+    const double cc = px * px + py * py - c.radius_m * c.radius_m;
+    if (a > 1e-18) {
+      const double disc = b * b - a * cc;
+      if (disc >= 0.0) {
+        const double root = std::sqrt(disc);
+        for (const double t : {(-b - root) / a, (-b + root) / a}) {
+          if (t <= 1e-6 || t >= best) continue;
+          const double z = o[2] + t * d[2];
+          if (z < 0.0 || z > c.height_m) continue;
+          best = t;
+          const double nx = (px + t * d[0]) / c.radius_m, ny = (py + t * d[1]) / c.radius_m;
+          const double cosine =
+              std::fabs(nx * d[0] + ny * d[1]) / std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+          colour = scale(c.colour, 0.7 + 0.3 * cosine);
+          hit_board = kNoBoard;
+          break;
+        }
+      }
+    }
+    if (std::fabs(d[2]) > 1e-12) {  // the top
+      const double t = (c.height_m - o[2]) / d[2];
+      const double qx = px + t * d[0], qy = py + t * d[1];
+      if (t > 1e-6 && t < best && qx * qx + qy * qy <= c.radius_m * c.radius_m) {
+        best = t;
+        colour = c.colour;
+        hit_board = kNoBoard;
+      }
     }
   }
   return hit_board;

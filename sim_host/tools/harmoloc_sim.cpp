@@ -15,7 +15,8 @@ int main(int argc, char** argv) {
       "harmoloc-sim: simulate a scenario run and write it as a dataset folder.\n"
       "The folder holds frames/ (binary PPM), frames.csv, encoders.log (candump -l), "
       "groundtruth.tum,\n"
-      "labels.tum (the poses an external reference would label), metadata.toml and scenario.toml.\n"
+      "labels.tum (the poses an external reference would label), metadata.toml, scenario.toml\n"
+      "and, for a run with kidnaps, kidnaps.csv.\n"
       "See docs/dataset-format.md and docs/scenarios.md.",
       "harmoloc-sim"};
   std::string scenario_name = "desk-shuttle";
@@ -34,7 +35,7 @@ int main(int argc, char** argv) {
 
   if (list) {
     for (const auto& [name, text] : builtin_scenarios())
-      std::printf("%-14s %s\n", name.c_str(), text.c_str());
+      std::printf("%-17s %s\n", name.c_str(), text.c_str());
     return 0;
   }
   if (out_dir.empty()) {
@@ -45,10 +46,12 @@ int main(int argc, char** argv) {
     const Scenario scenario = load_scenario(scenario_name);
     if (!quiet) {
       std::fprintf(stderr,
-                   "harmoloc-sim: scenario '%s' (%ux%u, %.0f Hz, %zu boards), seed %llu -> %s\n",
+                   "harmoloc-sim: scenario '%s' (%ux%u, %.0f Hz, %zu boards, %s), seed %llu -> "
+                   "%s\n",
                    scenario.name.c_str(), scenario.camera.width_px, scenario.camera.height_px,
                    scenario.camera.rate_hz, scenario.boards.size(),
-                   static_cast<unsigned long long>(seed), out_dir.c_str());
+                   describe_events(scenario).c_str(), static_cast<unsigned long long>(seed),
+                   out_dir.c_str());
     }
     const auto progress = [quiet](std::size_t done, std::size_t total) {
       if (!quiet) std::fprintf(stderr, "\r  rendering frame %zu/%zu", done, total);
@@ -57,9 +60,9 @@ int main(int argc, char** argv) {
     const SimulationSummary s = simulate_dataset(scenario, seed, out_dir, progress);
     std::printf(
         "wrote %s: %zu frames, %zu encoder frames, %zu labels; route %.2f m, %.1f s, heading "
-        "within +-%.0f deg\n",
+        "within +-%.0f deg; %s\n",
         out_dir.c_str(), s.frames, s.encoder_frames, s.labels, s.route.length_m, s.route.duration_s,
-        s.route.max_heading_offset_deg);
+        s.route.max_heading_offset_deg, describe_events(scenario).c_str());
   } catch (const std::exception& e) {
     std::fprintf(stderr, "harmoloc-sim: %s\n", e.what());
     return 2;

@@ -3,6 +3,7 @@
 /// driven forward and then backward (a differential-drive robot keeps the desk in view that
 /// way), with a trapezoidal speed profile. Sampled at a fine fixed step.
 
+#include <cstdint>
 #include <vector>
 
 #include "harmoloc/algorithms/geometry.hpp"
@@ -16,6 +17,15 @@ struct MotionSample {
   algorithms::Pose2 pose;  ///< axle centre, heading
   double left_m;           ///< cumulative true travel of each wheel (signed)
   double right_m;
+  double route_t_s;  ///< the route clock: equal to t_s until a kidnap moves the robot
+};
+
+/// The robot lifted at @p from and put down at @p to (ground truth of a kidnap).
+struct KidnapEvent {
+  double t_s;  ///< run time of the jump: the first motion sample at or after the scheduled time
+  algorithms::Pose2 from;      ///< the last pose before the jump
+  algorithms::Pose2 to;        ///< the first pose after it
+  std::uint64_t timestamp_ns;  ///< t_s on the dataset's clock (the scenario's start_time_s epoch)
 };
 
 struct RouteStats {
@@ -25,7 +35,21 @@ struct RouteStats {
 };
 
 /// Samples the whole run at @p step_s. @p rng draws this run's smooth sideways wander.
+///
+/// With scenario.kidnaps.count > 0 the robot is lifted at the scheduled times and put down on the
+/// route elsewhere: the route clock jumps to a place drawn from @p kidnap_rng (required then) that
+/// is at least kidnaps.min_distance_m away, where the robot drives, and from where the remaining
+/// kidnaps can keep that distance too. The wheels do not turn during a jump: the samples' wheel
+/// travel does not change at the jump sample. Kidnaps are listed in @p kidnaps (if given).
+/// Throws std::runtime_error when a kidnap falls after the run's end or no place on the route is
+/// far enough, std::invalid_argument when kidnaps are asked for without @p kidnap_rng.
 std::vector<MotionSample> simulate_motion(const Scenario& scenario, double step_s,
-                                          algorithms::Pcg32& rng, RouteStats* stats);
+                                          algorithms::Pcg32& rng, RouteStats* stats,
+                                          algorithms::Pcg32* kidnap_rng = nullptr,
+                                          std::vector<KidnapEvent>* kidnaps = nullptr);
+
+/// A run time (seconds from the start) on the dataset's clock: @p start_time_s (whole
+/// microseconds) plus @p t_s, in nanoseconds.
+std::uint64_t dataset_time_ns(double start_time_s, double t_s);
 
 }  // namespace harmoloc::sim_host

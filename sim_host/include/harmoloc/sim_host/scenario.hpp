@@ -59,6 +59,36 @@ struct EncoderSpec {
   std::uint32_t initial_right = 0;
 };
 
+/// Something that walks through the room, e.g. a person between the robot and the desk: an upright
+/// cylinder standing on the floor that hides what is behind it.
+struct OccluderSpec {
+  std::string name = "person";
+  Rgb colour{45, 45, 55};  ///< must not be a board colour (dark clothing); checked on load
+  double radius_m = 0.22;
+  double height_m = 1.75;
+  /// Keyframes [t_s, x_m, y_m] (run time, strictly increasing), linear in between; the occluder
+  /// is not in the room before the first keyframe or after the last.
+  std::vector<std::array<double, 3>> path;
+};
+
+/// Someone moves a board during the run: from @p at_s on, the board stands @p offset_m further
+/// (map frame) and is turned by @p turn_deg. Moves of one board add up.
+struct BoardMoveSpec {
+  std::string board;  ///< a board's name
+  double at_s = 0.0;
+  std::array<double, 3> offset_m{0.0, 0.0, 0.0};
+  double turn_deg = 0.0;  ///< added to the board's facing
+};
+
+/// The robot is lifted and put down elsewhere on its route (a kidnap), @p count times: at run
+/// times first_s + k interval_s, each new place at least @p min_distance_m from the old one.
+struct KidnapSpec {
+  int count = 0;
+  double first_s = 10.0;
+  double interval_s = 8.0;
+  double min_distance_m = 1.0;
+};
+
 struct Scenario {
   std::string name;
   std::string description;
@@ -75,6 +105,10 @@ struct Scenario {
   algorithms::EncoderFrameLayout can_layout;
   int labelled_frames = 64;
   double start_time_s = 1767225600.0;  ///< 2026-01-01T00:00:00Z, as a recorder's epoch clock
+  // Events: a world that misbehaves (docs/scenarios.md). None by default.
+  std::vector<OccluderSpec> occluders;
+  std::vector<BoardMoveSpec> board_moves;
+  KidnapSpec kidnaps;
 };
 
 /// Names and one-line descriptions of the built-in scenarios.
@@ -83,6 +117,9 @@ std::vector<std::pair<std::string, std::string>> builtin_scenarios();
 /// A built-in scenario by name, or one loaded from a TOML file (when @p name_or_file names an
 /// existing file). Throws std::runtime_error with one line on an unknown name or a bad file.
 Scenario load_scenario(const std::string& name_or_file);
+
+/// "10 kidnaps, 1 board move, 1 occluder", or "no events".
+std::string describe_events(const Scenario& scenario);
 
 /// The scenario as a TOML scenario file (what the simulator writes beside the dataset).
 std::string scenario_to_toml(const Scenario& scenario);
