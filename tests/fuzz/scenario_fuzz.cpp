@@ -121,8 +121,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
            a.colour.b == b.colour.b;
   }
   same = same && back.occluders.size() == s.occluders.size() &&
-         back.board_moves.size() == s.board_moves.size() &&
-         back.kidnaps.count == s.kidnaps.count;
+         back.board_moves.size() == s.board_moves.size() && back.kidnaps.count == s.kidnaps.count;
   for (std::size_t i = 0; same && i < s.occluders.size(); ++i) {
     same = back.occluders[i].name == s.occluders[i].name &&
            back.occluders[i].path.size() == s.occluders[i].path.size() &&
