@@ -131,7 +131,9 @@ class KidnapPlanner {
     };
     ok_.clear();
     ok_.push_back(step(nullptr));
-    for (int r = 1; r < spec.count; ++r) {
+    // The sets shrink with every level; they settle within a few levels on real routes. Beyond
+    // kMaxLookahead levels the last is used (a later kidnap may then find no place: an error).
+    for (int r = 1; r < spec.count && r < kMaxLookahead; ++r) {
       std::vector<char> ok = step(&ok_.back());
       if (ok == ok_.back()) break;  // a fixed point: the same for any more kidnaps
       ok_.push_back(std::move(ok));
@@ -185,6 +187,7 @@ class KidnapPlanner {
 
  private:
   static constexpr std::size_t kMaxPhases = 4000;
+  static constexpr int kMaxLookahead = 64;
   static constexpr double kPhaseStep_s = 0.01;
   static constexpr double kLegMargin_s = 0.1;  // "driving": this far inside a leg
   static constexpr double kGridMargin_m = 0.005;

@@ -305,6 +305,18 @@ def scenario_seeds(e2e):
     put("scenario", "bad-waypoints.toml", "[route]\nwaypoints = [[1, 2]]\n")
     put("scenario", "bad-colour.toml", "[[boards]]\ncolour = [256, 0, 0]\ncentre = [0, 0, 0]\n"
         "size = [1, 1]\n")
+    # Events (docs/scenarios.md, "Events"): the documented example, and broken ones.
+    start = doc.index("```toml\n", doc.index("## Events")) + len("```toml\n")
+    put("scenario", "docs-events.toml", doc[start:doc.index("```", start)])
+    put("scenario", "events.toml",
+        'base = "tiny"\n[[occluders]]\nname = "p"\ncolour = [40, 40, 50]\nradius_m = 0.2\n'
+        "height_m = 1.7\npath = [[1, 0.5, 2], [2.5, 3.5, 2]]\n\n[[board_moves]]\n"
+        'board = "green"\nat_s = 3\noffset_m = [0.1, 0, 0]\nturn_deg = 5\n\n[kidnaps]\n'
+        "count = 2\nfirst_s = 1\ninterval_s = 3\nmin_distance_m = 0.4\n")
+    put("scenario", "bad-event-board.toml",
+        '[[board_moves]]\nboard = "purple"\nat_s = 1\noffset_m = [0.3, 0, 0]\n')
+    put("scenario", "bad-event-path.toml", "[[occluders]]\npath = [[2, 1, 1], [1, 2, 2]]\n")
+    put("scenario", "bad-event-kidnaps.toml", "[kidnaps]\ncount = 3\nevery_s = 2\n")
     p = os.path.join(e2e, "train", "scenario.toml")
     if os.path.exists(p):
         shutil.copyfile(p, os.path.join(CORPUS, "scenario", "e2e-train.toml"))

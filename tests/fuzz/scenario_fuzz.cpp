@@ -2,7 +2,7 @@
 // file in this process's scratch directory and loaded by path. std::runtime_error is the
 // documented answer to a bad file; anything else is a finding. What scenario_to_toml writes
 // (the simulator's scenario.toml beside each dataset, "itself a valid scenario file" as
-// docs/scenarios.md says) must load again, with the same boards, camera and route.
+// docs/scenarios.md says) must load again, with the same boards, camera, route and events.
 //
 // A scenario file names a `base`, which is a built-in name or the path of another scenario
 // file, loaded recursively. Inputs whose `base` names an existing file are skipped: that file
@@ -38,7 +38,11 @@ bool base_names_a_file(const std::uint8_t* data, std::size_t size) {
   }
   const std::optional<std::string> base = t["base"].value_exact<std::string>();
   if (!base) return false;
-  if (*base == "desk-shuttle" || *base == "tiny" || *base == "tiny-wrap16") return false;
+  for (const char* builtin :
+       {"desk-shuttle", "desk-left", "desk-right", "desk-slalom", "desk-occlusion",
+        "desk-moved-board", "desk-kidnap", "desk-long", "tiny", "tiny-wrap16"}) {
+    if (*base == builtin) return false;
+  }
   std::error_code ec;
   const bool exists = std::filesystem::exists(*base, ec);
   return exists || ec;  // an error (EACCES, ELOOP...) counts as "might exist"
@@ -64,12 +68,29 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   HARMOLOC_FUZZ_CHECK(!s.boards.empty() && s.boards.size() <= 8, "board count out of range");
   HARMOLOC_FUZZ_CHECK(s.can_layout.counter_bits >= 8 && s.can_layout.counter_bits <= 32,
                       "counter width out of range");
+  // Events: keyframes in time order, positive sizes, moves of existing boards, sane kidnaps.
+  for (const sim_host::OccluderSpec& o : s.occluders) {
+    HARMOLOC_FUZZ_CHECK(!o.path.empty(), "occluder without keyframes");
+    HARMOLOC_FUZZ_CHECK(o.radius_m > 0.0 && o.height_m > 0.0, "occluder size not positive");
+    for (std::size_t k = 1; k < o.path.size(); ++k)
+      HARMOLOC_FUZZ_CHECK(o.path[k][0] > o.path[k - 1][0], "occluder keyframes out of order");
+  }
+  for (const sim_host::BoardMoveSpec& m : s.board_moves) {
+    bool found = false;
+    for (const sim_host::BoardSpec& b : s.boards) found = found || b.name == m.board;
+    HARMOLOC_FUZZ_CHECK(found, "board move of a board the scenario does not have");
+    HARMOLOC_FUZZ_CHECK(m.at_s >= 0.0, "board move before the run");
+  }
+  HARMOLOC_FUZZ_CHECK(s.kidnaps.count >= 0 && s.kidnaps.interval_s > 0.0 &&
+                          s.kidnaps.first_s >= 0.0 && s.kidnaps.min_distance_m >= 0.0,
+                      "kidnaps out of range");
 
 #ifdef HARMOLOC_FUZZ_SKIP_KNOWN_FINDINGS
   // Known finding (regressions/scenario/quote-in-name.toml): scenario_to_toml writes strings
   // without TOML escaping.
   std::vector<const std::string*> texts = {&s.name, &s.description};
   for (const sim_host::BoardSpec& b : s.boards) texts.push_back(&b.name);
+  for (const sim_host::OccluderSpec& o : s.occluders) texts.push_back(&o.name);
   for (const std::string* text : texts) {
     for (const char c : *text) {
       if (c == '"' || c == '\\' || static_cast<unsigned char>(c) < 0x20 || c == 0x7F) return 0;
@@ -99,6 +120,15 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     same = a.name == b.name && a.colour.r == b.colour.r && a.colour.g == b.colour.g &&
            a.colour.b == b.colour.b;
   }
+  same = same && back.occluders.size() == s.occluders.size() &&
+         back.board_moves.size() == s.board_moves.size() && back.kidnaps.count == s.kidnaps.count;
+  for (std::size_t i = 0; same && i < s.occluders.size(); ++i) {
+    same = back.occluders[i].name == s.occluders[i].name &&
+           back.occluders[i].path.size() == s.occluders[i].path.size() &&
+           back.occluders[i].colour.r == s.occluders[i].colour.r;
+  }
+  for (std::size_t i = 0; same && i < s.board_moves.size(); ++i)
+    same = back.board_moves[i].board == s.board_moves[i].board;
   HARMOLOC_FUZZ_CHECK(same, "the scenario.toml scenario_to_toml writes loads different");
   return 0;
 }
