@@ -37,7 +37,10 @@ BoardAssessment BoardReliability::assess(const ForwardMap& map, const BoardFeatu
     const double r = static_cast<double>(observed.value[b]) - static_cast<double>(expected[b]);
     a.chi2[b] = static_cast<float>(r * r * inv_var[b]);
     ++a.modelled;
-    if (static_cast<double>(a.chi2[b]) < params.consensus_chi2) ++a.agreeing;
+    if (static_cast<double>(a.chi2[b]) < params.consensus_chi2)
+      ++a.agreeing;
+    else if (r > 0.0)
+      ++a.exceeding;
   }
   a.consensus = a.modelled > 0 && static_cast<double>(a.agreeing) >=
                                       params.consensus_fraction * static_cast<double>(a.modelled);

@@ -10,8 +10,9 @@ void KidnapDetector::reset() {
   probability_ = 0.0;
   window_left_ = 0;
   window_evidence_ = 0;
+  window_lost_evidence_ = 0;
   evidence_run_ = 0;
-  disagreement_run_ = 0;
+  lost_run_ = 0;
 }
 
 KidnapVerdict KidnapDetector::step(const KidnapInput& in, const KidnapParams& p) {
@@ -30,18 +31,23 @@ KidnapVerdict KidnapDetector::step(const KidnapInput& in, const KidnapParams& p)
     return KidnapVerdict::kKidnapped;
   }
 
+  // With a fix: it is a known place far from the estimate. Without: the boards contradict it.
   const bool evidence = !in.consensus && in.fix_known && in.fix_distance_m >= p.fix_distance_m;
+  const bool lost_evidence = !in.consensus && !in.fix_known && in.contradiction;
   evidence_run_ = evidence ? evidence_run_ + 1 : 0;
-  disagreement_run_ = in.consensus ? 0 : disagreement_run_ + 1;
+  lost_run_ = lost_evidence ? lost_run_ + 1 : 0;
   if (triggered && window_left_ == 0) {
     window_left_ = p.window_frames;
     window_evidence_ = 0;
+    window_lost_evidence_ = 0;
   }
-  bool confirmed = false;
+  bool confirmed = false, confirmed_lost = false;
   if (window_left_ > 0) {
     if (evidence) ++window_evidence_;
+    if (lost_evidence) ++window_lost_evidence_;
     --window_left_;
     confirmed = window_evidence_ >= p.evidence_frames;
+    confirmed_lost = !confirmed && window_lost_evidence_ >= p.evidence_frames;
   }
   if (confirmed || evidence_run_ >= p.divergence_frames) {
     ++counters_.kidnaps;
@@ -49,7 +55,8 @@ KidnapVerdict KidnapDetector::step(const KidnapInput& in, const KidnapParams& p)
     reset();
     return KidnapVerdict::kKidnapped;
   }
-  if (disagreement_run_ >= p.lost_frames && !in.fix_known) {
+  if (confirmed_lost || lost_run_ >= p.lost_frames) {
+    ++counters_.kidnaps;
     ++counters_.lost;
     reset();
     return KidnapVerdict::kLost;

@@ -97,7 +97,7 @@ void ParticleFilter::update_position(double x_m, double y_m, double sigma_m,
 double ParticleFilter::update_boards(const BoardUpdate& u) {
   const ForwardMap& map = *u.map;
   std::array<float, kMaxBoards> expected{};
-  double sum = 0.0;
+  double sum = 0.0, match = 0.0;
   for (std::size_t i = 0; i < count_; ++i) {
     const GridPoint at = locate(map, particles_[i].x_m, particles_[i].y_m);
     expected_features(map, at, expected.data());
@@ -108,6 +108,9 @@ double ParticleFilter::update_boards(const BoardUpdate& u) {
       likelihood *=
           static_cast<double>(u.gain[b] * std::exp(-e * e * u.inv_two_var[b]) + u.floor[b]);
     }
+    // The match is the observation model's own (untempered): tempering compresses exactly the
+    // change the kidnap test looks for.
+    match += weights_[i] * likelihood;
     if (u.inv_tempering != 1.0) likelihood = std::pow(likelihood, u.inv_tempering);
     const float off_route = route_distance(map, at) - u.route_free_m;
     if (off_route > 0.0F)
@@ -116,7 +119,7 @@ double ParticleFilter::update_boards(const BoardUpdate& u) {
     sum += weights_[i];
   }
   normalize(sum);
-  return sum;
+  return match;
 }
 
 void ParticleFilter::normalize(double sum) {

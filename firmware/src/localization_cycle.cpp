@@ -290,6 +290,7 @@ bool LocalizationCycle::update_with_boards(
     in.consensus = assessment_.consensus;
     in.fix_known = robust_fix_.known_place;
     in.fix_distance_m = std::hypot(robust_fix_.x_m - estimate.x_m, robust_fix_.y_m - estimate.y_m);
+    in.contradiction = assessment_.exceeding > 0;
     const std::uint64_t triggers_before = kidnap_.counters().triggers;
     kidnap_verdict_ = kidnap_.step(in, config_.kidnap.detector);
     counters_.kidnap_triggers += kidnap_.counters().triggers - triggers_before;
@@ -301,6 +302,7 @@ bool LocalizationCycle::update_with_boards(
         reseed_globally();
       pending_text_ = "harmoloc: kidnap detected, relocalized";
     } else if (kidnap_verdict_ == algorithms::KidnapVerdict::kLost) {
+      ++counters_.kidnaps;
       ++counters_.lost;
       reseed_globally();
       pending_text_ = "harmoloc: lost (boards disagree, no fix), relocalizing over the map";

@@ -96,32 +96,33 @@ Scenario wrap_test() {
 
 // Events on the desk-shuttle route (docs/scenarios.md gives the facts each was designed to).
 
-// Two laps; halfway, as the robot leaves the start of its route, a person walks in from the left
-// along the desk, stands in front of the red board for 3 s (from the robot's view it hides red and
-// a sliver of green) and walks back out.
+// A person walks in along the desk and stands 3 s in front of the green board, the board with
+// the least noise for its size (what the filter leans on most), while the robot drives towards
+// the desk; blue, beside green's line of sight, is mostly hidden too.
 Scenario desk_occlusion() {
   Scenario s = desk_shuttle();
   s.name = "desk-occlusion";
-  s.description = "desk-shuttle, 2 laps; halfway a person stands in front of the red board for 3 s";
+  s.description =
+      "desk-shuttle, 2 laps; halfway a person stands in front of the green board for 3 s";
   s.route.laps = 2;
   OccluderSpec person;
   person.name = "person";
-  person.path = {{28.7, 0.20, 2.10}, {30.1, 1.57, 2.10}, {33.1, 1.57, 2.10}, {34.5, 0.20, 2.10}};
+  person.radius_m = 0.20;
+  person.path = {{28.7, 0.20, 2.15}, {30.1, 1.93, 2.15}, {33.1, 1.93, 2.15}, {34.5, 0.20, 2.15}};
   s.occluders.push_back(person);
   return s;
 }
 
-// Someone moves the red board 30 cm to the left along the desk halfway through two laps (while
-// the robot stands at the start of its route). Red stands in the front row with nothing behind
-// or in front of it there, so only red's area changes (and green's, by 1-2%, where red hid a
-// corner of it).
+// Someone moves the yellow board (the largest) 30 cm to the left along the desk halfway through
+// two laps (while the robot stands at the start of its route). There it stands partly behind
+// blue and in front of part of green, so three boards' areas change: yellow's most.
 Scenario desk_moved_board() {
   Scenario s = desk_shuttle();
   s.name = "desk-moved-board";
-  s.description = "desk-shuttle, 2 laps; halfway the red board is moved 30 cm along the desk";
+  s.description = "desk-shuttle, 2 laps; halfway the yellow board is moved 30 cm along the desk";
   s.route.laps = 2;
   BoardMoveSpec move;
-  move.board = "red";
+  move.board = "yellow";
   move.at_s = 29.7;
   move.offset_m = {-0.30, 0.0, 0.0};
   s.board_moves.push_back(move);

@@ -270,3 +270,90 @@ TEST(Config, UnparsableToml) {
   expect_one_line_error(dir, "[cycle]\nrate_hz = 30\nrate_hz = 31\n", "", 3);  // duplicate key
   expect_one_line_error(dir, "# ok\n\n[link]\nbaud = 115200\nname = \"unterminated\n", "", 5);
 }
+
+TEST(Config, ObservationAndKidnapSections) {
+  ht::TempDir dir;
+  const std::string path = dir.write("filter.toml", R"([observation]
+model = "fix"
+robust = false
+sigma_scale = 2.5
+tempering = 12
+outlier_floor = 0.001
+dcs_phi = 2
+consensus_chi2 = 16
+consensus_fraction = 0.5
+motion_index_rate = 0.1
+motion_index_min = 0.05
+motion_index_max = 0.9
+route_free_m = 0.05
+route_sigma_m = 0
+
+[kidnap]
+enabled = false
+change_threshold = 0.7
+confirm = false
+window_frames = 10
+evidence_frames = 4
+fix_distance_m = 0.5
+divergence_frames = 60
+lost_frames = 120
+reseed = "uniform"
+position_sigma_m = 0.1
+yaw_sigma_deg = 30
+)");
+  const hf::FirmwareConfig c = hf::load_config(path);
+  EXPECT_EQ(c.observation.model, hf::ObservationModel::kFix);
+  const auto& b = c.observation.boards;
+  EXPECT_FALSE(b.robust);
+  EXPECT_DOUBLE_EQ(b.sigma_scale, 2.5);
+  EXPECT_DOUBLE_EQ(b.tempering, 12.0);
+  EXPECT_DOUBLE_EQ(b.outlier_floor, 0.001);
+  EXPECT_DOUBLE_EQ(b.dcs_phi, 2.0);
+  EXPECT_DOUBLE_EQ(b.consensus_chi2, 16.0);
+  EXPECT_DOUBLE_EQ(b.consensus_fraction, 0.5);
+  EXPECT_DOUBLE_EQ(b.motion_index_rate, 0.1);
+  EXPECT_DOUBLE_EQ(b.motion_index_min, 0.05);
+  EXPECT_DOUBLE_EQ(b.motion_index_max, 0.9);
+  EXPECT_DOUBLE_EQ(b.route_free_m, 0.05);
+  EXPECT_DOUBLE_EQ(b.route_sigma_m, 0.0);
+  const auto& k = c.kidnap;
+  EXPECT_FALSE(k.enabled);
+  EXPECT_DOUBLE_EQ(k.detector.change_threshold, 0.7);
+  EXPECT_FALSE(k.detector.confirm);
+  EXPECT_EQ(k.detector.window_frames, 10);
+  EXPECT_EQ(k.detector.evidence_frames, 4);
+  EXPECT_DOUBLE_EQ(k.detector.fix_distance_m, 0.5);
+  EXPECT_EQ(k.detector.divergence_frames, 60);
+  EXPECT_EQ(k.detector.lost_frames, 120);
+  EXPECT_EQ(k.reseed, hf::ReseedStrategy::kUniform);
+  EXPECT_DOUBLE_EQ(k.position_sigma_m, 0.1);
+  EXPECT_DOUBLE_EQ(k.yaw_sigma_deg, 30.0);
+
+  // Defaults: the robust per-board model, kidnap test on, re-seed around the fix.
+  const hf::FirmwareConfig d = hf::default_config();
+  EXPECT_EQ(d.observation.model, hf::ObservationModel::kBoards);
+  EXPECT_TRUE(d.observation.boards.robust);
+  EXPECT_TRUE(d.kidnap.enabled);
+  EXPECT_TRUE(d.kidnap.detector.confirm);
+  EXPECT_EQ(d.kidnap.reseed, hf::ReseedStrategy::kAroundFix);
+}
+
+TEST(Config, ObservationAndKidnapValuesAreChecked) {
+  ht::TempDir dir;
+  const std::pair<const char*, const char*> bad[] = {
+      {"[observation]\nmodel = \"magic\"\n", "observation.model"},
+      {"[observation]\ntempering = 0.5\n", "observation.tempering"},
+      {"[observation]\nrobust = 1\n", "observation.robust must be true or false"},
+      {"[observation]\nmotion_index_min = 0.9\nmotion_index_max = 0.5\n", "motion_index_min"},
+      {"[observation]\nsigma = 3\n", "unknown key 'observation.sigma'"},
+      {"[kidnap]\nreseed = \"random\"\n", "kidnap.reseed"},
+      {"[kidnap]\nwindow_frames = 2\nevidence_frames = 3\n", "evidence_frames"},
+      {"[kidnap]\nchange_threshold = 1.5\n", "kidnap.change_threshold"},
+      {"[kidnap]\nlost_frames = 0\n", "kidnap.lost_frames"},
+  };
+  for (const auto& [text, want] : bad) {
+    const std::string path = dir.write("bad.toml", text);
+    const std::string why = ht::error_of([&] { hf::load_config(path); });
+    ht::expect_one_line(why, path + ": ", want);
+  }
+}

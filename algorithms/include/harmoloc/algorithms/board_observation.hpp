@@ -42,7 +42,7 @@ struct BoardModelParams {
   double outlier_floor = 0.01;  ///< c: likelihood of "something else", relative to a perfect fit
   double dcs_phi = 1.0;         ///< seed 002's Phi
   double consensus_chi2 = 9.0;  ///< a board agrees with the estimate when its chi2 is below
-  double consensus_fraction = 0.5;  ///< at least this fraction of the boards must agree
+  double consensus_fraction = 0.6;  ///< at least this fraction of the boards must agree
   double motion_index_rate = 0.05;  ///< weight of one frame in the motion index (forgetting)
   double motion_index_min = 0.02;   ///< bounds, so that a board can always come back
   double motion_index_max = 0.98;
@@ -72,7 +72,10 @@ struct BoardAssessment {
   std::array<float, kMaxBoards> scaling{};  ///< seed 002's s_b (1 without consensus)
   std::size_t modelled = 0;                 ///< boards the map models
   std::size_t agreeing = 0;                 ///< of those, with chi2 below the consensus bound
-  bool consensus = false;                   ///< enough boards agree with the estimate
+  /// Of the disagreeing boards, those showing more area than expected: something an occlusion
+  /// cannot do (it only hides), so a sign that the estimate itself is wrong.
+  std::size_t exceeding = 0;
+  bool consensus = false;  ///< enough boards agree with the estimate
 };
 
 /// The per-board state that lives from frame to frame: each board's motion index.

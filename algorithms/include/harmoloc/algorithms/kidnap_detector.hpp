@@ -6,8 +6,11 @@
 /// short window in which the kidnap must be confirmed by evidence that does not come from the
 /// cloud: the boards do not agree with the estimate (no consensus) and the harmonic localizer's
 /// global fix, a known place computed without the distrusted boards, lies far from it. The
-/// same evidence held for long without a trigger (a slow divergence) also counts, and a filter
-/// whose boards have disagreed for long with no usable fix at all is declared lost.
+/// same evidence held for long without a trigger (a slow divergence) also counts. Without a
+/// usable fix (the robot put down off the trained route), the boards alone must show that the
+/// estimate is wrong: most disagree, and at least one shows more area than expected there,
+/// which no occlusion can do (a person in front of the camera only hides boards); the filter is
+/// then lost and re-seeded over the whole map.
 
 #include <cstdint>
 
@@ -20,7 +23,7 @@ struct KidnapParams {
   int evidence_frames = 3;        ///< frames of evidence needed within the window
   double fix_distance_m = 0.25;   ///< evidence: the global fix is at least this far away
   int divergence_frames = 30;     ///< evidence in this many frames in a row, without a trigger
-  int lost_frames = 90;           ///< no consensus this many frames in a row, and no fix: lost
+  int lost_frames = 90;           ///< the same for the evidence without a fix: lost
 };
 
 /// What the cycle saw this frame.
@@ -29,13 +32,14 @@ struct KidnapInput {
   bool consensus = true;        ///< most boards agree with the estimate
   bool fix_known = false;       ///< the global fix is a known place
   double fix_distance_m = 0.0;  ///< from the global fix to the estimate
+  bool contradiction = false;   ///< a disagreeing board shows more area than expected
 };
 
 enum class KidnapVerdict : std::uint8_t {
   kNone = 0,
   kTriggered = 1,  ///< seed 004's test fired this frame; not (yet) confirmed
   kKidnapped = 2,  ///< confirmed: re-seed around the global fix
-  kLost = 3,       ///< the boards have disagreed for long and no fix is usable: re-seed widely
+  kLost = 3,       ///< the boards contradict the estimate and no fix is usable: re-seed widely
 };
 
 struct KidnapCounters {
@@ -63,8 +67,9 @@ class KidnapDetector {
   double probability_ = 0.0;
   int window_left_ = 0;
   int window_evidence_ = 0;
+  int window_lost_evidence_ = 0;
   int evidence_run_ = 0;
-  int disagreement_run_ = 0;
+  int lost_run_ = 0;
   KidnapCounters counters_{};
 };
 

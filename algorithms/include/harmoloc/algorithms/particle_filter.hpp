@@ -68,9 +68,10 @@ class ParticleFilter {
   /// uniform floor so that one wrong fix cannot wipe out every particle.
   void update_position(double x_m, double y_m, double sigma_m, double outlier_probability);
 
-  /// Weights every particle by the per-board likelihood of @p update (and its route term).
-  /// Returns the sum of the unnormalised weights (prior weight x likelihood): the match between
-  /// the frame and the cloud, which the kidnap test watches (seed 004's d_t).
+  /// Weights every particle by the per-board likelihood of @p update (tempered, and its route
+  /// term). Returns the sum over the particles of prior weight x the boards' untempered
+  /// likelihood: the match between the frame and the cloud that the kidnap test watches (seed
+  /// 004's d_t).
   double update_boards(const BoardUpdate& update);
 
   /// Low-variance (systematic) resampling when the effective sample size falls below

@@ -79,7 +79,7 @@ struct CycleCounters {
   std::uint64_t distrusted_boards = 0;  ///< sum over frames of boards below motion index 1/2
   std::uint64_t kidnap_triggers = 0;    ///< frames where seed 004's change rate exceeded 0.5
   std::uint64_t kidnaps = 0;            ///< confirmed kidnaps (the filter was re-seeded)
-  std::uint64_t lost = 0;               ///< re-seeds over the whole map (no usable fix)
+  std::uint64_t lost = 0;               ///< of those, re-seeded over the whole map (no fix)
   std::uint64_t link_dropped = 0;
   std::array<std::uint64_t, 5> cycles_in_health{};
 };

@@ -1,0 +1,189 @@
+#include "scenario_eval.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "harmoloc/algorithms/geometry.hpp"
+#include "harmoloc/algorithms/segmentation.hpp"
+#include "harmoloc/sim_host/log_encoders.hpp"
+#include "harmoloc/sim_host/sim_camera.hpp"
+
+namespace harmoloc::sim_host {
+
+namespace {
+
+// The link goes nowhere: the scenario table looks at the pose, not the wire.
+class NullLink final : public hal::PoseLink {
+ public:
+  hal::LinkWrite write_frame(const std::uint8_t*, std::size_t size) override {
+    ++counters_.frames_sent;
+    counters_.bytes_sent += size;
+    return hal::LinkWrite::kSent;
+  }
+  hal::LinkCounters counters() const override { return counters_; }
+
+ private:
+  hal::LinkCounters counters_{};
+};
+
+// Replays run as fast as it goes: the clock only times the stages.
+class WallClock final : public hal::Clock {
+ public:
+  std::uint64_t now_ns() const override {
+    timespec ts{};
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return static_cast<std::uint64_t>(ts.tv_sec) * 1000000000ULL +
+           static_cast<std::uint64_t>(ts.tv_nsec);
+  }
+  void sleep_until(std::uint64_t) override {}
+};
+
+}  // namespace
+
+double FrameRecord::position_error_m() const {
+  return std::hypot(estimate.x_m - truth.x_m, estimate.y_m - truth.y_m);
+}
+
+TrainedMap train_on_scenario(const Scenario& scenario, std::uint64_t seed,
+                             const Progress& progress) {
+  ScenarioRun run(scenario, seed);
+  const firmware::FirmwareConfig config = firmware::default_config();
+  std::vector<std::uint8_t> table_storage(algorithms::ColourTable::kEntries);
+  algorithms::ColourTable table;
+  table.build(algorithms::BoardClassifier(config.thresholds), table_storage.data());
+  AreaSeries series;
+  series.image_width_px = scenario.camera.width_px;
+  series.image_height_px = scenario.camera.height_px;
+  std::vector<std::uint8_t> rgb;
+  for (std::size_t k = 0; k < run.frame_count(); ++k) {
+    run.render(k, rgb);
+    algorithms::AreaVector a;
+    algorithms::segment_rgb24(rgb.data(), scenario.camera.width_px, scenario.camera.height_px,
+                              scenario.camera.width_px * 3U, table, a);
+    series.areas.push_back(a);
+    series.timestamp_ns.push_back(run.frame_timestamp_ns(k));
+    if (progress && (k % 100 == 0 || k + 1 == run.frame_count()))
+      progress(k + 1, run.frame_count());
+  }
+  TrainOptions opt;
+  opt.thresholds = config.thresholds;
+  TrainedMap t;
+  t.map = std::make_unique<algorithms::MapFile>();
+  t.report = train_on_areas(series, run.labels(), opt, *t.map);
+  return t;
+}
+
+RunRecord replay_scenario(const Scenario& scenario, std::uint64_t seed,
+                          const algorithms::MapFile& map, const firmware::FirmwareConfig& base,
+                          const Progress& progress) {
+  ScenarioRun run(scenario, seed);
+  firmware::FirmwareConfig config = base;
+  config.geometry = scenario.robot;  // the simulated robot, as a dataset's metadata gives it
+  config.can_layout = scenario.can_layout;
+  SimCamera camera(run);
+  LogEncoders encoders(run.encoder_frames(), config.can_layout);
+  NullLink link;
+  WallClock clock;
+  auto cycle = std::make_unique<firmware::LocalizationCycle>(config, map, camera, encoders, link,
+                                                             clock, hal::PixelFormat::kRgb24);
+  RunRecord record;
+  record.kidnaps = run.kidnaps();
+  record.frames.reserve(run.frame_count());
+  const double t0 = static_cast<double>(run.frame_timestamp_ns(0)) * 1e-9;
+  std::size_t k = 0;
+  while (cycle->run_once() == firmware::CycleResult::kRan) {
+    const firmware::PoseOutput& out = cycle->pose();
+    FrameRecord f;
+    f.t_s = static_cast<double>(out.data_time_ns) * 1e-9 - t0;
+    // The cycle ran on frame k (the simulated camera delivers every frame in order).
+    f.truth = run.truth(std::min(k, run.frame_count() - 1));
+    f.estimate = out.pose;
+    f.valid = out.valid;
+    f.health = out.health;
+    const firmware::FixOutput& fix = cycle->last_fix();
+    f.fix_known = fix.present && fix.fix.known_place;
+    f.fix = algorithms::Pose2{fix.fix.x_m, fix.fix.y_m, 0.0};
+    f.verdict = cycle->kidnap_verdict();
+    f.consensus = cycle->board_assessment().consensus;
+    for (std::size_t b = 0; b < map.thresholds.count; ++b) {
+      if (cycle->board_static_probability(b) < 0.5)
+        f.distrusted |= static_cast<std::uint8_t>(1U << b);
+    }
+    record.frames.push_back(f);
+    ++k;
+    if (progress && (k % 300 == 0 || k == run.frame_count())) progress(k, run.frame_count());
+  }
+  record.counters = cycle->counters();
+  record.uses_boards = cycle->uses_boards();
+  return record;
+}
+
+ErrorStats error_stats(const RunRecord& run, double from_s, double to_s) {
+  ErrorStats s;
+  double se = 0.0, sh = 0.0, sf = 0.0;
+  for (const FrameRecord& f : run.frames) {
+    if (f.t_s < from_s || f.t_s >= to_s || !f.valid) continue;
+    const double e = f.position_error_m();
+    se += e * e;
+    s.max_m = std::max(s.max_m, e);
+    const double dh = algorithms::wrap_angle_rad(f.estimate.yaw_rad - f.truth.yaw_rad);
+    sh += dh * dh;
+    ++s.frames;
+    if (f.fix_known) {
+      const double fe = std::hypot(f.fix.x_m - f.truth.x_m, f.fix.y_m - f.truth.y_m);
+      sf += fe * fe;
+      ++s.fixes;
+    }
+  }
+  if (s.frames > 0) {
+    s.rmse_m = std::sqrt(se / static_cast<double>(s.frames));
+    s.heading_rmse_deg = std::sqrt(sh / static_cast<double>(s.frames)) * 180.0 / algorithms::kPi;
+  }
+  if (s.fixes > 0) s.fix_rmse_m = std::sqrt(sf / static_cast<double>(s.fixes));
+  return s;
+}
+
+KidnapSummary kidnap_summary(const RunRecord& run, double bound_m, double hold_s,
+                             double deadline_s) {
+  KidnapSummary sum;
+  double total_recovery = 0.0;
+  for (std::size_t k = 0; k < run.kidnaps.size(); ++k) {
+    const KidnapEvent& ev = run.kidnaps[k];
+    const double end_s =
+        k + 1 < run.kidnaps.size() ? run.kidnaps[k + 1].t_s : run.frames.back().t_s + 1.0;
+    KidnapOutcome o;
+    o.t_s = ev.t_s;
+    o.distance_m = std::hypot(ev.to.x_m - ev.from.x_m, ev.to.y_m - ev.from.y_m);
+    double good_since = -1.0;
+    for (const FrameRecord& f : run.frames) {
+      if (f.t_s < ev.t_s) continue;
+      if (f.t_s >= end_s) break;
+      if (!o.detected && (f.verdict == algorithms::KidnapVerdict::kKidnapped ||
+                          f.verdict == algorithms::KidnapVerdict::kLost)) {
+        o.detected = true;
+        o.detected_after_s = f.t_s - ev.t_s;
+      }
+      if (o.recovered_after_s >= 0.0) continue;
+      const bool good = f.valid && f.position_error_m() < bound_m;
+      if (!good) {
+        good_since = -1.0;
+      } else {
+        if (good_since < 0.0) good_since = f.t_s;
+        if (f.t_s - good_since >= hold_s) o.recovered_after_s = good_since - ev.t_s;
+      }
+    }
+    if (o.detected) ++sum.detected;
+    if (o.recovered_after_s >= 0.0) {
+      ++sum.recovered_ever;
+      total_recovery += o.recovered_after_s;
+      if (o.detected && o.recovered_after_s <= deadline_s) ++sum.recovered_within;
+    }
+    sum.outcomes.push_back(o);
+  }
+  if (sum.recovered_ever > 0)
+    sum.mean_recovery_s = total_recovery / static_cast<double>(sum.recovered_ever);
+  return sum;
+}
+
+}  // namespace harmoloc::sim_host

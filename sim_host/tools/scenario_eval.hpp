@@ -1,0 +1,94 @@
+#pragma once
+/// @file Scenario evaluation for the particle filter (docs/filter.md): trains a map on a
+/// simulated run and replays simulated runs (occlusions, moved boards, kidnaps) through the
+/// firmware's own cycle, in memory (frames are rendered as the cycle asks for them), recording
+/// the truth, the estimate, the harmonic fix and the kidnap test's verdict of every frame; then
+/// the numbers of the scenario table. A host tool's library: it composes the firmware's cycle
+/// with the simulator, as a board's main does.
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "harmoloc/algorithms/kidnap_detector.hpp"
+#include "harmoloc/algorithms/map_codec.hpp"
+#include "harmoloc/firmware/config.hpp"
+#include "harmoloc/firmware/localization_cycle.hpp"
+#include "harmoloc/sim_host/scenario.hpp"
+#include "harmoloc/sim_host/scenario_run.hpp"
+#include "harmoloc/sim_host/trainer.hpp"
+
+namespace harmoloc::sim_host {
+
+using Progress = std::function<void(std::size_t done, std::size_t total)>;
+
+/// Simulates @p scenario with @p seed in memory, segments every frame and trains a map on it
+/// with its labels (the firmware's default thresholds).
+struct TrainedMap {
+  std::unique_ptr<algorithms::MapFile> map;
+  TrainReport report;
+};
+TrainedMap train_on_scenario(const Scenario& scenario, std::uint64_t seed,
+                             const Progress& progress = nullptr);
+
+/// One frame of a replay.
+struct FrameRecord {
+  double t_s = 0.0;  ///< from the start of the run
+  algorithms::Pose2 truth;
+  algorithms::Pose2 estimate;
+  bool valid = false;
+  firmware::Health health = firmware::Health::kNotInitialized;
+  bool fix_known = false;  ///< the harmonic localizer's own fix is a known place
+  algorithms::Pose2 fix;
+  algorithms::KidnapVerdict verdict = algorithms::KidnapVerdict::kNone;
+  std::uint8_t distrusted = 0;  ///< bit b: board b's motion index is below one half
+  bool consensus = true;        ///< most boards agreed with the estimate
+  double position_error_m() const;
+};
+
+struct RunRecord {
+  std::vector<FrameRecord> frames;
+  std::vector<KidnapEvent> kidnaps;
+  firmware::CycleCounters counters;
+  bool uses_boards = false;
+};
+
+/// Replays @p scenario (seed @p seed) through the cycle with @p map and @p config.
+RunRecord replay_scenario(const Scenario& scenario, std::uint64_t seed,
+                          const algorithms::MapFile& map, const firmware::FirmwareConfig& config,
+                          const Progress& progress = nullptr);
+
+/// Errors over the frames whose time is in [@p from_s, @p to_s) and that have a pose.
+struct ErrorStats {
+  std::size_t frames = 0;
+  double rmse_m = 0.0, max_m = 0.0, heading_rmse_deg = 0.0;
+  double fix_rmse_m = 0.0;  ///< the harmonic fixes (known places) of the same frames
+  std::size_t fixes = 0;
+};
+ErrorStats error_stats(const RunRecord& run, double from_s, double to_s);
+
+/// What became of one kidnap.
+struct KidnapOutcome {
+  double t_s = 0.0;
+  double distance_m = 0.0;  ///< how far the robot was carried
+  bool detected = false;    ///< the filter confirmed a kidnap (re-seeded) before recovering
+  double detected_after_s = -1.0;
+  /// First time after the kidnap from which the error stays below the bound for hold_s, or -1.
+  double recovered_after_s = -1.0;
+};
+
+struct KidnapSummary {
+  std::vector<KidnapOutcome> outcomes;
+  std::size_t detected = 0;
+  std::size_t recovered_within = 0;  ///< detected and recovered within the deadline
+  std::size_t recovered_ever = 0;    ///< recovered before the next kidnap
+  double mean_recovery_s = 0.0;      ///< over those recovered at all
+};
+
+/// @p bound_m: recovered = error below this; @p hold_s: for this long; @p deadline_s: the target.
+KidnapSummary kidnap_summary(const RunRecord& run, double bound_m, double hold_s,
+                             double deadline_s);
+
+}  // namespace harmoloc::sim_host
