@@ -38,10 +38,9 @@ set_target_properties(harmoloc::nettle PROPERTIES
   IMPORTED_LOCATION ${HARMOLOC_NETTLE_LIB}
   INTERFACE_INCLUDE_DIRECTORIES ${HARMOLOC_NETTLE_INCLUDE_DIR})
 
-if(HARMOLOC_BOARD STREQUAL "host")
-  find_package(CLI11 REQUIRED)
-  find_package(nlohmann_json 3 REQUIRED)
-endif()
+# Header-only (Debian packages of architecture all): the tools of every board.
+find_package(CLI11 REQUIRED)
+find_package(nlohmann_json 3 REQUIRED)
 
 if(HARMOLOC_BUILD_TESTS)
   find_package(GTest REQUIRED)
