@@ -37,6 +37,9 @@ gtest_discover_tests(firmware_test DISCOVERY_TIMEOUT 60)
 add_executable(drivers_test ${HARMOLOC_UNIT_DIR}/drivers_test.cpp)
 target_link_libraries(drivers_test PRIVATE harmoloc_drivers_can harmoloc_drivers_v4l2
   harmoloc_drivers_common harmoloc_algorithms GTest::gtest_main harmoloc_warnings)
+if(CMAKE_CROSSCOMPILING)
+  target_compile_definitions(drivers_test PRIVATE HARMOLOC_TESTS_UNDER_QEMU_USER)
+endif()
 gtest_discover_tests(drivers_test DISCOVERY_TIMEOUT 60)
 
 # The rest needs the host board (sim_host/, OpenCV): not built for the Linux boards.

@@ -19,7 +19,7 @@ finish() {
 }
 trap finish EXIT
 
-for m in configfs vivid vcan can-raw gpio-sim; do
+for m in configfs vivid vcan can-raw gpio-sim $(echo "${HARMOLOC_VM_MODULES:-}" | tr , ' '); do
   modprobe "$m" || say "modprobe $m failed"
 done
 mount -t configfs configfs /sys/kernel/config 2> /dev/null
@@ -44,7 +44,8 @@ echo "VMTEST-BEGIN drivers"
 echo "VMTEST-END drivers rc=$?"
 
 # End to end: vivid as the camera, the simulated run's encoder log played onto vcan0 (looped),
-# the MAVLink stream out on the second serial line (/dev/ttyS1, read on the host).
+# the MAVLink stream out on the second serial line (/dev/ttyS1 on x86_64, the virtio console
+# /dev/hvc0 on aarch64; read on the host).
 echo "VMTEST-BEGIN harmoloc"
 canplayer -l i -I /vm/e2e/encoders.log vcan0=can0 &
 player=$!
