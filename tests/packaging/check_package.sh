@@ -6,8 +6,9 @@
 # - contents: the firmware (when BUILD_DIR built one), harmoloc-budget, the config, the defaults
 #   file, the systemd unit, the docs; the packaged config is the documented example;
 # - the unit: systemd-analyze verify against the unpacked package, and the limits it must set;
-# - every packaged binary runs `--help` under qemu-user for its architecture, and every option
-#   the unit and the defaults file pass to harmoloc is one that its --help lists.
+# - every packaged binary runs `--help` under qemu-user for its architecture (except one that
+#   links libcamera: that hangs under qemu-user), and every option the unit and the defaults file
+#   pass to harmoloc is one that it takes (from --help, else from the binary's strings).
 # Prints one line per check and "N passed, N failed" at the end; exits 1 on any failure.
 set -uo pipefail
 deb=$1 build=$2
@@ -83,10 +84,17 @@ for bin in "$work"/root/usr/bin/*; do
       bad "$b needs $lib from $owner, which Depends does not name"
     fi
   done
+  if "$triplet-objdump" -p "$bin" | grep -q 'NEEDED *libcamera'; then
+    # Debian's libcamera starts lttng-ust, which hangs under qemu-user before main()
+    # (../shared/notes/cross-build.md): not run; its options are read from its strings below.
+    echo "     note: $b links libcamera, which hangs under qemu-user: --help not run here"
+    [ "$b" = harmoloc ] && strings "$bin" | grep -x -- '--[a-z-]*' > "$work/harmoloc-options"
+    continue
+  fi
   out=$(timeout -s KILL 60 "$qemu" -L "/usr/$triplet" "$bin" --help 2>&1)
   rc=$?
   check "$b --help runs under $qemu (exit $rc)" bash -c '[ "$1" -eq 0 ] && grep -qi usage <<< "$2"' _ "$rc" "$out"
-  [ "$b" = harmoloc ] && echo "$out" > "$work/harmoloc-help"
+  [ "$b" = harmoloc ] && grep -o -- '--[a-z-]*' <<< "$out" | sort -u > "$work/harmoloc-options"
 done
 
 # ---- the systemd unit ----
@@ -119,7 +127,7 @@ source <(grep '^HARMOLOC_ARGS=' "$work/root/etc/default/harmoloc")
 opts=$( (grep '^ExecStart=' "$unit" | sed 's/^ExecStart=[^ ]*//'; echo " ${HARMOLOC_ARGS:-}") | grep -o -- '--[a-z-]*' | sort -u)
 if [ $firmware -eq 1 ]; then
   for o in $opts; do
-    check "harmoloc --help lists $o (unit or /etc/default/harmoloc)" grep -q -- "$o\b" "$work/harmoloc-help"
+    check "harmoloc takes $o (unit or /etc/default/harmoloc)" grep -qx -- "$o" "$work/harmoloc-options"
   done
 else
   echo "     not checked without the firmware: harmoloc takes $(echo $opts)"
