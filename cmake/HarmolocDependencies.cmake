@@ -38,12 +38,40 @@ set_target_properties(harmoloc::nettle PROPERTIES
   IMPORTED_LOCATION ${HARMOLOC_NETTLE_LIB}
   INTERFACE_INCLUDE_DIRECTORIES ${HARMOLOC_NETTLE_INCLUDE_DIR})
 
-if(HARMOLOC_BOARD STREQUAL "host")
-  find_package(CLI11 REQUIRED)
-  find_package(nlohmann_json 3 REQUIRED)
-endif()
+# Header-only (Debian packages of architecture all): the tools of every board.
+find_package(CLI11 REQUIRED)
+find_package(nlohmann_json 3 REQUIRED)
 
 if(HARMOLOC_BUILD_TESTS)
   find_package(GTest REQUIRED)
   include(GoogleTest)
+endif()
+
+# Drivers' libraries, found directly (the aarch64 cross build has no pkg-config for them).
+# libgpiod 1.6 (v1 API): Debian libgpiod-dev.
+find_path(HARMOLOC_GPIOD_INCLUDE_DIR gpiod.h)
+find_library(HARMOLOC_GPIOD_LIB gpiod)
+if(HARMOLOC_GPIOD_INCLUDE_DIR AND HARMOLOC_GPIOD_LIB)
+  add_library(harmoloc::gpiod UNKNOWN IMPORTED)
+  set_target_properties(harmoloc::gpiod PROPERTIES
+    IMPORTED_LOCATION ${HARMOLOC_GPIOD_LIB}
+    INTERFACE_INCLUDE_DIRECTORIES ${HARMOLOC_GPIOD_INCLUDE_DIR})
+  set(HARMOLOC_HAVE_GPIOD ON)
+else()
+  message(STATUS "libgpiod not found: the GPIO quadrature encoder driver is not built")
+  set(HARMOLOC_HAVE_GPIOD OFF)
+endif()
+# libcamera 0.0.3: Debian libcamera-dev (headers under include/libcamera/libcamera).
+find_path(HARMOLOC_LIBCAMERA_INCLUDE_DIR libcamera/libcamera.h PATH_SUFFIXES libcamera)
+find_library(HARMOLOC_LIBCAMERA_LIB camera)
+find_library(HARMOLOC_LIBCAMERA_BASE_LIB camera-base)
+if(HARMOLOC_LIBCAMERA_INCLUDE_DIR AND HARMOLOC_LIBCAMERA_LIB AND HARMOLOC_LIBCAMERA_BASE_LIB)
+  add_library(harmoloc::libcamera INTERFACE IMPORTED)
+  set_target_properties(harmoloc::libcamera PROPERTIES
+    INTERFACE_LINK_LIBRARIES "${HARMOLOC_LIBCAMERA_LIB};${HARMOLOC_LIBCAMERA_BASE_LIB}"
+    INTERFACE_INCLUDE_DIRECTORIES ${HARMOLOC_LIBCAMERA_INCLUDE_DIR})
+  set(HARMOLOC_HAVE_LIBCAMERA ON)
+else()
+  message(STATUS "libcamera not found: the libcamera driver is not built")
+  set(HARMOLOC_HAVE_LIBCAMERA OFF)
 endif()

@@ -53,13 +53,15 @@ std::string stats_json(const LocalizationCycle& cycle, const RunCounters& run) {
     << ", \"vision_only\": " << c.cycles_in_health[3] << ", \"invalid\": " << c.cycles_in_health[4]
     << "},\n"
     << "  \"camera\": {\"frames\": " << run.camera.frames << ", \"corrupt\": " << run.camera.corrupt
-    << ", \"dropped\": " << run.camera.dropped << ", \"no_frame_cycles\": " << c.no_frame
+    << ", \"dropped\": " << run.camera.dropped << ", \"errors\": " << run.camera.errors
+    << ", \"reopens\": " << run.camera.reopens << ", \"no_frame_cycles\": " << c.no_frame
     << ", \"size_mismatch\": " << c.frame_size_mismatch << "},\n"
     << "  \"encoders\": {\"samples\": " << run.encoders.samples
     << ", \"ignored_id\": " << run.encoders.ignored_id
     << ", \"bad_length\": " << run.encoders.bad_length
     << ", \"glitches\": " << run.encoders.glitches
-    << ", \"bus_errors\": " << run.encoders.bus_errors << "},\n"
+    << ", \"bus_errors\": " << run.encoders.bus_errors << ", \"bus_off\": " << run.encoders.bus_off
+    << ", \"overflows\": " << run.encoders.overflows << "},\n"
     << "  \"link\": {\"frames_sent\": " << run.link.frames_sent
     << ", \"frames_dropped\": " << run.link.frames_dropped
     << ", \"bytes_sent\": " << run.link.bytes_sent << ", \"errors\": " << run.link.errors << "},\n"

@@ -8,6 +8,8 @@
 //   seg_yuyv_table RES         YUYV, YUYV table, best path (the cycle's)
 //   seg_yuyv_table_scalar RES  the same on the scalar path
 //   seg_yuyv_decode RES        YUYV with the RGB table, each pixel decoded first
+//   seg_table_noise RES        seg_table on a frame of uniform random bytes (every pixel another
+//                              colour: the table's worst case for the caches)
 //   seg_table_boards N         seg_table at 640x480 with N boards (1..8)
 //   seg_yuyv_table_boards N    seg_yuyv_table at 640x480 with N boards
 //   seg_rgb RES, seg_yuyv RES  the HSV arithmetic per pixel (BoardClassifier)
@@ -18,6 +20,8 @@
 //   cycle_boards N, cycle_particles N, cycle_samples N   the whole cycle at 640x480 RGB24 with
 //                              one of those changed
 //   path 0                     prints the best segmentation path of this CPU (no measurement)
+// Built without OpenCV (HARMOLOC_BENCH_OPENCV=0: the ARM builds, tests/bench/arm_instructions.sh)
+// the OpenCV kernels are left out.
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -26,14 +30,19 @@
 #include <vector>
 
 #include <valgrind/callgrind.h>
+#if HARMOLOC_BENCH_OPENCV
 #include <opencv2/core.hpp>
+#endif
 
 #include "bench_fixtures.hpp"
 #include "harmoloc/algorithms/harmonic_localizer.hpp"
 #include "harmoloc/algorithms/particle_filter.hpp"
+#include "harmoloc/algorithms/random.hpp"
 #include "harmoloc/algorithms/segmentation.hpp"
 #include "harmoloc/firmware/localization_cycle.hpp"
+#if HARMOLOC_BENCH_OPENCV
 #include "opencv_reference.hpp"
+#endif
 
 namespace {
 
@@ -104,7 +113,9 @@ int main(int argc, char** argv) {
     return 0;
   }
   const auto n = static_cast<std::size_t>(std::strtoul(argv[2], nullptr, 10));
+#if HARMOLOC_BENCH_OPENCV
   cv::setNumThreads(1);
+#endif
   algorithms::AreaVector areas;
   const algorithms::SegmentPath best = algorithms::best_segment_path();
   const algorithms::SegmentPath scalar = algorithms::SegmentPath::kScalar;
@@ -122,10 +133,12 @@ int main(int argc, char** argv) {
                                    : 6;
     const auto thresholds = bench::board_thresholds(boards);
     const algorithms::BoardClassifier classifier(thresholds);
+#if HARMOLOC_BENCH_OPENCV
     reference::OpencvScratch scratch;
+#endif
     const std::uint8_t* rgb = f.rgb[0].data();
     const std::uint8_t* yuyv = f.yuyv[0].data();
-    const int iw = static_cast<int>(w), ih = static_cast<int>(h);
+    [[maybe_unused]] const int iw = static_cast<int>(w), ih = static_cast<int>(h);
     if (kernel == "seg_table" || kernel == "seg_table_scalar" || kernel == "seg_table_boards") {
       const auto& table =
           table_for<algorithms::ColourTable>(boards, kernel == "seg_table_scalar" ? scalar : best);
@@ -135,21 +148,31 @@ int main(int argc, char** argv) {
       const auto& table = table_for<algorithms::YuyvTable>(
           boards, kernel == "seg_yuyv_table_scalar" ? scalar : best);
       measure([&] { algorithms::segment_yuyv(yuyv, w, h, w * 2, table, areas); });
+    } else if (kernel == "seg_table_noise") {
+      std::vector<std::uint8_t> noise(std::size_t{w} * h * 3);
+      algorithms::Pcg32 rng(7, 1);
+      for (std::uint8_t& b : noise) b = static_cast<std::uint8_t>(rng.next_u32() >> 24);
+      const auto& table = table_for<algorithms::ColourTable>(boards, best);
+      measure([&] { algorithms::segment_rgb24(noise.data(), w, h, w * 3, table, areas); });
     } else if (kernel == "seg_yuyv_decode") {
       const auto& table = table_for<algorithms::ColourTable>(boards, scalar);
       measure([&] { algorithms::segment_yuyv(yuyv, w, h, w * 2, table, areas); });
     } else if (kernel == "seg_rgb") {
       measure([&] { algorithms::segment_rgb24(rgb, w, h, w * 3, classifier, areas); });
+#if HARMOLOC_BENCH_OPENCV
     } else if (kernel == "seg_rgb_opencv") {
       measure([&] {
         reference::opencv_segment_rgb24(rgb, iw, ih, iw * 3, thresholds, areas, scratch);
       });
+#endif
     } else if (kernel == "seg_yuyv") {
       measure([&] { algorithms::segment_yuyv(yuyv, w, h, w * 2, classifier, areas); });
+#if HARMOLOC_BENCH_OPENCV
     } else if (kernel == "seg_yuyv_opencv") {
       measure([&] {
         reference::opencv_segment_yuyv(yuyv, iw, ih, iw * 2, thresholds, areas, scratch);
       });
+#endif
     } else if (kernel == "cycle") {
       return run_cycle(f, hal::PixelFormat::kRgb24, 6, 1024, 204);
     } else if (kernel == "cycle_yuyv") {

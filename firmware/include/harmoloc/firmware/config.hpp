@@ -80,6 +80,8 @@ struct LinkConfig {
   bool has_signing_key = false;
   std::array<std::uint8_t, 32> signing_key{};
   std::uint8_t link_id = 0;  ///< link id in the signatures of the frames sent
+  /// Serial device of the Linux board (its --link overrides it; the host board ignores it).
+  std::string device = "/dev/serial0";
 };
 
 /// Real-time set-up of the cycle's thread (applied where permitted; see
@@ -90,6 +92,31 @@ struct RealtimeConfig {
   int cpu = -1;
   bool lock_memory = true;
   std::size_t prefault_stack_kb = 256;
+};
+
+// ---- Devices of the Linux board ([camera], [encoders]; docs/drivers.md) ----
+
+/// The camera of the Linux board.
+struct CameraDeviceConfig {
+  std::string driver = "v4l2";  ///< "v4l2" or "libcamera"
+  /// v4l2: the device node; libcamera: the camera id ("" = the first camera found).
+  std::string device = "/dev/video0";
+  std::uint32_t width_px = 320;
+  std::uint32_t height_px = 240;
+  std::string format = "auto";              ///< "auto" (YUYV, else RGB24), "yuyv" or "rgb24"
+  std::uint32_t buffers = 4;                ///< mmap buffers / libcamera requests, 2..8
+  std::uint32_t reopen_interval_ms = 1000;  ///< v4l2: retry a failed device this often
+};
+
+/// The wheel encoders of the Linux board: SocketCAN (layout in [can]) or GPIO quadrature.
+struct EncoderDeviceConfig {
+  std::string driver = "can";     ///< "can" or "gpio"
+  bool can_kernel_filter = true;  ///< false: every frame reaches the driver (foreign IDs counted)
+  std::string gpio_chip = "gpiochip0";
+  std::array<unsigned, 2> left_lines{0, 1};   ///< A, B line offsets
+  std::array<unsigned, 2> right_lines{2, 3};  ///< A, B line offsets
+  std::uint32_t debounce_us = 0;
+  std::string gpio_reader = "thread";  ///< "thread" or "cycle"
 };
 
 struct BoardNames {
@@ -108,6 +135,8 @@ struct FirmwareConfig {
   KidnapConfig kidnap;
   LinkConfig link;
   RealtimeConfig realtime;
+  CameraDeviceConfig camera;
+  EncoderDeviceConfig encoders;
   /// Whether the file set these sections itself (else the host board may take them from the
   /// dataset's metadata, which describes the recorded robot).
   bool has_odometry_section = false;

@@ -125,6 +125,13 @@ class LocalizationCycle {
   /// a real-time clock leaves it, and the clock follows the peers' signed frames).
   void set_signing_time(std::uint64_t unix_time_us);
 
+  /// Live boards (real devices): the data clock is the monotonic clock the devices stamp their
+  /// data with. A cycle without a frame takes the clock's time instead of the last frame's time
+  /// plus one period, and the data time never goes back; the whole-cycle time and the budget
+  /// leave out the wait for the camera in acquire() (its own stage keeps it). Off (replay) by
+  /// default.
+  void set_live_clock(bool live) { live_clock_ = live; }
+
  private:
   void publish();
   // The link's inbound side and the commands (mavlink_commands.cpp).
@@ -175,6 +182,7 @@ class LocalizationCycle {
   std::uint64_t budget_ns_;
   std::uint64_t data_time_ns_ = 0;
   bool have_data_time_ = false;
+  bool live_clock_ = false;
   std::uint64_t last_fix_ns_ = 0;
   bool ever_fix_ = false;
   algorithms::HarmonicFix last_known_fix_{};  ///< the latest fix of a known place

@@ -19,6 +19,8 @@ struct CameraCounters {
   std::uint64_t frames = 0;
   std::uint64_t corrupt = 0;
   std::uint64_t dropped = 0;  ///< gaps in the sequence numbers
+  std::uint64_t errors = 0;   ///< device errors (EIO, unplugged): the device is reopened
+  std::uint64_t reopens = 0;  ///< times the device was opened again after an error
 };
 
 /// A source of frames. Implementations reserve every buffer before the cycle starts;

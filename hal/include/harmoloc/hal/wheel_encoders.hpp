@@ -27,6 +27,8 @@ struct EncoderCounters {
   std::uint64_t bad_length = 0;  ///< frames of ours with the wrong length
   std::uint64_t glitches = 0;    ///< impossible quadrature transitions
   std::uint64_t bus_errors = 0;  ///< error frames, bus-off and similar
+  std::uint64_t bus_off = 0;     ///< of those, the controller went bus-off
+  std::uint64_t overflows = 0;   ///< frames or edges the kernel dropped (queue full)
 };
 
 class WheelEncoders {

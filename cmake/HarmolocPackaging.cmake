@@ -1,0 +1,71 @@
+# Install rules and the Debian package of a Linux board build (docs/deploy.md): the firmware, the
+# tools a robot needs, a default config and a systemd unit. `./run package` builds one .deb per
+# target architecture into build/packages/; tests/packaging/check_package.sh checks them.
+include(GNUInstallDirs)
+
+set(HARMOLOC_PACKAGING_DIR ${PROJECT_SOURCE_DIR}/packaging)
+
+# The firmware itself: the Linux board's executable, once that board has one.
+if(TARGET harmoloc)
+  install(TARGETS harmoloc RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+endif()
+# Tools for the robot: the budget table of the stats the firmware writes.
+if(TARGET harmoloc-budget)
+  install(TARGETS harmoloc-budget RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+endif()
+
+# Configuration (conffiles: dpkg keeps local changes on upgrade). The default config is the
+# documented example, which the tests check to reproduce the built-in defaults.
+install(FILES ${PROJECT_SOURCE_DIR}/docs/examples/harmoloc.toml DESTINATION /etc/harmoloc)
+install(FILES ${HARMOLOC_PACKAGING_DIR}/harmoloc.default DESTINATION /etc/default RENAME harmoloc)
+install(FILES ${HARMOLOC_PACKAGING_DIR}/harmoloc.service DESTINATION /lib/systemd/system)
+install(FILES
+  ${PROJECT_SOURCE_DIR}/docs/deploy.md
+  ${PROJECT_SOURCE_DIR}/docs/config-format.md
+  ${PROJECT_SOURCE_DIR}/docs/wire-protocol.md
+  ${PROJECT_SOURCE_DIR}/docs/stats-format.md
+  DESTINATION ${CMAKE_INSTALL_DOCDIR})
+install(FILES ${PROJECT_SOURCE_DIR}/LICENSE DESTINATION ${CMAKE_INSTALL_DOCDIR} RENAME copyright)
+
+# Debian architecture of the target: from the toolchain's multiarch triplet, else the build
+# machine's own.
+if(CMAKE_LIBRARY_ARCHITECTURE STREQUAL "aarch64-linux-gnu")
+  set(HARMOLOC_DEB_ARCH arm64)
+elseif(CMAKE_LIBRARY_ARCHITECTURE STREQUAL "arm-linux-gnueabihf")
+  set(HARMOLOC_DEB_ARCH armhf)
+else()
+  execute_process(COMMAND dpkg --print-architecture OUTPUT_VARIABLE HARMOLOC_DEB_ARCH
+    OUTPUT_STRIP_TRAILING_WHITESPACE)
+endif()
+
+set(CPACK_GENERATOR DEB)
+set(CPACK_PACKAGE_NAME harmoloc)
+set(CPACK_PACKAGE_VERSION ${PROJECT_VERSION})
+set(CPACK_PACKAGE_CONTACT "harmoloc maintainers <harmoloc@localhost>")
+set(CPACK_PACKAGE_DESCRIPTION_SUMMARY "visual localization firmware for mobile robots (camera + wheel encoders)")
+string(CONCAT CPACK_PACKAGE_DESCRIPTION
+  "Localizes a mobile robot at 30 Hz from a monocular camera and its wheel encoders: board areas\n"
+  "in the raw frame, a precomputed harmonic localizer and a particle filter. The pose goes out as\n"
+  "MAVLink v2 on a serial line. Started at boot by harmoloc.service with real-time limits.")
+set(CPACK_PACKAGE_FILE_NAME harmoloc_${PROJECT_VERSION}_${HARMOLOC_DEB_ARCH})
+set(CPACK_PACKAGING_INSTALL_PREFIX /usr)
+set(CPACK_DEBIAN_PACKAGE_ARCHITECTURE ${HARMOLOC_DEB_ARCH})
+set(CPACK_DEBIAN_PACKAGE_SECTION misc)
+set(CPACK_DEBIAN_PACKAGE_PRIORITY optional)
+# Shared-library dependencies from dpkg-shlibdeps, which reads the target architecture from the
+# binaries and finds its libraries among the installed multiarch packages; passwd for the
+# system user the package makes.
+set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
+set(CPACK_DEBIAN_PACKAGE_DEPENDS "passwd")
+set(CPACK_DEBIAN_PACKAGE_SUGGESTS "can-utils")
+set(CPACK_DEBIAN_PACKAGE_CONTROL_STRICT_PERMISSION ON)
+set(HARMOLOC_CONTROL_DIR ${PROJECT_BINARY_DIR}/debian-control)
+file(WRITE ${HARMOLOC_CONTROL_DIR}/conffiles "/etc/harmoloc/harmoloc.toml\n/etc/default/harmoloc\n")
+set(CPACK_DEBIAN_PACKAGE_CONTROL_EXTRA
+  ${HARMOLOC_CONTROL_DIR}/conffiles
+  ${HARMOLOC_PACKAGING_DIR}/postinst
+  ${HARMOLOC_PACKAGING_DIR}/prerm
+  ${HARMOLOC_PACKAGING_DIR}/postrm)
+# Strip the binaries (the build tree keeps the symbols).
+set(CPACK_STRIP_FILES ON)
+include(CPack)

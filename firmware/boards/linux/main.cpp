@@ -1,0 +1,305 @@
+// harmoloc for the Linux board: the firmware's cycle on real devices. The camera is a V4L2
+// capture device or a libcamera camera, the wheel encoders come from a SocketCAN bus or from
+// quadrature lines on GPIO, the pose goes out on a serial line; all chosen by the config
+// (docs/drivers.md). The cycle is the host board's, paced by the camera.
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+#include "harmoloc/drivers/monotonic_clock.hpp"
+#include "harmoloc/drivers/realtime_setup.hpp"
+#include "harmoloc/drivers/serial_link.hpp"
+#include "harmoloc/drivers/socketcan_encoders.hpp"
+#include "harmoloc/drivers/v4l2_camera.hpp"
+#include "harmoloc/firmware/config.hpp"
+#include "harmoloc/firmware/localization_cycle.hpp"
+#include "harmoloc/firmware/map_loader.hpp"
+#include "harmoloc/firmware/stats_report.hpp"
+#ifdef HARMOLOC_WITH_GPIOD
+#include "harmoloc/drivers/gpio_quadrature_encoders.hpp"
+#endif
+#ifdef HARMOLOC_WITH_LIBCAMERA
+#include "harmoloc/drivers/libcamera_camera.hpp"
+#endif
+
+namespace {
+
+using namespace harmoloc;
+
+// The map is large (fixed capacity); it lives in static storage.
+algorithms::MapFile g_map;
+volatile std::sig_atomic_t g_stop = 0;
+
+void on_signal(int) {
+  g_stop = 1;
+}
+
+int fail(const std::string& why) {
+  std::fprintf(stderr, "harmoloc: %s\n", why.c_str());
+  return 2;
+}
+
+drivers::FormatRequest format_request(const std::string& name) {
+  if (name == "yuyv") return drivers::FormatRequest::kYuyv;
+  if (name == "rgb24") return drivers::FormatRequest::kRgb24;
+  return drivers::FormatRequest::kAuto;
+}
+
+void read_memory(long& rss_kb, long& peak_kb) {
+  rss_kb = peak_kb = -1;
+  std::FILE* f = std::fopen("/proc/self/status", "r");
+  if (f == nullptr) return;
+  char line[256];
+  while (std::fgets(line, sizeof line, f) != nullptr) {
+    if (std::strncmp(line, "VmRSS:", 6) == 0) rss_kb = std::strtol(line + 6, nullptr, 10);
+    if (std::strncmp(line, "VmHWM:", 6) == 0) peak_kb = std::strtol(line + 6, nullptr, 10);
+  }
+  std::fclose(f);
+}
+
+long count_open_fds() {
+  std::error_code ec;
+  long n = 0;
+  for (auto it = std::filesystem::directory_iterator("/proc/self/fd", ec);
+       !ec && it != std::filesystem::directory_iterator(); it.increment(ec)) {
+    ++n;
+  }
+  return ec ? -1 : n - 1;
+}
+
+// The trajectory as TUM lines through a buffer reserved at start-up.
+char g_trajectory_buffer[1 << 16];
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "harmoloc (Linux board): runs the firmware's fixed-rate localization cycle on the robot's\n"
+      "devices: a V4L2 or libcamera camera, SocketCAN or GPIO quadrature wheel encoders, and a\n"
+      "serial line for the MAVLink v2 pose stream (docs/drivers.md, docs/config-format.md).\n"
+      "Runs until SIGINT/SIGTERM, --duration or --cycles. Exit status 0 after a run, 2 with a\n"
+      "one-line reason on a bad config, map or a missing device.",
+      "harmoloc"};
+  std::string map_path, config_path, link_path, stats_path, trajectory_path;
+  double duration_s = 0.0;
+  std::uint64_t max_cycles = 0;
+  bool quiet = false;
+  app.add_option("--map", map_path, "map file from harmoloc-train")->required();
+  app.add_option("--config", config_path,
+                 "firmware config (TOML, docs/config-format.md); default: built-in");
+  app.add_option("--link", link_path,
+                 "serial device for the MAVLink v2 stream (overrides link.device); a file works");
+  app.add_option("--stats", stats_path,
+                 "write run statistics here at the end (JSON: per-stage timing, counters)");
+  app.add_option("--trajectory", trajectory_path, "write the fused pose of every cycle here (TUM)");
+  app.add_option("--duration", duration_s, "stop after this many seconds (0: run until a signal)")
+      ->check(CLI::Range(0.0, 1e9));
+  app.add_option("--cycles", max_cycles, "stop after this many cycles (0: no limit)");
+  app.add_flag("--quiet", quiet, "no progress output");
+  CLI11_PARSE(app, argc, argv);
+
+  // ---- start-up: everything is read, checked, opened and reserved here ----
+  firmware::FirmwareConfig config;
+  try {
+    config = config_path.empty() ? firmware::default_config() : firmware::load_config(config_path);
+  } catch (const std::exception& e) {
+    return fail(e.what());
+  }
+  if (const std::string e = firmware::load_map(map_path, g_map); !e.empty()) return fail(e);
+  if (const std::string e = firmware::check_map_matches(g_map, config, config.camera.width_px,
+                                                        config.camera.height_px);
+      !e.empty()) {
+    return fail(e);
+  }
+  if (!stats_path.empty()) {
+    std::ofstream probe(stats_path);
+    if (!probe) return fail(stats_path + ": cannot write");
+  }
+  std::FILE* trajectory = nullptr;
+  if (!trajectory_path.empty()) {
+    trajectory = std::fopen(trajectory_path.c_str(), "w");
+    if (trajectory == nullptr) return fail(trajectory_path + ": cannot write");
+    std::setvbuf(trajectory, g_trajectory_buffer, _IOFBF, sizeof g_trajectory_buffer);
+  }
+
+  drivers::MonotonicClock clock;
+
+  // Camera.
+  std::unique_ptr<drivers::V4l2Camera> v4l2;
+#ifdef HARMOLOC_WITH_LIBCAMERA
+  std::unique_ptr<drivers::LibcameraCamera> libcam;
+#endif
+  hal::Camera* camera = nullptr;
+  hal::PixelFormat pixel_format = hal::PixelFormat::kYuyv;
+  std::string camera_text;
+  if (config.camera.driver == "v4l2") {
+    v4l2 = std::make_unique<drivers::V4l2Camera>(clock);
+    drivers::V4l2Options o;
+    o.device = config.camera.device;
+    o.width_px = config.camera.width_px;
+    o.height_px = config.camera.height_px;
+    o.format = format_request(config.camera.format);
+    o.buffers = config.camera.buffers;
+    o.reopen_interval_ms = config.camera.reopen_interval_ms;
+    if (const std::string e = v4l2->open(o); !e.empty()) return fail("camera " + e);
+    camera = v4l2.get();
+    pixel_format = v4l2->pixel_format();
+    camera_text = "V4L2 " + config.camera.device + ": " + v4l2->description();
+  } else {
+#ifdef HARMOLOC_WITH_LIBCAMERA
+    libcam = std::make_unique<drivers::LibcameraCamera>(clock);
+    drivers::LibcameraOptions o;
+    o.camera_id = config.camera.device;
+    o.width_px = config.camera.width_px;
+    o.height_px = config.camera.height_px;
+    o.format = format_request(config.camera.format);
+    o.buffers = config.camera.buffers;
+    if (const std::string e = libcam->open(o); !e.empty()) return fail("camera " + e);
+    camera = libcam.get();
+    pixel_format = libcam->pixel_format();
+    camera_text = "libcamera " + libcam->description();
+#else
+    return fail("camera.driver = \"libcamera\", but this harmoloc was built without libcamera");
+#endif
+  }
+
+  // Wheel encoders.
+  std::unique_ptr<drivers::SocketCanEncoders> can;
+#ifdef HARMOLOC_WITH_GPIOD
+  std::unique_ptr<drivers::GpioQuadratureEncoders> gpio;
+#endif
+  hal::WheelEncoders* encoders = nullptr;
+  std::string encoders_text;
+  if (config.encoders.driver == "can") {
+    can = std::make_unique<drivers::SocketCanEncoders>();
+    drivers::SocketCanOptions o;
+    o.interface = config.can_interface;
+    o.layout = config.can_layout;
+    o.kernel_filter = config.encoders.can_kernel_filter;
+    if (const std::string e = can->open(o); !e.empty()) return fail(e);
+    encoders = can.get();
+    char id[16];
+    std::snprintf(id, sizeof id, "0x%X", config.can_layout.id);
+    encoders_text = "SocketCAN " + config.can_interface + ", ID " + id;
+  } else {
+#ifdef HARMOLOC_WITH_GPIOD
+    gpio = std::make_unique<drivers::GpioQuadratureEncoders>();
+    drivers::GpioEncoderOptions o;
+    o.chip = config.encoders.gpio_chip;
+    o.left_lines = config.encoders.left_lines;
+    o.right_lines = config.encoders.right_lines;
+    o.debounce_us = config.encoders.debounce_us;
+    o.reader = config.encoders.gpio_reader == "cycle" ? drivers::GpioReader::kCycle
+                                                      : drivers::GpioReader::kThread;
+    if (const std::string e = gpio->open(o); !e.empty()) return fail(e);
+    encoders = gpio.get();
+    encoders_text = "GPIO " + gpio->description();
+#else
+    return fail("encoders.driver = \"gpio\", but this harmoloc was built without libgpiod");
+#endif
+  }
+
+  // Link.
+  drivers::SerialLink link;
+  const std::string link_device = link_path.empty() ? config.link.device : link_path;
+  if (const std::string e = link.open(link_device, config.link.baud); !e.empty())
+    return fail("link " + e);
+
+  // Real time: applied where permitted (said once on stderr), as the config asks.
+  const drivers::RealtimeReport rt = drivers::apply_realtime(drivers::RealtimeOptions{
+      config.realtime.enabled, config.realtime.priority, config.realtime.cpu,
+      config.realtime.lock_memory, config.realtime.prefault_stack_kb});
+
+  auto cycle = std::make_unique<firmware::LocalizationCycle>(config, g_map, *camera, *encoders,
+                                                             link, clock, pixel_format);
+  cycle->set_live_clock(true);
+  cycle->set_signing_time(
+      static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::microseconds>(
+                                     std::chrono::system_clock::now().time_since_epoch())
+                                     .count()));
+  if (!quiet) {
+    std::fprintf(stderr, "harmoloc: camera %s\n", camera_text.c_str());
+    std::fprintf(stderr, "harmoloc: encoders %s\n", encoders_text.c_str());
+    std::fprintf(stderr, "harmoloc: link %s%s at %u baud\n", link_device.c_str(),
+                 link.is_tty() ? " (serial, raw)" : " (file)", config.link.baud);
+    std::fprintf(stderr, "harmoloc: map of %u samples on %u boards, %zu particles, %.0f Hz\n",
+                 g_map.model.sample_count, g_map.model.feature_count, config.filter.particles,
+                 config.cycle.rate_hz);
+    std::fprintf(stderr, "harmoloc: %s\n", rt.summary.c_str());
+  }
+
+  struct sigaction sa {};
+  sa.sa_handler = on_signal;
+  sigemptyset(&sa.sa_mask);
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
+
+  firmware::RunCounters run;
+  long unused_peak = 0;
+  read_memory(run.rss_kb_start, unused_peak);
+  run.open_fds_start = count_open_fds();
+
+  // ---- the cycle: paced by the camera (acquire waits for the next frame, at most a period) ----
+  const std::uint64_t start_ns = clock.now_ns();
+  const auto end_ns =
+      duration_s > 0.0 ? start_ns + static_cast<std::uint64_t>(duration_s * 1e9) : std::uint64_t{0};
+  std::uint64_t done = 0;
+  while (g_stop == 0) {
+    if (cycle->run_once() == firmware::CycleResult::kEnded) break;
+    ++done;
+    const firmware::PoseOutput& out = cycle->pose();
+    if (trajectory != nullptr && out.valid) {
+      const double yaw_half = 0.5 * out.pose.yaw_rad;
+      std::fprintf(trajectory, "%.9f %.6f %.6f 0 0 0 %.9f %.9f\n",
+                   static_cast<double>(out.data_time_ns) * 1e-9, out.pose.x_m, out.pose.y_m,
+                   std::sin(yaw_half), std::cos(yaw_half));
+    }
+    if (max_cycles != 0 && done >= max_cycles) break;
+    if (end_ns != 0 && clock.now_ns() >= end_ns) break;
+  }
+  read_memory(run.rss_kb_end, run.peak_rss_kb);
+  run.open_fds_end = count_open_fds();
+  if (trajectory != nullptr && std::fclose(trajectory) != 0)
+    return fail(trajectory_path + ": write failed");
+
+  run.board = "linux";
+  run.rate_hz = config.cycle.rate_hz;
+  run.camera = camera->counters();
+  run.encoders = encoders->counters();
+  run.link = link.counters();
+  if (!stats_path.empty()) {
+    std::ofstream out(stats_path);
+    out << firmware::stats_json(*cycle, run);
+    if (!out) return fail(stats_path + ": write failed");
+  }
+  const auto& c = cycle->counters();
+  const auto& h = cycle->stage_histogram(firmware::Stage::kCycle);
+  std::printf(
+      "harmoloc: %llu cycles in %.1f s, %llu frames (%llu dropped, %llu corrupt), %llu encoder "
+      "samples, %llu fixes (%llu off the map), %llu link frames sent (%llu dropped); cycle "
+      "median %.0f us, p99 %.0f us, max %.0f us, %llu overruns\n",
+      static_cast<unsigned long long>(c.cycles),
+      static_cast<double>(clock.now_ns() - start_ns) * 1e-9,
+      static_cast<unsigned long long>(c.frames),
+      static_cast<unsigned long long>(run.camera.dropped),
+      static_cast<unsigned long long>(run.camera.corrupt),
+      static_cast<unsigned long long>(c.encoder_samples),
+      static_cast<unsigned long long>(c.fixes_used),
+      static_cast<unsigned long long>(c.unknown_place),
+      static_cast<unsigned long long>(run.link.frames_sent),
+      static_cast<unsigned long long>(run.link.frames_dropped),
+      static_cast<double>(h.quantile_ns(0.5)) / 1000.0,
+      static_cast<double>(h.quantile_ns(0.99)) / 1000.0, static_cast<double>(h.max_ns()) / 1000.0,
+      static_cast<unsigned long long>(c.overruns));
+  return 0;
+}

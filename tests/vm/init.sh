@@ -1,0 +1,64 @@
+#!/bin/sh
+# /init of the test VM (busybox): loads the virtual devices, runs the drivers' tests and then the
+# Linux board's harmoloc for its end-to-end run, prints what the host checks, and powers off.
+# Lines starting with "VM" are read by tests/vm/run_vm_tests.sh from the console.
+export PATH=/bin:/sbin:/usr/bin:/usr/sbin
+mount -t proc proc /proc
+mount -t sysfs sys /sys
+mount -t devtmpfs dev /dev
+mkdir -p /dev/pts /dev/shm /tmp /run
+mount -t tmpfs tmp /tmp
+mount -t tmpfs shm /dev/shm
+mount -t configfs configfs /sys/kernel/config 2> /dev/null
+say() { echo "VM: $*"; }
+finish() {
+  echo "VMDONE"
+  sync
+  poweroff -f
+  sleep 5
+}
+trap finish EXIT
+
+for m in configfs vivid vcan can-raw gpio-sim $(echo "${HARMOLOC_VM_MODULES:-}" | tr , ' '); do
+  modprobe "$m" || say "modprobe $m failed"
+done
+mount -t configfs configfs /sys/kernel/config 2> /dev/null
+ip link add dev vcan0 type vcan && ip link set up vcan0 || say "vcan0 could not be set up"
+
+# A gpio-sim chip with 8 lines; its name is read back, never assumed.
+G=/sys/kernel/config/gpio-sim/chip0
+if mkdir "$G" && mkdir "$G/bank0" && echo 8 > "$G/bank0/num_lines" && echo 1 > "$G/live"; then
+  HARMOLOC_VM_GPIO_CHIP=$(cat "$G/bank0/chip_name")
+  HARMOLOC_VM_GPIO_SYSFS=/sys/devices/platform/$(cat "$G/dev_name")/$HARMOLOC_VM_GPIO_CHIP
+  export HARMOLOC_VM_GPIO_CHIP HARMOLOC_VM_GPIO_SYSFS
+  say "gpio-sim chip $HARMOLOC_VM_GPIO_CHIP at $HARMOLOC_VM_GPIO_SYSFS"
+else
+  say "gpio-sim chip could not be created"
+fi
+export HARMOLOC_VM_CAN_LOG=/vm/can_encoders.log
+say "devices: $(ls /dev/video* 2> /dev/null | tr '\n' ' ') $(ip link show vcan0 2> /dev/null | head -1)"
+say "uptime $(cut -d' ' -f1 /proc/uptime) s before the tests"
+
+echo "VMTEST-BEGIN drivers"
+/vm/vm_drivers_test --gtest_color=no
+echo "VMTEST-END drivers rc=$?"
+
+# End to end: vivid as the camera, the simulated run's encoder log played onto vcan0 (looped),
+# the MAVLink stream out on the second serial line (/dev/ttyS1 on x86_64, the virtio console
+# /dev/hvc0 on aarch64; read on the host).
+echo "VMTEST-BEGIN harmoloc"
+canplayer -l i -I /vm/e2e/encoders.log vcan0=can0 &
+player=$!
+/vm/harmoloc --config /vm/e2e/harmoloc.toml --map /vm/e2e/map.hmap --duration "${HARMOLOC_VM_SECONDS:-12}" \
+  --stats /tmp/stats.json --trajectory /tmp/trajectory.tum
+rc=$?
+kill "$player" 2> /dev/null
+echo "VMTEST-END harmoloc rc=$rc"
+echo "VMSTATS-BEGIN"
+cat /tmp/stats.json
+echo "VMSTATS-END"
+echo "VM: trajectory lines $(wc -l < /tmp/trajectory.tum)"
+# A missing device must stop start-up with exit status 2 and one line.
+/vm/harmoloc --config /vm/e2e/bad_camera.toml --map /vm/e2e/map.hmap --link /dev/null > /tmp/out 2> /tmp/err
+echo "VMTEST-END bad_camera rc=$? lines=$(wc -l < /tmp/err) $(cat /tmp/err)"
+say "uptime $(cut -d' ' -f1 /proc/uptime) s at the end"

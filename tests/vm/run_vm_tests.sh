@@ -1,0 +1,311 @@
+#!/usr/bin/env bash
+# The drivers' test bench (docs/testbench.md): Debian's own kernel under qemu-system-x86_64 (TCG)
+# with a small initramfs (busybox, the kernel's vivid, vcan and can-raw modules, gpio-sim built
+# out of tree from linux-source-6.1), the Linux board's driver tests and its harmoloc. Checks
+# what the VM prints on its console and decodes the MAVLink stream that leaves it on a second
+# serial line with node-mavlink on the host.
+#
+#   tests/vm/run_vm_tests.sh [x86_64|aarch64]   (./run test-vm installs the packages, calls both)
+#
+# x86_64 (default): Debian's amd64 kernel, the native Linux board (build/linux), link on ttyS1.
+# aarch64: Debian's arm64 kernel under qemu-system-aarch64 -M virt -cpu cortex-a53, the
+# cross-built Linux board (build/aarch64), gpio-sim cross-built against Debian's arm64 headers,
+# arm64 busybox and can-utils from apt-get download, link on a virtio console (hvc0).
+# Everything downloaded or built is cached in build/vm-cache (keyed by the kernel version).
+# Exit status: 0 all passed; 1 a check failed; 3 the bench cannot run here (reason printed).
+set -euo pipefail
+cd "$(dirname "${BASH_SOURCE[0]}")/../.."
+ROOT=$PWD
+ARCH=${1:-x86_64}
+CACHE=$ROOT/build/vm-cache
+WORK=$ROOT/build/vm-work-$ARCH
+case $ARCH in
+  x86_64) DEB_ARCH=amd64; LINUX_BUILD=$ROOT/build/linux; QEMU=qemu-system-x86_64
+    CONSOLE_DEV=ttyS0; LINK_DEV=/dev/ttyS1; LIB_DIRS="/lib/x86_64-linux-gnu /usr/lib/x86_64-linux-gnu /lib64"
+    EXTRA_MODULES="" ;;
+  aarch64) DEB_ARCH=arm64; LINUX_BUILD=$ROOT/build/aarch64; QEMU=qemu-system-aarch64
+    CONSOLE_DEV=ttyAMA0; LINK_DEV=/dev/hvc0; LIB_DIRS="/lib/aarch64-linux-gnu /usr/lib/aarch64-linux-gnu /lib"
+    EXTRA_MODULES="virtio_mmio virtio_console" ;;
+  *) echo "usage: $0 [x86_64|aarch64]" >&2; exit 2 ;;
+esac
+HOST_BIN=$ROOT/build/host/bin
+T0=$(date +%s.%N)
+say() { printf '\033[1m==> vm: %s\033[0m\n' "$*" >&2; }
+cannot() { echo "VM TEST BENCH CANNOT RUN: $*" >&2; exit 3; }
+fail() { echo "FAIL: $*" >&2; FAILED=$((FAILED + 1)); }
+elapsed() { python3 -c "import sys; print(f'{float(sys.argv[2]) - float(sys.argv[1]):.1f}')" "$1" "$(date +%s.%N)"; }
+FAILED=0
+
+for tool in "$QEMU" busybox depmod modprobe cpio xz make gcc node python3 readelf; do
+  command -v "$tool" > /dev/null || cannot "'$tool' is missing (./run test-vm installs it)"
+done
+[ -x "$HOST_BIN/harmoloc-sim" ] || cannot "the host board is not built (build/host/bin/harmoloc-sim)"
+[ -d tests/mavlink/node_modules/node-mavlink ] || cannot "node-mavlink is not installed (./run setup)"
+
+# ---- the kernel: Debian's current 6.1 amd64 image, unpacked, never installed ------------------
+# The amd64 kernel's version names the arm64 one too (same Debian kernel build).
+KVER_AMD64=${HARMOLOC_VM_KERNEL:-$(apt-cache depends linux-image-amd64 2> /dev/null |
+  sed -n 's/.*Depends: linux-image-\(.*\)$/\1/p' | head -1)}
+[ -n "$KVER_AMD64" ] || cannot "apt does not know linux-image-amd64 (apt-get update?)"
+KVER=${KVER_AMD64%-amd64}-$DEB_ARCH
+[ -d "/usr/src/linux-headers-$KVER_AMD64" ] || cannot "linux-headers-$KVER_AMD64 is not installed (./run test-vm installs it)"
+mkdir -p "$CACHE/debs"
+# fetch PACKAGE[:ARCH]: its .deb into build/vm-cache/debs once (apt-get download, never
+# installed); prints the file.
+fetch() {
+  local name=${1%%:*}
+  ls "$CACHE/debs/${name}"_*"_$DEB_ARCH.deb" > /dev/null 2>&1 || ls "$CACHE/debs/${name}"_*_all.deb > /dev/null 2>&1 ||
+    (cd "$CACHE/debs" && apt-get download "$1" > /dev/null 2>&1) || cannot "apt-get download $1 failed (offline?)"
+  local f found=""
+  for f in "$CACHE/debs/${name}"_*"_$DEB_ARCH.deb" "$CACHE/debs/${name}"_*_all.deb; do
+    [ -e "$f" ] && found=$f
+  done
+  echo "$found"
+}
+KDIR=$CACHE/kernel-$KVER
+if [ ! -f "$KDIR/.done" ]; then
+  say "fetching and unpacking linux-image-$KVER (apt-get download)"
+  rm -rf "$KDIR"; mkdir -p "$KDIR"
+  dpkg-deb -x "$(fetch "linux-image-$KVER:$DEB_ARCH")" "$KDIR/root"
+  depmod -b "$KDIR/root" "$KVER"
+  touch "$KDIR/.done"
+fi
+VMLINUZ=$KDIR/root/boot/vmlinuz-$KVER
+# Userland pieces of the guest's architecture: busybox and canplayer; the kernel headers.
+if [ "$ARCH" = x86_64 ]; then
+  BUSYBOX=$(command -v busybox); CANPLAYER=$(command -v canplayer || true)
+  [ -n "$CANPLAYER" ] || cannot "canplayer (can-utils) is missing"
+  KHEADERS=/usr/src/linux-headers-$KVER; KMAKE=()
+else
+  U=$CACHE/userland-$DEB_ARCH
+  if [ ! -f "$U/.done" ]; then
+    rm -rf "$U"; mkdir -p "$U"
+    dpkg-deb -x "$(fetch "busybox-static:$DEB_ARCH")" "$U"
+    dpkg-deb -x "$(fetch "can-utils:$DEB_ARCH")" "$U"
+    touch "$U/.done"
+  fi
+  BUSYBOX=$U/bin/busybox; CANPLAYER=$U/usr/bin/canplayer
+  # Debian's arm64 headers, unpacked: their kbuild scripts link to the host's linux-kbuild-6.1
+  # (x86_64 tools), their common part is the amd64 headers' dependency (the same version).
+  KHEADERS=$CACHE/headers-$KVER/usr/src/linux-headers-$KVER
+  if [ ! -f "$KHEADERS/.config" ]; then
+    rm -rf "$CACHE/headers-$KVER"
+    dpkg-deb -x "$(fetch "linux-headers-$KVER:$DEB_ARCH")" "$CACHE/headers-$KVER"
+    ln -sfn /usr/lib/linux-kbuild-6.1/scripts "$KHEADERS/scripts"
+    ln -sfn /usr/lib/linux-kbuild-6.1/tools "$KHEADERS/tools"
+  fi
+  command -v aarch64-linux-gnu-gcc-12 > /dev/null || cannot "aarch64-linux-gnu-gcc-12 is missing (./run test-arm64 installs it)"
+  KMAKE=(ARCH=arm64 CROSS_COMPILE=aarch64-linux-gnu-)
+fi
+[ -x "$BUSYBOX" ] || cannot "busybox ($DEB_ARCH) is missing"
+
+# ---- gpio-sim, built out of tree (Debian's kernels have CONFIG_GPIO_SIM off) -------------------
+GSIM=$CACHE/gpio-sim-$KVER
+if [ ! -f "$GSIM/gpio-sim.ko" ]; then
+  say "building gpio-sim out of tree from linux-source-6.1 against linux-headers-$KVER"
+  SRC_DEB=$(fetch linux-source-6.1)
+  rm -rf "$GSIM"; mkdir -p "$GSIM/src"
+  dpkg-deb --fsys-tarfile "$SRC_DEB" |
+    tar -xO ./usr/src/linux-source-6.1.tar.xz |
+    tar -xJ -C "$GSIM/src" --strip-components=1 linux-source-6.1/drivers/gpio/gpio-sim.c \
+      linux-source-6.1/drivers/gpio/gpiolib.h linux-source-6.1/kernel/irq/irq_sim.c
+  cp "$GSIM/src/drivers/gpio/gpio-sim.c" "$GSIM/gpio-sim-main.c"
+  cp "$GSIM/src/drivers/gpio/gpiolib.h" "$GSIM/"
+  # irq_to_desc() is not exported to modules; generic_handle_irq_safe() does the same here.
+  sed 's/handle_simple_irq(irq_to_desc(irqnum));/generic_handle_irq_safe(irqnum);/' \
+    "$GSIM/src/kernel/irq/irq_sim.c" > "$GSIM/irq_sim.c"
+  grep -q 'generic_handle_irq_safe(irqnum)' "$GSIM/irq_sim.c" || cannot "irq_sim.c did not take the patch"
+  cp tests/vm/gpio-sim/Kbuild "$GSIM/Kbuild"
+  make -s -C "$KHEADERS" M="$GSIM" "${KMAKE[@]}" modules > "$GSIM/build.log" 2>&1 ||
+    { tail -20 "$GSIM/build.log" >&2; cannot "gpio-sim did not build (see $GSIM/build.log)"; }
+fi
+say "kernel $KVER, gpio-sim module ready ($(elapsed "$T0") s)"
+
+# ---- the Linux board, native x86_64 (build/linux) ----------------------------------------------
+T1=$(date +%s.%N)
+PRESET=$([ "$ARCH" = x86_64 ] && echo linux || echo aarch64)
+say "building the Linux board for $ARCH (build/$(basename "$LINUX_BUILD")): harmoloc, vm_drivers_test"
+cmake --preset "$PRESET" > /dev/null
+cmake --build --preset "$PRESET" -j "$(nproc)" --target harmoloc vm_drivers_test > "$CACHE/build-$ARCH.log" 2>&1 ||
+  { tail -30 "$CACHE/build-$ARCH.log" >&2; echo "FAIL: the Linux board did not build" >&2; exit 1; }
+say "Linux board built ($(elapsed "$T1") s)"
+
+# ---- data for the end-to-end run: a map at vivid's 320x180, the simulated robot's CAN log ------
+rm -rf "$WORK"; mkdir -p "$WORK/e2e"
+E2E=$WORK/e2e
+cat > "$E2E/scenario.toml" <<'EOF'
+base = "tiny"
+name = "vm-320x180"
+description = "the tiny scenario at vivid's webcam size"
+[camera]
+width_px = 320
+height_px = 180
+EOF
+"$HOST_BIN/harmoloc-sim" --scenario "$E2E/scenario.toml" --seed 1 --out "$E2E/train" --quiet
+"$HOST_BIN/harmoloc-train" --dataset "$E2E/train" --labels "$E2E/train/labels.tum" --out "$E2E/map.hmap" > "$E2E/train.log"
+
+# ---- initramfs ---------------------------------------------------------------------------------
+T2=$(date +%s.%N)
+IRD=$WORK/initramfs
+mkdir -p "$IRD"/{bin,sbin,usr/bin,usr/sbin,proc,sys,dev,tmp,run,vm/e2e,lib/modules}
+cp "$BUSYBOX" "$IRD/bin/busybox"
+# The applet list from the host's busybox (the same package; the guest's may be another arch).
+for applet in $(busybox --list); do
+  [ -e "$IRD/bin/$applet" ] || ln -s busybox "$IRD/bin/$applet"
+done
+cp tests/vm/init.sh "$IRD/init"; chmod +x "$IRD/init"
+cp "$LINUX_BUILD/bin/harmoloc" "$LINUX_BUILD/bin/vm_drivers_test" "$CANPLAYER" "$IRD/vm/"
+ln -sf /vm/canplayer "$IRD/usr/bin/canplayer"
+cp tests/vm/can_encoders.log "$IRD/vm/"
+cp "$E2E/map.hmap" "$IRD/vm/e2e/"
+# The simulated robot's encoders: candump -l lines, interface can0, replayed onto vcan0.
+cp "$E2E/train/encoders.log" "$IRD/vm/e2e/encoders.log"
+cat > "$IRD/vm/e2e/harmoloc.toml" <<'EOF'
+[camera]
+driver = "v4l2"
+device = "/dev/video0"
+width = 320
+height = 180
+format = "auto"
+[encoders]
+driver = "can"
+[can]
+interface = "vcan0"
+[link]
+device = "@LINK_DEV@"
+baud = 115200
+EOF
+sed -i "s|@LINK_DEV@|$LINK_DEV|" "$IRD/vm/e2e/harmoloc.toml"
+printf '[camera]\ndevice = "/dev/video7"\nwidth = 320\nheight = 180\n[can]\ninterface = "vcan0"\n' > "$IRD/vm/e2e/bad_camera.toml"
+# Shared libraries of the programs: the NEEDED closure (readelf, so it works for either
+# architecture) found in the architecture's library folders, and the dynamic loader.
+needed_closure() {
+  local todo=("$@") seen=" " f lib dir found
+  while [ ${#todo[@]} -gt 0 ]; do
+    f=${todo[0]}; todo=("${todo[@]:1}")
+    for lib in $(readelf -d "$f" 2> /dev/null | sed -n 's/.*Shared library: \[\(.*\)\]/\1/p'); do
+      case $seen in *" $lib "*) continue ;; esac
+      seen="$seen$lib "
+      found=""
+      for dir in $LIB_DIRS; do [ -e "$dir/$lib" ] && { found=$dir/$lib; break; }; done
+      [ -n "$found" ] || cannot "library $lib (needed by $(basename "$f")) not found in $LIB_DIRS"
+      echo "$found"
+      todo+=("$found")
+    done
+  done
+}
+for lib in $(needed_closure "$IRD/vm/harmoloc" "$IRD/vm/vm_drivers_test" "$IRD/vm/canplayer" | sort -u); do
+  mkdir -p "$IRD$(dirname "$lib")"
+  cp -L "$lib" "$IRD$lib"
+done
+INTERP=$(readelf -l "$IRD/vm/harmoloc" | sed -n 's/.*Requesting program interpreter: \(.*\)\]/\1/p')
+mkdir -p "$IRD$(dirname "$INTERP")"
+cp -L "$INTERP" "$IRD$INTERP"
+# Modules: the dependency closure of what the tests load, decompressed (busybox modprobe reads
+# plain .ko), plus gpio-sim.
+MODS=$IRD/lib/modules/$KVER
+mkdir -p "$MODS/extra"
+for m in configfs vivid vcan can-raw $EXTRA_MODULES; do
+  modprobe -d "$KDIR/root" -S "$KVER" --show-depends "$m" 2> /dev/null | awk '$1 == "insmod" {print $2}'
+done | sort -u | while read -r ko; do
+  rel=${ko#"$KDIR/root/lib/modules/$KVER/"}
+  mkdir -p "$MODS/$(dirname "$rel")"
+  case $ko in
+    *.xz) xz -dc "$ko" > "$MODS/${rel%.xz}" ;;
+    *) cp "$ko" "$MODS/$rel" ;;
+  esac
+done
+cp "$GSIM/gpio-sim.ko" "$MODS/extra/"
+cp "$KDIR/root/lib/modules/$KVER"/modules.{order,builtin,builtin.modinfo} "$MODS/" 2> /dev/null || true
+depmod -b "$IRD" "$KVER"
+(cd "$IRD" && find . | cpio -o -H newc --quiet | gzip -1 > "$WORK/initramfs.cpio.gz")
+say "initramfs $(du -h "$WORK/initramfs.cpio.gz" | cut -f1) ($(elapsed "$T2") s)"
+
+# ---- the command the host sends down the line: SET_POSE (unsigned, from a ground station) ------
+cat > "$WORK/commands.json" <<'EOF'
+[{"name": "set_pose", "command": 31011, "params": [1.0, -0.5, 0.3, 0.05, 0.05, 0, 0],
+  "sysid": 255, "compid": 190, "targetSystem": 1, "targetComponent": 197,
+  "key": null, "linkId": 0, "timestampMs": 0}]
+EOF
+node tests/mavlink/link_peer.js frames "$WORK/commands.json" "$WORK/commands.out.json"
+COMMAND_HEX=$(python3 -c "import json,sys; print(json.load(open(sys.argv[1]))['set_pose'])" "$WORK/commands.out.json")
+
+# ---- boot -------------------------------------------------------------------------------------
+T3=$(date +%s.%N)
+SOCK=$WORK/link.sock
+VM_TIMEOUT_S=${HARMOLOC_VM_TIMEOUT_S:-900}
+python3 -u tests/vm/link_listener.py "$SOCK" "$WORK/link.bin" "$COMMAND_HEX" 0 "$VM_TIMEOUT_S" > "$WORK/listener.out" 2> "$WORK/listener.err" &
+LISTENER=$!
+for _ in $(seq 100); do grep -q listening "$WORK/listener.out" 2> /dev/null && break; sleep 0.1; done
+if [ "$ARCH" = x86_64 ]; then
+  MACHINE=(-accel tcg -cpu max -serial "file:$WORK/console.log" -serial "unix:$SOCK")
+else
+  # virt has one UART (the console); the link is a virtio console on the same Unix socket.
+  MACHINE=(-M virt -accel tcg -cpu cortex-a53 -serial "file:$WORK/console.log"
+    -chardev "socket,id=link,path=$SOCK" -device virtio-serial-device -device virtconsole,chardev=link)
+fi
+say "booting Debian's kernel $KVER under $QEMU (TCG, 1 CPU); console in build/$(basename "$WORK")/console.log"
+set +e
+timeout -s KILL "$VM_TIMEOUT_S" "$QEMU" "${MACHINE[@]}" -smp 1 -m 768 -nographic -no-reboot \
+  -kernel "$VMLINUZ" -initrd "$WORK/initramfs.cpio.gz" \
+  -append "console=$CONSOLE_DEV quiet loglevel=3 panic=-1 HARMOLOC_VM_SECONDS=${HARMOLOC_VM_SECONDS:-12} HARMOLOC_VM_MODULES=$(echo "$EXTRA_MODULES" | tr ' ' ,)" \
+  -monitor none > "$WORK/qemu.out" 2>&1
+QEMU_RC=$?
+set -e
+wait "$LISTENER" || true
+VM_S=$(elapsed "$T3")
+say "VM ran $VM_S s (qemu exit $QEMU_RC); $(cat "$WORK/listener.err")"
+CONSOLE=$WORK/console.log
+tr -d '\r' < "$CONSOLE" > "$WORK/console.txt"
+CONSOLE=$WORK/console.txt
+
+# ---- checks -------------------------------------------------------------------------------------
+grep -q '^VMDONE' "$CONSOLE" || fail "the VM did not finish its script (timeout $VM_TIMEOUT_S s or a crash); see $CONSOLE"
+sed -n '/^VMTEST-BEGIN drivers/,/^VMTEST-END drivers/p' "$CONSOLE" | grep -E '^\[ *(OK|FAILED|PASSED|RUN) *\]|VMSTAT' | grep -v '^\[ RUN' >&2 || true
+grep -q '^VMTEST-END drivers rc=0' "$CONSOLE" || {
+  sed -n '/^VMTEST-BEGIN drivers/,/^VMTEST-END drivers/p' "$CONSOLE" | grep -B3 -A12 'Failure\|FAILED' | head -80 >&2
+  fail "driver tests in the VM failed (vm_drivers_test)"
+}
+grep -q '^VMTEST-END harmoloc rc=0' "$CONSOLE" || fail "harmoloc (Linux board) did not complete its run in the VM: $(grep -m3 'harmoloc' "$CONSOLE" | tr '\n' ' ')"
+grep -q '^VMTEST-END bad_camera rc=2 lines=1 harmoloc: camera /dev/video7: No such file or directory' "$CONSOLE" ||
+  fail "a missing camera must give exit status 2 and one line: $(grep '^VMTEST-END bad_camera' "$CONSOLE")"
+sed -n '/^VMSTATS-BEGIN/,/^VMSTATS-END/p' "$CONSOLE" | sed '1d;$d' > "$WORK/stats.json"
+grep '^harmoloc:' "$CONSOLE" >&2 || true
+python3 - "$WORK/stats.json" "${HARMOLOC_VM_SECONDS:-12}" >&2 <<'PY' || fail "the end-to-end run's stats do not hold"
+import json, sys
+s = json.load(open(sys.argv[1]))
+seconds = float(sys.argv[2])
+bad = []
+def need(ok, what):
+    print(("ok   " if ok else "FAIL ") + what)
+    if not ok: bad.append(what)
+need(s["board"] == "linux", f"board {s['board']}")
+need(s["cycles"] >= 10 * seconds, f"{s['cycles']} cycles in {seconds:.0f} s")
+need(s["camera"]["frames"] >= 30, f"{s['camera']['frames']} frames from vivid (>= 30)")
+need(s["camera"]["errors"] == 0 and s["camera"]["corrupt"] == 0, "no camera errors or corrupt frames")
+need(s["encoders"]["samples"] >= 50 * seconds, f"{s['encoders']['samples']} CAN encoder samples from vcan0")
+need(s["encoders"]["bad_length"] == 0 and s["encoders"]["ignored_id"] == 0, "no bad CAN frames")
+need(s["link"]["frames_sent"] > 0 and s["link"]["errors"] == 0, f"{s['link']['frames_sent']} link frames sent, no errors")
+need(s["link"]["frames_dropped"] == 0, f"{s['link']['frames_dropped']} link frames dropped")
+need(s["inbound"]["commands_accepted"] == 1, f"{s['inbound']['commands_accepted']} command accepted (SET_POSE from the host)")
+need(s["health_cycles"]["odometry_only"] > 0, "odometry-only cycles after SET_POSE (vivid's test pattern is not on the map)")
+print(f"VM e2e: cycle median {s['stages']['cycle']['median_us']} us, p99 {s['stages']['cycle']['p99_us']} us, "
+      f"acquire median {s['stages']['acquire']['median_us']} us, overruns {s['overruns']}")
+sys.exit(1 if bad else 0)
+PY
+[ -s "$WORK/link.bin" ] || fail "nothing arrived on the link ($LINK_DEV)"
+if [ -s "$WORK/link.bin" ]; then
+  say "decoding the link ($(stat -c %s "$WORK/link.bin") bytes from $LINK_DEV) with node-mavlink"
+  node tests/mavlink/decode_link.js "$WORK/link.bin" || fail "node-mavlink did not decode the VM's link cleanly"
+  # Negative control: a flipped byte must be caught.
+  python3 -c "import sys; d=bytearray(open(sys.argv[1],'rb').read()); d[len(d)//2]^=0x40; open(sys.argv[2],'wb').write(d)" "$WORK/link.bin" "$WORK/link-bad.bin"
+  if node tests/mavlink/decode_link.js "$WORK/link-bad.bin" > /dev/null 2>&1; then fail "a corrupted copy of the link passed the decoder"; fi
+fi
+
+TOTAL=$(elapsed "$T0")
+echo "VM bench ($ARCH): kernel $KVER, VM $VM_S s, whole bench $TOTAL s"
+if [ "$FAILED" -gt 0 ]; then
+  echo "VM bench ($ARCH): $FAILED check(s) failed" >&2
+  exit 1
+fi
+echo "VM bench ($ARCH): all checks passed"
