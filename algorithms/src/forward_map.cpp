@@ -50,7 +50,8 @@ GridPoint locate(const ForwardMap& map, double x_m, double y_m) {
   p.weight[1] = fx * (1.0F - fy);
   p.weight[2] = (1.0F - fx) * fy;
   p.weight[3] = fx * fy;
-  p.outside_m = static_cast<float>(std::min(1e6, std::hypot(ox, oy)));
+  p.outside_m =
+      ox == 0.0 && oy == 0.0 ? 0.0F : static_cast<float>(std::min(1e6, std::hypot(ox, oy)));
   return p;
 }
 

@@ -111,7 +111,11 @@ double ParticleFilter::update_boards(const BoardUpdate& u) {
     // The match is the observation model's own (untempered): tempering compresses exactly the
     // change the kidnap test looks for.
     match += weights_[i] * likelihood;
-    if (u.inv_tempering != 1.0) likelihood = std::pow(likelihood, u.inv_tempering);
+    // likelihood^(1/tempering), in float: weights need no more precision than that.
+    if (u.inv_tempering != 1.0 && likelihood > 0.0) {
+      likelihood = static_cast<double>(
+          std::exp(std::log(static_cast<float>(likelihood)) * static_cast<float>(u.inv_tempering)));
+    }
     const float off_route = route_distance(map, at) - u.route_free_m;
     if (off_route > 0.0F)
       likelihood *= static_cast<double>(std::exp(-off_route * off_route * u.route_inv_two_var));
@@ -152,6 +156,15 @@ bool ParticleFilter::resample_if_needed(double threshold_fraction) {
     weights_[m] = step;
   }
   return true;
+}
+
+Pose2 ParticleFilter::mean_position() const {
+  double sx = 0.0, sy = 0.0;
+  for (std::size_t i = 0; i < count_; ++i) {
+    sx += weights_[i] * particles_[i].x_m;
+    sy += weights_[i] * particles_[i].y_m;
+  }
+  return Pose2{sx, sy, 0.0};
 }
 
 PoseEstimate ParticleFilter::estimate() const {

@@ -272,7 +272,7 @@ bool LocalizationCycle::update_with_boards(
     const algorithms::AreaVector& areas,
     const std::array<float, algorithms::HarmonicModel::kMaxFeatures>& features) {
   const algorithms::BoardModelParams& params = config_.observation.boards;
-  const algorithms::Pose2 estimate = filter_.estimate().mean;
+  const algorithms::Pose2 estimate = filter_.mean_position();
   const algorithms::BoardFeatures observed =
       algorithms::board_features(map_.model.area_scale, areas);
   assessment_ = reliability_.assess(map_.forward, observed, estimate, params, board_update_);

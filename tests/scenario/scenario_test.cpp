@@ -58,7 +58,7 @@ bool distrusted_all(const hs::RunRecord& r, std::size_t b, double from_s, double
 
 }  // namespace
 
-TEST(Scenario, NominalBeatsTheLocalizerAlone) {
+TEST(FilterScenario, NominalBeatsTheLocalizerAlone) {
   const hs::RunRecord r = replay("desk-shuttle", robust());
   ASSERT_TRUE(r.uses_boards);
   const hs::ErrorStats e = hs::error_stats(r, 3.0, 1e9);
@@ -72,7 +72,7 @@ TEST(Scenario, NominalBeatsTheLocalizerAlone) {
 }
 
 // A person stands in front of the green board (and most of blue) from 30.1 s to 33.1 s.
-TEST(Scenario, OccludedBoardIsIgnoredThenTrustedAgain) {
+TEST(FilterScenario, OccludedBoardIsIgnoredThenTrustedAgain) {
   const hs::RunRecord r = replay("desk-occlusion", robust());
   const hs::ErrorStats e = hs::error_stats(r, 3.0, 1e9);
   const hs::ErrorStats during = hs::error_stats(r, 30.1, 34.5);
@@ -95,7 +95,7 @@ TEST(Scenario, OccludedBoardIsIgnoredThenTrustedAgain) {
 }
 
 // The yellow board is moved 30 cm at 29.7 s (and then hides part of green).
-TEST(Scenario, MovedBoardIsWrittenOffAndTheCameraStaysInUse) {
+TEST(FilterScenario, MovedBoardIsWrittenOffAndTheCameraStaysInUse) {
   const hs::RunRecord r = replay("desk-moved-board", robust());
   const hs::ErrorStats e = hs::error_stats(r, 3.0, 1e9);
   std::printf("moved board: max %.2f cm, RMSE %.2f cm, nominal %llu of %llu cycles\n",
@@ -121,7 +121,7 @@ TEST(Scenario, MovedBoardIsWrittenOffAndTheCameraStaysInUse) {
 }
 
 // Ten kidnaps, each >= 1 m along the route: detected and back under 10 cm within 1 s.
-TEST(Scenario, KidnapsAreDetectedAndRecoveredWithinASecond) {
+TEST(FilterScenario, KidnapsAreDetectedAndRecoveredWithinASecond) {
   const hs::RunRecord r = replay("desk-kidnap", robust());
   const hs::KidnapSummary k = hs::kidnap_summary(r, 0.10, 1.0, 1.0);
   ASSERT_EQ(k.outcomes.size(), 10U);

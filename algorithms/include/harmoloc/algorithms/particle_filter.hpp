@@ -79,6 +79,8 @@ class ParticleFilter {
   bool resample_if_needed(double threshold_fraction);
 
   PoseEstimate estimate() const;
+  /// The weighted mean position only (no heading, no covariance: no trigonometry).
+  Pose2 mean_position() const;
   std::size_t size() const { return count_; }
 
   struct Particle {
