@@ -9,8 +9,12 @@
 #include <cstdlib>
 #include <memory>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "harmoloc/firmware/map_loader.hpp"
+#include "harmoloc/sim_host/log_encoders.hpp"
+#include "harmoloc/sim_host/sim_camera.hpp"
 #include "scenario_eval.hpp"
 
 namespace hs = harmoloc::sim_host;
@@ -89,8 +93,7 @@ TEST(FilterScenario, OccludedBoardIsIgnoredThenTrustedAgain) {
   hf::FirmwareConfig plain = robust();
   plain.observation.boards.robust = false;
   const hs::ErrorStats p = hs::error_stats(replay("desk-occlusion", plain), 30.1, 36.0);
-  std::printf("occlusion, not robust: max %.2f cm while the person stands there\n",
-              100 * p.max_m);
+  std::printf("occlusion, not robust: max %.2f cm while the person stands there\n", 100 * p.max_m);
   EXPECT_GT(p.max_m, 1.2 * during.max_m);
 }
 
@@ -132,4 +135,138 @@ TEST(FilterScenario, KidnapsAreDetectedAndRecoveredWithinASecond) {
   EXPECT_EQ(k.detected, 10U);
   EXPECT_EQ(k.recovered_within, 10U);
   EXPECT_EQ(r.counters.kidnaps, 10U);  // no false alarm in between
+}
+
+namespace {
+
+// Inputs that go missing in given windows of run time.
+struct Window {
+  double from_s, to_s;
+  bool contains(double t) const { return t >= from_s && t < to_s; }
+};
+
+class GappyCamera final : public harmoloc::hal::Camera {
+ public:
+  GappyCamera(harmoloc::hal::Camera& inner, double t0_s, std::vector<Window> gaps)
+      : inner_(inner), t0_s_(t0_s), gaps_(std::move(gaps)) {}
+  harmoloc::hal::CameraStatus acquire(harmoloc::hal::FrameView& f,
+                                      std::uint64_t deadline) override {
+    const harmoloc::hal::CameraStatus s = inner_.acquire(f, deadline);
+    if (s != harmoloc::hal::CameraStatus::kFrame) return s;
+    const double t = static_cast<double>(f.timestamp_ns) * 1e-9 - t0_s_;
+    for (const Window& w : gaps_) {
+      if (w.contains(t)) {
+        inner_.release();
+        return harmoloc::hal::CameraStatus::kNoFrame;
+      }
+    }
+    return s;
+  }
+  void release() override { inner_.release(); }
+  harmoloc::hal::CameraCounters counters() const override { return inner_.counters(); }
+
+ private:
+  harmoloc::hal::Camera& inner_;
+  double t0_s_;
+  std::vector<Window> gaps_;
+};
+
+class GappyEncoders final : public harmoloc::hal::WheelEncoders {
+ public:
+  GappyEncoders(harmoloc::hal::WheelEncoders& inner, double t0_s, std::vector<Window> gaps)
+      : inner_(inner), t0_s_(t0_s), gaps_(std::move(gaps)) {}
+  harmoloc::hal::EncoderStatus read(std::uint64_t t_ns, harmoloc::hal::EncoderCounts& c) override {
+    const harmoloc::hal::EncoderStatus s = inner_.read(t_ns, c);  // drained either way
+    const double t = static_cast<double>(t_ns) * 1e-9 - t0_s_;
+    for (const Window& w : gaps_) {
+      if (w.contains(t) && s == harmoloc::hal::EncoderStatus::kFresh)
+        return harmoloc::hal::EncoderStatus::kNoData;
+    }
+    return s;
+  }
+  harmoloc::hal::EncoderCounters counters() const override { return inner_.counters(); }
+
+ private:
+  harmoloc::hal::WheelEncoders& inner_;
+  double t0_s_;
+  std::vector<Window> gaps_;
+};
+
+class NullLink final : public harmoloc::hal::PoseLink {
+ public:
+  harmoloc::hal::LinkWrite write_frame(const std::uint8_t*, std::size_t) override {
+    return harmoloc::hal::LinkWrite::kSent;
+  }
+  harmoloc::hal::LinkCounters counters() const override { return {}; }
+};
+
+class StepClock final : public harmoloc::hal::Clock {
+ public:
+  std::uint64_t now_ns() const override { return now_ += 1000; }
+  void sleep_until(std::uint64_t) override {}
+
+ private:
+  mutable std::uint64_t now_ = 0;
+};
+
+}  // namespace
+
+// No frames: odometry only, the covariance grows; no encoder data: vision only; neither: the
+// pose is flagged invalid. Each recovers by itself when its input returns.
+TEST(FilterScenario, DegradedModesAndRecovery) {
+  const hs::Scenario s = hs::load_scenario("desk-shuttle");
+  hs::ScenarioRun run(s, 2);
+  hf::FirmwareConfig config = robust();
+  config.geometry = s.robot;
+  config.can_layout = s.can_layout;
+  const double t0 = static_cast<double>(run.frame_timestamp_ns(0)) * 1e-9;
+  hs::SimCamera sim(run);
+  GappyCamera camera(sim, t0, {{8.0, 10.0}, {18.0, 20.0}});
+  harmoloc::sim_host::LogEncoders log(run.encoder_frames(), config.can_layout);
+  GappyEncoders encoders(log, t0, {{13.0, 15.0}, {18.0, 20.0}});
+  NullLink link;
+  StepClock clock;
+  auto cycle =
+      std::make_unique<hf::LocalizationCycle>(config, map(), camera, encoders, link, clock);
+  std::vector<std::pair<double, hf::PoseOutput>> out;
+  while (cycle->run_once() == hf::CycleResult::kRan) {
+    const hf::PoseOutput& p = cycle->pose();
+    out.emplace_back(static_cast<double>(p.data_time_ns) * 1e-9 - t0, p);
+  }
+  const auto at = [&](double t) -> const hf::PoseOutput& {
+    for (const auto& [ts, p] : out)
+      if (ts >= t) return p;
+    return out.back().second;
+  };
+  const auto truth_error = [&](double t) {
+    std::size_t k = 0;
+    while (k + 1 < run.frame_count() && run.frame_time_s(k) < t) ++k;
+    const hf::PoseOutput& p = at(t);
+    return std::hypot(p.pose.x_m - run.truth(k).x_m, p.pose.y_m - run.truth(k).y_m);
+  };
+  EXPECT_EQ(at(7.5).health, hf::Health::kNominal);
+  // Camera gone 8-10 s: odometry only after the timeout, the covariance grows meanwhile.
+  EXPECT_EQ(at(8.5).health, hf::Health::kOdometryOnly);
+  EXPECT_EQ(at(9.9).health, hf::Health::kOdometryOnly);
+  const auto spread = [&](double t) { return at(t).covariance(0, 0) + at(t).covariance(1, 1); };
+  EXPECT_GT(spread(9.0), spread(8.3));
+  EXPECT_GT(spread(9.9), spread(9.0));
+  EXPECT_GT(spread(9.9), 1.3 * spread(8.0));
+  EXPECT_LT(spread(10.5), spread(9.9));  // the camera back: it shrinks again
+  EXPECT_LT(truth_error(9.9), 0.05);  // dead reckoning holds for 2 s
+  EXPECT_EQ(at(10.3).health, hf::Health::kNominal);
+  // Encoders gone 13-15 s: vision only.
+  EXPECT_EQ(at(13.5).health, hf::Health::kVisionOnly);
+  EXPECT_EQ(at(15.3).health, hf::Health::kNominal);
+  EXPECT_LT(truth_error(14.9), 0.10);
+  // Both gone 18-20 s: invalid; back to nominal after.
+  EXPECT_EQ(at(18.5).health, hf::Health::kInvalid);
+  EXPECT_EQ(at(20.4).health, hf::Health::kNominal);
+  EXPECT_LT(truth_error(22.0), 0.05);
+  const auto& c = cycle->counters();
+  std::printf("degraded: odometry-only %llu, vision-only %llu, invalid %llu cycles\n",
+              static_cast<unsigned long long>(c.cycles_in_health[2]),
+              static_cast<unsigned long long>(c.cycles_in_health[3]),
+              static_cast<unsigned long long>(c.cycles_in_health[4]));
+  EXPECT_EQ(c.kidnaps, 0U);
 }
