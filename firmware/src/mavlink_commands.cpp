@@ -39,6 +39,7 @@ void LocalizationCycle::service_link() {
     filter_.initialize_around_points(m.target_x_m.data(), m.target_y_m.data(), m.sample_count,
                                      reseed_.position_sigma_m);
   }
+  kidnap_.reset();  // the new cloud's first match is not to be compared with the old one's
   ++reset_counter_;
   // This cycle's outputs (ODOMETRY, trajectory) show the new cloud at once.
   const algorithms::PoseEstimate e = filter_.estimate();
@@ -67,10 +68,16 @@ mavlink::MavResult LocalizationCycle::relocalize(std::int32_t& how) {
   const auto camera_timeout_ns = static_cast<std::uint64_t>(config_.cycle.camera_timeout_ms * 1e6);
   if (ever_fix_ && data_time_ns_ - last_fix_ns_ <= camera_timeout_ns) {
     // The camera sees a trained place now: that fix is a global position (seed 004's recovery,
-    // with the harmonic localizer as the global guess). The heading is unknown.
+    // with the harmonic localizer as the global guess). The heading is the training run's there
+    // when the map knows it, else unknown.
+    const algorithms::ForwardMap& f = map_.forward;
+    const bool heading = use_boards_ && f.has_heading;
+    const double yaw = heading ? static_cast<double>(algorithms::route_heading(
+                                     f, last_known_fix_.x_m, last_known_fix_.y_m))
+                               : 0.0;
     reseed_ = Reseed{Reseed::Kind::kAround,
-                     algorithms::Pose2{last_known_fix_.x_m, last_known_fix_.y_m, 0.0}, sigma_m, 0.0,
-                     true};
+                     algorithms::Pose2{last_known_fix_.x_m, last_known_fix_.y_m, yaw}, sigma_m,
+                     config_.kidnap.yaw_sigma_deg * algorithms::kPi / 180.0, !heading};
     how = kRelocalizedAroundFix;
   } else {
     // No trusted fix: the robot is somewhere on the trained route, nothing more is known.
