@@ -119,14 +119,34 @@ if [ ! -f "$GSIM/gpio-sim.ko" ]; then
   make -s -C "$KHEADERS" M="$GSIM" "${KMAKE[@]}" modules > "$GSIM/build.log" 2>&1 ||
     { tail -20 "$GSIM/build.log" >&2; cannot "gpio-sim did not build (see $GSIM/build.log)"; }
 fi
-say "kernel $KVER, gpio-sim module ready ($(elapsed "$T0") s)"
+# vimc (the virtual media-controller camera libcamera's vimc pipeline drives) is off in Debian's
+# kernels too (CONFIG_VIDEO_VIMC not set): built out of tree the same way, unpatched.
+VIMC=$CACHE/vimc-$KVER
+if [ ! -f "$VIMC/vimc.ko" ]; then
+  say "building vimc out of tree from linux-source-6.1 against linux-headers-$KVER"
+  rm -rf "$VIMC"; mkdir -p "$VIMC/src"
+  dpkg-deb --fsys-tarfile "$(fetch linux-source-6.1)" | tar -xO ./usr/src/linux-source-6.1.tar.xz |
+    tar -xJ -C "$VIMC/src" --strip-components=5 --wildcards 'linux-source-6.1/drivers/media/test-drivers/vimc/*.[ch]'
+  cp "$VIMC"/src/*.[ch] "$VIMC/"
+  printf 'obj-m := vimc.o\nvimc-y := vimc-core.o vimc-common.o vimc-streamer.o vimc-capture.o vimc-debayer.o vimc-scaler.o vimc-sensor.o vimc-lens.o\n' > "$VIMC/Kbuild"
+  make -s -C "$KHEADERS" M="$VIMC" "${KMAKE[@]}" modules > "$VIMC/build.log" 2>&1 ||
+    { tail -20 "$VIMC/build.log" >&2; cannot "vimc did not build (see $VIMC/build.log)"; }
+fi
+# libcamera's IPA modules (the vimc pipeline needs ipa_vimc), unpacked from Debian's libcamera-ipa.
+IPA=$CACHE/libcamera-ipa-$DEB_ARCH
+if [ ! -f "$IPA/.done" ]; then
+  rm -rf "$IPA"; mkdir -p "$IPA"
+  dpkg-deb -x "$(fetch "libcamera-ipa:$DEB_ARCH")" "$IPA"
+  touch "$IPA/.done"
+fi
+say "kernel $KVER, gpio-sim and vimc modules ready ($(elapsed "$T0") s)"
 
 # ---- the Linux board, native x86_64 (build/linux) ----------------------------------------------
 T1=$(date +%s.%N)
 PRESET=$([ "$ARCH" = x86_64 ] && echo linux || echo aarch64)
 say "building the Linux board for $ARCH (build/$(basename "$LINUX_BUILD")): harmoloc, vm_drivers_test"
 cmake --preset "$PRESET" > /dev/null
-cmake --build --preset "$PRESET" -j "$(nproc)" --target harmoloc vm_drivers_test > "$CACHE/build-$ARCH.log" 2>&1 ||
+cmake --build --preset "$PRESET" -j "$(nproc)" --target harmoloc vm_drivers_test vm_libcamera_test > "$CACHE/build-$ARCH.log" 2>&1 ||
   { tail -30 "$CACHE/build-$ARCH.log" >&2; echo "FAIL: the Linux board did not build" >&2; exit 1; }
 say "Linux board built ($(elapsed "$T1") s)"
 
@@ -154,7 +174,9 @@ for applet in $(busybox --list); do
   [ -e "$IRD/bin/$applet" ] || ln -s busybox "$IRD/bin/$applet"
 done
 cp tests/vm/init.sh "$IRD/init"; chmod +x "$IRD/init"
-cp "$LINUX_BUILD/bin/harmoloc" "$LINUX_BUILD/bin/vm_drivers_test" "$CANPLAYER" "$IRD/vm/"
+cp "$LINUX_BUILD/bin/harmoloc" "$LINUX_BUILD/bin/vm_drivers_test" "$LINUX_BUILD/bin/vm_libcamera_test" "$CANPLAYER" "$IRD/vm/"
+# libcamera's IPA modules, their proxies and configuration, where libcamera looks for them.
+cp -a "$IPA/usr" "$IRD/"
 ln -sf /vm/canplayer "$IRD/usr/bin/canplayer"
 cp tests/vm/can_encoders.log "$IRD/vm/"
 cp "$E2E/map.hmap" "$IRD/vm/e2e/"
@@ -194,7 +216,8 @@ needed_closure() {
     done
   done
 }
-for lib in $(needed_closure "$IRD/vm/harmoloc" "$IRD/vm/vm_drivers_test" "$IRD/vm/canplayer" | sort -u); do
+for lib in $(needed_closure "$IRD/vm/harmoloc" "$IRD/vm/vm_drivers_test" "$IRD/vm/vm_libcamera_test" "$IRD/vm/canplayer" \
+  "$IRD"/usr/lib/*/libcamera/ipa_vimc.so "$IRD"/usr/lib/*/libcamera/vimc_ipa_proxy | sort -u); do
   mkdir -p "$IRD$(dirname "$lib")"
   cp -L "$lib" "$IRD$lib"
 done
@@ -205,7 +228,7 @@ cp -L "$INTERP" "$IRD$INTERP"
 # plain .ko), plus gpio-sim.
 MODS=$IRD/lib/modules/$KVER
 mkdir -p "$MODS/extra"
-for m in configfs vivid vcan can-raw $EXTRA_MODULES; do
+for m in configfs vivid vcan can-raw $EXTRA_MODULES $(modinfo -F depends "$VIMC/vimc.ko" | tr , ' '); do
   modprobe -d "$KDIR/root" -S "$KVER" --show-depends "$m" 2> /dev/null | awk '$1 == "insmod" {print $2}'
 done | sort -u | while read -r ko; do
   rel=${ko#"$KDIR/root/lib/modules/$KVER/"}
@@ -215,7 +238,7 @@ done | sort -u | while read -r ko; do
     *) cp "$ko" "$MODS/$rel" ;;
   esac
 done
-cp "$GSIM/gpio-sim.ko" "$MODS/extra/"
+cp "$GSIM/gpio-sim.ko" "$VIMC/vimc.ko" "$MODS/extra/"
 cp "$KDIR/root/lib/modules/$KVER"/modules.{order,builtin,builtin.modinfo} "$MODS/" 2> /dev/null || true
 depmod -b "$IRD" "$KVER"
 (cd "$IRD" && find . | cpio -o -H newc --quiet | gzip -1 > "$WORK/initramfs.cpio.gz")
@@ -265,6 +288,11 @@ sed -n '/^VMTEST-BEGIN drivers/,/^VMTEST-END drivers/p' "$CONSOLE" | grep -E '^\
 grep -q '^VMTEST-END drivers rc=0' "$CONSOLE" || {
   sed -n '/^VMTEST-BEGIN drivers/,/^VMTEST-END drivers/p' "$CONSOLE" | grep -B3 -A12 'Failure\|FAILED' | head -80 >&2
   fail "driver tests in the VM failed (vm_drivers_test)"
+}
+sed -n '/^VMTEST-BEGIN libcamera/,/^VMTEST-END libcamera/p' "$CONSOLE" | grep -E '^\[ *(OK|FAILED|PASSED) *\]|VMSTAT' >&2 || true
+grep -q '^VMTEST-END libcamera rc=0' "$CONSOLE" || {
+  sed -n '/^VMTEST-BEGIN libcamera/,/^VMTEST-END libcamera/p' "$CONSOLE" | grep -B3 -A12 'Failure\|FAILED\|ERROR' | head -60 >&2
+  fail "the libcamera driver's test against vimc failed in the VM (vm_libcamera_test)"
 }
 grep -q '^VMTEST-END harmoloc rc=0' "$CONSOLE" || fail "harmoloc (Linux board) did not complete its run in the VM: $(grep -m3 'harmoloc' "$CONSOLE" | tr '\n' ' ')"
 grep -q '^VMTEST-END bad_camera rc=2 lines=1 harmoloc: camera /dev/video7: No such file or directory' "$CONSOLE" ||
