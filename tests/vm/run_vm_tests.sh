@@ -99,21 +99,28 @@ else
 fi
 [ -x "$BUSYBOX" ] || cannot "busybox ($DEB_ARCH) is missing"
 
+# ---- the few kernel sources the out-of-tree modules need, from linux-source-6.1 (one pass) -------
+KSRC=$CACHE/linux-source-files
+if [ ! -f "$KSRC/.done" ]; then
+  say "unpacking gpio-sim, irq_sim and vimc sources from linux-source-6.1 (apt-get download)"
+  rm -rf "$KSRC"; mkdir -p "$KSRC"
+  dpkg-deb --fsys-tarfile "$(fetch linux-source-6.1)" | tar -xO ./usr/src/linux-source-6.1.tar.xz |
+    tar -xJ -C "$KSRC" --strip-components=1 --wildcards linux-source-6.1/drivers/gpio/gpio-sim.c \
+      linux-source-6.1/drivers/gpio/gpiolib.h linux-source-6.1/kernel/irq/irq_sim.c \
+      'linux-source-6.1/drivers/media/test-drivers/vimc/*.[ch]'
+  touch "$KSRC/.done"
+fi
+
 # ---- gpio-sim, built out of tree (Debian's kernels have CONFIG_GPIO_SIM off) -------------------
 GSIM=$CACHE/gpio-sim-$KVER
 if [ ! -f "$GSIM/gpio-sim.ko" ]; then
-  say "building gpio-sim out of tree from linux-source-6.1 against linux-headers-$KVER"
-  SRC_DEB=$(fetch linux-source-6.1)
-  rm -rf "$GSIM"; mkdir -p "$GSIM/src"
-  dpkg-deb --fsys-tarfile "$SRC_DEB" |
-    tar -xO ./usr/src/linux-source-6.1.tar.xz |
-    tar -xJ -C "$GSIM/src" --strip-components=1 linux-source-6.1/drivers/gpio/gpio-sim.c \
-      linux-source-6.1/drivers/gpio/gpiolib.h linux-source-6.1/kernel/irq/irq_sim.c
-  cp "$GSIM/src/drivers/gpio/gpio-sim.c" "$GSIM/gpio-sim-main.c"
-  cp "$GSIM/src/drivers/gpio/gpiolib.h" "$GSIM/"
+  say "building gpio-sim out of tree against linux-headers-$KVER"
+  rm -rf "$GSIM"; mkdir -p "$GSIM"
+  cp "$KSRC/drivers/gpio/gpio-sim.c" "$GSIM/gpio-sim-main.c"
+  cp "$KSRC/drivers/gpio/gpiolib.h" "$GSIM/"
   # irq_to_desc() is not exported to modules; generic_handle_irq_safe() does the same here.
   sed 's/handle_simple_irq(irq_to_desc(irqnum));/generic_handle_irq_safe(irqnum);/' \
-    "$GSIM/src/kernel/irq/irq_sim.c" > "$GSIM/irq_sim.c"
+    "$KSRC/kernel/irq/irq_sim.c" > "$GSIM/irq_sim.c"
   grep -q 'generic_handle_irq_safe(irqnum)' "$GSIM/irq_sim.c" || cannot "irq_sim.c did not take the patch"
   cp tests/vm/gpio-sim/Kbuild "$GSIM/Kbuild"
   make -s -C "$KHEADERS" M="$GSIM" "${KMAKE[@]}" modules > "$GSIM/build.log" 2>&1 ||
@@ -123,11 +130,9 @@ fi
 # kernels too (CONFIG_VIDEO_VIMC not set): built out of tree the same way, unpatched.
 VIMC=$CACHE/vimc-$KVER
 if [ ! -f "$VIMC/vimc.ko" ]; then
-  say "building vimc out of tree from linux-source-6.1 against linux-headers-$KVER"
-  rm -rf "$VIMC"; mkdir -p "$VIMC/src"
-  dpkg-deb --fsys-tarfile "$(fetch linux-source-6.1)" | tar -xO ./usr/src/linux-source-6.1.tar.xz |
-    tar -xJ -C "$VIMC/src" --strip-components=5 --wildcards 'linux-source-6.1/drivers/media/test-drivers/vimc/*.[ch]'
-  cp "$VIMC"/src/*.[ch] "$VIMC/"
+  say "building vimc out of tree against linux-headers-$KVER"
+  rm -rf "$VIMC"; mkdir -p "$VIMC"
+  cp "$KSRC"/drivers/media/test-drivers/vimc/*.[ch] "$VIMC/"
   printf 'obj-m := vimc.o\nvimc-y := vimc-core.o vimc-common.o vimc-streamer.o vimc-capture.o vimc-debayer.o vimc-scaler.o vimc-sensor.o vimc-lens.o\n' > "$VIMC/Kbuild"
   make -s -C "$KHEADERS" M="$VIMC" "${KMAKE[@]}" modules > "$VIMC/build.log" 2>&1 ||
     { tail -20 "$VIMC/build.log" >&2; cannot "vimc did not build (see $VIMC/build.log)"; }
