@@ -113,7 +113,6 @@ std::string GpioQuadratureEncoders::open(const GpioEncoderOptions& options) {
 
 bool GpioQuadratureEncoders::service(std::uint64_t now_ns) {
   if (failed_) return false;
-  bool any_event = false;
   for (std::size_t wheel = 0; wheel < 2; ++wheel) {
     // Both lines of the wheel, merged by timestamp (each line's queue is already in order).
     std::array<std::array<gpiod_line_event, kEventsPerRead>, 2> events{};
@@ -143,7 +142,6 @@ bool GpioQuadratureEncoders::service(std::uint64_t now_ns) {
       const gpiod_line_event& e = events[k][next[k]++];
       d.edge(static_cast<std::uint8_t>(k), e.event_type == GPIOD_LINE_EVENT_RISING_EDGE,
              event_ns(e));
-      any_event = true;
     }
     d.commit_until(now_ns);
     if (count[0] + count[1] > 0) {
@@ -170,7 +168,6 @@ bool GpioQuadratureEncoders::service(std::uint64_t now_ns) {
       quiet_mismatch_[wheel] = 0;
     }
   }
-  (void)any_event;
   publish();
   return true;
 }

@@ -99,34 +99,59 @@ else
 fi
 [ -x "$BUSYBOX" ] || cannot "busybox ($DEB_ARCH) is missing"
 
+# ---- the few kernel sources the out-of-tree modules need, from linux-source-6.1 (one pass) -------
+KSRC=$CACHE/linux-source-files
+if [ ! -f "$KSRC/.done" ]; then
+  say "unpacking gpio-sim, irq_sim and vimc sources from linux-source-6.1 (apt-get download)"
+  rm -rf "$KSRC"; mkdir -p "$KSRC"
+  dpkg-deb --fsys-tarfile "$(fetch linux-source-6.1)" | tar -xO ./usr/src/linux-source-6.1.tar.xz |
+    tar -xJ -C "$KSRC" --strip-components=1 --wildcards linux-source-6.1/drivers/gpio/gpio-sim.c \
+      linux-source-6.1/drivers/gpio/gpiolib.h linux-source-6.1/kernel/irq/irq_sim.c \
+      'linux-source-6.1/drivers/media/test-drivers/vimc/*.[ch]'
+  touch "$KSRC/.done"
+fi
+
 # ---- gpio-sim, built out of tree (Debian's kernels have CONFIG_GPIO_SIM off) -------------------
 GSIM=$CACHE/gpio-sim-$KVER
 if [ ! -f "$GSIM/gpio-sim.ko" ]; then
-  say "building gpio-sim out of tree from linux-source-6.1 against linux-headers-$KVER"
-  SRC_DEB=$(fetch linux-source-6.1)
-  rm -rf "$GSIM"; mkdir -p "$GSIM/src"
-  dpkg-deb --fsys-tarfile "$SRC_DEB" |
-    tar -xO ./usr/src/linux-source-6.1.tar.xz |
-    tar -xJ -C "$GSIM/src" --strip-components=1 linux-source-6.1/drivers/gpio/gpio-sim.c \
-      linux-source-6.1/drivers/gpio/gpiolib.h linux-source-6.1/kernel/irq/irq_sim.c
-  cp "$GSIM/src/drivers/gpio/gpio-sim.c" "$GSIM/gpio-sim-main.c"
-  cp "$GSIM/src/drivers/gpio/gpiolib.h" "$GSIM/"
+  say "building gpio-sim out of tree against linux-headers-$KVER"
+  rm -rf "$GSIM"; mkdir -p "$GSIM"
+  cp "$KSRC/drivers/gpio/gpio-sim.c" "$GSIM/gpio-sim-main.c"
+  cp "$KSRC/drivers/gpio/gpiolib.h" "$GSIM/"
   # irq_to_desc() is not exported to modules; generic_handle_irq_safe() does the same here.
   sed 's/handle_simple_irq(irq_to_desc(irqnum));/generic_handle_irq_safe(irqnum);/' \
-    "$GSIM/src/kernel/irq/irq_sim.c" > "$GSIM/irq_sim.c"
+    "$KSRC/kernel/irq/irq_sim.c" > "$GSIM/irq_sim.c"
   grep -q 'generic_handle_irq_safe(irqnum)' "$GSIM/irq_sim.c" || cannot "irq_sim.c did not take the patch"
   cp tests/vm/gpio-sim/Kbuild "$GSIM/Kbuild"
   make -s -C "$KHEADERS" M="$GSIM" "${KMAKE[@]}" modules > "$GSIM/build.log" 2>&1 ||
     { tail -20 "$GSIM/build.log" >&2; cannot "gpio-sim did not build (see $GSIM/build.log)"; }
 fi
-say "kernel $KVER, gpio-sim module ready ($(elapsed "$T0") s)"
+# vimc (the virtual media-controller camera libcamera's vimc pipeline drives) is off in Debian's
+# kernels too (CONFIG_VIDEO_VIMC not set): built out of tree the same way, unpatched.
+VIMC=$CACHE/vimc-$KVER
+if [ ! -f "$VIMC/vimc.ko" ]; then
+  say "building vimc out of tree against linux-headers-$KVER"
+  rm -rf "$VIMC"; mkdir -p "$VIMC"
+  cp "$KSRC"/drivers/media/test-drivers/vimc/*.[ch] "$VIMC/"
+  printf 'obj-m := vimc.o\nvimc-y := vimc-core.o vimc-common.o vimc-streamer.o vimc-capture.o vimc-debayer.o vimc-scaler.o vimc-sensor.o vimc-lens.o\n' > "$VIMC/Kbuild"
+  make -s -C "$KHEADERS" M="$VIMC" "${KMAKE[@]}" modules > "$VIMC/build.log" 2>&1 ||
+    { tail -20 "$VIMC/build.log" >&2; cannot "vimc did not build (see $VIMC/build.log)"; }
+fi
+# libcamera's IPA modules (the vimc pipeline needs ipa_vimc), unpacked from Debian's libcamera-ipa.
+IPA=$CACHE/libcamera-ipa-$DEB_ARCH
+if [ ! -f "$IPA/.done" ]; then
+  rm -rf "$IPA"; mkdir -p "$IPA"
+  dpkg-deb -x "$(fetch "libcamera-ipa:$DEB_ARCH")" "$IPA"
+  touch "$IPA/.done"
+fi
+say "kernel $KVER, gpio-sim and vimc modules ready ($(elapsed "$T0") s)"
 
 # ---- the Linux board, native x86_64 (build/linux) ----------------------------------------------
 T1=$(date +%s.%N)
 PRESET=$([ "$ARCH" = x86_64 ] && echo linux || echo aarch64)
 say "building the Linux board for $ARCH (build/$(basename "$LINUX_BUILD")): harmoloc, vm_drivers_test"
 cmake --preset "$PRESET" > /dev/null
-cmake --build --preset "$PRESET" -j "$(nproc)" --target harmoloc vm_drivers_test > "$CACHE/build-$ARCH.log" 2>&1 ||
+cmake --build --preset "$PRESET" -j "$(nproc)" --target harmoloc vm_drivers_test vm_libcamera_test > "$CACHE/build-$ARCH.log" 2>&1 ||
   { tail -30 "$CACHE/build-$ARCH.log" >&2; echo "FAIL: the Linux board did not build" >&2; exit 1; }
 say "Linux board built ($(elapsed "$T1") s)"
 
@@ -154,7 +179,9 @@ for applet in $(busybox --list); do
   [ -e "$IRD/bin/$applet" ] || ln -s busybox "$IRD/bin/$applet"
 done
 cp tests/vm/init.sh "$IRD/init"; chmod +x "$IRD/init"
-cp "$LINUX_BUILD/bin/harmoloc" "$LINUX_BUILD/bin/vm_drivers_test" "$CANPLAYER" "$IRD/vm/"
+cp "$LINUX_BUILD/bin/harmoloc" "$LINUX_BUILD/bin/vm_drivers_test" "$LINUX_BUILD/bin/vm_libcamera_test" "$CANPLAYER" "$IRD/vm/"
+# libcamera's IPA modules, their proxies and configuration, where libcamera looks for them.
+cp -a "$IPA/usr" "$IRD/"
 ln -sf /vm/canplayer "$IRD/usr/bin/canplayer"
 cp tests/vm/can_encoders.log "$IRD/vm/"
 cp "$E2E/map.hmap" "$IRD/vm/e2e/"
@@ -194,7 +221,8 @@ needed_closure() {
     done
   done
 }
-for lib in $(needed_closure "$IRD/vm/harmoloc" "$IRD/vm/vm_drivers_test" "$IRD/vm/canplayer" | sort -u); do
+for lib in $(needed_closure "$IRD/vm/harmoloc" "$IRD/vm/vm_drivers_test" "$IRD/vm/vm_libcamera_test" "$IRD/vm/canplayer" \
+  "$IRD"/usr/lib/*/libcamera/ipa_vimc.so "$IRD"/usr/lib/*/libcamera/vimc_ipa_proxy | sort -u); do
   mkdir -p "$IRD$(dirname "$lib")"
   cp -L "$lib" "$IRD$lib"
 done
@@ -205,7 +233,7 @@ cp -L "$INTERP" "$IRD$INTERP"
 # plain .ko), plus gpio-sim.
 MODS=$IRD/lib/modules/$KVER
 mkdir -p "$MODS/extra"
-for m in configfs vivid vcan can-raw $EXTRA_MODULES; do
+for m in configfs vivid vcan can-raw $EXTRA_MODULES $(modinfo -F depends "$VIMC/vimc.ko" | tr , ' '); do
   modprobe -d "$KDIR/root" -S "$KVER" --show-depends "$m" 2> /dev/null | awk '$1 == "insmod" {print $2}'
 done | sort -u | while read -r ko; do
   rel=${ko#"$KDIR/root/lib/modules/$KVER/"}
@@ -215,7 +243,7 @@ done | sort -u | while read -r ko; do
     *) cp "$ko" "$MODS/$rel" ;;
   esac
 done
-cp "$GSIM/gpio-sim.ko" "$MODS/extra/"
+cp "$GSIM/gpio-sim.ko" "$VIMC/vimc.ko" "$MODS/extra/"
 cp "$KDIR/root/lib/modules/$KVER"/modules.{order,builtin,builtin.modinfo} "$MODS/" 2> /dev/null || true
 depmod -b "$IRD" "$KVER"
 (cd "$IRD" && find . | cpio -o -H newc --quiet | gzip -1 > "$WORK/initramfs.cpio.gz")
@@ -265,6 +293,11 @@ sed -n '/^VMTEST-BEGIN drivers/,/^VMTEST-END drivers/p' "$CONSOLE" | grep -E '^\
 grep -q '^VMTEST-END drivers rc=0' "$CONSOLE" || {
   sed -n '/^VMTEST-BEGIN drivers/,/^VMTEST-END drivers/p' "$CONSOLE" | grep -B3 -A12 'Failure\|FAILED' | head -80 >&2
   fail "driver tests in the VM failed (vm_drivers_test)"
+}
+sed -n '/^VMTEST-BEGIN libcamera/,/^VMTEST-END libcamera/p' "$CONSOLE" | grep -E '^\[ *(OK|FAILED|PASSED) *\]|VMSTAT' >&2 || true
+grep -q '^VMTEST-END libcamera rc=0' "$CONSOLE" || {
+  sed -n '/^VMTEST-BEGIN libcamera/,/^VMTEST-END libcamera/p' "$CONSOLE" | grep -B3 -A12 'Failure\|FAILED\|ERROR' | head -60 >&2
+  fail "the libcamera driver's test against vimc failed in the VM (vm_libcamera_test)"
 }
 grep -q '^VMTEST-END harmoloc rc=0' "$CONSOLE" || fail "harmoloc (Linux board) did not complete its run in the VM: $(grep -m3 'harmoloc' "$CONSOLE" | tr '\n' ' ')"
 grep -q '^VMTEST-END bad_camera rc=2 lines=1 harmoloc: camera /dev/video7: No such file or directory' "$CONSOLE" ||

@@ -98,7 +98,8 @@ Capture capture(hd::V4l2Camera& cam, hd::MonotonicClock& clock, int n, double se
     hal::FrameView v;
     const std::uint64_t deadline = clock.now_ns() + 500000000ULL;
     const hal::CameraStatus s = cam.acquire(v, deadline);
-    EXPECT_LE(clock.now_ns(), deadline + 50000000ULL) << "acquire overstayed its deadline";
+    // Generous: the emulated machine may be descheduled by the host for a while.
+    EXPECT_LE(clock.now_ns(), deadline + 250000000ULL) << "acquire overstayed its deadline";
     if (s == hal::CameraStatus::kFrame) {
       EXPECT_EQ(v.width_px, w);
       EXPECT_EQ(v.height_px, h);
@@ -178,7 +179,8 @@ TEST(Vivid, DeadlineIsKeptWhenNoFrameComes) {
   hd::MonotonicClock clock;
   hd::V4l2Camera cam(clock);
   ASSERT_EQ(cam.open(options(320, 180, hd::FormatRequest::kAuto)), "");
-  // Take whatever is ready, then ask for a frame within 2 ms: vivid (a few fps here) has none.
+  // Ask for a frame within 2 ms, 20 times: vivid (5 fps here) mostly has none. An acquire that
+  // waited for the next frame would come back up to 200 ms late, most times.
   int late = 0;
   for (int i = 0; i < 20; ++i) {
     hal::FrameView v;
@@ -186,9 +188,9 @@ TEST(Vivid, DeadlineIsKeptWhenNoFrameComes) {
     const hal::CameraStatus s = cam.acquire(v, deadline);
     const std::uint64_t now = clock.now_ns();
     if (s == hal::CameraStatus::kFrame) cam.release();
-    if (now > deadline + 20000000ULL) ++late;
+    if (now > deadline + 60000000ULL) ++late;
   }
-  EXPECT_EQ(late, 0) << "acquire returned more than 20 ms after its deadline";
+  EXPECT_LE(late, 2) << "acquire returned more than 60 ms after its deadline " << late << " times";
 }
 
 TEST(Vivid, DroppedBuffersAreCountedFromSequenceGaps) {
@@ -508,15 +510,15 @@ TEST(GpioSim, OneLostEdgeIsResynchronisedAndCounted) {
 TEST(GpioSim, DebounceIgnoresShortPulses) {
   all_low();
   hd::GpioQuadratureEncoders enc;
-  ASSERT_EQ(enc.open(gpio_options(hd::GpioReader::kThread, 30000)), "");  // 30 ms
+  ASSERT_EQ(enc.open(gpio_options(hd::GpioReader::kThread, 50000)), "");  // 50 ms
   // A pulse on left A: up and straight back down (microseconds apart).
   pull(0, true);
   pull(0, false);
-  sleep_ms(150);
+  sleep_ms(300);
   EXPECT_EQ(enc.left_position(), 0) << "a bounce was counted";
   // A steady edge counts once it has held for the debounce time.
   pull(0, true);
-  sleep_ms(150);
+  sleep_ms(300);
   EXPECT_EQ(enc.left_position(), 1);
   EXPECT_EQ(enc.counters().glitches, 0U);
   all_low();

@@ -89,7 +89,6 @@ class GpioQuadratureEncoders final : public hal::WheelEncoders {
   std::atomic<std::uint64_t> shared_glitches_{0};
   std::atomic<std::uint64_t> shared_overflows_{0};
   std::atomic<bool> shared_failed_{false};
-  std::atomic<std::uint64_t> shared_edges_{0};
 
   int stop_fd_ = -1;  ///< eventfd that wakes the reader to stop
   std::thread reader_;
