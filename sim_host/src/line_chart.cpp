@@ -9,7 +9,8 @@ namespace harmoloc::sim_host {
 std::string line_chart(const std::string& title, const std::string& x_label,
                        const std::string& y_label, const std::vector<double>& x,
                        const std::vector<Series>& series, double reference,
-                       const std::string& reference_label, bool markers) {
+                       const std::string& reference_label, bool markers,
+                       const std::vector<Span>& spans) {
   const double w = 640, h = 400, left = 70, right = 170, top = 40, bottom = 55;
   double y_max = reference > 0 ? reference * 1.15 : 0.0;
   for (const auto& s : series)
@@ -34,6 +35,13 @@ std::string line_chart(const std::string& title, const std::string& x_label,
     << "' font-family='sans-serif' font-size='12'>\n<rect width='100%' height='100%' "
        "fill='white'/>\n<text x='"
     << w / 2 << "' y='20' text-anchor='middle' font-size='14'>" << title << "</text>\n";
+  for (const Span& sp : spans) {
+    const double a = std::clamp(px(sp.from), left, w - right);
+    const double b = std::clamp(px(sp.to), left, w - right);
+    o << "<rect x='" << a << "' y='" << top << "' width='" << std::max(1.0, b - a) << "' height='"
+      << h - top - bottom << "' fill='#f2e6c9'/>\n<text x='" << a + 3 << "' y='" << top + 12
+      << "' fill='#8a6d2b'>" << sp.label << "</text>\n";
+  }
   for (int i = 0; i <= 5; ++i) {
     const double v = y_max * i / 5.0;
     o << "<line x1='" << left << "' x2='" << w - right << "' y1='" << py(v) << "' y2='" << py(v)
