@@ -90,7 +90,15 @@ DatasetMetadata read_metadata(const std::string& dataset_dir) {
   m.frame_rate_hz = number<double>(t, "camera", "rate_hz", 1.0, 1000.0, 30.0, true);
   m.frames_index = text(t, "camera", "frames_index", "frames.csv");
 
-  m.encoder_log = text(t, "encoders", "log", "encoders.log");
+  const std::string source = text(t, "encoders", "source", "can");
+  if (source == "can")
+    m.encoder_source = EncoderSource::kCan;
+  else if (source == "gpio")
+    m.encoder_source = EncoderSource::kGpio;
+  else
+    fail("encoders.source must be \"can\" or \"gpio\", not \"" + source + "\"");
+  m.encoder_log = text(t, "encoders", "log",
+                       m.encoder_source == EncoderSource::kGpio ? "encoders.csv" : "encoders.log");
   m.can_interface = text(t, "encoders", "interface", "can0");
   auto& lay = m.encoder_layout;
   lay.id = number<std::uint32_t>(t, "encoders", "can_id", 0, 0x1FFFFFFF, lay.id, false);
@@ -143,6 +151,7 @@ void write_metadata(const std::string& dataset_dir, const DatasetMetadata& m) {
       << "rate_hz = " << m.frame_rate_hz << "\n"
       << "frames_index = " << toml_string(m.frames_index) << "\n\n"
       << "[encoders]\n"
+      << (m.encoder_source == EncoderSource::kGpio ? "source = \"gpio\"\n" : "")
       << "log = " << toml_string(m.encoder_log) << "\n"
       << "interface = " << toml_string(m.can_interface) << "\n"
       << "can_id = " << id << "\n"
