@@ -57,10 +57,11 @@ bool parse_encoder_csv_line(const char* line, std::size_t size, std::uint8_t cou
     *reason = "empty line";
     return false;
   }
-  const char* c1 = static_cast<const char*>(std::memchr(line, ',', static_cast<std::size_t>(end - line)));
-  const char* c2 =
-      c1 == nullptr ? nullptr
-                    : static_cast<const char*>(std::memchr(c1 + 1, ',', static_cast<std::size_t>(end - c1 - 1)));
+  const char* c1 =
+      static_cast<const char*>(std::memchr(line, ',', static_cast<std::size_t>(end - line)));
+  const char* c2 = c1 == nullptr ? nullptr
+                                 : static_cast<const char*>(std::memchr(
+                                       c1 + 1, ',', static_cast<std::size_t>(end - c1 - 1)));
   if (c1 == nullptr || c2 == nullptr ||
       std::memchr(c2 + 1, ',', static_cast<std::size_t>(end - c2 - 1)) != nullptr) {
     *reason = "expected three fields: timestamp_ns,left_ticks,right_ticks";
@@ -155,8 +156,8 @@ hal::EncoderStatus EncoderRecorder::read(std::uint64_t data_time_ns, hal::Encode
       counts.counter_bits >= 32 ? 0xFFFFFFFFU : (1U << counts.counter_bits) - 1U;
   char line[64];
   const std::size_t n = format_encoder_csv_line(
-      EncoderSample{counts.timestamp_ns, counts.left_ticks & mask, counts.right_ticks & mask},
-      line, sizeof line);
+      EncoderSample{counts.timestamp_ns, counts.left_ticks & mask, counts.right_ticks & mask}, line,
+      sizeof line);
   std::fwrite(line, 1, n, file_);
   any_ = true;
   last_ns_ = counts.timestamp_ns;

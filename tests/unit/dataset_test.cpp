@@ -393,26 +393,26 @@ TEST(EncoderCsv, ParsesSignedAndUnsignedCountsWithinTheWidth) {
 
   const std::pair<const char*, std::uint8_t> bad[] = {
       {"", 32},
-      {"1,2", 32},                      // two fields
-      {"1,2,3,4", 32},                  // four
-      {"1,2,3,", 32},                   // a trailing comma
-      {" 1,2,3", 32},                   // spaces
+      {"1,2", 32},      // two fields
+      {"1,2,3,4", 32},  // four
+      {"1,2,3,", 32},   // a trailing comma
+      {" 1,2,3", 32},   // spaces
       {"1, 2,3", 32},
-      {"+1,2,3", 32},                   // signs on the timestamp
+      {"+1,2,3", 32},  // signs on the timestamp
       {"-1,2,3", 32},
-      {"1.5,2,3", 32},                  // not whole
+      {"1.5,2,3", 32},  // not whole
       {"1e3,2,3", 32},
-      {"18446744073709551616,2,3", 32}, // 2^64 ns
-      {"1,4294967296,3", 32},           // 2^32
-      {"1,-2147483649,3", 32},          // below -2^31
+      {"18446744073709551616,2,3", 32},  // 2^64 ns
+      {"1,4294967296,3", 32},            // 2^32
+      {"1,-2147483649,3", 32},           // below -2^31
       {"1,65536,3", 16},
       {"1,-32769,3", 16},
       {"1,256,0", 8},
-      {"1,2,-", 32},                    // a sign alone
+      {"1,2,-", 32},  // a sign alone
       {"1,,3", 32},
       {"1,0x10,3", 32},
       {"1,2,3\r\r", 32},
-      {"1,2,3", 7},                     // a width the firmware does not have
+      {"1,2,3", 7},  // a width the firmware does not have
       {"1,2,3", 33},
   };
   for (const auto& [line, bits] : bad) {
@@ -467,11 +467,11 @@ TEST(EncoderCsv, ReadNamesFileAndLine) {
       {"", 1, "header"},
       {"timestamp_ns,left,right\n1,2,3\n", 1, "header"},
       {"# a comment\n" + header + "1,2,3\n", 1, "header"},
-      {header + "100,1,2\n100,1,2\n", 3, "not after"},       // repeated timestamp
-      {header + "200,1,2\n100,1,2\n", 3, "not after"},       // going back
-      {header + "100,1,2\n\n200,1,2\n", 3, "empty"},         // a blank line inside
-      {header + "100,1,2\n\n", 3, "empty"},                   // two newlines at the end
-      {header + "100,1,2\n200,1,70000\n", 3, "width"},        // beyond 16 bits
+      {header + "100,1,2\n100,1,2\n", 3, "not after"},  // repeated timestamp
+      {header + "200,1,2\n100,1,2\n", 3, "not after"},  // going back
+      {header + "100,1,2\n\n200,1,2\n", 3, "empty"},    // a blank line inside
+      {header + "100,1,2\n\n", 3, "empty"},             // two newlines at the end
+      {header + "100,1,2\n200,1,70000\n", 3, "width"},  // beyond 16 bits
       {header + "100;1;2\n", 2, "three fields"},
   };
   for (const Case& c : bad) {
@@ -566,8 +566,8 @@ TEST(Metadata, EncoderSourceSelectsTheRecordingAndItsDefaultFile) {
   EXPECT_EQ(m.encoder_log, "encoders.csv");
   EXPECT_EQ(m.encoder_layout.counter_bits, 16);
   dir.write("metadata.toml", base + "[encoders]\nsource = \"quadrature\"\n");
-  ht::expect_one_line(ht::error_of([&] { hs::read_metadata(dir.dir()); }), "metadata.toml: ",
-                      "encoders.source");
+  ht::expect_one_line(ht::error_of([&] { hs::read_metadata(dir.dir()); }),
+                      "metadata.toml: ", "encoders.source");
 }
 
 TEST(Metadata, CalibratedGeometryKeepsItsPrecision) {

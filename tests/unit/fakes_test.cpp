@@ -17,8 +17,8 @@
 
 #include "harmoloc/algorithms/can_encoder_layout.hpp"
 #include "harmoloc/drivers/serial_link.hpp"
-#include "harmoloc/sim_host/file_camera.hpp"
 #include "harmoloc/sim_host/encoder_csv.hpp"
+#include "harmoloc/sim_host/file_camera.hpp"
 #include "harmoloc/sim_host/frame_index.hpp"
 #include "harmoloc/sim_host/gpio_log_encoders.hpp"
 #include "harmoloc/sim_host/log_encoders.hpp"
@@ -364,7 +364,8 @@ TEST(EncoderRecorder, RecordsFreshSamplesThatReplayIdentically) {
   std::vector<ha::CanFrame> frames;
   for (std::uint64_t k = 0; k < 50; ++k) {
     frames.push_back(ha::encode_encoder_frame(layout, static_cast<std::uint32_t>(65500 + 7 * k),
-                                              static_cast<std::uint32_t>(300 - 9 * k), 1000 + k * 10));
+                                              static_cast<std::uint32_t>(300 - 9 * k),
+                                              1000 + k * 10));
   }
   frames.push_back(frame_at(1005, 0x281, 8, 1, 1));  // ignored by both
   ht::TempDir dir;

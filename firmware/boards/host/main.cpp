@@ -147,8 +147,8 @@ int main(int argc, char** argv) {
     const std::string encoder_path = (std::filesystem::path(dataset) / meta.encoder_log).string();
     if (meta.encoder_source == sim_host::EncoderSource::kGpio) {
       // A GPIO recording: its counter width is the metadata's (the config's [can] is the bus's).
-      gpio_log = std::make_unique<sim_host::GpioLogEncoders>(
-          encoder_path, meta.encoder_layout.counter_bits);
+      gpio_log = std::make_unique<sim_host::GpioLogEncoders>(encoder_path,
+                                                             meta.encoder_layout.counter_bits);
       encoders = gpio_log.get();
       encoder_records = gpio_log->sample_count();
       encoders_first_ns = gpio_log->first_timestamp_ns();
@@ -162,9 +162,9 @@ int main(int argc, char** argv) {
     }
     if (loops > 1) {
       // One pass lasts from the first to the last record, plus one frame period.
-      const std::uint64_t first =
-          encoder_records > 0 ? std::min(camera->first_timestamp_ns(), encoders_first_ns)
-                              : camera->first_timestamp_ns();
+      const std::uint64_t first = encoder_records > 0
+                                      ? std::min(camera->first_timestamp_ns(), encoders_first_ns)
+                                      : camera->first_timestamp_ns();
       const std::uint64_t last = std::max(camera->last_timestamp_ns(), encoders_last_ns);
       const auto period = static_cast<std::uint64_t>(1e9 / meta.frame_rate_hz);
       camera->set_loops(loops, last - first + period);
@@ -224,10 +224,10 @@ int main(int argc, char** argv) {
     std::fprintf(stderr,
                  "harmoloc: %zu frames %ux%u, %zu encoder %s, map of %u samples on %u boards, "
                  "%zu particles%s\n",
-                 camera->frame_count(), meta.image_width_px, meta.image_height_px,
-                 encoder_records, gpio_log ? "samples (GPIO recording)" : "frames",
-                 g_map.model.sample_count, g_map.model.feature_count,
-                 config.filter.particles, realtime ? ", real-time pacing" : "");
+                 camera->frame_count(), meta.image_width_px, meta.image_height_px, encoder_records,
+                 gpio_log ? "samples (GPIO recording)" : "frames", g_map.model.sample_count,
+                 g_map.model.feature_count, config.filter.particles,
+                 realtime ? ", real-time pacing" : "");
     if (link.can_receive()) {
       std::fprintf(stderr, "harmoloc: link commands %s\n",
                    config.link.has_signing_key ? "signed only (MAVLink 2 signing key loaded)"

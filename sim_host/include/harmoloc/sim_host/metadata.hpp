@@ -25,7 +25,7 @@ struct DatasetMetadata {
   double frame_rate_hz = 30.0;
   std::string frames_index = "frames.csv";
   EncoderSource encoder_source = EncoderSource::kCan;
-  std::string encoder_log = "encoders.log";  ///< "encoders.csv" by default for kGpio
+  std::string encoder_log = "encoders.log";      ///< "encoders.csv" by default for kGpio
   std::string ground_truth = "groundtruth.tum";  ///< empty when there is none (a real recording)
   std::string can_interface = "can0";
   algorithms::DiffDriveGeometry geometry;
