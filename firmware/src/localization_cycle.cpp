@@ -109,16 +109,27 @@ CycleResult LocalizationCycle::run_once() {
   // budget starts when it returns. A replay's acquire does not wait and counts in full.
   const std::uint64_t compute_start = live_clock_ ? clock_.now_ns() : cycle_start;
   ++counters_.cycles;
-  const bool have_frame = status == hal::CameraStatus::kFrame;
+  // A frame stamped no later than the last one used (a repeated or reordered timestamp) is no
+  // new view of the scene: released unused and counted; the cycle goes on as without a frame.
+  const bool stale = status == hal::CameraStatus::kFrame && have_frame_time_ &&
+                     frame.timestamp_ns <= last_frame_ns_;
+  if (stale) {
+    camera_.release();
+    ++counters_.stale_frames;
+  }
+  const bool have_frame = status == hal::CameraStatus::kFrame && !stale;
   if (have_frame) {
-    data_time_ns_ = live_clock_ && have_data_time_ ? std::max(frame.timestamp_ns, data_time_ns_)
-                                                   : frame.timestamp_ns;
+    // The data clock never goes back: a frame stamped before it (late) is used at its time.
+    data_time_ns_ =
+        have_data_time_ ? std::max(frame.timestamp_ns, data_time_ns_) : frame.timestamp_ns;
     have_data_time_ = true;
+    last_frame_ns_ = frame.timestamp_ns;
+    have_frame_time_ = true;
     ++counters_.frames;
   } else {
     if (status == hal::CameraStatus::kCorrupt)
       ++counters_.corrupt_frames;
-    else
+    else if (!stale)
       ++counters_.no_frame;
     if (live_clock_) {
       data_time_ns_ = std::max(data_time_ns_, cycle_start);

@@ -55,7 +55,8 @@ std::string stats_json(const LocalizationCycle& cycle, const RunCounters& run) {
     << "  \"camera\": {\"frames\": " << run.camera.frames << ", \"corrupt\": " << run.camera.corrupt
     << ", \"dropped\": " << run.camera.dropped << ", \"errors\": " << run.camera.errors
     << ", \"reopens\": " << run.camera.reopens << ", \"no_frame_cycles\": " << c.no_frame
-    << ", \"size_mismatch\": " << c.frame_size_mismatch << "},\n"
+    << ", \"size_mismatch\": " << c.frame_size_mismatch << ", \"stale\": " << c.stale_frames
+    << "},\n"
     << "  \"encoders\": {\"samples\": " << run.encoders.samples
     << ", \"ignored_id\": " << run.encoders.ignored_id
     << ", \"bad_length\": " << run.encoders.bad_length

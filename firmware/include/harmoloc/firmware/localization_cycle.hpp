@@ -69,6 +69,7 @@ struct CycleCounters {
   std::uint64_t frames = 0;
   std::uint64_t no_frame = 0;
   std::uint64_t corrupt_frames = 0;
+  std::uint64_t stale_frames = 0;  ///< frames stamped no later than the last one used (unused)
   std::uint64_t frame_size_mismatch = 0;
   std::uint64_t fixes_used = 0;
   std::uint64_t unknown_place = 0;
@@ -182,6 +183,8 @@ class LocalizationCycle {
   std::uint64_t budget_ns_;
   std::uint64_t data_time_ns_ = 0;
   bool have_data_time_ = false;
+  std::uint64_t last_frame_ns_ = 0;  ///< timestamp of the last frame used
+  bool have_frame_time_ = false;
   bool live_clock_ = false;
   std::uint64_t last_fix_ns_ = 0;
   bool ever_fix_ = false;
