@@ -51,6 +51,7 @@ LocalizationCycle::LocalizationCycle(const FirmwareConfig& config, const algorit
       budget_ns_(static_cast<std::uint64_t>(std::llround(config.cycle.budget_ms * 1e6))) {
   filter_.configure(config.filter.particles, config.filter.seed, config.filter.noise);
   reliability_.reset(config.observation.boards);
+  if (use_boards_) board_maxima_ = algorithms::board_maxima(map.forward);
   if (config.link.has_signing_key) signer_.configure(config.link.signing_key, config.link.link_id);
   mavlink_.set_signer(&signer_);
   colour_table_storage_.reset(new std::uint8_t[algorithms::MaskTable::kStorageBytes]);
@@ -191,7 +192,12 @@ CycleResult LocalizationCycle::run_once() {
     hal::EncoderCounts counts{};
     if (encoders_.read(data_time_ns_, counts) == hal::EncoderStatus::kFresh) {
       ++counters_.encoder_samples;
-      if (have_encoder_) {
+      if (have_encoder_ && motion_diffused_) {
+        // The first sample after a gap the filter bridged by diffusing (vision only): the
+        // travel since the last sample is already in the cloud's spread and the fixes that
+        // followed it, so it is not applied again. The counts become the new reference.
+        ++counters_.encoder_reanchors;
+      } else if (have_encoder_) {
         const std::int64_t dl = algorithms::wrapped_delta(last_counts_.left_ticks,
                                                           counts.left_ticks, counts.counter_bits);
         const std::int64_t dr = algorithms::wrapped_delta(last_counts_.right_ticks,
@@ -203,6 +209,7 @@ CycleResult LocalizationCycle::run_once() {
       last_counts_ = counts;
       last_encoder_ns_ = counts.timestamp_ns;
       have_encoder_ = true;
+      motion_diffused_ = false;
     }
   }
 
@@ -217,6 +224,7 @@ CycleResult LocalizationCycle::run_once() {
         const double step_m = config_.filter.vision_only_speed_mps / config_.cycle.rate_hz;
         filter_.predict(algorithms::OdometryDelta{0.0, 0.0});
         filter_.diffuse(step_m, 0.5 * step_m / (0.5 * config_.geometry.track_m));
+        motion_diffused_ = true;
       }
     }
     if (have_delta && delta_dt_s > 0.0) {
@@ -229,7 +237,14 @@ CycleResult LocalizationCycle::run_once() {
   {
     StageTimer t(clock_, at(Stage::kUpdate));
     kidnap_verdict_ = algorithms::KidnapVerdict::kNone;
-    if (fix_.present) {
+    // A frame no place on the map can look like (noise, a blinded sensor) is not a view.
+    const bool implausible =
+        fix_.present && use_boards_ &&
+        algorithms::frame_implausible(map_.forward, board_maxima_,
+                                      algorithms::board_features(map_.model.area_scale, areas),
+                                      config_.observation.boards.implausible_ratio);
+    if (implausible) ++counters_.implausible_frames;
+    if (fix_.present && !implausible) {
       if (fix_.fix.known_place) {
         ++counters_.fixes_used;
         last_known_fix_ = fix_.fix;

@@ -21,6 +21,7 @@
 #include <utility>
 #include <vector>
 
+#include "../unit/test_support.hpp"
 #include "fault_harness.hpp"
 #include "harmoloc/algorithms/can_encoder_layout.hpp"
 #include "harmoloc/algorithms/quadrature.hpp"
@@ -293,5 +294,153 @@ TEST(Fault, DuplicatedAndOutOfOrderFrameTimestamps) {
   expect_pose_flows(r, 3.0);
   EXPECT_EQ(r.cycles_in(hf::Health::kNominal, 3.0, 1e9), r.errors(3.0, 1e9).cycles);
   EXPECT_LT(r.errors(3.0, 1e9).max_m, kNominalMax_m);
+  EXPECT_EQ(r.counters.kidnaps, 0U);
+}
+
+// Frame files that go bad while the run is under way (FileCamera checked them all at start-up):
+// cut short, overwritten with noise, deleted, grown by a byte, replaced by a frame of another size
+// or by a directory; and ten frames whose header is fine but whose pixels are noise. A file that
+// cannot be read whole as the frame it was at start-up is a corrupt frame (kCorrupt, counted,
+// the cycle goes on without it); a noise image is a frame, and the robust filter must not let it
+// move the pose or raise a kidnap.
+TEST(Fault, FrameFilesGoBadDuringTheRun) {
+  harmoloc::test::TempDir dir;
+  const std::string data = dir.path("tiny");
+  hs::simulate_dataset(hs::load_scenario("tiny"), 2, data, nullptr);
+  const hs::DatasetMetadata meta = hs::read_metadata(data);
+  hs::FileCamera camera(data, meta);  // start-up: every file checked
+  const auto entries = hs::read_frame_index(data + "/frames.csv");
+  const auto file = [&](std::size_t k) { return data + "/" + entries.at(k).file; };
+  const auto size = fs::file_size(file(0));
+  std::uint64_t rng = 7;
+  const auto noise = [&](std::size_t n) {
+    std::vector<std::uint8_t> b(n);
+    for (std::uint8_t& v : b) {
+      rng = rng * 6364136223846793005ULL + 1442695040888963407ULL;
+      v = static_cast<std::uint8_t>(rng >> 56);
+    }
+    return b;
+  };
+  // Frame k is at k / 30 s.
+  fs::resize_file(file(150), size / 2);                 // 5.0 s: cut short
+  harmoloc::test::write_bytes(file(165), noise(size));  // 5.5 s: all noise
+  fs::remove(file(180));                                // 6.0 s: gone
+  fs::resize_file(file(195), size + 1);                 // 6.5 s: one byte more
+  std::vector<std::uint8_t> small(80 * 60 * 3, 128);
+  hs::write_ppm(file(210), 80, 60, small.data());  // 7.0 s: another size
+  fs::remove(file(225));                           // 7.5 s: a directory
+  fs::create_directory(file(225));
+  const std::size_t noisy_from = 240, noisy = 10;  // 8.0-8.3 s: noise pixels
+  for (std::size_t k = noisy_from; k < noisy_from + noisy; ++k) {
+    const std::vector<std::uint8_t> pixels = noise(160 * 120 * 3);
+    hs::write_ppm(file(k), 160, 120, pixels.data());
+  }
+  const std::size_t corrupt = 6;
+
+  const SimRun sim("tiny", 2);  // the truth
+  hf::FirmwareConfig config = sim.config();
+  config.geometry = meta.geometry;
+  config.can_layout = meta.encoder_layout;
+  hs::LogEncoders encoders(data + "/" + meta.encoder_log, config.can_layout);
+  harmoloc::fault::MemoryLink link;
+  const Replay r = harmoloc::fault::replay(sim, config, camera, encoders, link);
+  const Replay::Errors e = r.errors(3.0, 1e9);
+  std::printf(
+      "bad frame files: camera corrupt %llu, cycle corrupt %llu, frames %llu, max error "
+      "%.2f cm (8.0-9.0 s: %.2f cm), kidnaps %llu, no-consensus frames %llu, odometry-only "
+      "%zu cycles, recovered %.2f s after the noise, worst cycle %.2f ms\n",
+      static_cast<unsigned long long>(r.camera.corrupt),
+      static_cast<unsigned long long>(r.counters.corrupt_frames),
+      static_cast<unsigned long long>(r.counters.frames), 100 * e.max_m,
+      100 * r.errors(8.0, 9.0).max_m, static_cast<unsigned long long>(r.counters.kidnaps),
+      static_cast<unsigned long long>(r.counters.no_consensus),
+      r.cycles_in(hf::Health::kOdometryOnly, 0, 1e9), r.recovery_s(8.34, kRecovered_m, 1.0),
+      r.max_wall_ms);
+  EXPECT_EQ(r.cycles.size(), entries.size());
+  // Six unreadable frames are corrupt; the ten noise images are frames no place on the map can
+  // look like, so they are not used either (odometry only for the 0.1 s beyond the timeout).
+  EXPECT_EQ(r.counters.implausible_frames, noisy);
+  EXPECT_LE(r.cycles_in(hf::Health::kOdometryOnly, 0, 1e9), 4U);
+  const double recovery = r.recovery_s(8.34, kRecovered_m, 1.0);
+  EXPECT_GE(recovery, 0.0);
+  EXPECT_LE(recovery, 2 * kPeriod_s);
+  EXPECT_EQ(r.camera.corrupt, corrupt);
+  EXPECT_EQ(r.counters.corrupt_frames, corrupt);
+  EXPECT_EQ(r.counters.frames, entries.size() - corrupt);
+  EXPECT_EQ(r.counters.frame_size_mismatch, 0U);
+  expect_cycle_keeps_its_rate(r);
+  expect_pose_flows(r, 3.0);
+  EXPECT_LT(e.max_m, kNominalMax_m);
+  EXPECT_EQ(r.counters.kidnaps, 0U);
+}
+
+// Images of noise from the camera itself (a sensor or bus fault): 10 frames in a row. Without the
+// implausibility check the robust filter takes them for a kidnap and re-seeds 30 cm away; with
+// it they are not used.
+TEST(Fault, NoiseFramesAreNoViewOfTheScene) {
+  std::size_t noisy = 0;
+  const Replay r = run_with_camera_faults({{8.0, 8.33, FrameFault::kNoise}}, &noisy);
+  EXPECT_EQ(noisy, 10U);
+  EXPECT_EQ(r.counters.implausible_frames, noisy);
+  EXPECT_EQ(r.counters.kidnaps, 0U);
+  EXPECT_LT(r.errors(3.0, 1e9).max_m, kNominalMax_m);
+  expect_cycle_keeps_its_rate(r);
+  expect_pose_flows(r, 3.0);
+
+  hf::FirmwareConfig unchecked = tiny().sim.config();
+  unchecked.observation.boards.implausible_ratio = 0.0;
+  const Replay u = run_with_camera_faults({{8.0, 8.33, FrameFault::kNoise}}, nullptr, &unchecked);
+  std::printf(
+      "noise frames without the check: kidnaps %llu, max error %.2f cm (with it: %.2f cm)\n",
+      static_cast<unsigned long long>(u.counters.kidnaps), 100 * u.errors(3.0, 1e9).max_m,
+      100 * r.errors(3.0, 1e9).max_m);
+  EXPECT_EQ(u.counters.implausible_frames, 0U);
+  EXPECT_GE(u.counters.kidnaps, 1U) << "the negative control no longer shows the problem";
+}
+
+// Gaps in the encoder log (the bus silent for 0.5 s and 3 s): vision only after
+// encoder_timeout_ms (250 ms), nominal again with the first sample, which carries the whole travel
+// of the gap (the counters are absolute).
+TEST(Fault, EncoderLogGaps) {
+  const SimRun& sim = tiny().sim;
+  const hf::FirmwareConfig config = sim.config();
+  const std::vector<ha::CanFrame> frames = frames_without(sim, {{5.0, 5.5}, {8.0, 11.0}});
+  harmoloc::fault::CachedCamera camera(tiny().frames);
+  hs::LogEncoders encoders(frames, config.can_layout);
+  harmoloc::fault::MemoryLink link;
+  const Replay r = harmoloc::fault::replay(sim, config, camera, encoders, link);
+  const std::size_t vision_only = r.cycles_in(hf::Health::kVisionOnly, 0, 1e9);
+  std::printf(
+      "encoder gaps: %zu of %zu CAN frames left, samples %llu, vision-only %zu cycles, "
+      "max error %.2f cm (during the 3 s gap %.2f cm), recovered %.2f s and %.2f s after, "
+      "%llu re-anchors\n",
+      frames.size(), sim.run.encoder_frames().size(),
+      static_cast<unsigned long long>(r.encoders.samples), vision_only,
+      100 * r.errors(3.0, 1e9).max_m, 100 * r.errors(8.0, 11.0).max_m,
+      r.recovery_s(5.5, kRecovered_m, 1.0), r.recovery_s(11.0, kRecovered_m, 1.0),
+      static_cast<unsigned long long>(r.counters.encoder_reanchors));
+  expect_cycle_keeps_its_rate(r);
+  expect_pose_flows(r, 3.0);
+  EXPECT_LT(frames.size(), sim.run.encoder_frames().size());
+  EXPECT_EQ(r.health_at(5.35), hf::Health::kVisionOnly);
+  EXPECT_EQ(r.health_at(9.5), hf::Health::kVisionOnly);
+  EXPECT_EQ(r.health_at(10.95), hf::Health::kVisionOnly);
+  // (0.5 - 0.25) + (3 - 0.25) s at 30 Hz, give or take a cycle at each edge.
+  EXPECT_NEAR(static_cast<double>(vision_only), 3.0 * 30.0, 4.0);
+  EXPECT_EQ(r.counters.cycles_in_health[3], vision_only);
+  // Vision only, the cloud diffusing at vision_only_speed_mps between fixes, holds 10 cm over
+  // 3 s on this route; the first sample after a gap is a new reference (its travel is already in
+  // the cloud). Before that re-anchoring, the 3 s gap's travel was applied a second time: 16 cm,
+  // and 2.1 s to come back under 5 cm.
+  EXPECT_LT(r.errors(8.0, 11.0).max_m, 0.10);
+  EXPECT_EQ(r.counters.encoder_reanchors, 2U);
+  const double short_gap = r.recovery_s(5.5, kRecovered_m, 1.0);
+  const double long_gap = r.recovery_s(11.0, kRecovered_m, 1.0);
+  EXPECT_GE(short_gap, 0.0);
+  EXPECT_LE(short_gap, 2 * kPeriod_s);
+  EXPECT_GE(long_gap, 0.0);
+  EXPECT_LE(long_gap, 1.0);
+  EXPECT_LT(r.errors(3.0, 8.0).max_m, kNominalMax_m);
+  EXPECT_LT(r.errors(12.0, 1e9).max_m, kNominalMax_m);
   EXPECT_EQ(r.counters.kidnaps, 0U);
 }

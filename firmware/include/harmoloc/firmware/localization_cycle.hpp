@@ -73,7 +73,11 @@ struct CycleCounters {
   std::uint64_t frame_size_mismatch = 0;
   std::uint64_t fixes_used = 0;
   std::uint64_t unknown_place = 0;
+  std::uint64_t implausible_frames = 0;  ///< frames no place on the map can look like (unused)
   std::uint64_t encoder_samples = 0;
+  /// Samples taken as a new reference without applying their travel: the first after a gap the
+  /// filter bridged by diffusing (vision only), whose motion the cloud already covers.
+  std::uint64_t encoder_reanchors = 0;
   std::uint64_t overruns = 0;
   std::uint64_t resamples = 0;
   std::uint64_t no_consensus = 0;       ///< frames whose boards mostly disagreed with the estimate
@@ -166,6 +170,7 @@ class LocalizationCycle {
   algorithms::YuyvTable yuyv_table_;
   algorithms::ParticleFilter filter_;
   algorithms::BoardReliability reliability_;
+  std::array<float, algorithms::kMaxBoards> board_maxima_{};  ///< per board, over the map
   algorithms::BoardUpdate board_update_{};
   algorithms::BoardAssessment assessment_{};
   algorithms::HarmonicFix robust_fix_{};
@@ -191,6 +196,7 @@ class LocalizationCycle {
   algorithms::HarmonicFix last_known_fix_{};  ///< the latest fix of a known place
   std::uint64_t last_encoder_ns_ = 0;
   bool have_encoder_ = false;
+  bool motion_diffused_ = false;  ///< the cloud diffused since the last encoder sample
   hal::EncoderCounts last_counts_{};
   std::uint64_t next_heartbeat_ns_ = 0;
   std::uint8_t reset_counter_ = 0;
