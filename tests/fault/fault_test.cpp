@@ -444,3 +444,430 @@ TEST(Fault, EncoderLogGaps) {
   EXPECT_LT(r.errors(12.0, 1e9).max_m, kNominalMax_m);
   EXPECT_EQ(r.counters.kidnaps, 0U);
 }
+
+namespace {
+
+/// The tiny run's frames with the encoder frames of @p encoders_run (same motion, same seed,
+/// other counters), through @p config's layout. @p width_override: report this counter width
+/// instead of the log's (a misconfiguration, for the negative control).
+Replay run_with_encoder_frames(const std::vector<ha::CanFrame>& frames,
+                               const hf::FirmwareConfig& config, std::uint8_t width_override = 0) {
+  harmoloc::fault::CachedCamera camera(tiny().frames);
+  hs::LogEncoders log(frames, config.can_layout);
+  struct Width final : hal::WheelEncoders {
+    Width(hal::WheelEncoders& in, std::uint8_t b) : inner(in), bits(b) {}
+    hal::EncoderStatus read(std::uint64_t t, hal::EncoderCounts& c) override {
+      const hal::EncoderStatus s = inner.read(t, c);
+      if (bits != 0) c.counter_bits = bits;
+      return s;
+    }
+    hal::EncoderCounters counters() const override { return inner.counters(); }
+    hal::WheelEncoders& inner;
+    std::uint8_t bits;
+  } encoders(log, width_override);
+  harmoloc::fault::MemoryLink link;
+  return harmoloc::fault::replay(tiny().sim, config, camera, encoders, link);
+}
+
+/// Whether two replays give the same poses, bit for bit.
+bool same_poses(const Replay& a, const Replay& b) {
+  if (a.cycles.size() != b.cycles.size()) return false;
+  for (std::size_t i = 0; i < a.cycles.size(); ++i) {
+    const hf::PoseOutput &p = a.cycles[i].pose, &q = b.cycles[i].pose;
+    if (p.valid != q.valid || p.health != q.health || p.pose.x_m != q.pose.x_m ||
+        p.pose.y_m != q.pose.y_m || p.pose.yaw_rad != q.pose.yaw_rad)
+      return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+// Encoder counters that wrap during the run, at 32 bits and at 16 bits (a 4-byte frame of two
+// 16-bit counters), both wheels about 5 s into the run: deltas are taken modulo the width, so
+// the poses are those of the run whose counters start at 0, bit for bit. Reporting the wrong
+// width (32 for the 16-bit counters) turns each wheel's wrap into a 65536-tick (5 m) jump, and
+// the poses differ: the negative control. (The two wheels wrap in different cycles, so each jump
+// is a spin on a 15 cm circle, and the camera pulls the pose back within 5 cm.)
+TEST(Fault, EncoderCountersWrapAt16And32Bits) {
+  const SimRun& sim = tiny().sim;
+  const Replay plain = run_with_encoder_frames(sim.run.encoder_frames(), sim.config());
+
+  hs::Scenario s32 = sim.scenario;
+  s32.encoders.initial_left = 0xFFFFFFFFU - 6000U;
+  s32.encoders.initial_right = 0xFFFFFFFFU - 6000U;
+  const hs::ScenarioRun run32(s32, 2);
+  hs::Scenario s16 = hs::load_scenario("tiny-wrap16");  // 16-bit layout
+  s16.encoders.initial_left = 65536U - 6000U;
+  s16.encoders.initial_right = 65536U - 6000U;
+  const hs::ScenarioRun run16(s16, 2);
+  hf::FirmwareConfig c16 = sim.config();
+  c16.can_layout = s16.can_layout;
+
+  // The counters really wrap in both runs.
+  const auto wraps = [](const hs::ScenarioRun& run, const ha::EncoderFrameLayout& layout) {
+    std::size_t n = 0;
+    std::uint32_t last = 0;
+    bool first = true;
+    for (const ha::CanFrame& f : run.encoder_frames()) {
+      std::uint32_t l = 0, r = 0;
+      if (ha::decode_encoder_frame(layout, f, l, r) != ha::CanDecode::kOk) continue;
+      if (!first && l < last && last - l > (1U << (layout.counter_bits - 1))) ++n;
+      last = l;
+      first = false;
+    }
+    return n;
+  };
+  EXPECT_GE(wraps(run32, sim.scenario.can_layout), 1U);
+  EXPECT_GE(wraps(run16, s16.can_layout), 1U);
+
+  const Replay r32 = run_with_encoder_frames(run32.encoder_frames(), sim.config());
+  const Replay r16 = run_with_encoder_frames(run16.encoder_frames(), c16);
+  EXPECT_TRUE(same_poses(plain, r32)) << "32-bit wrap changed the poses";
+  EXPECT_TRUE(same_poses(plain, r16)) << "16-bit wrap changed the poses";
+  EXPECT_EQ(r16.encoders.samples, plain.encoders.samples);
+  EXPECT_EQ(r16.encoders.bad_length + r16.encoders.glitches, 0U);
+  expect_cycle_keeps_its_rate(r16);
+  expect_pose_flows(r16, 3.0);
+
+  const Replay wrong = run_with_encoder_frames(run16.encoder_frames(), c16, 32);
+  std::printf(
+      "counter wrap: 16- and 32-bit runs equal to the unwrapped one; with the width "
+      "misreported as 32 bits the worst error is %.2f m (%llu kidnaps)\n",
+      wrong.errors(0, 1e9).max_m, static_cast<unsigned long long>(wrong.counters.kidnaps));
+  EXPECT_FALSE(same_poses(plain, wrong));
+}
+
+// CAN frames of the wrong length or ID among the counters: with our ID and 6 or 0 data bytes,
+// a foreign ID, and an extended frame with our (standard) ID's number, each carrying other
+// counts. They are ignored and counted; the poses are those of the clean run, bit for bit. Frames
+// of ours with the right length but other counts (0.1 s of them) do change them (negative
+// control).
+TEST(Fault, CanFramesOfTheWrongLengthOrId) {
+  const SimRun& sim = tiny().sim;
+  const hf::FirmwareConfig config = sim.config();
+  const Replay clean = run_with_encoder_frames(sim.run.encoder_frames(), config);
+  std::vector<ha::CanFrame> frames;
+  std::uint64_t rng = 3;
+  const auto garbage = [&](ha::CanFrame f, std::uint32_t id, std::uint8_t length, bool ext) {
+    f.id = id;
+    f.length = length;
+    f.extended = ext;
+    for (std::uint8_t& b : f.data) {
+      rng = rng * 6364136223846793005ULL + 1442695040888963407ULL;
+      b = static_cast<std::uint8_t>(rng >> 56);
+    }
+    return f;
+  };
+  // Frames after the last cycle's data time are never read.
+  const std::uint64_t last_ns = clean.cycles.back().data_time_ns;
+  std::size_t bad_length = 0, foreign = 0, k = 0;
+  for (const ha::CanFrame& f : sim.run.encoder_frames()) {
+    frames.push_back(f);
+    if (f.id != config.can_layout.id || ++k % 3 != 0 || f.timestamp_ns > last_ns) continue;
+    frames.push_back(garbage(f, 0x181, 6, false));
+    frames.push_back(garbage(f, 0x181, 0, false));
+    frames.push_back(garbage(f, 0x182, 8, false));
+    frames.push_back(garbage(f, 0x181, 8, true));
+    bad_length += 2;
+    foreign += 2;
+  }
+  std::size_t status_frames = 0;
+  for (const ha::CanFrame& f : sim.run.encoder_frames())
+    status_frames += f.id != config.can_layout.id && f.timestamp_ns <= last_ns ? 1U : 0U;
+  const Replay r = run_with_encoder_frames(frames, config);
+  std::printf(
+      "bad CAN frames: %zu injected, bad_length %llu, ignored_id %llu (%zu status frames)\n",
+      bad_length + foreign, static_cast<unsigned long long>(r.encoders.bad_length),
+      static_cast<unsigned long long>(r.encoders.ignored_id), status_frames);
+  EXPECT_EQ(r.encoders.bad_length, bad_length);
+  EXPECT_EQ(r.encoders.ignored_id, foreign + status_frames);
+  EXPECT_EQ(r.encoders.samples, clean.encoders.samples);
+  EXPECT_TRUE(same_poses(clean, r)) << "ignored frames changed the poses";
+  expect_cycle_keeps_its_rate(r);
+  expect_pose_flows(r, 3.0);
+
+  std::vector<ha::CanFrame> bad = sim.run.encoder_frames();
+  for (ha::CanFrame& f : bad) {
+    const double t = static_cast<double>(f.timestamp_ns) * 1e-9 - sim.t0_s();
+    if (f.id == config.can_layout.id && t >= 7.0 && t < 7.1)
+      f = garbage(f, f.id, f.length, f.extended);
+  }
+  EXPECT_FALSE(same_poses(clean, run_with_encoder_frames(bad, config)));
+}
+
+namespace {
+
+/// A GPIO quadrature encoder pair in software: the tiny run's counts (its CAN counter frames)
+/// turned into A/B edges, each wheel's edges spread evenly over each 10 ms sample interval and
+/// decoded by the driver's own algorithms::QuadratureDecoder; extra edges (a glitch burst) can
+/// be added. read() reports the decoded positions at the data time, as the GPIO driver does.
+class QuadratureEncoders final : public hal::WheelEncoders {
+ public:
+  struct Edge {
+    std::uint64_t t_ns;
+    std::uint8_t wheel, line;
+    bool level;
+  };
+  QuadratureEncoders(const SimRun& sim, std::uint64_t debounce_ns) {
+    const ha::EncoderFrameLayout& layout = sim.scenario.can_layout;
+    std::array<std::uint8_t, 2> state{0, 0};
+    std::array<std::uint32_t, 2> last{};
+    std::uint64_t last_t = 0;
+    bool first = true;
+    for (const ha::CanFrame& f : sim.run.encoder_frames()) {
+      std::array<std::uint32_t, 2> raw{};
+      if (ha::decode_encoder_frame(layout, f, raw[0], raw[1]) != ha::CanDecode::kOk) continue;
+      if (!first) {
+        for (std::uint8_t w = 0; w < 2; ++w) {
+          const std::int64_t d = ha::wrapped_delta(last[w], raw[w], layout.counter_bits);
+          const std::int64_t n = d < 0 ? -d : d;
+          for (std::int64_t i = 0; i < n; ++i) {
+            const std::uint64_t t =
+                last_t + static_cast<std::uint64_t>((f.timestamp_ns - last_t) * (i + 1) / (n + 1));
+            edges_.push_back(step(state[w], d > 0, t, w));
+          }
+          truth_[w] += d;
+        }
+      }
+      last = raw;
+      last_t = f.timestamp_ns;
+      first = false;
+    }
+    std::stable_sort(edges_.begin(), edges_.end(),
+                     [](const Edge& a, const Edge& b) { return a.t_ns < b.t_ns; });
+    for (auto& d : decoders_) d.reset(false, false, debounce_ns);
+  }
+  /// Adds edges that are not motion (they keep the time order).
+  void inject(const std::vector<Edge>& extra) {
+    edges_.insert(edges_.end(), extra.begin(), extra.end());
+    std::stable_sort(edges_.begin(), edges_.end(),
+                     [](const Edge& a, const Edge& b) { return a.t_ns < b.t_ns; });
+  }
+  /// The level of @p wheel's @p line at @p t_ns after the real edges (before any injection).
+  bool level_at(std::uint8_t wheel, std::uint8_t line, std::uint64_t t_ns) const {
+    bool level = false;
+    for (const Edge& e : edges_) {
+      if (e.t_ns > t_ns) break;
+      if (e.wheel == wheel && e.line == line) level = e.level;
+    }
+    return level;
+  }
+  /// Real edges of @p wheel within @p window_ns of @p t_ns (a burst must not touch them).
+  bool near_real_edge(std::uint8_t wheel, std::uint64_t t_ns, std::uint64_t window_ns) const {
+    for (const Edge& e : edges_)
+      if (e.wheel == wheel && e.t_ns + window_ns >= t_ns && e.t_ns <= t_ns + window_ns) return true;
+    return false;
+  }
+  hal::EncoderStatus read(std::uint64_t data_time_ns, hal::EncoderCounts& c) override {
+    while (next_ < edges_.size() && edges_[next_].t_ns <= data_time_ns) {
+      const Edge& e = edges_[next_++];
+      decoders_[e.wheel].edge(e.line, e.level, e.t_ns);
+    }
+    for (auto& d : decoders_) d.commit_until(data_time_ns);
+    c.left_ticks = static_cast<std::uint32_t>(static_cast<std::uint64_t>(decoders_[0].position()));
+    c.right_ticks = static_cast<std::uint32_t>(static_cast<std::uint64_t>(decoders_[1].position()));
+    c.counter_bits = 32;
+    c.timestamp_ns = data_time_ns;
+    ++counters_.samples;
+    return hal::EncoderStatus::kFresh;
+  }
+  hal::EncoderCounters counters() const override {
+    hal::EncoderCounters c = counters_;
+    c.glitches = decoders_[0].glitches() + decoders_[1].glitches();
+    return c;
+  }
+  std::uint64_t bounces() const { return decoders_[0].bounces() + decoders_[1].bounces(); }
+  std::int64_t position(std::size_t w) const { return decoders_[w].position(); }
+  std::int64_t truth(std::size_t w) const { return truth_[w]; }
+
+ private:
+  // The edge that moves a wheel one step forward or back from @p s (00 -> 10 -> 11 -> 01).
+  static Edge step(std::uint8_t& s, bool forward, std::uint64_t t, std::uint8_t wheel) {
+    static constexpr std::uint8_t kNext[4] = {2, 0, 3, 1}, kPrev[4] = {1, 3, 0, 2};
+    const std::uint8_t to = forward ? kNext[s] : kPrev[s];
+    const std::uint8_t changed = s ^ to;
+    s = to;
+    const std::uint8_t line =
+        changed == 2 ? ha::QuadratureDecoder::kLineA : ha::QuadratureDecoder::kLineB;
+    return Edge{t, wheel, line, (to & changed) != 0};
+  }
+
+  std::vector<Edge> edges_;
+  std::size_t next_ = 0;
+  std::array<ha::QuadratureDecoder, 2> decoders_{};
+  std::array<std::int64_t, 2> truth_{};
+  hal::EncoderCounters counters_{};
+};
+
+}  // namespace
+
+// A burst of electrical noise on both wheels' quadrature lines at 7 s: 40 overlapping 3 us
+// pulses on A and B (each pair, decoded without debounce, is a whole cycle: 4 counts one way)
+// and 10 edges that leave their line where it was (an impossible transition: the opposite edge
+// was lost). With the driver's debounce (20 us) the pulses are dropped as bounces, the impossible
+// edges are counted as glitches and move nothing: the positions equal the true counts and the
+// poses those of the run without the burst, bit for bit. Without debounce the same burst moves
+// the counts (negative control).
+TEST(Fault, QuadratureGlitchBurst) {
+  const SimRun& sim = tiny().sim;
+  const hf::FirmwareConfig config = sim.config();
+  const std::uint64_t debounce_ns = 20000;
+  const std::uint64_t t0 = sim.run.frame_timestamp_ns(0);
+  const auto burst_for = [&](const QuadratureEncoders& q) {
+    std::vector<QuadratureEncoders::Edge> burst;
+    for (std::uint8_t w = 0; w < 2; ++w) {
+      std::uint64_t t = t0 + 7000000000ULL;
+      std::size_t pulses = 0, wrong = 0;
+      while (pulses < 40 || wrong < 10) {
+        t += 37000;  // 37 us apart
+        if (q.near_real_edge(w, t, 60000)) continue;
+        if (pulses < 40) {
+          // A flips, B flips, A back, B back, 1 us apart: taken as edges, a whole cycle.
+          const bool a = q.level_at(w, ha::QuadratureDecoder::kLineA, t);
+          const bool b = q.level_at(w, ha::QuadratureDecoder::kLineB, t);
+          burst.push_back({t, w, ha::QuadratureDecoder::kLineA, !a});
+          burst.push_back({t + 1000, w, ha::QuadratureDecoder::kLineB, !b});
+          burst.push_back({t + 2000, w, ha::QuadratureDecoder::kLineA, a});
+          burst.push_back({t + 3000, w, ha::QuadratureDecoder::kLineB, b});
+          ++pulses;
+        } else {
+          // An edge to the level line A already has: the opposite edge before it was lost.
+          const bool a = q.level_at(w, ha::QuadratureDecoder::kLineA, t);
+          burst.push_back({t, w, ha::QuadratureDecoder::kLineA, a});
+          ++wrong;
+        }
+      }
+    }
+    return burst;
+  };
+  const auto run = [&](QuadratureEncoders& q) {
+    harmoloc::fault::CachedCamera camera(tiny().frames);
+    harmoloc::fault::MemoryLink link;
+    return harmoloc::fault::replay(sim, config, camera, q, link);
+  };
+  QuadratureEncoders clean(sim, debounce_ns);
+  const Replay base = run(clean);
+  QuadratureEncoders noisy(sim, debounce_ns);
+  noisy.inject(burst_for(noisy));
+  const Replay r = run(noisy);
+  QuadratureEncoders undebounced(sim, 0);
+  undebounced.inject(burst_for(undebounced));
+  const Replay u = run(undebounced);
+  std::printf(
+      "glitch burst: with debounce %llu glitches, %llu bounces, positions off by %lld / "
+      "%lld; without debounce %llu glitches, positions off by %lld / %lld, max error "
+      "%.2f cm\n",
+      static_cast<unsigned long long>(r.encoders.glitches),
+      static_cast<unsigned long long>(noisy.bounces()),
+      static_cast<long long>(noisy.position(0) - noisy.truth(0)),
+      static_cast<long long>(noisy.position(1) - noisy.truth(1)),
+      static_cast<unsigned long long>(u.encoders.glitches),
+      static_cast<long long>(undebounced.position(0) - undebounced.truth(0)),
+      static_cast<long long>(undebounced.position(1) - undebounced.truth(1)),
+      100 * u.errors(3.0, 1e9).max_m);
+  EXPECT_EQ(clean.position(0), clean.truth(0));
+  EXPECT_EQ(clean.position(1), clean.truth(1));
+  EXPECT_EQ(clean.counters().glitches, 0U);
+  EXPECT_EQ(noisy.position(0), noisy.truth(0));
+  EXPECT_EQ(noisy.position(1), noisy.truth(1));
+  EXPECT_EQ(r.encoders.glitches, 2U * 10U);   // the impossible edges, counted
+  EXPECT_EQ(noisy.bounces(), 2U * 40U * 2U);  // each pulse pair: two edges back within 20 us
+  EXPECT_TRUE(same_poses(base, r)) << "the burst changed the poses";
+  EXPECT_LT(base.errors(3.0, 1e9).max_m, kNominalMax_m);
+  expect_cycle_keeps_its_rate(r);
+  expect_pose_flows(r, 3.0);
+  // Without debounce each overlapping pulse pair counts a whole cycle.
+  EXPECT_NE(undebounced.position(0), undebounced.truth(0));
+  EXPECT_FALSE(same_poses(base, u));
+}
+
+// The serial line stops taking bytes for 5 s (a pty whose reader stops reading; the kernel's
+// buffer, 20 KB here, fills after about 2.5 s of frames): SerialLink must never block the cycle,
+// drop whole frames and count them, and the stream must resume cleanly: every byte that arrives
+// belongs to a whole frame with a valid checksum, and the frames missing from the sequence
+// numbers are exactly those counted as dropped.
+TEST(Fault, SerialLineStopsTakingBytesFor5s) {
+  const int master = ::posix_openpt(O_RDWR | O_NOCTTY);
+  ASSERT_GE(master, 0);
+  ASSERT_EQ(::grantpt(master), 0);
+  ASSERT_EQ(::unlockpt(master), 0);
+  const char* slave = ::ptsname(master);
+  ASSERT_NE(slave, nullptr);
+  ASSERT_EQ(::fcntl(master, F_SETFL, ::fcntl(master, F_GETFL) | O_NONBLOCK), 0);
+  harmoloc::drivers::SerialLink link;
+  ASSERT_EQ(link.open(slave, 115200), "");
+
+  harmoloc::fault::StreamCheck stream;
+  std::uint64_t bytes_read = 0;
+  const auto drain = [&] {
+    std::uint8_t buf[4096];
+    for (;;) {
+      const ssize_t n = ::read(master, buf, sizeof buf);
+      if (n <= 0) break;
+      bytes_read += static_cast<std::uint64_t>(n);
+      stream.feed(buf, static_cast<std::size_t>(n));
+    }
+  };
+  constexpr double kStop_s = 5.0, kResume_s = 10.0;
+  std::uint64_t written_by_cycles = 0, odometry_after = 0, cycles_after = 0;
+  std::uint64_t odometry_at_resume = 0;
+  bool resumed = false;
+  const SimRun& sim = tiny().sim;
+  const hf::FirmwareConfig config = sim.config();
+  harmoloc::fault::CachedCamera camera(tiny().frames);
+  hs::LogEncoders encoders(sim.run.encoder_frames(), config.can_layout);
+  const Replay r =
+      harmoloc::fault::replay(sim, config, camera, encoders, link, [&](const CycleRecord& c) {
+        written_by_cycles += c.link_frames;
+        if (c.t_s >= kStop_s && c.t_s < kResume_s) return;
+        if (resumed) ++cycles_after;
+        drain();
+        if (c.t_s >= kResume_s && !resumed) {
+          // The backlog is read: from here on, one
+          // ODOMETRY a cycle must arrive.
+          resumed = true;
+          odometry_at_resume = stream.odometry;
+        }
+      });
+  odometry_after = stream.odometry - odometry_at_resume;
+  ::usleep(20000);
+  drain();
+  ::close(master);
+  std::printf(
+      "serial line stopped 5 s: %llu frames sent, %llu dropped, %llu bytes read, %llu "
+      "frames parsed (%llu ODOMETRY), %llu missing from the sequence, %llu garbage "
+      "bytes, %llu checksum errors; worst cycle %.2f ms; %llu ODOMETRY in the %llu "
+      "cycles after the line came back\n",
+      static_cast<unsigned long long>(r.link.frames_sent),
+      static_cast<unsigned long long>(r.link.frames_dropped),
+      static_cast<unsigned long long>(bytes_read), static_cast<unsigned long long>(stream.frames),
+      static_cast<unsigned long long>(stream.odometry),
+      static_cast<unsigned long long>(stream.sequence_gaps),
+      static_cast<unsigned long long>(stream.garbage_bytes),
+      static_cast<unsigned long long>(stream.crc_errors), r.max_wall_ms,
+      static_cast<unsigned long long>(odometry_after),
+      static_cast<unsigned long long>(cycles_after));
+  // The cycle never waited, and every frame it made was sent or dropped whole, and counted.
+  expect_cycle_keeps_its_rate(r);
+  expect_pose_flows(r, 3.0);
+  EXPECT_GT(r.link.frames_dropped, 0U) << "the line never filled up";
+  EXPECT_EQ(r.link.frames_sent + r.link.frames_dropped, written_by_cycles);
+  EXPECT_EQ(r.counters.link_dropped, r.link.frames_dropped);
+  EXPECT_EQ(r.link.errors, 0U);
+  // What arrived is whole frames only, and exactly those sent.
+  EXPECT_EQ(bytes_read, r.link.bytes_sent);
+  EXPECT_EQ(stream.garbage_bytes, 0U);
+  EXPECT_EQ(stream.crc_errors, 0U);
+  EXPECT_EQ(stream.bad_headers, 0U);
+  EXPECT_EQ(stream.unparsed(), 0U);
+  EXPECT_EQ(stream.frames, r.link.frames_sent);
+  EXPECT_EQ(stream.sequence_gaps, r.link.frames_dropped);
+  // Once the line takes bytes again, every cycle's ODOMETRY arrives (plus, at most, the one
+  // that was half written when the backlog was read).
+  EXPECT_GE(odometry_after, cycles_after);
+  EXPECT_LE(odometry_after, cycles_after + 1);
+  // The line has nothing to do with the pose: nominal throughout.
+  EXPECT_EQ(r.cycles_in(hf::Health::kNominal, 3.0, 1e9), r.errors(3.0, 1e9).cycles);
+  EXPECT_LT(r.errors(3.0, 1e9).max_m, kNominalMax_m);
+}
