@@ -185,6 +185,8 @@ CycleResult LocalizationCycle::run_once() {
 
   // encoders
   bool have_delta = false;
+  bool bridge_now = false;    // the first sample after a diffused gap: move the cloud (predict)
+  bool fresh_sample = false;  // an encoder sample came in this cycle
   algorithms::OdometryDelta delta{};
   double delta_dt_s = 0.0;
   {
@@ -192,11 +194,23 @@ CycleResult LocalizationCycle::run_once() {
     hal::EncoderCounts counts{};
     if (encoders_.read(data_time_ns_, counts) == hal::EncoderStatus::kFresh) {
       ++counters_.encoder_samples;
-      if (have_encoder_ && motion_diffused_) {
-        // The first sample after a gap the filter bridged by diffusing (vision only): the
-        // travel since the last sample is already in the cloud's spread and the fixes that
-        // followed it, so it is not applied again. The counts become the new reference.
-        ++counters_.encoder_reanchors;
+      if (have_encoder_ && gap_ != EncoderGap::kNone) {
+        // The first sample after a gap the cloud spent diffusing (vision only). Its counts are
+        // absolute, so they hold the travel over the whole gap: the cloud, which has meanwhile
+        // spread and followed the fixes, is moved so that its centre is where that travel
+        // takes the pose of the last sample (predict), keeping its spread. Applying the
+        // travel on top of what the cloud did would count the motion the fixes saw twice.
+        // If the filter was re-seeded in the gap, the counts only become the new reference.
+        if (gap_ == EncoderGap::kDiffused) {
+          const std::int64_t dl = algorithms::wrapped_delta(last_counts_.left_ticks,
+                                                            counts.left_ticks, counts.counter_bits);
+          const std::int64_t dr = algorithms::wrapped_delta(
+              last_counts_.right_ticks, counts.right_ticks, counts.counter_bits);
+          gap_travel_ = algorithms::odometry_from_ticks(config_.geometry, dl, dr);
+          bridge_now = true;
+        }
+        ++counters_.encoder_gaps_bridged;
+        gap_ = EncoderGap::kNone;
       } else if (have_encoder_) {
         const std::int64_t dl = algorithms::wrapped_delta(last_counts_.left_ticks,
                                                           counts.left_ticks, counts.counter_bits);
@@ -209,7 +223,7 @@ CycleResult LocalizationCycle::run_once() {
       last_counts_ = counts;
       last_encoder_ns_ = counts.timestamp_ns;
       have_encoder_ = true;
-      motion_diffused_ = false;
+      fresh_sample = true;
     }
   }
 
@@ -217,14 +231,19 @@ CycleResult LocalizationCycle::run_once() {
   {
     StageTimer t(clock_, at(Stage::kPredict));
     if (filter_.initialized()) {
-      if (have_delta) {
+      if (bridge_now) {
+        const algorithms::Pose2 target = algorithms::apply_arc(gap_anchor_, gap_travel_);
+        const algorithms::Pose2 mean = filter_.estimate().mean;
+        filter_.shift(target.x_m - mean.x_m, target.y_m - mean.y_m,
+                      algorithms::wrap_angle_rad(target.yaw_rad - mean.yaw_rad));
+      } else if (have_delta) {
         filter_.predict(delta);
       } else if (assess_health() == Health::kVisionOnly) {
         // Motion unknown: let the cloud spread as fast as the robot could move.
         const double step_m = config_.filter.vision_only_speed_mps / config_.cycle.rate_hz;
         filter_.predict(algorithms::OdometryDelta{0.0, 0.0});
         filter_.diffuse(step_m, 0.5 * step_m / (0.5 * config_.geometry.track_m));
-        motion_diffused_ = true;
+        if (gap_ == EncoderGap::kNone && have_anchor_) gap_ = EncoderGap::kDiffused;
       }
     }
     if (have_delta && delta_dt_s > 0.0) {
@@ -275,6 +294,11 @@ CycleResult LocalizationCycle::run_once() {
       pose_.pose = e.mean;
       pose_.covariance = e.covariance;
       pose_.valid = true;
+      // Where the robot was at the latest encoder sample: a gap's travel starts there.
+      if (fresh_sample) {
+        gap_anchor_ = e.mean;
+        have_anchor_ = true;
+      }
     }
     pose_.data_time_ns = data_time_ns_;
     pose_.health = assess_health();
@@ -354,6 +378,7 @@ void LocalizationCycle::reseed_around(double x_m, double y_m) {
                                                : config_.filter.init_position_sigma_m;
   filter_.initialize(Pose2{x_m, y_m, yaw}, sigma_m,
                      config_.kidnap.yaw_sigma_deg * algorithms::kPi / 180.0, !heading);
+  if (gap_ == EncoderGap::kDiffused) gap_ = EncoderGap::kReseeded;
   kidnap_.reset();
   ++reset_counter_;
 }
@@ -369,6 +394,7 @@ void LocalizationCycle::reseed_globally() {
     filter_.initialize_around_points(m.target_x_m.data(), m.target_y_m.data(), m.sample_count,
                                      config_.kidnap.position_sigma_m);
   }
+  if (gap_ == EncoderGap::kDiffused) gap_ = EncoderGap::kReseeded;
   kidnap_.reset();
   ++reset_counter_;
 }

@@ -195,6 +195,21 @@ struct StreamCheck {
   hf::mavlink::FrameParser parser_;
 };
 
+/// The cycle's clock in these tests: the thread's CPU time, so that the stage times, the budget
+/// and the overrun count measure the firmware's own work, not time this shared machine spent
+/// running other processes (the replay also records each cycle's wall-clock time: a cycle that
+/// waited, on a line that blocks for instance, shows there).
+class ThreadCpuClock final : public hal::Clock {
+ public:
+  std::uint64_t now_ns() const override {
+    timespec ts{};
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+    return static_cast<std::uint64_t>(ts.tv_sec) * 1000000000ULL +
+           static_cast<std::uint64_t>(ts.tv_nsec);
+  }
+  void sleep_until(std::uint64_t) override {}
+};
+
 /// Every cycle of a replay.
 struct CycleRecord {
   double t_s = 0.0;  ///< data time from the run's first frame
@@ -202,6 +217,7 @@ struct CycleRecord {
   hf::PoseOutput pose;
   double error_m = -1.0;          ///< position error against the truth (-1 without a pose)
   double wall_ms = 0.0;           ///< how long run_once() took
+  double cpu_ms = 0.0;            ///< of which CPU time of this thread
   bool frame = false;             ///< the cycle had a frame
   std::uint64_t link_frames = 0;  ///< frames the cycle wrote (counted at the link)
 };
@@ -212,7 +228,8 @@ struct Replay {
   hal::CameraCounters camera;
   hal::EncoderCounters encoders;
   hal::LinkCounters link;
-  double max_wall_ms = 0.0;
+  double max_wall_ms = 0.0;  ///< the longest run_once() on the wall clock
+  double max_cpu_ms = 0.0;   ///< the longest cycle in CPU time (the firmware's own histogram)
 
   /// Worst and RMS position error over [from_s, to_s) of the cycles that have a pose.
   struct Errors {
@@ -274,21 +291,26 @@ inline Replay replay(const SimRun& sim, const hf::FirmwareConfig& config, hal::C
                      const std::function<void(const CycleRecord&)>& between = nullptr,
                      const ha::MapFile& map = tiny_map()) {
   drivers::MonotonicClock clock;
-  auto cycle = std::make_unique<hf::LocalizationCycle>(config, map, camera, encoders, link, clock);
+  ThreadCpuClock cpu_clock;
+  auto cycle =
+      std::make_unique<hf::LocalizationCycle>(config, map, camera, encoders, link, cpu_clock);
   Replay r;
   r.cycles.reserve(sim.run.frame_count() + 16);
   for (;;) {
     const std::uint64_t frames_before = cycle->counters().frames;
     const std::uint64_t link_before = link.counters().frames_sent + link.counters().frames_dropped;
     const std::uint64_t t0 = clock.now_ns();
+    const std::uint64_t cpu0 = cpu_clock.now_ns();
     const hf::CycleResult res = cycle->run_once();
     const double wall_ms = static_cast<double>(clock.now_ns() - t0) * 1e-6;
+    const double cpu_ms = static_cast<double>(cpu_clock.now_ns() - cpu0) * 1e-6;
     if (res == hf::CycleResult::kEnded) break;
     CycleRecord c;
     c.pose = cycle->pose();
     c.data_time_ns = c.pose.data_time_ns;
     c.t_s = sim.run_time_s(c.data_time_ns);
     c.wall_ms = wall_ms;
+    c.cpu_ms = cpu_ms;
     c.frame = cycle->counters().frames != frames_before;
     c.link_frames = link.counters().frames_sent + link.counters().frames_dropped - link_before;
     if (c.pose.valid) {
@@ -300,6 +322,7 @@ inline Replay replay(const SimRun& sim, const hf::FirmwareConfig& config, hal::C
     if (between) between(r.cycles.back());
   }
   r.counters = cycle->counters();
+  r.max_cpu_ms = static_cast<double>(cycle->stage_histogram(hf::Stage::kCycle).max_ns()) * 1e-6;
   r.camera = camera.counters();
   r.encoders = encoders.counters();
   r.link = link.counters();

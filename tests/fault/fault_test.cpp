@@ -148,12 +148,15 @@ void expect_pose_flows(const Replay& r, double from_s) {
   EXPECT_EQ(missing, 0U) << "cycles without a pose or without a frame on the link";
 }
 
-// Every cycle returns within the budget, and the data clock advances by one period a cycle,
-// with or without a frame (@p exact), or at least never goes back and never skips more than two
-// periods (frames with wrong timestamps move it as they come).
+// Every cycle's work fits the budget (CPU time: the machine is shared) and no cycle waits (a
+// blocking call would show in wall-clock time: seconds, not the milliseconds a busy machine's
+// scheduler can add), and the data clock advances by one period a cycle, with or without a frame
+// (@p exact), or at least never goes back and never skips more than two periods (frames with
+// wrong timestamps move it as they come).
 void expect_cycle_keeps_its_rate(const Replay& r, bool exact = true) {
-  EXPECT_LT(r.max_wall_ms, kBudget_ms);
+  EXPECT_LT(r.max_cpu_ms, kBudget_ms);
   EXPECT_EQ(r.counters.overruns, 0U);
+  EXPECT_LT(r.max_wall_ms, 500.0) << "a cycle waited";
   for (std::size_t i = 1; i < r.cycles.size(); ++i) {
     const double step = r.cycles[i].t_s - r.cycles[i - 1].t_s;
     if (exact) {
@@ -196,8 +199,10 @@ Replay run_with_camera_faults(std::vector<Window> windows, std::size_t* faulted 
 TEST(Fault, BaselineWithoutFaults) {
   const Replay r = run_with_camera_faults({});
   const Replay::Errors e = r.errors(3.0, 1e9);
-  std::printf("baseline: %zu cycles, RMSE %.2f cm, max %.2f cm, worst cycle %.2f ms\n",
-              r.cycles.size(), 100 * e.rmse_m, 100 * e.max_m, r.max_wall_ms);
+  std::printf(
+      "baseline: %zu cycles, RMSE %.2f cm, max %.2f cm, worst cycle %.2f ms CPU, %.2f ms "
+      "wall\n",
+      r.cycles.size(), 100 * e.rmse_m, 100 * e.max_m, r.max_cpu_ms, r.max_wall_ms);
   EXPECT_LT(e.max_m, kNominalMax_m);
   EXPECT_EQ(r.counters.no_frame + r.counters.corrupt_frames, 0U);
   EXPECT_EQ(r.cycles_in(hf::Health::kNominal, 3.0, 1e9), r.errors(3.0, 1e9).cycles);
@@ -413,12 +418,12 @@ TEST(Fault, EncoderLogGaps) {
   std::printf(
       "encoder gaps: %zu of %zu CAN frames left, samples %llu, vision-only %zu cycles, "
       "max error %.2f cm (during the 3 s gap %.2f cm), recovered %.2f s and %.2f s after, "
-      "%llu re-anchors\n",
+      "%llu gaps bridged\n",
       frames.size(), sim.run.encoder_frames().size(),
       static_cast<unsigned long long>(r.encoders.samples), vision_only,
       100 * r.errors(3.0, 1e9).max_m, 100 * r.errors(8.0, 11.0).max_m,
       r.recovery_s(5.5, kRecovered_m, 1.0), r.recovery_s(11.0, kRecovered_m, 1.0),
-      static_cast<unsigned long long>(r.counters.encoder_reanchors));
+      static_cast<unsigned long long>(r.counters.encoder_gaps_bridged));
   expect_cycle_keeps_its_rate(r);
   expect_pose_flows(r, 3.0);
   EXPECT_LT(frames.size(), sim.run.encoder_frames().size());
@@ -433,7 +438,7 @@ TEST(Fault, EncoderLogGaps) {
   // the cloud). Before that re-anchoring, the 3 s gap's travel was applied a second time: 16 cm,
   // and 2.1 s to come back under 5 cm.
   EXPECT_LT(r.errors(8.0, 11.0).max_m, 0.10);
-  EXPECT_EQ(r.counters.encoder_reanchors, 2U);
+  EXPECT_EQ(r.counters.encoder_gaps_bridged, 2U);
   const double short_gap = r.recovery_s(5.5, kRecovered_m, 1.0);
   const double long_gap = r.recovery_s(11.0, kRecovered_m, 1.0);
   EXPECT_GE(short_gap, 0.0);

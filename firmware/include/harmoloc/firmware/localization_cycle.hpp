@@ -75,9 +75,9 @@ struct CycleCounters {
   std::uint64_t unknown_place = 0;
   std::uint64_t implausible_frames = 0;  ///< frames no place on the map can look like (unused)
   std::uint64_t encoder_samples = 0;
-  /// Samples taken as a new reference without applying their travel: the first after a gap the
-  /// filter bridged by diffusing (vision only), whose motion the cloud already covers.
-  std::uint64_t encoder_reanchors = 0;
+  /// Encoder gaps the cloud spent diffusing (vision only), closed by their first sample: the
+  /// cloud is moved to where the gap's travel takes the pose of the last sample before it.
+  std::uint64_t encoder_gaps_bridged = 0;
   std::uint64_t overruns = 0;
   std::uint64_t resamples = 0;
   std::uint64_t no_consensus = 0;       ///< frames whose boards mostly disagreed with the estimate
@@ -196,7 +196,13 @@ class LocalizationCycle {
   algorithms::HarmonicFix last_known_fix_{};  ///< the latest fix of a known place
   std::uint64_t last_encoder_ns_ = 0;
   bool have_encoder_ = false;
-  bool motion_diffused_ = false;  ///< the cloud diffused since the last encoder sample
+  /// An encoder gap in progress: the cloud diffused since the last sample (vision only), and
+  /// whether it was re-seeded meanwhile.
+  enum class EncoderGap : std::uint8_t { kNone, kDiffused, kReseeded };
+  EncoderGap gap_ = EncoderGap::kNone;
+  algorithms::Pose2 gap_anchor_{};  ///< the estimate at the latest encoder sample
+  bool have_anchor_ = false;
+  algorithms::OdometryDelta gap_travel_{};
   hal::EncoderCounts last_counts_{};
   std::uint64_t next_heartbeat_ns_ = 0;
   std::uint8_t reset_counter_ = 0;
