@@ -347,6 +347,7 @@ TEST(SoakWithFaults, OneHourOfCyclesWithFaultsAndKidnaps) {
   std::vector<bool> in_window(kCycles, false);
   std::size_t detected = 0, recovered = 0;
   double worst_recovery_s = 0.0, sum_recovery_s = 0.0;
+  double worst_detection_s = 0.0, sum_detection_s = 0.0;
   for (const KidnapPlan& k : plan.kidnaps) {
     const std::size_t end_i =
         std::min(kCycles, k.cycle + static_cast<std::size_t>(kKidnapWindow_s * 30));
@@ -357,6 +358,11 @@ TEST(SoakWithFaults, OneHourOfCyclesWithFaultsAndKidnaps) {
     bool good = false;
     double rec = -1.0;
     for (std::size_t i = k.cycle; i < end_i; ++i) {
+      if (!det && samples[i].kidnaps != before) {
+        const double after_s = static_cast<double>(i - k.cycle) / 30.0;
+        worst_detection_s = std::max(worst_detection_s, after_s);
+        sum_detection_s += after_s;
+      }
       det = det || samples[i].kidnaps != before;
       const bool ok = samples[i].error_m >= 0.0F &&
                       static_cast<double>(samples[i].error_m) < kRecovered_m &&
@@ -432,6 +438,8 @@ TEST(SoakWithFaults, OneHourOfCyclesWithFaultsAndKidnaps) {
      << ", \"recovered_within_3_s\": " << recovered
      << ", \"worst_recovery_s\": " << worst_recovery_s << ", \"mean_recovery_s\": "
      << (recovered > 0 ? sum_recovery_s / static_cast<double>(recovered) : 0.0)
+     << ", \"worst_detection_s\": " << worst_detection_s << ", \"mean_detection_s\": "
+     << (detected > 0 ? sum_detection_s / static_cast<double>(detected) : 0.0)
      << ", \"false_alarms\": " << false_alarms << ",\n"
      << "  \"error_outside_kidnap_windows_cm\": {\"max\": " << 100 * worst_outside
      << ", \"rmse\": " << 100 * rmse_outside << ", \"cycles\": " << outside
