@@ -350,19 +350,18 @@ bool LocalizationCycle::update_with_boards(
     in.fix_known = robust_fix_.known_place;
     in.fix_distance_m = std::hypot(robust_fix_.x_m - estimate.x_m, robust_fix_.y_m - estimate.y_m);
     in.contradiction = assessment_.exceeding > 0;
-    const std::uint64_t triggers_before = kidnap_.counters().triggers;
     kidnap_verdict_ = kidnap_.step(in, config_.kidnap.detector);
-    counters_.kidnap_triggers += kidnap_.counters().triggers - triggers_before;
+    const algorithms::KidnapCounters& k = kidnap_.counters();
+    counters_.kidnap_triggers = k.triggers;
+    counters_.kidnaps = k.kidnaps;
+    counters_.lost = k.lost;
     if (kidnap_verdict_ == algorithms::KidnapVerdict::kKidnapped) {
-      ++counters_.kidnaps;
       if (config_.kidnap.reseed == ReseedStrategy::kAroundFix && robust_fix_.known_place)
         reseed_around(robust_fix_.x_m, robust_fix_.y_m);
       else
         reseed_globally();
       pending_text_ = "harmoloc: kidnap detected, relocalized";
     } else if (kidnap_verdict_ == algorithms::KidnapVerdict::kLost) {
-      ++counters_.kidnaps;
-      ++counters_.lost;
       reseed_globally();
       pending_text_ = "harmoloc: lost (boards disagree, no fix), relocalizing over the map";
     }

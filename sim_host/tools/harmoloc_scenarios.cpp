@@ -187,8 +187,11 @@ int main(int argc, char** argv) {
     {
       // Laps enough for the kidnaps and for the minutes asked.
       const sim_host::ScenarioRun one(nominal, seed);
-      const double lap_s = one.route().duration_s / nominal.route.laps;
-      const double kidnap_s = kidnap.kidnaps.first_s + kidnaps * kidnap.kidnaps.interval_s + 4.0;
+      // A lap without the final pause (the run is laps x lap + one pause), and 20 s after the
+      // last kidnap for it to be recovered from.
+      const double lap_s = (one.route().duration_s - nominal.route.pause_s) / nominal.route.laps;
+      const double kidnap_s =
+          kidnap.kidnaps.first_s + (kidnaps - 1) * kidnap.kidnaps.interval_s + 20.0;
       kidnap.route.laps = static_cast<int>(std::ceil(kidnap_s / lap_s));
       long_run.route.laps = std::max(1, static_cast<int>(std::ceil(minutes * 60.0 / lap_s)));
     }

@@ -2,7 +2,8 @@
 # Instructions of the whole cycle (steady state: 6 boards, 1024 particles, 204-sample map) and of
 # its stages' kernels run alone, counted by callgrind between harmoloc-instructions' start/stop
 # markers: segmentation (the cycle's path and table), the harmonic query over 204 samples, the
-# particle filter's predict + update + resample + estimate with 1024 particles; "rest" is the
+# particle filter's predict + per-board update + resample + estimate with 1024 particles (the
+# harmonic-fix update of older maps beside it, for comparison); "rest" is the
 # whole cycle minus those three (acquire, encoders, link, accounting). (callgrind's
 # --toggle-collect per stage function would count the stages inside the cycle itself, but on
 # aarch64 it loses track at tail calls, such as segment_rgb24's into its NEON kernel.)
@@ -57,7 +58,7 @@ count() {  # count KERNEL ARG: instructions (and misses) per run into ir/d1/ll[K
   ll[$1_$2]=$(( ${#t[@]} > 1 ? t[7] / repeat : 0 ))
 }
 
-for k in "harmonic 204" "filter 1024" "seg_table 320x240" "seg_table 640x480" \
+for k in "harmonic 204" "filter 1024" "filter_boards 1024" "seg_table 320x240" "seg_table 640x480" \
   "seg_yuyv_table 640x480" "seg_table_noise 320x240" "seg_table_noise 640x480" \
   "cycle 320x240" "cycle 640x480" "cycle_yuyv 640x480"; do
   count $k
@@ -65,7 +66,7 @@ done
 
 echo "per run ($([ "$mode" = --aarch64 ] && echo "aarch64 build, callgrind under qemu-aarch64, A53-like caches" || echo "this build, callgrind")), segmentation path $("${run_bin[@]}" "$bin" path 0)"
 printf '%-26s %12s %12s %12s\n' kernel instructions "L1D misses" "L2 misses"
-for k in harmonic_204 filter_1024 seg_table_320x240 seg_table_640x480 seg_yuyv_table_640x480 \
+for k in harmonic_204 filter_1024 filter_boards_1024 seg_table_320x240 seg_table_640x480 seg_yuyv_table_640x480 \
   seg_table_noise_320x240 seg_table_noise_640x480 cycle_320x240 cycle_640x480 cycle_yuyv_640x480; do
   printf '%-26s %12d %12d %12d\n' "$k" "${ir[$k]}" "${d1[$k]}" "${ll[$k]}"
 done
@@ -75,12 +76,12 @@ row() { printf '%-34s %14s %14s %14s\n' "$@"; }
 row stage cycle@320x240 cycle@640x480 cycle_yuyv@640x480
 row "segment" "${ir[seg_table_320x240]}" "${ir[seg_table_640x480]}" "${ir[seg_yuyv_table_640x480]}"
 row "localize (harmonic query, 204)" "${ir[harmonic_204]}" "${ir[harmonic_204]}" "${ir[harmonic_204]}"
-row "predict + update (filter, 1024)" "${ir[filter_1024]}" "${ir[filter_1024]}" "${ir[filter_1024]}"
+row "predict + update (filter, 1024)" "${ir[filter_boards_1024]}" "${ir[filter_boards_1024]}" "${ir[filter_boards_1024]}"
 rest=()
 for k in "cycle_320x240 seg_table_320x240" "cycle_640x480 seg_table_640x480" \
   "cycle_yuyv_640x480 seg_yuyv_table_640x480"; do
   set -- $k
-  rest+=($((ir[$1] - ir[$2] - ir[harmonic_204] - ir[filter_1024])))
+  rest+=($((ir[$1] - ir[$2] - ir[harmonic_204] - ir[filter_boards_1024])))
 done
 row "rest (whole minus the above)" "${rest[@]}"
 row "whole cycle" "${ir[cycle_320x240]}" "${ir[cycle_640x480]}" "${ir[cycle_yuyv_640x480]}"
