@@ -67,12 +67,24 @@ DatasetMetadata read_metadata(const std::string& dataset_dir) {
     fail(s.str());
   }
   DatasetMetadata m;
-  const auto version = t["format_version"].value<std::int64_t>();
-  if (!version) fail("missing format_version");
+  // value_exact, not value<>: toml++ 3.3.0's float-to-integer conversion casts before it checks
+  // the range (undefined for 2e57; found by the metadata fuzzer), and a version of 1.0 is not 1.
+  if (t["format_version"].node() == nullptr) fail("missing format_version");
+  const auto version = t["format_version"].value_exact<std::int64_t>();
+  if (!version) fail("format_version must be an integer");
   if (*version != 1)
     fail("format_version " + std::to_string(*version) + " is not supported (expected 1)");
-  m.name = t["name"].value_or(std::string{});
-  const std::int64_t seed = t["seed"].value_or(std::int64_t{0});
+  if (t["name"].node() != nullptr) {
+    const auto name = t["name"].value_exact<std::string>();
+    if (!name) fail("name must be a string");
+    m.name = *name;
+  }
+  std::int64_t seed = 0;
+  if (t["seed"].node() != nullptr) {
+    const auto s = t["seed"].value_exact<std::int64_t>();
+    if (!s) fail("seed must be an integer");
+    seed = *s;
+  }
   if (seed < 0) fail("seed must not be negative");
   m.seed = static_cast<std::uint64_t>(seed);
 

@@ -842,7 +842,8 @@ TEST(Fault, SerialLineStopsTakingBytesFor5s) {
   std::printf(
       "serial line stopped 5 s: %llu frames sent, %llu dropped, %llu bytes read, %llu "
       "frames parsed (%llu ODOMETRY), %llu missing from the sequence, %llu garbage "
-      "bytes, %llu checksum errors; worst cycle %.2f ms on the wall clock; %llu ODOMETRY in the %llu "
+      "bytes, %llu checksum errors; worst cycle %.2f ms on the wall clock; %llu ODOMETRY in the "
+      "%llu "
       "cycles after the line came back\n",
       static_cast<unsigned long long>(r.link.frames_sent),
       static_cast<unsigned long long>(r.link.frames_dropped),

@@ -155,7 +155,7 @@ Plan make_plan(const Lap& lap, std::uint64_t t0) {
       }
     }
     p.frame[i] = static_cast<std::uint32_t>(k);
-    const double s = std::getenv("NOF") ? -1.0 : static_cast<double>(in_minute) / 30.0;
+    const double s = static_cast<double>(in_minute) / 30.0;
     if ((s >= 5.0 && s < 5.1) || (s >= 10.0 && s < 12.0)) p.camera[i] = Cam::kStall;
     if (s >= 38.0 && s < 38.1) p.camera[i] = Cam::kCorrupt;
     if (s >= 40.0 && s < 40.17) p.camera[i] = Cam::kNoise;

@@ -625,4 +625,10 @@ TEST(Metadata, ErrorsStartWithMetadataToml) {
                     "encoders");  // 2 x 32 bits in 4 bytes
   expect_meta_error(msg_for(good + "[encoders]\nbyte_order = \"pdp\"\n"), "byte_order");
   expect_meta_error(msg_for("format_version = 1\n[camera\n"), "line 2");
+  // Another type than an integer (a huge float was undefined behaviour in toml++'s conversion).
+  const std::string rest = good.substr(good.find('\n') + 1);
+  expect_meta_error(msg_for("format_version = 2.01e57\n" + rest), "format_version");
+  expect_meta_error(msg_for("format_version = 1.0\n" + rest), "format_version");
+  expect_meta_error(msg_for("seed = 1e300\n" + good), "seed");
+  expect_meta_error(msg_for("name = 3\n" + good), "name");
 }
