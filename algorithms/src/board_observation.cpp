@@ -13,6 +13,29 @@ BoardFeatures board_features(float area_scale, const AreaVector& areas) {
   return f;
 }
 
+std::array<float, kMaxBoards> board_maxima(const ForwardMap& map) {
+  std::array<float, kMaxBoards> m{};
+  const std::size_t boards = std::min<std::size_t>(map.board_count, kMaxBoards);
+  for (std::size_t c = 0; c < map.cell_count(); ++c) {
+    const float* e = map.expected.data() + c * kMaxBoards;
+    for (std::size_t b = 0; b < boards; ++b) m[b] = std::max(m[b], e[b]);
+  }
+  return m;
+}
+
+bool frame_implausible(const ForwardMap& map, const std::array<float, kMaxBoards>& maxima,
+                       const BoardFeatures& observed, double ratio) {
+  if (!(ratio > 0.0)) return false;
+  const std::size_t boards = std::min<std::size_t>({map.board_count, observed.count, kMaxBoards});
+  std::size_t modelled = 0, beyond = 0;
+  for (std::size_t b = 0; b < boards; ++b) {
+    if (!(map.sigma[b] > 0.0F)) continue;
+    ++modelled;
+    if (static_cast<double>(observed.value[b]) > ratio * static_cast<double>(maxima[b])) ++beyond;
+  }
+  return modelled > 0 && 2 * beyond > modelled;
+}
+
 void BoardReliability::reset(const BoardModelParams& params) {
   static_probability_.fill(params.motion_index_max);
 }

@@ -40,7 +40,9 @@ bool layout_valid(const EncoderFrameLayout& layout) {
 
 CanDecode decode_encoder_frame(const EncoderFrameLayout& layout, const CanFrame& frame,
                                std::uint32_t& left_raw, std::uint32_t& right_raw) {
-  if (frame.id != layout.id) return CanDecode::kOtherId;
+  // A standard and an extended frame are different IDs even with the same number (the layout's
+  // ID is extended when it needs more than 11 bits), as on the bus.
+  if (frame.id != layout.id || frame.extended != (layout.id > 0x7FFU)) return CanDecode::kOtherId;
   if (frame.length != layout.length) return CanDecode::kBadLength;
   left_raw = read_counter(layout, frame.data.data() + layout.left_offset);
   right_raw = read_counter(layout, frame.data.data() + layout.right_offset);

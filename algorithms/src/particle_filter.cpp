@@ -80,6 +80,15 @@ void ParticleFilter::diffuse(double position_sigma_m, double yaw_sigma_rad) {
   }
 }
 
+void ParticleFilter::shift(double dx_m, double dy_m, double dyaw_rad) {
+  for (std::size_t i = 0; i < count_; ++i) {
+    Particle& p = particles_[i];
+    p.x_m += dx_m;
+    p.y_m += dy_m;
+    p.yaw_rad = wrap_angle_rad(p.yaw_rad + dyaw_rad);
+  }
+}
+
 void ParticleFilter::update_position(double x_m, double y_m, double sigma_m,
                                      double outlier_probability) {
   const double inv_two_var = 0.5 / (sigma_m * sigma_m);

@@ -173,16 +173,13 @@ bool GpioQuadratureEncoders::service(std::uint64_t now_ns) {
 }
 
 void GpioQuadratureEncoders::publish() {
-  const std::uint32_t s = seq_.load(std::memory_order_relaxed);
-  seq_.store(s + 1, std::memory_order_relaxed);
-  std::atomic_thread_fence(std::memory_order_release);
-  shared_left_.store(decoders_[0].position(), std::memory_order_relaxed);
-  shared_right_.store(decoders_[1].position(), std::memory_order_relaxed);
-  shared_glitches_.store(decoders_[0].glitches() + decoders_[1].glitches(),
-                         std::memory_order_relaxed);
-  shared_overflows_.store(overflows_, std::memory_order_relaxed);
-  shared_failed_.store(failed_, std::memory_order_relaxed);
-  seq_.store(s + 2, std::memory_order_release);
+  CountSnapshot snapshot;
+  snapshot.left = decoders_[0].position();
+  snapshot.right = decoders_[1].position();
+  snapshot.glitches = decoders_[0].glitches() + decoders_[1].glitches();
+  snapshot.overflows = overflows_;
+  snapshot.failed = failed_;
+  shared_.publish(snapshot);
 }
 
 void GpioQuadratureEncoders::reader_loop() {
@@ -208,39 +205,31 @@ hal::EncoderStatus GpioQuadratureEncoders::read(std::uint64_t data_time_ns,
                                                 hal::EncoderCounts& counts) {
   if (options_.reader == GpioReader::kCycle) service(monotonic_ns());
   // Sequence lock, reader side: a few tries; the writer holds it for a handful of stores.
-  for (int attempt = 0; attempt < 8; ++attempt) {
-    const std::uint32_t s1 = seq_.load(std::memory_order_acquire);
-    if ((s1 & 1U) != 0) continue;
-    const std::int64_t left = shared_left_.load(std::memory_order_relaxed);
-    const std::int64_t right = shared_right_.load(std::memory_order_relaxed);
-    const bool failed = shared_failed_.load(std::memory_order_relaxed);
-    std::atomic_thread_fence(std::memory_order_acquire);
-    if (seq_.load(std::memory_order_relaxed) != s1) continue;
-    if (failed) return hal::EncoderStatus::kNoData;
-    counts.left_ticks = static_cast<std::uint32_t>(static_cast<std::uint64_t>(left));
-    counts.right_ticks = static_cast<std::uint32_t>(static_cast<std::uint64_t>(right));
-    counts.counter_bits = 32;
-    counts.timestamp_ns = data_time_ns != 0 ? data_time_ns : monotonic_ns();
-    ++samples_;
-    return hal::EncoderStatus::kFresh;
-  }
-  return hal::EncoderStatus::kNoData;  // the reader was writing every time: next cycle
+  CountSnapshot snapshot;
+  if (!shared_.read(snapshot)) return hal::EncoderStatus::kNoData;  // next cycle
+  if (snapshot.failed) return hal::EncoderStatus::kNoData;
+  counts.left_ticks = static_cast<std::uint32_t>(static_cast<std::uint64_t>(snapshot.left));
+  counts.right_ticks = static_cast<std::uint32_t>(static_cast<std::uint64_t>(snapshot.right));
+  counts.counter_bits = 32;
+  counts.timestamp_ns = data_time_ns != 0 ? data_time_ns : monotonic_ns();
+  ++samples_;
+  return hal::EncoderStatus::kFresh;
 }
 
 hal::EncoderCounters GpioQuadratureEncoders::counters() const {
   hal::EncoderCounters c;
   c.samples = samples_;
-  c.glitches = shared_glitches_.load(std::memory_order_relaxed);
-  c.overflows = shared_overflows_.load(std::memory_order_relaxed);
-  c.bus_errors = shared_failed_.load(std::memory_order_relaxed) ? 1 : 0;
+  c.glitches = shared_.glitches();
+  c.overflows = shared_.overflows();
+  c.bus_errors = shared_.failed() ? 1 : 0;
   return c;
 }
 
 std::int64_t GpioQuadratureEncoders::left_position() const {
-  return shared_left_.load(std::memory_order_relaxed);
+  return shared_.left();
 }
 std::int64_t GpioQuadratureEncoders::right_position() const {
-  return shared_right_.load(std::memory_order_relaxed);
+  return shared_.right();
 }
 
 }  // namespace harmoloc::drivers

@@ -11,22 +11,6 @@
 
 namespace harmoloc::drivers {
 
-namespace {
-
-void bump(int fd) {
-  const std::uint64_t one = 1;
-  while (::write(fd, &one, sizeof one) < 0 && errno == EINTR) {
-  }
-}
-
-void drain_eventfd(int fd) {
-  std::uint64_t value = 0;
-  while (::read(fd, &value, sizeof value) < 0 && errno == EINTR) {
-  }
-}
-
-}  // namespace
-
 LibcameraCamera::LibcameraCamera(hal::Clock& clock) : clock_(clock) {}
 
 LibcameraCamera::~LibcameraCamera() {
@@ -46,9 +30,7 @@ std::string LibcameraCamera::open(const LibcameraOptions& options) {
   options_ = options;
   if (options.buffers < 2 || options.buffers > kMaxBuffers)
     return "camera.buffers must be 2.." + std::to_string(kMaxBuffers);
-  completed_fd_ = ::eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK);
-  released_fd_ = ::eventfd(0, EFD_CLOEXEC);
-  if (completed_fd_ < 0 || released_fd_ < 0) return std::string("eventfd: ") + std::strerror(errno);
+  if (const std::string e = handoff_.open(); !e.empty()) return e;
 
   manager_ = std::make_unique<libcamera::CameraManager>();
   if (const int rc = manager_->start(); rc != 0)
@@ -144,70 +126,38 @@ std::string LibcameraCamera::open(const LibcameraOptions& options) {
 }
 
 void LibcameraCamera::on_request_completed(libcamera::Request* request) {
-  // libcamera's thread. No locks, no allocation: a pointer into the ring and a wake-up.
+  // libcamera's thread. No locks, no allocation: a pointer into the ring and a wake-up. The ring
+  // has room for every request (static_assert in the header); were it full, the request would
+  // be lost and counted as an error (CompletionHandoff::full_count).
   if (request->status() == libcamera::Request::RequestCancelled) {
     cancelled_.fetch_add(1, std::memory_order_relaxed);
     return;  // stopping
   }
-  if (!completed_.push(request)) {
-    // Cannot happen with one ring slot per request; requeue rather than lose the buffer.
-    released_.push(request);
-    bump(released_fd_);
-    return;
-  }
-  bump(completed_fd_);
+  handoff_.complete(request);
 }
 
 void LibcameraCamera::requeue_loop() {
-  for (;;) {
-    drain_eventfd(released_fd_);  // blocks until release() or shutdown bumps it
-    if (stopping_.load(std::memory_order_acquire)) return;
-    libcamera::Request* r = nullptr;
-    while (released_.pop(r)) {
-      r->reuse(libcamera::Request::ReuseBuffers);
-      camera_->queueRequest(r);
-    }
+  while (handoff_.wait_given_back([this](libcamera::Request* r) {
+    r->reuse(libcamera::Request::ReuseBuffers);
+    camera_->queueRequest(r);
+  })) {
   }
 }
 
 hal::CameraStatus LibcameraCamera::acquire(hal::FrameView& frame, std::uint64_t deadline_ns) {
   if (held_ != nullptr) release();
+  // The newest completed request; older ones go straight back (counted as dropped).
   libcamera::Request* request = nullptr;
-  for (;;) {
-    if (completed_.pop(request)) break;
-    const std::uint64_t now = clock_.now_ns();
-    if (now >= deadline_ns) return hal::CameraStatus::kNoFrame;
-    const std::uint64_t left_ns = deadline_ns - now;
-    timespec timeout{static_cast<time_t>(left_ns / 1000000000ULL),
-                     static_cast<long>(left_ns % 1000000000ULL)};
-    pollfd p{completed_fd_, POLLIN, 0};
-    const int rc = ::ppoll(&p, 1, &timeout, nullptr);
-    if (rc > 0) {
-      std::uint64_t value = 0;
-      if (::read(completed_fd_, &value, sizeof value) < 0) {
-      }
-    } else if (rc == 0) {
-      if (!completed_.pop(request)) return hal::CameraStatus::kNoFrame;
-      break;
-    }
-  }
-  // Keep the newest: older completed requests go straight back.
-  libcamera::Request* newer = nullptr;
-  bool skipped = false;
-  while (completed_.pop(newer)) {
-    ++counters_.dropped;
-    released_.push(request);
-    request = newer;
-    skipped = true;
-  }
-  if (skipped) bump(released_fd_);
+  std::uint64_t skipped = 0;
+  const bool got = handoff_.take_newest(request, deadline_ns, clock_, skipped);
+  counters_.dropped += skipped;
+  if (!got) return hal::CameraStatus::kNoFrame;
 
   libcamera::FrameBuffer* buffer = request->findBuffer(stream_);
   const std::uint64_t index = request->cookie();
   if (buffer == nullptr || index >= mappings_.size()) {
     ++counters_.corrupt;
-    released_.push(request);
-    bump(released_fd_);
+    handoff_.give_back(request);
     return hal::CameraStatus::kCorrupt;
   }
   const libcamera::FrameMetadata& meta = buffer->metadata();
@@ -217,8 +167,7 @@ hal::CameraStatus LibcameraCamera::acquire(hal::FrameView& frame, std::uint64_t 
       meta.status != libcamera::FrameMetadata::FrameSuccess || meta.planes().empty() ||
       meta.planes()[0].bytesused < need) {
     ++counters_.corrupt;
-    released_.push(request);
-    bump(released_fd_);
+    handoff_.give_back(request);
     return hal::CameraStatus::kCorrupt;
   }
   held_ = request;
@@ -235,21 +184,20 @@ hal::CameraStatus LibcameraCamera::acquire(hal::FrameView& frame, std::uint64_t 
 
 void LibcameraCamera::release() {
   if (held_ == nullptr) return;
-  released_.push(held_);
+  handoff_.give_back(held_);
   held_ = nullptr;
-  bump(released_fd_);
 }
 
 hal::CameraCounters LibcameraCamera::counters() const {
   hal::CameraCounters c = counters_;
   c.dropped += sequence_.dropped();
+  c.errors += handoff_.full_count();
   return c;
 }
 
 void LibcameraCamera::shutdown() {
   if (requeuer_.joinable()) {
-    stopping_.store(true, std::memory_order_release);
-    bump(released_fd_);
+    handoff_.stop();
     requeuer_.join();
   }
   if (started_) camera_->stop();
@@ -265,9 +213,7 @@ void LibcameraCamera::shutdown() {
   camera_.reset();
   if (manager_) manager_->stop();
   manager_.reset();
-  if (completed_fd_ >= 0) ::close(completed_fd_);
-  if (released_fd_ >= 0) ::close(released_fd_);
-  completed_fd_ = released_fd_ = -1;
+  handoff_.close();
 }
 
 }  // namespace harmoloc::drivers

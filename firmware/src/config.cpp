@@ -147,7 +147,7 @@ void read_observation(const Checker& check, const toml::table& root, Observation
   check.only(*t, w,
              {"model", "robust", "sigma_scale", "tempering", "outlier_floor", "dcs_phi",
               "consensus_chi2", "consensus_fraction", "motion_index_rate", "motion_index_min",
-              "motion_index_max", "route_free_m", "route_sigma_m"});
+              "motion_index_max", "route_free_m", "route_sigma_m", "implausible_ratio"});
   const std::string model = check.text(*t, "model", w, "boards");
   if (model == "boards")
     o.model = ObservationModel::kBoards;
@@ -170,6 +170,10 @@ void read_observation(const Checker& check, const toml::table& root, Observation
     check.fail(t, "observation.motion_index_min must not exceed motion_index_max");
   b.route_free_m = check.number(*t, "route_free_m", w, b.route_free_m, 0.0, 10.0);
   b.route_sigma_m = check.number(*t, "route_sigma_m", w, b.route_sigma_m, 0.0, 10.0);
+  b.implausible_ratio = check.number(*t, "implausible_ratio", w, b.implausible_ratio, 0.0, 1000.0);
+  if (b.implausible_ratio > 0.0 && b.implausible_ratio < 1.0)
+    check.fail(t->get("implausible_ratio"),
+               "observation.implausible_ratio must be 0 (off) or >= 1");
 }
 
 // [kidnap]: seed 004's test, its confirmation and the re-seed (docs/filter.md).
@@ -326,10 +330,9 @@ FirmwareConfig load_config(const std::string& path) {
   }
   FirmwareConfig c = default_config();
   c.source = path;
-  check.only(
-      root, "",
-      {"cycle", "board", "odometry", "can", "filter", "observation", "kidnap", "link", "realtime",
-       "camera", "encoders"});
+  check.only(root, "",
+             {"cycle", "board", "odometry", "can", "filter", "observation", "kidnap", "link",
+              "realtime", "camera", "encoders"});
 
   if (const toml::table* t = check.section(root, "cycle")) {
     check.only(*t, "cycle.", {"rate_hz", "budget_ms", "camera_timeout_ms", "encoder_timeout_ms"});

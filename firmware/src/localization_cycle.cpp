@@ -51,6 +51,7 @@ LocalizationCycle::LocalizationCycle(const FirmwareConfig& config, const algorit
       budget_ns_(static_cast<std::uint64_t>(std::llround(config.cycle.budget_ms * 1e6))) {
   filter_.configure(config.filter.particles, config.filter.seed, config.filter.noise);
   reliability_.reset(config.observation.boards);
+  if (use_boards_) board_maxima_ = algorithms::board_maxima(map.forward);
   if (config.link.has_signing_key) signer_.configure(config.link.signing_key, config.link.link_id);
   mavlink_.set_signer(&signer_);
   colour_table_storage_.reset(new std::uint8_t[algorithms::MaskTable::kStorageBytes]);
@@ -109,16 +110,27 @@ CycleResult LocalizationCycle::run_once() {
   // budget starts when it returns. A replay's acquire does not wait and counts in full.
   const std::uint64_t compute_start = live_clock_ ? clock_.now_ns() : cycle_start;
   ++counters_.cycles;
-  const bool have_frame = status == hal::CameraStatus::kFrame;
+  // A frame stamped no later than the last one used (a repeated or reordered timestamp) is no
+  // new view of the scene: released unused and counted; the cycle goes on as without a frame.
+  const bool stale = status == hal::CameraStatus::kFrame && have_frame_time_ &&
+                     frame.timestamp_ns <= last_frame_ns_;
+  if (stale) {
+    camera_.release();
+    ++counters_.stale_frames;
+  }
+  const bool have_frame = status == hal::CameraStatus::kFrame && !stale;
   if (have_frame) {
-    data_time_ns_ = live_clock_ && have_data_time_ ? std::max(frame.timestamp_ns, data_time_ns_)
-                                                   : frame.timestamp_ns;
+    // The data clock never goes back: a frame stamped before it (late) is used at its time.
+    data_time_ns_ =
+        have_data_time_ ? std::max(frame.timestamp_ns, data_time_ns_) : frame.timestamp_ns;
     have_data_time_ = true;
+    last_frame_ns_ = frame.timestamp_ns;
+    have_frame_time_ = true;
     ++counters_.frames;
   } else {
     if (status == hal::CameraStatus::kCorrupt)
       ++counters_.corrupt_frames;
-    else
+    else if (!stale)
       ++counters_.no_frame;
     if (live_clock_) {
       data_time_ns_ = std::max(data_time_ns_, cycle_start);
@@ -173,6 +185,8 @@ CycleResult LocalizationCycle::run_once() {
 
   // encoders
   bool have_delta = false;
+  bool bridge_now = false;    // the first sample after a diffused gap: move the cloud (predict)
+  bool fresh_sample = false;  // an encoder sample came in this cycle
   algorithms::OdometryDelta delta{};
   double delta_dt_s = 0.0;
   {
@@ -180,7 +194,24 @@ CycleResult LocalizationCycle::run_once() {
     hal::EncoderCounts counts{};
     if (encoders_.read(data_time_ns_, counts) == hal::EncoderStatus::kFresh) {
       ++counters_.encoder_samples;
-      if (have_encoder_) {
+      if (have_encoder_ && gap_ != EncoderGap::kNone) {
+        // The first sample after a gap the cloud spent diffusing (vision only). Its counts are
+        // absolute, so they hold the travel over the whole gap: the cloud, which has meanwhile
+        // spread and followed the fixes, is moved so that its centre is where that travel
+        // takes the pose of the last sample (predict), keeping its spread. Applying the
+        // travel on top of what the cloud did would count the motion the fixes saw twice.
+        // If the filter was re-seeded in the gap, the counts only become the new reference.
+        if (gap_ == EncoderGap::kDiffused) {
+          const std::int64_t dl = algorithms::wrapped_delta(last_counts_.left_ticks,
+                                                            counts.left_ticks, counts.counter_bits);
+          const std::int64_t dr = algorithms::wrapped_delta(
+              last_counts_.right_ticks, counts.right_ticks, counts.counter_bits);
+          gap_travel_ = algorithms::odometry_from_ticks(config_.geometry, dl, dr);
+          bridge_now = true;
+        }
+        ++counters_.encoder_gaps_bridged;
+        gap_ = EncoderGap::kNone;
+      } else if (have_encoder_) {
         const std::int64_t dl = algorithms::wrapped_delta(last_counts_.left_ticks,
                                                           counts.left_ticks, counts.counter_bits);
         const std::int64_t dr = algorithms::wrapped_delta(last_counts_.right_ticks,
@@ -192,6 +223,7 @@ CycleResult LocalizationCycle::run_once() {
       last_counts_ = counts;
       last_encoder_ns_ = counts.timestamp_ns;
       have_encoder_ = true;
+      fresh_sample = true;
     }
   }
 
@@ -199,13 +231,19 @@ CycleResult LocalizationCycle::run_once() {
   {
     StageTimer t(clock_, at(Stage::kPredict));
     if (filter_.initialized()) {
-      if (have_delta) {
+      if (bridge_now) {
+        const algorithms::Pose2 target = algorithms::apply_arc(gap_anchor_, gap_travel_);
+        const algorithms::Pose2 mean = filter_.estimate().mean;
+        filter_.shift(target.x_m - mean.x_m, target.y_m - mean.y_m,
+                      algorithms::wrap_angle_rad(target.yaw_rad - mean.yaw_rad));
+      } else if (have_delta) {
         filter_.predict(delta);
       } else if (assess_health() == Health::kVisionOnly) {
         // Motion unknown: let the cloud spread as fast as the robot could move.
         const double step_m = config_.filter.vision_only_speed_mps / config_.cycle.rate_hz;
         filter_.predict(algorithms::OdometryDelta{0.0, 0.0});
         filter_.diffuse(step_m, 0.5 * step_m / (0.5 * config_.geometry.track_m));
+        if (gap_ == EncoderGap::kNone && have_anchor_) gap_ = EncoderGap::kDiffused;
       }
     }
     if (have_delta && delta_dt_s > 0.0) {
@@ -218,7 +256,14 @@ CycleResult LocalizationCycle::run_once() {
   {
     StageTimer t(clock_, at(Stage::kUpdate));
     kidnap_verdict_ = algorithms::KidnapVerdict::kNone;
-    if (fix_.present) {
+    // A frame no place on the map can look like (noise, a blinded sensor) is not a view.
+    const bool implausible =
+        fix_.present && use_boards_ &&
+        algorithms::frame_implausible(map_.forward, board_maxima_,
+                                      algorithms::board_features(map_.model.area_scale, areas),
+                                      config_.observation.boards.implausible_ratio);
+    if (implausible) ++counters_.implausible_frames;
+    if (fix_.present && !implausible) {
       if (fix_.fix.known_place) {
         ++counters_.fixes_used;
         last_known_fix_ = fix_.fix;
@@ -249,6 +294,11 @@ CycleResult LocalizationCycle::run_once() {
       pose_.pose = e.mean;
       pose_.covariance = e.covariance;
       pose_.valid = true;
+      // Where the robot was at the latest encoder sample: a gap's travel starts there.
+      if (fresh_sample) {
+        gap_anchor_ = e.mean;
+        have_anchor_ = true;
+      }
     }
     pose_.data_time_ns = data_time_ns_;
     pose_.health = assess_health();
@@ -327,6 +377,7 @@ void LocalizationCycle::reseed_around(double x_m, double y_m) {
                                                : config_.filter.init_position_sigma_m;
   filter_.initialize(Pose2{x_m, y_m, yaw}, sigma_m,
                      config_.kidnap.yaw_sigma_deg * algorithms::kPi / 180.0, !heading);
+  if (gap_ == EncoderGap::kDiffused) gap_ = EncoderGap::kReseeded;
   kidnap_.reset();
   ++reset_counter_;
 }
@@ -342,6 +393,7 @@ void LocalizationCycle::reseed_globally() {
     filter_.initialize_around_points(m.target_x_m.data(), m.target_y_m.data(), m.sample_count,
                                      config_.kidnap.position_sigma_m);
   }
+  if (gap_ == EncoderGap::kDiffused) gap_ = EncoderGap::kReseeded;
   kidnap_.reset();
   ++reset_counter_;
 }

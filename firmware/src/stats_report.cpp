@@ -55,9 +55,10 @@ std::string stats_json(const LocalizationCycle& cycle, const RunCounters& run) {
     << "  \"camera\": {\"frames\": " << run.camera.frames << ", \"corrupt\": " << run.camera.corrupt
     << ", \"dropped\": " << run.camera.dropped << ", \"errors\": " << run.camera.errors
     << ", \"reopens\": " << run.camera.reopens << ", \"no_frame_cycles\": " << c.no_frame
-    << ", \"size_mismatch\": " << c.frame_size_mismatch << "},\n"
+    << ", \"size_mismatch\": " << c.frame_size_mismatch << ", \"stale\": " << c.stale_frames
+    << "},\n"
     << "  \"encoders\": {\"samples\": " << run.encoders.samples
-    << ", \"ignored_id\": " << run.encoders.ignored_id
+    << ", \"gaps_bridged\": " << c.encoder_gaps_bridged << ", \"ignored_id\": " << run.encoders.ignored_id
     << ", \"bad_length\": " << run.encoders.bad_length
     << ", \"glitches\": " << run.encoders.glitches
     << ", \"bus_errors\": " << run.encoders.bus_errors << ", \"bus_off\": " << run.encoders.bus_off
@@ -66,7 +67,7 @@ std::string stats_json(const LocalizationCycle& cycle, const RunCounters& run) {
     << ", \"frames_dropped\": " << run.link.frames_dropped
     << ", \"bytes_sent\": " << run.link.bytes_sent << ", \"errors\": " << run.link.errors << "},\n"
     << "  \"localizer\": {\"fixes\": " << c.fixes_used << ", \"unknown_place\": " << c.unknown_place
-    << "},\n"
+    << ", \"implausible_frames\": " << c.implausible_frames << "},\n"
     << "  \"filter\": {\"observation\": \"" << (cycle.uses_boards() ? "boards" : "fix")
     << "\", \"resamples\": " << c.resamples << ", \"no_consensus\": " << c.no_consensus
     << ", \"distrusted_board_frames\": " << c.distrusted_boards

@@ -67,12 +67,24 @@ DatasetMetadata read_metadata(const std::string& dataset_dir) {
     fail(s.str());
   }
   DatasetMetadata m;
-  const auto version = t["format_version"].value<std::int64_t>();
-  if (!version) fail("missing format_version");
+  // value_exact, not value<>: toml++ 3.3.0's float-to-integer conversion casts before it checks
+  // the range (undefined for 2e57; found by the metadata fuzzer), and a version of 1.0 is not 1.
+  if (t["format_version"].node() == nullptr) fail("missing format_version");
+  const auto version = t["format_version"].value_exact<std::int64_t>();
+  if (!version) fail("format_version must be an integer");
   if (*version != 1)
     fail("format_version " + std::to_string(*version) + " is not supported (expected 1)");
-  m.name = t["name"].value_or(std::string{});
-  const std::int64_t seed = t["seed"].value_or(std::int64_t{0});
+  if (t["name"].node() != nullptr) {
+    const auto name = t["name"].value_exact<std::string>();
+    if (!name) fail("name must be a string");
+    m.name = *name;
+  }
+  std::int64_t seed = 0;
+  if (t["seed"].node() != nullptr) {
+    const auto s = t["seed"].value_exact<std::int64_t>();
+    if (!s) fail("seed must be an integer");
+    seed = *s;
+  }
   if (seed < 0) fail("seed must not be negative");
   m.seed = static_cast<std::uint64_t>(seed);
 
@@ -90,7 +102,15 @@ DatasetMetadata read_metadata(const std::string& dataset_dir) {
   m.frame_rate_hz = number<double>(t, "camera", "rate_hz", 1.0, 1000.0, 30.0, true);
   m.frames_index = text(t, "camera", "frames_index", "frames.csv");
 
-  m.encoder_log = text(t, "encoders", "log", "encoders.log");
+  const std::string source = text(t, "encoders", "source", "can");
+  if (source == "can")
+    m.encoder_source = EncoderSource::kCan;
+  else if (source == "gpio")
+    m.encoder_source = EncoderSource::kGpio;
+  else
+    fail("encoders.source must be \"can\" or \"gpio\", not \"" + source + "\"");
+  m.encoder_log = text(t, "encoders", "log",
+                       m.encoder_source == EncoderSource::kGpio ? "encoders.csv" : "encoders.log");
   m.can_interface = text(t, "encoders", "interface", "can0");
   auto& lay = m.encoder_layout;
   lay.id = number<std::uint32_t>(t, "encoders", "can_id", 0, 0x1FFFFFFF, lay.id, false);
@@ -143,6 +163,7 @@ void write_metadata(const std::string& dataset_dir, const DatasetMetadata& m) {
       << "rate_hz = " << m.frame_rate_hz << "\n"
       << "frames_index = " << toml_string(m.frames_index) << "\n\n"
       << "[encoders]\n"
+      << (m.encoder_source == EncoderSource::kGpio ? "source = \"gpio\"\n" : "")
       << "log = " << toml_string(m.encoder_log) << "\n"
       << "interface = " << toml_string(m.can_interface) << "\n"
       << "can_id = " << id << "\n"

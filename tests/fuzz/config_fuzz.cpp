@@ -45,6 +45,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
                           c.geometry.right_direction * c.geometry.right_direction == 1,
                       "wheel direction not +-1");
   HARMOLOC_FUZZ_CHECK(c.filter.particles >= 16, "too few particles");
+  const double ratio = c.observation.boards.implausible_ratio;
+  HARMOLOC_FUZZ_CHECK(ratio == 0.0 || (ratio >= 1.0 && ratio <= 1000.0),
+                      "implausible_ratio out of range");
   HARMOLOC_FUZZ_CHECK(c.filter.fix_sigma_m > 0.0 && std::isfinite(c.filter.fix_sigma_m),
                       "fix sigma out of range");
   HARMOLOC_FUZZ_CHECK(c.link.heartbeat_hz > 0.0 && std::isfinite(c.link.heartbeat_hz),

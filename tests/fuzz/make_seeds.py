@@ -202,6 +202,10 @@ def metadata_seeds(e2e):
         METADATA.replace('"rgb24"', '"yuyv"').replace("width_px = 160", "width_px = 161"))
     put("metadata", "bad-layout.toml", METADATA.replace("right_offset = 4", "right_offset = 2"))
     put("metadata", "bad-syntax.toml", "format_version = 1\n[camera\n")
+    put("metadata", "gpio.toml", METADATA.replace('[encoders]\n', '[encoders]\nsource = "gpio"\n')
+        .replace('log = "encoders.log"', 'log = "encoders.csv"'))
+    put("metadata", "bad-source.toml",
+        METADATA.replace('[encoders]\n', '[encoders]\nsource = "quadrature"\n'))
     for sub in ("train", "wrap16"):
         p = os.path.join(e2e, sub, "metadata.toml")
         if os.path.exists(p):
@@ -264,6 +268,34 @@ def candump_seeds(e2e):
         p = os.path.join(e2e, sub, "encoders.log")
         if os.path.exists(p):
             put("candump_log", "e2e-%s.log" % sub, head_lines(p, 40))
+
+
+# --- GPIO encoder recordings (encoders.csv) -----------------------------------------------------
+
+def encoder_csv_seeds(e2e):
+    """Each seed: 1 byte choosing the counter width (8 + b % 25 bits), then the file."""
+    header = "timestamp_ns,left_ticks,right_ticks\n"
+    width = {8: 0, 16: 8, 32: 24}
+    files = {
+        "good-32.csv": (32, header + "1767225600000000000,0,0\n1767225600033333333,27,-3\n"
+                        "1767225600066666666,55,4294967290\n"),
+        "good-16-wrap.csv": (16, header + "100,65500,-10\n200,65535,-32768\n300,12,65535"),
+        "good-8-crlf.csv": (8, header.replace("\n", "\r\n") + "1,255,-128\r\n2,0,0\r\n"),
+        "bad-order.csv": (32, header + "200,1,2\n100,1,2\n"),
+        "bad-width.csv": (16, header + "100,65536,0\n"),
+        "bad-blank.csv": (32, header + "100,1,2\n\n200,1,2\n"),
+        "bad-fields.csv": (32, header + "100,1\n"),
+        "bad-header.csv": (32, "t,l,r\n100,1,2\n"),
+        "header-only.csv": (32, header),
+    }
+    for name, (bits, text) in files.items():
+        put("encoder_csv", name, bytes([width[bits]]) + text.encode())
+    p = os.path.join(e2e, "gpio", "encoders.csv")
+    if os.path.exists(p):
+        put("encoder_csv", "e2e-test.csv", bytes([width[32]]) + head_lines(p, 40))
+    p = os.path.join(e2e, "gpio", "encoders16.csv")
+    if os.path.exists(p):
+        put("encoder_csv", "e2e-wrap16.csv", bytes([width[16]]) + head_lines(p, 40))
 
 
 # --- TUM ----------------------------------------------------------------------------------------
@@ -419,7 +451,7 @@ def main():
     if not os.path.isdir(args.e2e):
         print("note: %s not found: only the hand-written seeds" % args.e2e, file=sys.stderr)
     for make in (map_seeds, config_seeds, metadata_seeds, frame_index_seeds, candump_seeds,
-                 tum_seeds, scenario_seeds, segment_seeds, mavlink_seeds):
+                 encoder_csv_seeds, tum_seeds, scenario_seeds, segment_seeds, mavlink_seeds):
         make(args.e2e)
     total = 0
     for d, _, files in os.walk(CORPUS):

@@ -72,9 +72,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
                     back.pixel_format == m.pixel_format && back.frame_rate_hz == m.frame_rate_hz &&
                     back.frames_index == m.frames_index && back.encoder_log == m.encoder_log &&
                     back.ground_truth == m.ground_truth && back.can_interface == m.can_interface &&
-                    back.seed == m.seed && a.id == b.id && a.length == b.length &&
-                    a.left_offset == b.left_offset && a.right_offset == b.right_offset &&
-                    a.counter_bits == b.counter_bits && a.byte_order == b.byte_order &&
+                    back.seed == m.seed && back.encoder_source == m.encoder_source &&
+                    a.id == b.id && a.length == b.length && a.left_offset == b.left_offset &&
+                    a.right_offset == b.right_offset && a.counter_bits == b.counter_bits &&
+                    a.byte_order == b.byte_order &&
                     back.geometry.wheel_radius_m == m.geometry.wheel_radius_m &&
                     back.geometry.track_m == m.geometry.track_m &&
                     back.geometry.ticks_per_rev == m.geometry.ticks_per_rev &&

@@ -132,6 +132,25 @@ TEST(CanLayout, OtherIdAndBadLength) {
   EXPECT_EQ(ha::decode_encoder_frame(l, f, left, right), ha::CanDecode::kOtherId);
 }
 
+// Standard and extended frames are different IDs on the bus even with the same number: a candump
+// log's 00000181#... is not our standard 0x181 (the SocketCAN driver sees it the same way).
+TEST(CanLayout, StandardAndExtendedFramesOfTheSameNumberDiffer) {
+  const ha::EncoderFrameLayout standard;  // 0x181
+  ha::CanFrame f = ha::encode_encoder_frame(standard, 1, 2, 0);
+  std::uint32_t left = 0, right = 0;
+  ASSERT_EQ(ha::decode_encoder_frame(standard, f, left, right), ha::CanDecode::kOk);
+  f.extended = true;
+  EXPECT_EQ(ha::decode_encoder_frame(standard, f, left, right), ha::CanDecode::kOtherId);
+  ha::EncoderFrameLayout ext;
+  ext.id = 0x18FF0001;
+  ha::CanFrame g = ha::encode_encoder_frame(ext, 1, 2, 0);
+  EXPECT_TRUE(g.extended);
+  ASSERT_EQ(ha::decode_encoder_frame(ext, g, left, right), ha::CanDecode::kOk);
+  ext.id = 0x181;
+  g.id = 0x181;  // an extended frame numbered like a standard layout's ID
+  EXPECT_EQ(ha::decode_encoder_frame(ext, g, left, right), ha::CanDecode::kOtherId);
+}
+
 TEST(CanLayout, LayoutValidity) {
   using BO = ha::ByteOrder;
   struct Case {

@@ -287,6 +287,7 @@ motion_index_min = 0.05
 motion_index_max = 0.9
 route_free_m = 0.05
 route_sigma_m = 0
+implausible_ratio = 3.5
 
 [kidnap]
 enabled = false
@@ -316,6 +317,7 @@ yaw_sigma_deg = 30
   EXPECT_DOUBLE_EQ(b.motion_index_max, 0.9);
   EXPECT_DOUBLE_EQ(b.route_free_m, 0.05);
   EXPECT_DOUBLE_EQ(b.route_sigma_m, 0.0);
+  EXPECT_DOUBLE_EQ(b.implausible_ratio, 3.5);
   const auto& k = c.kidnap;
   EXPECT_FALSE(k.enabled);
   EXPECT_DOUBLE_EQ(k.detector.change_threshold, 0.7);
@@ -344,6 +346,8 @@ TEST(Config, ObservationAndKidnapValuesAreChecked) {
       {"[observation]\nmodel = \"magic\"\n", "observation.model"},
       {"[observation]\ntempering = 0.5\n", "observation.tempering"},
       {"[observation]\nrobust = 1\n", "observation.robust must be true or false"},
+      {"[observation]\nimplausible_ratio = 0.5\n", "observation.implausible_ratio"},
+      {"[observation]\nimplausible_ratio = -1\n", "observation.implausible_ratio"},
       {"[observation]\nmotion_index_min = 0.9\nmotion_index_max = 0.5\n", "motion_index_min"},
       {"[observation]\nsigma = 3\n", "unknown key 'observation.sigma'"},
       {"[kidnap]\nreseed = \"random\"\n", "kidnap.reseed"},

@@ -10,6 +10,7 @@
 
 #include "harmoloc/algorithms/geometry.hpp"
 #include "harmoloc/sim_host/candump_log.hpp"
+#include "harmoloc/sim_host/encoder_csv.hpp"
 #include "harmoloc/sim_host/frame_index.hpp"
 #include "harmoloc/sim_host/metadata.hpp"
 #include "harmoloc/sim_host/tum.hpp"
@@ -366,6 +367,124 @@ TEST(Candump, ReadLogNamesFileAndLine) {
   expect_file_line_error(ht::error_of([&] { hs::read_candump_log(p); }), p, 2);
 }
 
+// --- GPIO encoder recordings (encoders.csv) ---------------------------------------------------
+
+TEST(EncoderCsv, ParsesSignedAndUnsignedCountsWithinTheWidth) {
+  hs::EncoderSample s;
+  const char* why = nullptr;
+  auto parse = [&](const std::string& line, std::uint8_t bits) {
+    why = nullptr;
+    return hs::parse_encoder_csv_line(line.data(), line.size(), bits, s, &why);
+  };
+  ASSERT_TRUE(parse("1767225600033333333,27,4294967295", 32)) << why;
+  EXPECT_EQ(s.timestamp_ns, 1767225600033333333ULL);
+  EXPECT_EQ(s.left_ticks, 27U);
+  EXPECT_EQ(s.right_ticks, 4294967295U);
+  ASSERT_TRUE(parse("5,-1,-2147483648\r", 32)) << why;  // signed, CRLF
+  EXPECT_EQ(s.left_ticks, 0xFFFFFFFFU);
+  EXPECT_EQ(s.right_ticks, 0x80000000U);
+  ASSERT_TRUE(parse("18446744073709551615,65535,-32768", 16)) << why;
+  EXPECT_EQ(s.timestamp_ns, 18446744073709551615ULL);
+  EXPECT_EQ(s.left_ticks, 65535U);
+  EXPECT_EQ(s.right_ticks, 32768U);
+  ASSERT_TRUE(parse("0,-0,0000255", 8)) << why;
+  EXPECT_EQ(s.left_ticks, 0U);
+  EXPECT_EQ(s.right_ticks, 255U);
+
+  const std::pair<const char*, std::uint8_t> bad[] = {
+      {"", 32},
+      {"1,2", 32},      // two fields
+      {"1,2,3,4", 32},  // four
+      {"1,2,3,", 32},   // a trailing comma
+      {" 1,2,3", 32},   // spaces
+      {"1, 2,3", 32},
+      {"+1,2,3", 32},  // signs on the timestamp
+      {"-1,2,3", 32},
+      {"1.5,2,3", 32},  // not whole
+      {"1e3,2,3", 32},
+      {"18446744073709551616,2,3", 32},  // 2^64 ns
+      {"1,4294967296,3", 32},            // 2^32
+      {"1,-2147483649,3", 32},           // below -2^31
+      {"1,65536,3", 16},
+      {"1,-32769,3", 16},
+      {"1,256,0", 8},
+      {"1,2,-", 32},  // a sign alone
+      {"1,,3", 32},
+      {"1,0x10,3", 32},
+      {"1,2,3\r\r", 32},
+      {"1,2,3", 7},  // a width the firmware does not have
+      {"1,2,3", 33},
+  };
+  for (const auto& [line, bits] : bad) {
+    EXPECT_FALSE(parse(line, bits)) << "accepted: '" << line << "' at " << int{bits} << " bits";
+    EXPECT_NE(why, nullptr) << line;
+  }
+}
+
+TEST(EncoderCsv, FormatParseRoundTrip) {
+  std::uint64_t r = 11;
+  auto next = [&r]() {
+    r = r * 6364136223846793005ULL + 1442695040888963407ULL;
+    return r;
+  };
+  char buf[64];
+  for (int i = 0; i < 2000; ++i) {
+    const std::uint8_t bits = static_cast<std::uint8_t>(8 + i % 25);
+    const std::uint32_t mask = bits == 32 ? 0xFFFFFFFFU : (1U << bits) - 1U;
+    const hs::EncoderSample s{next(), static_cast<std::uint32_t>(next() >> 7) & mask,
+                              static_cast<std::uint32_t>(next() >> 11) & mask};
+    const std::size_t n = hs::format_encoder_csv_line(s, buf, sizeof buf);
+    ASSERT_GT(n, 0U);
+    ASSERT_EQ(buf[n - 1], '\n');
+    hs::EncoderSample back;
+    const char* why = nullptr;
+    ASSERT_TRUE(hs::parse_encoder_csv_line(buf, n - 1, bits, back, &why)) << buf << why;
+    EXPECT_EQ(back, s) << buf;
+  }
+  EXPECT_EQ(hs::format_encoder_csv_line(hs::EncoderSample{1, 2, 3}, buf, 5), 0U);  // too small
+  hs::format_encoder_csv_line(hs::EncoderSample{1767225600000000000ULL, 0, 4294967295U}, buf,
+                              sizeof buf);
+  EXPECT_STREQ(buf, "1767225600000000000,0,4294967295\n");
+}
+
+TEST(EncoderCsv, ReadNamesFileAndLine) {
+  ht::TempDir dir;
+  const std::string header = std::string(hs::kEncoderCsvHeader) + "\n";
+  std::string p = dir.write("ok.csv", header + "100,1,2\n200,-1,3\n300,5,6");  // no final newline
+  const auto samples = hs::read_encoder_csv(p, 16);
+  ASSERT_EQ(samples.size(), 3U);
+  EXPECT_EQ(samples[1], (hs::EncoderSample{200, 65535, 3}));
+  EXPECT_EQ(samples[2], (hs::EncoderSample{300, 5, 6}));
+  p = dir.write("crlf.csv", std::string(hs::kEncoderCsvHeader) + "\r\n100,1,2\r\n");
+  EXPECT_EQ(hs::read_encoder_csv(p, 32).size(), 1U);
+
+  struct Case {
+    std::string text;
+    int line;
+    const char* what;
+  };
+  const Case bad[] = {
+      {"", 1, "header"},
+      {"timestamp_ns,left,right\n1,2,3\n", 1, "header"},
+      {"# a comment\n" + header + "1,2,3\n", 1, "header"},
+      {header + "100,1,2\n100,1,2\n", 3, "not after"},  // repeated timestamp
+      {header + "200,1,2\n100,1,2\n", 3, "not after"},  // going back
+      {header + "100,1,2\n\n200,1,2\n", 3, "empty"},    // a blank line inside
+      {header + "100,1,2\n\n", 3, "empty"},             // two newlines at the end
+      {header + "100,1,2\n200,1,70000\n", 3, "width"},  // beyond 16 bits
+      {header + "100;1;2\n", 2, "three fields"},
+  };
+  for (const Case& c : bad) {
+    p = dir.write("bad.csv", c.text);
+    const std::string msg = ht::error_of([&] { hs::read_encoder_csv(p, 16); });
+    ht::expect_one_line(msg, p + ":" + std::to_string(c.line) + ": ", c.what);
+  }
+  p = dir.write("empty.csv", header);
+  ht::expect_one_line(ht::error_of([&] { hs::read_encoder_csv(p, 16); }), p + ": ", "no samples");
+  ht::expect_one_line(ht::error_of([&] { hs::read_encoder_csv(dir.path("none.csv"), 16); }),
+                      dir.path("none.csv") + ": ", "cannot open");
+}
+
 // --- metadata.toml -----------------------------------------------------------------------------
 
 TEST(Metadata, WriteReadRoundTrip) {
@@ -415,10 +534,40 @@ TEST(Metadata, WriteReadRoundTrip) {
   EXPECT_EQ(r.encoder_layout.byte_order, ha::ByteOrder::kBigEndian);
   EXPECT_EQ(r.seed, 1234U);
 
+  EXPECT_EQ(r.encoder_source, hs::EncoderSource::kCan);
+
   // No ground truth: the key is left out and reads back empty.
   m.ground_truth.clear();
   hs::write_metadata(dir.dir(), m);
   EXPECT_EQ(hs::read_metadata(dir.dir()).ground_truth, "");
+  // A CAN dataset's metadata does not mention the source (files written before it existed
+  // stay byte for byte the same); a GPIO recording's does.
+  const std::vector<std::uint8_t> written = ht::read_bytes(dir.path("metadata.toml"));
+  EXPECT_EQ(std::string(written.begin(), written.end()).find("source"), std::string::npos);
+  m.encoder_source = hs::EncoderSource::kGpio;
+  m.encoder_log = "encoders.csv";
+  hs::write_metadata(dir.dir(), m);
+  EXPECT_EQ(hs::read_metadata(dir.dir()).encoder_source, hs::EncoderSource::kGpio);
+  EXPECT_EQ(hs::read_metadata(dir.dir()).encoder_log, "encoders.csv");
+}
+
+TEST(Metadata, EncoderSourceSelectsTheRecordingAndItsDefaultFile) {
+  ht::TempDir dir;
+  const std::string base =
+      "format_version = 1\n[camera]\nwidth_px = 160\nheight_px = 120\nrate_hz = 30\n"
+      "[robot]\nwheel_radius_m = 0.05\ntrack_m = 0.3\nticks_per_rev = 4096\n";
+  dir.write("metadata.toml", base);
+  hs::DatasetMetadata m = hs::read_metadata(dir.dir());
+  EXPECT_EQ(m.encoder_source, hs::EncoderSource::kCan);
+  EXPECT_EQ(m.encoder_log, "encoders.log");
+  dir.write("metadata.toml", base + "[encoders]\nsource = \"gpio\"\ncounter_bits = 16\n");
+  m = hs::read_metadata(dir.dir());
+  EXPECT_EQ(m.encoder_source, hs::EncoderSource::kGpio);
+  EXPECT_EQ(m.encoder_log, "encoders.csv");
+  EXPECT_EQ(m.encoder_layout.counter_bits, 16);
+  dir.write("metadata.toml", base + "[encoders]\nsource = \"quadrature\"\n");
+  ht::expect_one_line(ht::error_of([&] { hs::read_metadata(dir.dir()); }),
+                      "metadata.toml: ", "encoders.source");
 }
 
 TEST(Metadata, CalibratedGeometryKeepsItsPrecision) {
@@ -476,4 +625,10 @@ TEST(Metadata, ErrorsStartWithMetadataToml) {
                     "encoders");  // 2 x 32 bits in 4 bytes
   expect_meta_error(msg_for(good + "[encoders]\nbyte_order = \"pdp\"\n"), "byte_order");
   expect_meta_error(msg_for("format_version = 1\n[camera\n"), "line 2");
+  // Another type than an integer (a huge float was undefined behaviour in toml++'s conversion).
+  const std::string rest = good.substr(good.find('\n') + 1);
+  expect_meta_error(msg_for("format_version = 2.01e57\n" + rest), "format_version");
+  expect_meta_error(msg_for("format_version = 1.0\n" + rest), "format_version");
+  expect_meta_error(msg_for("seed = 1e300\n" + good), "seed");
+  expect_meta_error(msg_for("name = 3\n" + good), "name");
 }

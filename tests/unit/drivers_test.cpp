@@ -1,6 +1,7 @@
 // What the drivers decide without a device: the quadrature decoder (4x table, glitches,
 // debounce, lost-edge resynchronisation), sequence-gap counting, V4L2 format negotiation, the
-// SPSC ring of the libcamera hand-off, SocketCAN frame handling (layouts, wrap, wrong length,
+// SPSC ring and the three-thread completion hand-off of the libcamera driver, the GPIO reader
+// thread's sequence lock, SocketCAN frame handling (layouts, wrap, wrong length,
 // foreign IDs, error frames, the data clock), and the serial link's raw mode on a pty.
 // Runs on the host and, cross-built, under qemu-aarch64 (nothing here links libcamera).
 #include <gtest/gtest.h>
@@ -11,12 +12,21 @@
 #include <termios.h>
 #include <unistd.h>
 
+#include <array>
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
 #include <cstdlib>
 #include <cstring>
+#include <deque>
+#include <mutex>
 #include <thread>
 #include <vector>
 
 #include "harmoloc/algorithms/quadrature.hpp"
+#include "harmoloc/drivers/completion_handoff.hpp"
+#include "harmoloc/drivers/count_handoff.hpp"
+#include "harmoloc/drivers/monotonic_clock.hpp"
 #include "harmoloc/drivers/serial_link.hpp"
 #include "harmoloc/drivers/socketcan_encoders.hpp"
 #include "harmoloc/drivers/spsc_ring.hpp"
@@ -225,6 +235,184 @@ TEST(SpscRing, TwoThreadsPassEveryValueInOrder) {
   }
   producer.join();
   EXPECT_EQ(r.size(), 0U);
+}
+
+// --- the GPIO reader thread's hand-off (a sequence lock of atomics) ----------------------------
+
+// A write held open: readers neither block nor see it half done; once it ends they see it whole.
+TEST(CountHandoff, AReadDuringAWriteFailsThenSeesTheWholeWrite) {
+  hd::CountHandoff h;
+  hd::CountSnapshot s;
+  ASSERT_TRUE(h.read(s));
+  EXPECT_EQ(s.left, 0);
+  h.begin_write();
+  h.store(hd::CountSnapshot{5, -5, 1, 2, true});
+  EXPECT_FALSE(h.read(s)) << "a write under way was read";
+  EXPECT_EQ(s.left, 0) << "a failed read changed the output";
+  h.end_write();
+  ASSERT_TRUE(h.read(s));
+  EXPECT_EQ(s.left, 5);
+  EXPECT_EQ(s.right, -5);
+  EXPECT_EQ(s.glitches, 1U);
+  EXPECT_EQ(s.overflows, 2U);
+  EXPECT_TRUE(s.failed);
+  h.publish(hd::CountSnapshot{6, -6, 1, 2, false});
+  ASSERT_TRUE(h.read(s));
+  EXPECT_EQ(s.left, 6);
+  EXPECT_FALSE(s.failed);
+}
+
+// The reader thread publishes as fast as it can while the cycle reads: every snapshot read is
+// one the writer published whole (its fields agree), and they never go back.
+TEST(CountHandoff, TwoThreadsReadOnlyWholeSnapshotsInOrder) {
+#ifdef HARMOLOC_TESTS_UNDER_QEMU_USER
+  GTEST_SKIP() << "threads hang under qemu-user";
+#endif
+  hd::CountHandoff h;
+  std::atomic<bool> done{false};
+  constexpr std::int64_t kWrites = 200000;
+  std::thread writer([&] {
+    for (std::int64_t i = 1; i <= kWrites; ++i) {
+      h.publish(hd::CountSnapshot{i, -3 * i, static_cast<std::uint64_t>(i) / 7U,
+                                  static_cast<std::uint64_t>(i) * 5U, (i & 1) != 0});
+    }
+    done.store(true, std::memory_order_release);
+  });
+  std::int64_t last = 0, reads = 0, torn = 0, backwards = 0, busy = 0;
+  while (!done.load(std::memory_order_acquire) || reads == 0) {
+    hd::CountSnapshot s;
+    if (!h.read(s)) {
+      ++busy;
+      continue;
+    }
+    ++reads;
+    if (s.right != -3 * s.left || s.glitches != static_cast<std::uint64_t>(s.left) / 7U ||
+        s.overflows != static_cast<std::uint64_t>(s.left) * 5U || s.failed != ((s.left & 1) != 0))
+      ++torn;
+    if (s.left < last) ++backwards;
+    last = s.left;
+  }
+  writer.join();
+  hd::CountSnapshot end;
+  ASSERT_TRUE(h.read(end));
+  EXPECT_EQ(end.left, kWrites);
+  EXPECT_EQ(torn, 0) << "a snapshot mixed two writes";
+  EXPECT_EQ(backwards, 0);
+  EXPECT_GT(reads, 0);
+  std::printf("count hand-off: %lld reads, %lld busy retries exhausted\n",
+              static_cast<long long>(reads), static_cast<long long>(busy));
+}
+
+// --- the libcamera driver's completion hand-off (three threads) -------------------------------
+
+// A stand-in for libcamera: a device thread completes buffers from its queue (filling them
+// first: the payload the cycle must see whole), the cycle takes the newest with a deadline and
+// gives it back, and a requeue thread queues given-back buffers to the device again (libcamera's
+// queueRequest is thread-safe: here a mutex). Each buffer's owner is tracked; a buffer in two
+// places at once, a payload seen half written, frames out of order or a buffer lost fail.
+TEST(CompletionHandoff, ThreeThreadsPassEveryBufferWithoutLosingOrSharingOne) {
+#ifdef HARMOLOC_TESTS_UNDER_QEMU_USER
+  GTEST_SKIP() << "threads hang under qemu-user";
+#endif
+  enum Owner : int { kQueued, kDevice, kCompleted, kCycle, kReturned };
+  struct Buffer {
+    std::uint64_t sequence = 0;
+    std::array<std::uint64_t, 16> payload{};
+    std::atomic<int> owner{kQueued};
+  };
+  constexpr std::size_t kBuffers = 4;
+  constexpr std::uint64_t kFrames = 20000;
+  std::array<Buffer, kBuffers> buffers;
+  hd::CompletionHandoff<Buffer*, 8> handoff;
+  ASSERT_EQ(handoff.open(), "");
+  std::atomic<std::uint64_t> violations{0};
+  const auto move = [&](Buffer* b, int from, int to) {
+    int expected = from;
+    if (!b->owner.compare_exchange_strong(expected, to)) violations.fetch_add(1);
+  };
+
+  std::mutex m;
+  std::condition_variable cv;
+  std::deque<Buffer*> queue;
+  for (Buffer& b : buffers) queue.push_back(&b);
+  std::atomic<bool> device_done{false};
+  std::thread device([&] {
+    for (std::uint64_t n = 1; n <= kFrames; ++n) {
+      Buffer* b = nullptr;
+      {
+        std::unique_lock<std::mutex> lock(m);
+        cv.wait(lock, [&] { return !queue.empty(); });
+        b = queue.front();
+        queue.pop_front();
+      }
+      move(b, kQueued, kDevice);
+      b->sequence = n;  // plain stores: the hand-off must publish them
+      for (std::size_t i = 0; i < b->payload.size(); ++i) b->payload[i] = n * (i + 1);
+      move(b, kDevice, kCompleted);
+      if (!handoff.complete(b)) violations.fetch_add(1);
+    }
+    device_done.store(true, std::memory_order_release);
+  });
+  std::thread requeuer([&] {
+    while (handoff.wait_given_back([&](Buffer* b) {
+      // Given back by the cycle after use, or skipped by take_newest (an older completed one).
+      int expected = kReturned;
+      if (!b->owner.compare_exchange_strong(expected, kQueued)) {
+        expected = kCompleted;
+        if (!b->owner.compare_exchange_strong(expected, kQueued)) violations.fetch_add(1);
+      }
+      {
+        std::lock_guard<std::mutex> lock(m);
+        queue.push_back(b);
+      }
+      cv.notify_one();
+    })) {
+    }
+  });
+
+  hd::MonotonicClock clock;
+  std::uint64_t taken = 0, skipped = 0, timeouts = 0, last = 0, torn = 0, out_of_order = 0;
+  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (taken + skipped < kFrames && std::chrono::steady_clock::now() < until) {
+    Buffer* b = nullptr;
+    std::uint64_t skipped_now = 0;
+    if (!handoff.take_newest(b, clock.now_ns() + 2000000, clock, skipped_now)) {
+      ++timeouts;
+      continue;
+    }
+    skipped += skipped_now;
+    ++taken;
+    move(b, kCompleted, kCycle);
+    for (std::size_t i = 0; i < b->payload.size(); ++i)
+      if (b->payload[i] != b->sequence * (i + 1)) ++torn;
+    if (b->sequence <= last) ++out_of_order;
+    last = b->sequence;
+    move(b, kCycle, kReturned);
+    handoff.give_back(b);
+  }
+  device.join();
+  // Every buffer back in the device's queue before the requeue thread is stopped.
+  for (int i = 0; i < 2000; ++i) {
+    {
+      std::lock_guard<std::mutex> lock(m);
+      if (queue.size() == kBuffers) break;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  handoff.stop();
+  requeuer.join();
+  std::printf(
+      "completion hand-off: %llu frames taken, %llu skipped (older ones given back), %llu "
+      "deadlines passed\n",
+      static_cast<unsigned long long>(taken), static_cast<unsigned long long>(skipped),
+      static_cast<unsigned long long>(timeouts));
+  EXPECT_TRUE(device_done.load());
+  EXPECT_EQ(taken + skipped, kFrames);
+  EXPECT_EQ(torn, 0U) << "a buffer's contents were seen half written";
+  EXPECT_EQ(out_of_order, 0U) << "not the newest, or a frame twice";
+  EXPECT_EQ(handoff.full_count(), 0U);
+  EXPECT_EQ(violations.load(), 0U) << "a buffer was in two places at once";
+  EXPECT_EQ(queue.size(), kBuffers) << "a buffer was lost";
 }
 
 // --- SocketCAN frame handling --------------------------------------------------------------------

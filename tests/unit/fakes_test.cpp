@@ -17,8 +17,10 @@
 
 #include "harmoloc/algorithms/can_encoder_layout.hpp"
 #include "harmoloc/drivers/serial_link.hpp"
+#include "harmoloc/sim_host/encoder_csv.hpp"
 #include "harmoloc/sim_host/file_camera.hpp"
 #include "harmoloc/sim_host/frame_index.hpp"
+#include "harmoloc/sim_host/gpio_log_encoders.hpp"
 #include "harmoloc/sim_host/log_encoders.hpp"
 #include "harmoloc/sim_host/metadata.hpp"
 #include "test_support.hpp"
@@ -295,6 +297,110 @@ TEST(LogEncoders, FromALogFile) {
   const std::string msg =
       ht::error_of([&] { hs::LogEncoders from_bad_log(bad, ha::EncoderFrameLayout{}); });
   EXPECT_EQ(msg.rfind(bad + ":2: ", 0), 0U) << msg;
+}
+
+// --- GPIO encoder recordings ---------------------------------------------------------------------
+
+TEST(GpioLogEncoders, HandsOutSamplesByTimestampWithTheRecordingsWidth) {
+  hs::GpioLogEncoders enc({{100, 1, 2}, {200, 3, 4}, {300, 65535, 0}, {400, 2, 1}}, 16);
+  EXPECT_EQ(enc.sample_count(), 4U);
+  hal::EncoderCounts c;
+  EXPECT_EQ(enc.read(50, c), hal::EncoderStatus::kNoData);
+  ASSERT_EQ(enc.read(100, c), hal::EncoderStatus::kFresh);
+  EXPECT_EQ(c.left_ticks, 1U);
+  EXPECT_EQ(c.right_ticks, 2U);
+  EXPECT_EQ(c.timestamp_ns, 100U);
+  EXPECT_EQ(c.counter_bits, 16);
+  EXPECT_EQ(enc.read(199, c), hal::EncoderStatus::kNoData);
+  // Two samples due at once: the latest.
+  ASSERT_EQ(enc.read(350, c), hal::EncoderStatus::kFresh);
+  EXPECT_EQ(c.left_ticks, 65535U);
+  EXPECT_EQ(c.timestamp_ns, 300U);
+  EXPECT_EQ(enc.counters().samples, 3U);
+  ASSERT_EQ(enc.read(400, c), hal::EncoderStatus::kFresh);
+  EXPECT_EQ(enc.read(500, c), hal::EncoderStatus::kEnded);
+  EXPECT_EQ(enc.counters().ignored_id + enc.counters().bad_length + enc.counters().glitches, 0U);
+}
+
+TEST(GpioLogEncoders, LoopsCarryTheCountersOnAcrossTheWrap) {
+  // 8-bit counters advancing 200 a pass: the second pass continues from 210 and wraps.
+  hs::GpioLogEncoders enc({{0, 10, 250}, {10, 210, 50}}, 8);
+  enc.set_loops(2, 20);
+  hal::EncoderCounts c;
+  ASSERT_EQ(enc.read(10, c), hal::EncoderStatus::kFresh);
+  EXPECT_EQ(c.left_ticks, 210U);
+  ASSERT_EQ(enc.read(20, c), hal::EncoderStatus::kFresh);
+  EXPECT_EQ(c.timestamp_ns, 20U);
+  EXPECT_EQ(c.left_ticks, 210U);  // 10 + 200
+  EXPECT_EQ(c.right_ticks, 50U);  // 250 + 56 (50 - 250 mod 256)
+  ASSERT_EQ(enc.read(30, c), hal::EncoderStatus::kFresh);
+  EXPECT_EQ(c.left_ticks, (210U + 200U) & 0xFFU);
+  EXPECT_EQ(enc.read(40, c), hal::EncoderStatus::kEnded);
+}
+
+TEST(GpioLogEncoders, FromAFileAndItsErrors) {
+  ht::TempDir dir;
+  const std::string ok = dir.write("encoders.csv",
+                                   "timestamp_ns,left_ticks,right_ticks\n"
+                                   "1000000000,0,0\n1010000000,-3,7\n");
+  hs::GpioLogEncoders enc(ok, 32);
+  hal::EncoderCounts c;
+  ASSERT_EQ(enc.read(1010000000ULL, c), hal::EncoderStatus::kFresh);
+  EXPECT_EQ(c.left_ticks, 0xFFFFFFFDU);
+  EXPECT_EQ(c.right_ticks, 7U);
+  const std::string bad = dir.write("bad.csv",
+                                    "timestamp_ns,left_ticks,right_ticks\n"
+                                    "1000000000,0,0\n1010000000,70000,7\n");
+  const std::string msg = ht::error_of([&] { hs::GpioLogEncoders from_bad(bad, 16); });
+  EXPECT_EQ(msg.rfind(bad + ":3: ", 0), 0U) << msg;
+}
+
+// The recorder writes what the cycle read; replaying the file gives the same reads.
+TEST(EncoderRecorder, RecordsFreshSamplesThatReplayIdentically) {
+  ha::EncoderFrameLayout layout;
+  layout.length = 4;
+  layout.right_offset = 2;
+  layout.counter_bits = 16;
+  std::vector<ha::CanFrame> frames;
+  for (std::uint64_t k = 0; k < 50; ++k) {
+    frames.push_back(ha::encode_encoder_frame(layout, static_cast<std::uint32_t>(65500 + 7 * k),
+                                              static_cast<std::uint32_t>(300 - 9 * k),
+                                              1000 + k * 10));
+  }
+  frames.push_back(frame_at(1005, 0x281, 8, 1, 1));  // ignored by both
+  ht::TempDir dir;
+  const std::string path = dir.path("rec.csv");
+  std::vector<std::pair<hal::EncoderStatus, hal::EncoderCounts>> original;
+  {
+    hs::LogEncoders can(frames, layout);
+    hs::EncoderRecorder rec(can);
+    ASSERT_TRUE(rec.open(path));
+    for (std::uint64_t t = 990; t <= 1600; t += 33) {
+      hal::EncoderCounts c;
+      const hal::EncoderStatus s = rec.read(t, c);
+      original.emplace_back(s, c);
+    }
+    EXPECT_EQ(rec.counter_bits(), 16);
+    EXPECT_GT(rec.samples_written(), 10U);
+    ASSERT_TRUE(rec.close());
+  }
+  hs::GpioLogEncoders replay(path, 16);
+  std::size_t i = 0;
+  for (std::uint64_t t = 990; t <= 1600; t += 33, ++i) {
+    hal::EncoderCounts c;
+    const hal::EncoderStatus s = replay.read(t, c);
+    const auto& [os, oc] = original[i];
+    if (os == hal::EncoderStatus::kFresh) {
+      ASSERT_EQ(s, hal::EncoderStatus::kFresh) << "at " << t;
+      EXPECT_EQ(c.left_ticks, oc.left_ticks) << "at " << t;
+      EXPECT_EQ(c.right_ticks, oc.right_ticks) << "at " << t;
+      EXPECT_EQ(c.timestamp_ns, oc.timestamp_ns) << "at " << t;
+      EXPECT_EQ(c.counter_bits, oc.counter_bits);
+    } else {
+      EXPECT_NE(s, hal::EncoderStatus::kFresh) << "at " << t;
+    }
+  }
+  EXPECT_FALSE(hs::EncoderRecorder(replay).open(dir.path("no/such/dir/rec.csv")));
 }
 
 // --- SerialLink --------------------------------------------------------------------------------

@@ -121,6 +121,31 @@ TEST(BoardObservation, FeaturesAreScaledAreas) {
   EXPECT_FLOAT_EQ(f.value[2], 25.0F);
 }
 
+// A frame no place on the map can look like (noise): most modelled boards far above their
+// largest expected area anywhere. One board above it (moved nearer) is not enough.
+TEST(BoardObservation, ImplausibleFrameIsMostBoardsBeyondAnywhereOnTheMap) {
+  const auto map = make_forward_map();
+  const std::array<float, ha::kMaxBoards> m = ha::board_maxima(*map);
+  EXPECT_FLOAT_EQ(m[0], 3.0F);  // x = 2.0
+  EXPECT_FLOAT_EQ(m[1], 4.0F);  // x = 1.0, y = 1.0
+  EXPECT_FLOAT_EQ(m[2], 2.5F);  // y = 1.0
+  EXPECT_FLOAT_EQ(m[3], 0.0F);  // not modelled
+  ha::BoardFeatures o = observe(1.5, 0.75);
+  EXPECT_FALSE(ha::frame_implausible(*map, m, o, 2.0));
+  o.value[3] = 1000.0F;  // the unmodelled board does not count
+  EXPECT_FALSE(ha::frame_implausible(*map, m, o, 2.0));
+  o.value[0] = 6.1F;  // one board beyond twice its maximum: a moved board, not noise
+  EXPECT_FALSE(ha::frame_implausible(*map, m, o, 2.0));
+  o.value[1] = 8.0F;  // exactly twice: not beyond
+  EXPECT_FALSE(ha::frame_implausible(*map, m, o, 2.0));
+  o.value[1] = 8.1F;  // two of the three modelled boards
+  EXPECT_TRUE(ha::frame_implausible(*map, m, o, 2.0));
+  EXPECT_FALSE(ha::frame_implausible(*map, m, o, 3.0));
+  EXPECT_FALSE(ha::frame_implausible(*map, m, o, 0.0));  // the check off
+  const ha::ForwardMap none;
+  EXPECT_FALSE(ha::frame_implausible(none, ha::board_maxima(none), o, 2.0));
+}
+
 TEST(BoardObservation, AgreeingBoardsKeepFullWeight) {
   const auto map = make_forward_map();
   ha::BoardModelParams params;

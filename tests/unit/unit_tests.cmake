@@ -41,7 +41,17 @@ target_link_libraries(drivers_test PRIVATE harmoloc_drivers_can harmoloc_drivers
 if(CMAKE_CROSSCOMPILING)
   target_compile_definitions(drivers_test PRIVATE HARMOLOC_TESTS_UNDER_QEMU_USER)
 endif()
-gtest_discover_tests(drivers_test DISCOVERY_TIMEOUT 60)
+gtest_discover_tests(drivers_test DISCOVERY_TIMEOUT 60 PROPERTIES LABELS drivers)
+
+# ThreadSanitizer's own negative control, in the host-tsan build only (the preset builds just the
+# drivers' tests and this): a deliberate data race that TSan must report.
+if(CMAKE_CXX_FLAGS MATCHES "sanitize=thread")
+  add_executable(tsan_canary ${HARMOLOC_UNIT_DIR}/tsan_canary.cpp)
+  target_link_libraries(tsan_canary PRIVATE Threads::Threads)
+  add_test(NAME tsan.canary_reports_a_race COMMAND tsan_canary)
+  set_tests_properties(tsan.canary_reports_a_race PROPERTIES LABELS tsan
+    PASS_REGULAR_EXPRESSION "ThreadSanitizer: data race")
+endif()
 
 # The rest needs the host board (sim_host/, OpenCV): not built for the Linux boards.
 if(NOT HARMOLOC_BOARD STREQUAL "host")

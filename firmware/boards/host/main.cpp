@@ -19,7 +19,9 @@
 #include "harmoloc/firmware/map_loader.hpp"
 #include "harmoloc/firmware/stats_report.hpp"
 #include "harmoloc/sim_host/area_log.hpp"
+#include "harmoloc/sim_host/encoder_csv.hpp"
 #include "harmoloc/sim_host/file_camera.hpp"
+#include "harmoloc/sim_host/gpio_log_encoders.hpp"
 #include "harmoloc/sim_host/log_encoders.hpp"
 #include "harmoloc/sim_host/metadata.hpp"
 #include "harmoloc/sim_host/tum_writer.hpp"
@@ -74,7 +76,7 @@ int main(int argc, char** argv) {
       "Exit status 0 on a completed run, 2 with a one-line reason on bad input.",
       "harmoloc"};
   std::string dataset, map_path, config_path, trajectory_path, link_path, stats_path, fixes_path,
-      link_in_path, areas_path;
+      link_in_path, areas_path, record_encoders_path;
   bool realtime = false, quiet = false;
   std::uint32_t loops = 1;
   app.add_option("--dataset", dataset, "dataset folder (metadata.toml, frames.csv, encoders.log)")
@@ -97,6 +99,9 @@ int main(int argc, char** argv) {
   app.add_option("--record-areas", areas_path,
                  "write every frame's board areas here (area log, docs/dataset-format.md): with\n"
                  "a few labelled poses, harmoloc-train --areas makes a map from it");
+  app.add_option("--record-encoders", record_encoders_path,
+                 "write every fresh encoder sample the cycle reads here, as a GPIO encoder\n"
+                 "recording (encoders.csv, docs/dataset-format.md)");
   app.add_flag("--realtime", realtime,
                "pace the cycle at the recording's rate instead of as fast as possible");
   app.add_option("--loop", loops,
@@ -110,7 +115,11 @@ int main(int argc, char** argv) {
   firmware::FirmwareConfig config;
   sim_host::DatasetMetadata meta;
   std::unique_ptr<sim_host::FileCamera> camera;
-  std::unique_ptr<sim_host::LogEncoders> encoders;
+  std::unique_ptr<sim_host::LogEncoders> can_log;
+  std::unique_ptr<sim_host::GpioLogEncoders> gpio_log;
+  hal::WheelEncoders* encoders = nullptr;
+  std::size_t encoder_records = 0;
+  std::uint64_t encoders_first_ns = 0, encoders_last_ns = 0;
   drivers::SerialLink link;
   try {
     config = config_path.empty() ? firmware::default_config() : firmware::load_config(config_path);
@@ -135,17 +144,32 @@ int main(int argc, char** argv) {
       return fail(e);
     }
     camera = std::make_unique<sim_host::FileCamera>(dataset, meta);
-    encoders = std::make_unique<sim_host::LogEncoders>(
-        (std::filesystem::path(dataset) / meta.encoder_log).string(), config.can_layout);
+    const std::string encoder_path = (std::filesystem::path(dataset) / meta.encoder_log).string();
+    if (meta.encoder_source == sim_host::EncoderSource::kGpio) {
+      // A GPIO recording: its counter width is the metadata's (the config's [can] is the bus's).
+      gpio_log = std::make_unique<sim_host::GpioLogEncoders>(encoder_path,
+                                                             meta.encoder_layout.counter_bits);
+      encoders = gpio_log.get();
+      encoder_records = gpio_log->sample_count();
+      encoders_first_ns = gpio_log->first_timestamp_ns();
+      encoders_last_ns = gpio_log->last_timestamp_ns();
+    } else {
+      can_log = std::make_unique<sim_host::LogEncoders>(encoder_path, config.can_layout);
+      encoders = can_log.get();
+      encoder_records = can_log->frame_count();
+      encoders_first_ns = can_log->first_timestamp_ns();
+      encoders_last_ns = can_log->last_timestamp_ns();
+    }
     if (loops > 1) {
       // One pass lasts from the first to the last record, plus one frame period.
-      const std::uint64_t first =
-          std::min(camera->first_timestamp_ns(), encoders->first_timestamp_ns());
-      const std::uint64_t last =
-          std::max(camera->last_timestamp_ns(), encoders->last_timestamp_ns());
+      const std::uint64_t first = encoder_records > 0
+                                      ? std::min(camera->first_timestamp_ns(), encoders_first_ns)
+                                      : camera->first_timestamp_ns();
+      const std::uint64_t last = std::max(camera->last_timestamp_ns(), encoders_last_ns);
       const auto period = static_cast<std::uint64_t>(1e9 / meta.frame_rate_hz);
       camera->set_loops(loops, last - first + period);
-      encoders->set_loops(loops, last - first + period);
+      if (can_log) can_log->set_loops(loops, last - first + period);
+      if (gpio_log) gpio_log->set_loops(loops, last - first + period);
     }
     if (const std::string e =
             link.open(link_path.empty() ? "/dev/null" : link_path, config.link.baud);
@@ -184,6 +208,11 @@ int main(int argc, char** argv) {
     if (!quiet) std::fprintf(stderr, "harmoloc: %s\n", rt.summary.c_str());
   }
   static firmware::LatencyHistogram wakeup_latency;
+  sim_host::EncoderRecorder recorder(*encoders);
+  if (!record_encoders_path.empty()) {
+    if (!recorder.open(record_encoders_path)) return fail(record_encoders_path + ": cannot write");
+    encoders = &recorder;
+  }
   auto cycle = std::make_unique<firmware::LocalizationCycle>(config, g_map, *camera, *encoders,
                                                              link, clock, meta.pixel_format);
   // The signing clock starts at the wall time (MAVLink signing timestamps are wall-clock based).
@@ -193,11 +222,12 @@ int main(int argc, char** argv) {
                                      .count()));
   if (!quiet) {
     std::fprintf(stderr,
-                 "harmoloc: %zu frames %ux%u, %zu encoder frames, map of %u samples on %u boards, "
+                 "harmoloc: %zu frames %ux%u, %zu encoder %s, map of %u samples on %u boards, "
                  "%zu particles%s\n",
-                 camera->frame_count(), meta.image_width_px, meta.image_height_px,
-                 encoders->frame_count(), g_map.model.sample_count, g_map.model.feature_count,
-                 config.filter.particles, realtime ? ", real-time pacing" : "");
+                 camera->frame_count(), meta.image_width_px, meta.image_height_px, encoder_records,
+                 gpio_log ? "samples (GPIO recording)" : "frames", g_map.model.sample_count,
+                 g_map.model.feature_count, config.filter.particles,
+                 realtime ? ", real-time pacing" : "");
     if (link.can_receive()) {
       std::fprintf(stderr, "harmoloc: link commands %s\n",
                    config.link.has_signing_key ? "signed only (MAVLink 2 signing key loaded)"
@@ -239,6 +269,18 @@ int main(int argc, char** argv) {
   if (!quiet) std::fprintf(stderr, "\r  cycle %zu/%zu\n", done, camera->frame_count());
   if (!g_trajectory.close() || !g_fixes.close()) return fail("writing the trajectory failed");
   if (!g_areas.close()) return fail(areas_path + ": write failed");
+  if (!record_encoders_path.empty()) {
+    if (!recorder.close()) return fail(record_encoders_path + ": write failed");
+    if (!quiet) {
+      std::fprintf(stderr,
+                   "harmoloc: recorded %llu encoder samples to %s (metadata: [encoders] source = "
+                   "\"gpio\", counter_bits = %u)\n",
+                   static_cast<unsigned long long>(recorder.samples_written()),
+                   record_encoders_path.c_str(),
+                   unsigned{recorder.counter_bits() != 0 ? recorder.counter_bits()
+                                                         : config.can_layout.counter_bits});
+    }
+  }
 
   run.board = "host";
   run.rate_hz = config.cycle.rate_hz;

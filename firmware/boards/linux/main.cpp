@@ -25,6 +25,7 @@
 #include "harmoloc/firmware/localization_cycle.hpp"
 #include "harmoloc/firmware/map_loader.hpp"
 #include "harmoloc/firmware/stats_report.hpp"
+#include "harmoloc/sim_host/encoder_csv.hpp"
 #ifdef HARMOLOC_WITH_GPIOD
 #include "harmoloc/drivers/gpio_quadrature_encoders.hpp"
 #endif
@@ -90,7 +91,7 @@ int main(int argc, char** argv) {
       "Runs until SIGINT/SIGTERM, --duration or --cycles. Exit status 0 after a run, 2 with a\n"
       "one-line reason on a bad config, map or a missing device.",
       "harmoloc"};
-  std::string map_path, config_path, link_path, stats_path, trajectory_path;
+  std::string map_path, config_path, link_path, stats_path, trajectory_path, record_encoders_path;
   double duration_s = 0.0;
   std::uint64_t max_cycles = 0;
   bool quiet = false;
@@ -102,6 +103,9 @@ int main(int argc, char** argv) {
   app.add_option("--stats", stats_path,
                  "write run statistics here at the end (JSON: per-stage timing, counters)");
   app.add_option("--trajectory", trajectory_path, "write the fused pose of every cycle here (TUM)");
+  app.add_option("--record-encoders", record_encoders_path,
+                 "record the wheel counters the cycle reads as a GPIO encoder recording (CSV\n"
+                 "timestamp_ns,left_ticks,right_ticks; docs/dataset-format.md)");
   app.add_option("--duration", duration_s, "stop after this many seconds (0: run until a signal)")
       ->check(CLI::Range(0.0, 1e9));
   app.add_option("--cycles", max_cycles, "stop after this many cycles (0: no limit)");
@@ -209,6 +213,13 @@ int main(int argc, char** argv) {
 #endif
   }
 
+  // Recording the counters the cycle reads (a 64 KiB buffer reserved here).
+  sim_host::EncoderRecorder recorder(*encoders);
+  if (!record_encoders_path.empty()) {
+    if (!recorder.open(record_encoders_path)) return fail(record_encoders_path + ": cannot write");
+    encoders = &recorder;
+  }
+
   // Link.
   drivers::SerialLink link;
   const std::string link_device = link_path.empty() ? config.link.device : link_path;
@@ -271,6 +282,8 @@ int main(int argc, char** argv) {
   run.open_fds_end = count_open_fds();
   if (trajectory != nullptr && std::fclose(trajectory) != 0)
     return fail(trajectory_path + ": write failed");
+  if (!record_encoders_path.empty() && !recorder.close())
+    return fail(record_encoders_path + ": write failed");
 
   run.board = "linux";
   run.rate_hz = config.cycle.rate_hz;

@@ -33,6 +33,16 @@ struct BoardFeatures {
 
 BoardFeatures board_features(float area_scale, const AreaVector& areas);
 
+/// The largest feature the forward map expects for each board anywhere on its grid (0 for the
+/// boards it does not model). Computed once, at start-up.
+std::array<float, kMaxBoards> board_maxima(const ForwardMap& map);
+
+/// Whether more than half of the modelled boards show more than @p ratio times their maximum
+/// (BoardModelParams::implausible_ratio): no place on the map can look like that. False when
+/// @p ratio is 0 or the map models no board.
+bool frame_implausible(const ForwardMap& map, const std::array<float, kMaxBoards>& maxima,
+                       const BoardFeatures& observed, double ratio);
+
 struct BoardModelParams {
   double sigma_scale = 3.0;  ///< k: inflation of the forward map's per-board sigma
   /// The boards' joint likelihood is raised to 1 / this power: successive frames share most of
@@ -49,6 +59,10 @@ struct BoardModelParams {
   double route_free_m = 0.03;   ///< distance from the training run that costs nothing
   double route_sigma_m = 0.03;  ///< beyond it, a Gaussian fall-off of this width
   bool robust = true;           ///< false: seed 001's plain product of Gaussians (w = 1, s = 1)
+  /// A frame in which more than half of the modelled boards show more than this many times the
+  /// largest area the forward map expects for them anywhere is no view of the mapped scene (a
+  /// frame of noise, a blinded sensor): it is not used. 0 turns the check off.
+  double implausible_ratio = 2.0;
 };
 
 /// What the particle filter needs for one update: per board, the mixture's weights and the

@@ -34,7 +34,8 @@ enum class CanDecode : std::uint8_t { kOk = 0, kOtherId = 1, kBadLength = 2 };
 /// True when the layout itself is consistent (counters inside the frame, width 8..32 in bytes).
 bool layout_valid(const EncoderFrameLayout& layout);
 
-/// Extracts the raw counters of a frame with our ID and the expected length.
+/// Extracts the raw counters of a frame with our ID and the expected length. Our ID is extended
+/// when it needs more than 11 bits; a frame of the other kind with the same number is another ID.
 CanDecode decode_encoder_frame(const EncoderFrameLayout& layout, const CanFrame& frame,
                                std::uint32_t& left_raw, std::uint32_t& right_raw);
 

@@ -63,6 +63,9 @@ class ParticleFilter {
 
   /// Random walk of every particle (motion unknown, e.g. while odometry is missing).
   void diffuse(double position_sigma_m, double yaw_sigma_rad);
+  /// Moves every particle by (@p dx_m, @p dy_m) and turns it by @p dyaw_rad: the cloud keeps its
+  /// shape and weights, its centre moves.
+  void shift(double dx_m, double dy_m, double dyaw_rad);
 
   /// Weights particles by a Gaussian position fix; the small @p outlier_probability mixes in a
   /// uniform floor so that one wrong fix cannot wipe out every particle.

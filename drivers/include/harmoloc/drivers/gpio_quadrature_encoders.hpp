@@ -25,6 +25,7 @@
 #include <thread>
 
 #include "harmoloc/algorithms/quadrature.hpp"
+#include "harmoloc/drivers/count_handoff.hpp"
 #include "harmoloc/hal/wheel_encoders.hpp"
 
 struct gpiod_chip;
@@ -82,13 +83,8 @@ class GpioQuadratureEncoders final : public hal::WheelEncoders {
   std::uint64_t overflows_ = 0;  ///< lost edges found by the level check (resynchronised)
   std::string description_;
 
-  // Hand-off to the cycle (sequence lock: odd while the reader writes).
-  std::atomic<std::uint32_t> seq_{0};
-  std::atomic<std::int64_t> shared_left_{0};
-  std::atomic<std::int64_t> shared_right_{0};
-  std::atomic<std::uint64_t> shared_glitches_{0};
-  std::atomic<std::uint64_t> shared_overflows_{0};
-  std::atomic<bool> shared_failed_{false};
+  // Hand-off to the cycle (a sequence lock of atomics, count_handoff.hpp).
+  CountHandoff shared_;
 
   int stop_fd_ = -1;  ///< eventfd that wakes the reader to stop
   std::thread reader_;

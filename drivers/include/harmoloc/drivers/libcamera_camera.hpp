@@ -3,12 +3,12 @@
 /// one viewfinder stream in YUYV or RGB24 at the configured size, a fixed set of buffers
 /// allocated and mapped at start-up with one request each.
 ///
-/// Hand-off without locks or allocation in the cycle: libcamera completes requests in its own
-/// thread; the completion handler pushes the Request pointer into a fixed single-producer
-/// single-consumer ring and bumps an eventfd. acquire() waits on that eventfd with ppoll until
-/// the deadline and pops the ring. release() pushes the request into a second ring and bumps a
-/// second eventfd; a small requeue thread (not the cycle) gives it back to libcamera, whose
-/// queueRequest() allocates its internal messages.
+/// Hand-off without locks or allocation in the cycle (completion_handoff.hpp): libcamera completes
+/// requests in its own thread; the completion handler pushes the Request pointer into a fixed
+/// single-producer single-consumer ring and bumps an eventfd. acquire() waits on that eventfd
+/// with ppoll until the deadline and pops the ring. release() pushes the request into a second
+/// ring and bumps a second eventfd; a small requeue thread (not the cycle) gives it back to
+/// libcamera, whose queueRequest() allocates its internal messages.
 ///
 /// Anything linking libcamera hangs under qemu-user (lttng-ust's start-up fork): this driver is
 /// its own library (harmoloc_drivers_libcamera) and its tests run natively only.
@@ -21,7 +21,7 @@
 #include <vector>
 
 #include "harmoloc/algorithms/quadrature.hpp"
-#include "harmoloc/drivers/spsc_ring.hpp"
+#include "harmoloc/drivers/completion_handoff.hpp"
 #include "harmoloc/drivers/v4l2_format.hpp"
 #include "harmoloc/hal/camera.hpp"
 #include "harmoloc/hal/clock.hpp"
@@ -88,11 +88,10 @@ class LibcameraCamera final : public hal::Camera {
   bool acquired_ = false;
   bool started_ = false;
 
-  SpscRing<libcamera::Request*, 16> completed_;  // libcamera thread -> cycle
-  SpscRing<libcamera::Request*, 16> released_;   // cycle -> requeue thread
-  int completed_fd_ = -1;                        // eventfd: a request completed
-  int released_fd_ = -1;                         // eventfd: a request to requeue (or stop)
-  std::atomic<bool> stopping_{false};
+  // Every request is in one place at a time (libcamera, a ring, held by the cycle), so with at
+  // most kMaxBuffers of them neither ring can fill.
+  CompletionHandoff<libcamera::Request*, 16> handoff_;
+  static_assert(kMaxBuffers <= decltype(handoff_)::capacity(), "a ring could fill up");
   std::thread requeuer_;
   libcamera::Request* held_ = nullptr;
 

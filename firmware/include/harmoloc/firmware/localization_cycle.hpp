@@ -69,10 +69,15 @@ struct CycleCounters {
   std::uint64_t frames = 0;
   std::uint64_t no_frame = 0;
   std::uint64_t corrupt_frames = 0;
+  std::uint64_t stale_frames = 0;  ///< frames stamped no later than the last one used (unused)
   std::uint64_t frame_size_mismatch = 0;
   std::uint64_t fixes_used = 0;
   std::uint64_t unknown_place = 0;
+  std::uint64_t implausible_frames = 0;  ///< frames no place on the map can look like (unused)
   std::uint64_t encoder_samples = 0;
+  /// Encoder gaps the cloud spent diffusing (vision only), closed by their first sample: the
+  /// cloud is moved to where the gap's travel takes the pose of the last sample before it.
+  std::uint64_t encoder_gaps_bridged = 0;
   std::uint64_t overruns = 0;
   std::uint64_t resamples = 0;
   std::uint64_t no_consensus = 0;       ///< frames whose boards mostly disagreed with the estimate
@@ -165,6 +170,7 @@ class LocalizationCycle {
   algorithms::YuyvTable yuyv_table_;
   algorithms::ParticleFilter filter_;
   algorithms::BoardReliability reliability_;
+  std::array<float, algorithms::kMaxBoards> board_maxima_{};  ///< per board, over the map
   algorithms::BoardUpdate board_update_{};
   algorithms::BoardAssessment assessment_{};
   algorithms::HarmonicFix robust_fix_{};
@@ -182,12 +188,21 @@ class LocalizationCycle {
   std::uint64_t budget_ns_;
   std::uint64_t data_time_ns_ = 0;
   bool have_data_time_ = false;
+  std::uint64_t last_frame_ns_ = 0;  ///< timestamp of the last frame used
+  bool have_frame_time_ = false;
   bool live_clock_ = false;
   std::uint64_t last_fix_ns_ = 0;
   bool ever_fix_ = false;
   algorithms::HarmonicFix last_known_fix_{};  ///< the latest fix of a known place
   std::uint64_t last_encoder_ns_ = 0;
   bool have_encoder_ = false;
+  /// An encoder gap in progress: the cloud diffused since the last sample (vision only), and
+  /// whether it was re-seeded meanwhile.
+  enum class EncoderGap : std::uint8_t { kNone, kDiffused, kReseeded };
+  EncoderGap gap_ = EncoderGap::kNone;
+  algorithms::Pose2 gap_anchor_{};  ///< the estimate at the latest encoder sample
+  bool have_anchor_ = false;
+  algorithms::OdometryDelta gap_travel_{};
   hal::EncoderCounts last_counts_{};
   std::uint64_t next_heartbeat_ns_ = 0;
   std::uint8_t reset_counter_ = 0;

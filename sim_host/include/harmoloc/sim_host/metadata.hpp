@@ -11,6 +11,12 @@
 
 namespace harmoloc::sim_host {
 
+/// Where the wheel encoder counts of a recording come from (`[encoders] source`).
+enum class EncoderSource : std::uint8_t {
+  kCan = 0,   ///< a `candump -l` log of the CAN bus (encoders.log)
+  kGpio = 1,  ///< a GPIO encoder recording, CSV (encoders.csv, encoder_csv.hpp)
+};
+
 struct DatasetMetadata {
   std::string name;
   std::uint32_t image_width_px = 0;
@@ -18,7 +24,8 @@ struct DatasetMetadata {
   hal::PixelFormat pixel_format = hal::PixelFormat::kRgb24;
   double frame_rate_hz = 30.0;
   std::string frames_index = "frames.csv";
-  std::string encoder_log = "encoders.log";
+  EncoderSource encoder_source = EncoderSource::kCan;
+  std::string encoder_log = "encoders.log";      ///< "encoders.csv" by default for kGpio
   std::string ground_truth = "groundtruth.tum";  ///< empty when there is none (a real recording)
   std::string can_interface = "can0";
   algorithms::DiffDriveGeometry geometry;
