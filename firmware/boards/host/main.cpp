@@ -17,6 +17,7 @@
 #include "harmoloc/drivers/serial_link.hpp"
 #include "harmoloc/firmware/config.hpp"
 #include "harmoloc/firmware/cycle_pacer.hpp"
+#include "harmoloc/firmware/eigen_guard.hpp"
 #include "harmoloc/firmware/localization_cycle.hpp"
 #include "harmoloc/firmware/map_loader.hpp"
 #include "harmoloc/firmware/stats_report.hpp"
@@ -268,7 +269,8 @@ int main(int argc, char** argv) {
   read_memory(run.rss_kb_start, unused_peak);
   run.open_fds_start = count_open_fds();
 
-  // ---- the cycle ----
+  // ---- the cycle; Eigen may not allocate from here on (it would stop the program) ----
+  firmware::forbid_eigen_heap();
   const std::uint64_t wall_start = clock.now_ns();
   const std::uint64_t data_start = camera->first_timestamp_ns();
   std::size_t done = 0;

@@ -24,6 +24,7 @@
 #include "harmoloc/drivers/v4l2_camera.hpp"
 #include "harmoloc/firmware/config.hpp"
 #include "harmoloc/firmware/cycle_pacer.hpp"
+#include "harmoloc/firmware/eigen_guard.hpp"
 #include "harmoloc/firmware/localization_cycle.hpp"
 #include "harmoloc/firmware/map_loader.hpp"
 #include "harmoloc/firmware/stats_report.hpp"
@@ -258,6 +259,7 @@ int main(int argc, char** argv) {
 
   // ---- the cycle: camera-paced (acquire waits for the next frame, at most a period) or
   // timer-paced (wakes on an absolute grid, takes a ready frame or none) ----
+  firmware::forbid_eigen_heap();  // Eigen may not allocate from here on (eigen_guard.hpp)
   const std::uint64_t start_ns = clock.now_ns();
   const auto end_ns =
       duration_s > 0.0 ? start_ns + static_cast<std::uint64_t>(duration_s * 1e9) : std::uint64_t{0};
