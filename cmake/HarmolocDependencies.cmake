@@ -1,5 +1,12 @@
 # All dependencies come from Debian packages; `./run` installs them.
 find_package(Eigen3 3.3 REQUIRED NO_MODULE)
+# Eigen as every harmoloc target uses it: with EIGEN_RUNTIME_NO_MALLOC everywhere, so that all
+# translation units see the same inline Eigen functions, and a program can forbid Eigen's heap
+# after start-up (the board mains do: firmware/eigen_guard.hpp). Allowed until switched off, so
+# the trainer is unaffected.
+add_library(harmoloc_eigen INTERFACE)
+target_link_libraries(harmoloc_eigen INTERFACE Eigen3::Eigen)
+target_compile_definitions(harmoloc_eigen INTERFACE EIGEN_RUNTIME_NO_MALLOC)
 find_package(Threads REQUIRED)
 
 # OpenCV core and imgproc only. Debian's libopencv-dev (the only package with OpenCVConfig.cmake)

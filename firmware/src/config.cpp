@@ -335,13 +335,24 @@ FirmwareConfig load_config(const std::string& path) {
               "realtime", "camera", "encoders"});
 
   if (const toml::table* t = check.section(root, "cycle")) {
-    check.only(*t, "cycle.", {"rate_hz", "budget_ms", "camera_timeout_ms", "encoder_timeout_ms"});
+    check.only(*t, "cycle.",
+               {"rate_hz", "budget_ms", "camera_timeout_ms", "encoder_timeout_ms", "pacing",
+                "overrun_alarm_cycles"});
     c.cycle.rate_hz = check.number(*t, "rate_hz", "cycle.", c.cycle.rate_hz, 1.0, 1000.0);
     c.cycle.budget_ms = check.number(*t, "budget_ms", "cycle.", c.cycle.budget_ms, 0.01, 1000.0);
     c.cycle.camera_timeout_ms =
         check.number(*t, "camera_timeout_ms", "cycle.", c.cycle.camera_timeout_ms, 1.0, 60000.0);
     c.cycle.encoder_timeout_ms =
         check.number(*t, "encoder_timeout_ms", "cycle.", c.cycle.encoder_timeout_ms, 1.0, 60000.0);
+    const std::string pacing = check.text(*t, "pacing", "cycle.", "camera");
+    if (pacing == "camera")
+      c.cycle.pacing = Pacing::kCamera;
+    else if (pacing == "timer")
+      c.cycle.pacing = Pacing::kTimer;
+    else
+      check.fail(t->get("pacing"), "cycle.pacing must be \"camera\" or \"timer\"");
+    c.cycle.overrun_alarm_cycles = static_cast<std::uint32_t>(
+        check.integer(*t, "overrun_alarm_cycles", "cycle.", c.cycle.overrun_alarm_cycles, 1, 1000));
   }
 
   if (const toml::node* boards_node = root.get("board")) {

@@ -94,6 +94,14 @@ Health LocalizationCycle::assess_health() const {
 }
 
 CycleResult LocalizationCycle::run_once() {
+  return run(0, false);
+}
+
+CycleResult LocalizationCycle::run_once(std::uint64_t acquire_deadline_ns) {
+  return run(acquire_deadline_ns, true);
+}
+
+CycleResult LocalizationCycle::run(std::uint64_t acquire_deadline_ns, bool have_deadline) {
   const std::uint64_t cycle_start = clock_.now_ns();
   auto& h = histograms_;
   const auto at = [&h](Stage s) -> LatencyHistogram& { return h[static_cast<std::size_t>(s)]; };
@@ -103,7 +111,7 @@ CycleResult LocalizationCycle::run_once() {
   hal::CameraStatus status;
   {
     StageTimer t(clock_, at(Stage::kAcquire));
-    status = camera_.acquire(frame, cycle_start + period_ns_);
+    status = camera_.acquire(frame, have_deadline ? acquire_deadline_ns : cycle_start + period_ns_);
   }
   if (status == hal::CameraStatus::kEnded) return CycleResult::kEnded;
   // On a live board acquire() is where the cycle waits for the camera (its pacing): the compute
@@ -315,7 +323,27 @@ CycleResult LocalizationCycle::run_once() {
   const std::uint64_t elapsed = clock_.now_ns() - compute_start;
   at(Stage::kCycle).record(elapsed);
   if (elapsed > budget_ns_) ++counters_.overruns;
+  account_overrun(elapsed > budget_ns_);
   return CycleResult::kRan;
+}
+
+void LocalizationCycle::account_overrun(bool overrun) {
+  if (!overrun_alarm_enabled_) return;
+  // The streak counts towards the change of state: overruns while the alarm is off, cycles
+  // within the budget while it is on.
+  if (overrun == overrun_alarm_) {
+    overrun_streak_ = 0;
+    return;
+  }
+  if (++overrun_streak_ < config_.cycle.overrun_alarm_cycles) return;
+  overrun_streak_ = 0;
+  overrun_alarm_ = !overrun_alarm_;
+  if (overrun_alarm_) {
+    ++counters_.overrun_alarms;
+    pending_overrun_text_ = "harmoloc: cycle overrun";
+  } else {
+    pending_overrun_text_ = "harmoloc: cycle overrun cleared";
+  }
 }
 
 bool LocalizationCycle::update_with_boards(
@@ -424,6 +452,9 @@ void LocalizationCycle::publish() {
         hb.system_status = mavlink::kMavStateEmergency;
         break;
     }
+    // Overrunning: the pose comes late or not every cycle. At least CRITICAL while it lasts.
+    if (overrun_alarm_ && (health == Health::kNominal || health == Health::kNotInitialized))
+      hb.system_status = mavlink::kMavStateCritical;
     send(mavlink_.heartbeat(hb, frame_buffer_));
   }
   if (heartbeat_due) {  // a requested one leaves the schedule alone
@@ -441,6 +472,11 @@ void LocalizationCycle::publish() {
                                                                : mavlink::kSeverityWarning;
     send(mavlink_.statustext(severity, kText[static_cast<std::size_t>(health)], frame_buffer_));
     last_reported_health_ = health;
+  }
+  if (pending_overrun_text_ != nullptr) {
+    send(mavlink_.statustext(overrun_alarm_ ? mavlink::kSeverityWarning : mavlink::kSeverityInfo,
+                             pending_overrun_text_, frame_buffer_));
+    pending_overrun_text_ = nullptr;
   }
   if (pending_text_ != nullptr) {
     send(mavlink_.statustext(mavlink::kSeverityWarning, pending_text_, frame_buffer_));

@@ -24,6 +24,8 @@ std::string stats_json(const LocalizationCycle& cycle, const RunCounters& run) {
     << "  \"cycles\": " << c.cycles << ",\n"
     << "  \"frames\": " << c.frames << ",\n"
     << "  \"overruns\": " << c.overruns << ",\n"
+    << "  \"pacing\": {\"mode\": \"" << run.pacing << "\", \"skipped_ticks\": " << run.skipped_ticks
+    << ", \"overrun_alarms\": " << c.overrun_alarms << "},\n"
     << "  \"stages\": {";
   for (std::size_t s = 0; s < kStageCount; ++s) {
     const LatencyHistogram& h = cycle.stage_histogram(static_cast<Stage>(s));

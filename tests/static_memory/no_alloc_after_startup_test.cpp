@@ -2,7 +2,11 @@
 // fakes, the serial link and the trajectory writer) makes no heap allocation at all, over
 // thousands of cycles and through every health state, while the link brings in garbage and
 // signed, unsigned and replayed commands. Every allocation function of the process is
-// interposed here and counted while the cycle runs.
+// interposed here and counted while the cycle runs. Eigen's own guard is on meanwhile, as in the
+// board mains (EIGEN_RUNTIME_NO_MALLOC; firmware/eigen_guard.hpp), and shown to catch a
+// dynamically sized Eigen object.
+#include "harmoloc/firmware/eigen.hpp"  // before any other Eigen header
+
 #include <gtest/gtest.h>
 
 #include <atomic>
@@ -20,6 +24,7 @@
 #include "harmoloc/drivers/monotonic_clock.hpp"
 #include "harmoloc/drivers/serial_link.hpp"
 #include "harmoloc/firmware/config.hpp"
+#include "harmoloc/firmware/eigen_guard.hpp"
 #include "harmoloc/firmware/localization_cycle.hpp"
 #include "harmoloc/firmware/map_loader.hpp"
 #include "harmoloc/sim_host/file_camera.hpp"
@@ -219,6 +224,7 @@ PassResult run_pass(const std::string& dataset, Fault fault) {
       std::make_unique<firmware::LocalizationCycle>(config, g_map, camera, *encoders, link, clock);
 
   PassResult r;
+  firmware::forbid_eigen_heap();  // as the board mains do after start-up
   g_allocations = 0;
   g_armed = true;
   while (cycle->run_once() == firmware::CycleResult::kRan) {
@@ -227,6 +233,8 @@ PassResult run_pass(const std::string& dataset, Fault fault) {
     if (pose.valid) trajectory.write(pose.data_time_ns, pose.pose);
   }
   g_armed = false;
+  EXPECT_FALSE(firmware::eigen_heap_allowed());
+  firmware::allow_eigen_heap();
   r.allocations = g_allocations;
   r.first_size = g_first_size;
   const firmware::mavlink::InboundCounters in = cycle->inbound_counters();
@@ -258,6 +266,43 @@ TEST(StaticMemory, InterposerCountsAllocations) {
   delete[] p;
   std::free(q);
   EXPECT_GE(g_allocations.load(), 3U);
+}
+
+volatile double g_sink = 0.0;
+
+// The guard works in this build (RelWithDebInfo: NDEBUG, where Eigen's own eigen_assert is off):
+// once forbidden, a dynamically sized Eigen object stops the program with one line; fixed sizes
+// never allocate and still work; allowed again, dynamic sizes work again.
+TEST(StaticMemoryDeathTest, EigenHeapAfterStartUpIsCaught) {
+  ASSERT_TRUE(firmware::eigen_heap_allowed());
+  {
+    Eigen::VectorXd startup(64);  // start-up may allocate
+    startup.setOnes();
+    g_sink = startup.sum();
+  }
+  firmware::forbid_eigen_heap();
+  EXPECT_FALSE(firmware::eigen_heap_allowed());
+  const Eigen::Matrix<double, 6, 6> fixed = Eigen::Matrix<double, 6, 6>::Identity() * 2.0;
+  g_sink = fixed.trace();
+  EXPECT_EQ(g_sink, 12.0);
+  EXPECT_DEATH(
+      {
+        Eigen::VectorXd v(64);
+        v.setOnes();
+        g_sink = v.sum();
+      },
+      "harmoloc: Eigen: .*heap allocation is forbidden");
+  EXPECT_DEATH(
+      {
+        const Eigen::MatrixXd m = Eigen::MatrixXd::Identity(8, 8);
+        g_sink = m.trace();
+      },
+      "heap allocation is forbidden");
+  firmware::allow_eigen_heap();
+  Eigen::VectorXd after(64);
+  after.setOnes();
+  g_sink = after.sum();
+  EXPECT_EQ(g_sink, 64.0);
 }
 
 TEST(StaticMemory, NoAllocationAfterStartUp) {

@@ -44,6 +44,8 @@ TEST(Config, DefaultsHaveSixBoards) {
   EXPECT_GT(c.thresholds.boards[0].hue_min_deg, c.thresholds.boards[0].hue_max_deg);
   EXPECT_DOUBLE_EQ(c.cycle.rate_hz, 30.0);
   EXPECT_DOUBLE_EQ(c.cycle.budget_ms, 15.0);
+  EXPECT_EQ(c.cycle.pacing, hf::Pacing::kCamera);
+  EXPECT_EQ(c.cycle.overrun_alarm_cycles, 3U);
   EXPECT_TRUE(ha::layout_valid(c.can_layout));
   EXPECT_FALSE(c.has_odometry_section);
   EXPECT_FALSE(c.has_can_section);
@@ -57,6 +59,8 @@ rate_hz = 25
 budget_ms = 12.5
 camera_timeout_ms = 300.0
 encoder_timeout_ms = 400
+pacing = "timer"
+overrun_alarm_cycles = 5
 
 [[board]]
 name = "orange"
@@ -110,6 +114,8 @@ heartbeat_hz = 2
   EXPECT_DOUBLE_EQ(c.cycle.budget_ms, 12.5);
   EXPECT_DOUBLE_EQ(c.cycle.camera_timeout_ms, 300.0);
   EXPECT_DOUBLE_EQ(c.cycle.encoder_timeout_ms, 400.0);
+  EXPECT_EQ(c.cycle.pacing, hf::Pacing::kTimer);
+  EXPECT_EQ(c.cycle.overrun_alarm_cycles, 5U);
 
   ASSERT_EQ(c.thresholds.count, 2U);
   EXPECT_EQ(c.board_names.names[0], "orange");
@@ -212,6 +218,12 @@ TEST(Config, OutOfRange) {
   expect_one_line_error(dir, "[cycle]\nrate_hz = nan\n", "cycle.rate_hz", 2);
   expect_one_line_error(dir, "[odometry]\nleft_direction = 0\n", "direction");
   expect_one_line_error(dir, "[can]\nbyte_order = \"middle\"\n", "byte_order", 2);
+  expect_one_line_error(dir, "[cycle]\nrate_hz = 30\npacing = \"frame\"\n",
+                        "cycle.pacing must be \"camera\" or \"timer\"", 3);
+  expect_one_line_error(dir, "[cycle]\npacing = 1\n", "cycle.pacing must be a string", 2);
+  expect_one_line_error(dir, "[cycle]\novverrun_alarm_cycles = 0\n", "unknown key", 2);
+  expect_one_line_error(dir, "[cycle]\noverrun_alarm_cycles = 0\n",
+                        "cycle.overrun_alarm_cycles = 0 is outside 1..1000", 2);
   std::string boards;
   for (int i = 0; i < 9; ++i) boards += "[[board]]\nhue_deg = [1, 2]\n";
   expect_one_line_error(dir, boards, "1 to 8");

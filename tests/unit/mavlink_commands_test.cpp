@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <memory>
 #include <random>
 
@@ -62,8 +63,9 @@ class NoEncoders final : public hh::WheelEncoders {
 
 class StepClock final : public hh::Clock {
  public:
-  std::uint64_t now_ns() const override { return now_ += 1000; }
+  std::uint64_t now_ns() const override { return now_ += step; }
   void sleep_until(std::uint64_t) override {}
+  std::uint64_t step = 1000;  ///< every reading of the clock advances it this much
 
  private:
   mutable std::uint64_t now_ = 0;
@@ -383,4 +385,84 @@ TEST(MavlinkCommands, GarbageOnTheLineDoesNotDisturbTheCycle) {
   EXPECT_GT(c.ignored_messages, 0U);
   EXPECT_GT(c.saturated_cycles, 0U);
   EXPECT_LE(noisy.link.bytes_read, 60 * mv::CommandReceiver::kMaxBytesPerCycle);
+}
+
+namespace {
+
+std::string statustext_of(const tf::Decoded& d) {
+  return std::string(reinterpret_cast<const char*>(d.payload.data() + 1),
+                     strnlen(reinterpret_cast<const char*>(d.payload.data() + 1), 50));
+}
+
+// A rig whose cycles overrun while the clock runs fast (1 ms a reading: a cycle reads it a few
+// dozen times, against a 0.5 ms budget) and fit while it runs slowly (1 us a reading).
+struct OverrunRig : Rig {
+  OverrunRig() {
+    config.cycle.budget_ms = 0.5;
+    config.link.heartbeat_hz = 50.0;  // a HEARTBEAT every cycle
+    start();
+  }
+  void overrunning(bool on) { clock.step = on ? 1'000'000 : 1000; }
+};
+
+}  // namespace
+
+TEST(OverrunAlarm, RaisedAfterConsecutiveOverrunsAndClearedAfterAsManyWithinBudget) {
+  OverrunRig r;
+  r.cycle->set_overrun_alarm(true);
+  r.overrunning(true);
+  for (int i = 0; i < 3; ++i) {
+    const auto frames = r.run();
+    EXPECT_TRUE(of_type(frames, 253).empty()) << "cycle " << i;
+    const auto hb = of_type(frames, 0);
+    ASSERT_EQ(hb.size(), 1U);
+    EXPECT_EQ(hb[0].payload[7], 3);  // STANDBY: no fix yet, no alarm yet
+  }
+  EXPECT_EQ(r.cycle->counters().overruns, 3U);
+  EXPECT_TRUE(r.cycle->overrun_alarm());
+  EXPECT_EQ(r.cycle->counters().overrun_alarms, 1U);
+  // The third overrun raised it: the next cycle says so, once, and the HEARTBEAT is CRITICAL.
+  auto frames = r.run();
+  auto texts = of_type(frames, 253);
+  ASSERT_EQ(texts.size(), 1U);
+  EXPECT_EQ(texts[0].payload[0], 4);  // MAV_SEVERITY_WARNING
+  EXPECT_EQ(statustext_of(texts[0]), "harmoloc: cycle overrun");
+  EXPECT_EQ(of_type(frames, 0).at(0).payload[7], 5);  // CRITICAL
+  // Within the budget again: the alarm holds for two more cycles, clears on the third.
+  r.overrunning(false);
+  for (int i = 0; i < 3; ++i) {
+    frames = r.run();
+    EXPECT_TRUE(of_type(frames, 253).empty()) << "cycle " << i;
+    EXPECT_EQ(of_type(frames, 0).at(0).payload[7], 5);
+  }
+  EXPECT_FALSE(r.cycle->overrun_alarm());
+  frames = r.run();
+  texts = of_type(frames, 253);
+  ASSERT_EQ(texts.size(), 1U);
+  EXPECT_EQ(texts[0].payload[0], 6);  // MAV_SEVERITY_INFO
+  EXPECT_EQ(statustext_of(texts[0]), "harmoloc: cycle overrun cleared");
+  EXPECT_EQ(of_type(frames, 0).at(0).payload[7], 3);
+  EXPECT_EQ(r.cycle->counters().overruns, 4U);
+  EXPECT_EQ(r.cycle->counters().overrun_alarms, 1U);
+}
+
+TEST(OverrunAlarm, NeedsOverrunsInARowAndIsOffOnAnUnpacedReplay) {
+  OverrunRig r;
+  r.cycle->set_overrun_alarm(true);
+  for (int i = 0; i < 12; ++i) {  // two overruns, one cycle within, and again
+    r.overrunning(i % 3 != 2);
+    EXPECT_TRUE(of_type(r.run(), 253).empty()) << "cycle " << i;
+  }
+  EXPECT_EQ(r.cycle->counters().overruns, 8U);
+  EXPECT_FALSE(r.cycle->overrun_alarm());
+
+  OverrunRig replay;  // set_overrun_alarm() not called: counted, never on the link
+  replay.overrunning(true);
+  for (int i = 0; i < 10; ++i) {
+    const auto frames = replay.run();
+    EXPECT_TRUE(of_type(frames, 253).empty());
+    EXPECT_EQ(of_type(frames, 0).at(0).payload[7], 3);
+  }
+  EXPECT_EQ(replay.cycle->counters().overruns, 10U);
+  EXPECT_EQ(replay.cycle->counters().overrun_alarms, 0U);
 }

@@ -21,6 +21,7 @@ gtest_discover_tests(algorithms_test DISCOVERY_TIMEOUT 60)
 # histogram, map loading.
 add_executable(firmware_test
   ${HARMOLOC_UNIT_DIR}/config_test.cpp
+  ${HARMOLOC_UNIT_DIR}/cycle_pacer_test.cpp
   ${HARMOLOC_UNIT_DIR}/mavlink_test.cpp
   ${HARMOLOC_UNIT_DIR}/mavlink_inbound_test.cpp
   ${HARMOLOC_UNIT_DIR}/mavlink_commands_test.cpp

@@ -1,6 +1,7 @@
 // harmoloc for the host board: the firmware's cycle with file-backed fakes of the camera and the
 // encoder bus (a dataset folder), the pose link into a file or a serial device (a pty works).
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -15,6 +16,8 @@
 #include "harmoloc/drivers/realtime_setup.hpp"
 #include "harmoloc/drivers/serial_link.hpp"
 #include "harmoloc/firmware/config.hpp"
+#include "harmoloc/firmware/cycle_pacer.hpp"
+#include "harmoloc/firmware/eigen_guard.hpp"
 #include "harmoloc/firmware/localization_cycle.hpp"
 #include "harmoloc/firmware/map_loader.hpp"
 #include "harmoloc/firmware/stats_report.hpp"
@@ -53,6 +56,48 @@ void read_memory(long& rss_kb, long& peak_kb) {
   }
   std::fclose(f);
 }
+
+// A recording as a live camera would deliver it, for timer-paced real-time replays: a frame is
+// there from its recorded time on (mapped onto the monotonic clock from the start of the run),
+// acquire() never waits, and of the frames due by its deadline it hands over the newest, dropping
+// the older ones as the V4L2 and libcamera drivers do.
+class RecordedTimeCamera final : public hal::Camera {
+ public:
+  explicit RecordedTimeCamera(sim_host::FileCamera& inner) : inner_(inner) {}
+  void start(std::uint64_t wall_start_ns, std::uint64_t data_start_ns) {
+    wall_start_ns_ = wall_start_ns;
+    data_start_ns_ = data_start_ns;
+  }
+  hal::CameraStatus acquire(hal::FrameView& frame, std::uint64_t deadline_ns) override {
+    if (taken_ >= inner_.frame_count()) return hal::CameraStatus::kEnded;
+    if (due_ns() > deadline_ns) return hal::CameraStatus::kNoFrame;
+    hal::CameraStatus status = inner_.acquire(frame, deadline_ns);
+    ++taken_;
+    // Bounded by the frames of the recording.
+    while (taken_ < inner_.frame_count() && due_ns() <= deadline_ns) {
+      if (status == hal::CameraStatus::kFrame) ++dropped_;
+      status = inner_.acquire(frame, deadline_ns);
+      ++taken_;
+    }
+    return status;
+  }
+  void release() override { inner_.release(); }
+  hal::CameraCounters counters() const override {
+    hal::CameraCounters c = inner_.counters();
+    c.dropped += dropped_;
+    return c;
+  }
+
+ private:
+  std::uint64_t due_ns() const {
+    const std::uint64_t t = inner_.next_timestamp_ns();
+    return wall_start_ns_ + (t > data_start_ns_ ? t - data_start_ns_ : 0);
+  }
+  sim_host::FileCamera& inner_;
+  std::uint64_t wall_start_ns_ = 0, data_start_ns_ = 0;
+  std::size_t taken_ = 0;
+  std::uint64_t dropped_ = 0;
+};
 
 long count_open_fds() {
   std::error_code ec;
@@ -103,7 +148,9 @@ int main(int argc, char** argv) {
                  "write every fresh encoder sample the cycle reads here, as a GPIO encoder\n"
                  "recording (encoders.csv, docs/dataset-format.md)");
   app.add_flag("--realtime", realtime,
-               "pace the cycle at the recording's rate instead of as fast as possible");
+               "pace the cycle at the recording's rate instead of as fast as possible\n"
+               "(cycle.pacing: \"camera\" waits for each frame's recorded time, \"timer\" wakes\n"
+               "every period and takes the frame that is due, if any)");
   app.add_option("--loop", loops,
                  "replay the dataset this many times back to back (soak runs); time and the\n"
                  "encoder counters run on across passes")
@@ -208,13 +255,22 @@ int main(int argc, char** argv) {
     if (!quiet) std::fprintf(stderr, "harmoloc: %s\n", rt.summary.c_str());
   }
   static firmware::LatencyHistogram wakeup_latency;
+  // Timer pacing needs a clock to pace against: with --realtime only (a replay runs unpaced).
+  const bool timer_paced = realtime && config.cycle.pacing == firmware::Pacing::kTimer;
+  static firmware::CyclePacer pacer(
+      clock, config.cycle.pacing,
+      static_cast<std::uint64_t>(std::llround(1e9 / config.cycle.rate_hz)));
+  RecordedTimeCamera recorded_time_camera(*camera);
+  hal::Camera& cycle_camera =
+      timer_paced ? static_cast<hal::Camera&>(recorded_time_camera) : *camera;
   sim_host::EncoderRecorder recorder(*encoders);
   if (!record_encoders_path.empty()) {
     if (!recorder.open(record_encoders_path)) return fail(record_encoders_path + ": cannot write");
     encoders = &recorder;
   }
-  auto cycle = std::make_unique<firmware::LocalizationCycle>(config, g_map, *camera, *encoders,
+  auto cycle = std::make_unique<firmware::LocalizationCycle>(config, g_map, cycle_camera, *encoders,
                                                              link, clock, meta.pixel_format);
+  cycle->set_overrun_alarm(realtime);
   // The signing clock starts at the wall time (MAVLink signing timestamps are wall-clock based).
   cycle->set_signing_time(
       static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::microseconds>(
@@ -227,7 +283,9 @@ int main(int argc, char** argv) {
                  camera->frame_count(), meta.image_width_px, meta.image_height_px, encoder_records,
                  gpio_log ? "samples (GPIO recording)" : "frames", g_map.model.sample_count,
                  g_map.model.feature_count, config.filter.particles,
-                 realtime ? ", real-time pacing" : "");
+                 !realtime     ? ""
+                 : timer_paced ? ", real-time pacing (timer)"
+                               : ", real-time pacing (camera)");
     if (link.can_receive()) {
       std::fprintf(stderr, "harmoloc: link commands %s\n",
                    config.link.has_signing_key ? "signed only (MAVLink 2 signing key loaded)"
@@ -240,19 +298,23 @@ int main(int argc, char** argv) {
   read_memory(run.rss_kb_start, unused_peak);
   run.open_fds_start = count_open_fds();
 
-  // ---- the cycle ----
+  // ---- the cycle; Eigen may not allocate from here on (it would stop the program) ----
+  firmware::forbid_eigen_heap();
   const std::uint64_t wall_start = clock.now_ns();
   const std::uint64_t data_start = camera->first_timestamp_ns();
   std::size_t done = 0;
+  recorded_time_camera.start(wall_start, data_start);
   for (;;) {
-    if (realtime && camera->next_timestamp_ns() >= data_start) {
+    if (timer_paced) {
+      if (cycle->run_once(pacer.wait_for_cycle()) == firmware::CycleResult::kEnded) break;
+    } else if (realtime && camera->next_timestamp_ns() >= data_start) {
       // Absolute deadlines from the start (clock_nanosleep TIMER_ABSTIME): no drift.
       const std::uint64_t deadline = wall_start + (camera->next_timestamp_ns() - data_start);
       clock.sleep_until(deadline);
       const std::uint64_t woke = clock.now_ns();
       wakeup_latency.record(woke > deadline ? woke - deadline : 0);
     }
-    if (cycle->run_once() == firmware::CycleResult::kEnded) break;
+    if (!timer_paced && cycle->run_once() == firmware::CycleResult::kEnded) break;
     const firmware::PoseOutput& out = cycle->pose();
     if (out.valid) g_trajectory.write(out.data_time_ns, out.pose);
     const firmware::FixOutput& fix = cycle->last_fix();
@@ -284,10 +346,12 @@ int main(int argc, char** argv) {
 
   run.board = "host";
   run.rate_hz = config.cycle.rate_hz;
-  run.camera = camera->counters();
+  run.camera = cycle_camera.counters();
+  run.pacing = !realtime ? "replay" : firmware::pacing_name(config.cycle.pacing);
+  run.skipped_ticks = pacer.skipped_ticks();
   run.encoders = encoders->counters();
   run.link = link.counters();
-  if (realtime) run.wakeup_latency = &wakeup_latency;
+  if (realtime) run.wakeup_latency = timer_paced ? &pacer.wakeup_latency() : &wakeup_latency;
   if (!stats_path.empty()) {
     std::ofstream out(stats_path);
     out << firmware::stats_json(*cycle, run);

@@ -1,7 +1,8 @@
 // harmoloc for the Linux board: the firmware's cycle on real devices. The camera is a V4L2
 // capture device or a libcamera camera, the wheel encoders come from a SocketCAN bus or from
 // quadrature lines on GPIO, the pose goes out on a serial line; all chosen by the config
-// (docs/drivers.md). The cycle is the host board's, paced by the camera.
+// (docs/drivers.md). The cycle is the host board's, paced by the camera or by a timer
+// (cycle.pacing; docs/architecture.md, "Pacing and overruns").
 #include <cerrno>
 #include <chrono>
 #include <cmath>
@@ -22,6 +23,8 @@
 #include "harmoloc/drivers/socketcan_encoders.hpp"
 #include "harmoloc/drivers/v4l2_camera.hpp"
 #include "harmoloc/firmware/config.hpp"
+#include "harmoloc/firmware/cycle_pacer.hpp"
+#include "harmoloc/firmware/eigen_guard.hpp"
 #include "harmoloc/firmware/localization_cycle.hpp"
 #include "harmoloc/firmware/map_loader.hpp"
 #include "harmoloc/firmware/stats_report.hpp"
@@ -234,6 +237,10 @@ int main(int argc, char** argv) {
   auto cycle = std::make_unique<firmware::LocalizationCycle>(config, g_map, *camera, *encoders,
                                                              link, clock, pixel_format);
   cycle->set_live_clock(true);
+  cycle->set_overrun_alarm(true);
+  static firmware::CyclePacer pacer(
+      clock, config.cycle.pacing,
+      static_cast<std::uint64_t>(std::llround(1e9 / config.cycle.rate_hz)));
   cycle->set_signing_time(
       static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::microseconds>(
                                      std::chrono::system_clock::now().time_since_epoch())
@@ -243,9 +250,10 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "harmoloc: encoders %s\n", encoders_text.c_str());
     std::fprintf(stderr, "harmoloc: link %s%s at %u baud\n", link_device.c_str(),
                  link.is_tty() ? " (serial, raw)" : " (file)", config.link.baud);
-    std::fprintf(stderr, "harmoloc: map of %u samples on %u boards, %zu particles, %.0f Hz\n",
+    std::fprintf(stderr,
+                 "harmoloc: map of %u samples on %u boards, %zu particles, %.0f Hz, %s-paced\n",
                  g_map.model.sample_count, g_map.model.feature_count, config.filter.particles,
-                 config.cycle.rate_hz);
+                 config.cycle.rate_hz, firmware::pacing_name(config.cycle.pacing));
     std::fprintf(stderr, "harmoloc: %s\n", rt.summary.c_str());
   }
 
@@ -260,13 +268,15 @@ int main(int argc, char** argv) {
   read_memory(run.rss_kb_start, unused_peak);
   run.open_fds_start = count_open_fds();
 
-  // ---- the cycle: paced by the camera (acquire waits for the next frame, at most a period) ----
+  // ---- the cycle: camera-paced (acquire waits for the next frame, at most a period) or
+  // timer-paced (wakes on an absolute grid, takes a ready frame or none) ----
+  firmware::forbid_eigen_heap();  // Eigen may not allocate from here on (eigen_guard.hpp)
   const std::uint64_t start_ns = clock.now_ns();
   const auto end_ns =
       duration_s > 0.0 ? start_ns + static_cast<std::uint64_t>(duration_s * 1e9) : std::uint64_t{0};
   std::uint64_t done = 0;
   while (g_stop == 0) {
-    if (cycle->run_once() == firmware::CycleResult::kEnded) break;
+    if (cycle->run_once(pacer.wait_for_cycle()) == firmware::CycleResult::kEnded) break;
     ++done;
     const firmware::PoseOutput& out = cycle->pose();
     if (trajectory != nullptr && out.valid) {
@@ -288,6 +298,9 @@ int main(int argc, char** argv) {
   run.board = "linux";
   run.rate_hz = config.cycle.rate_hz;
   run.camera = camera->counters();
+  run.pacing = firmware::pacing_name(config.cycle.pacing);
+  run.skipped_ticks = pacer.skipped_ticks();
+  if (config.cycle.pacing == firmware::Pacing::kTimer) run.wakeup_latency = &pacer.wakeup_latency();
   run.encoders = encoders->counters();
   run.link = link.counters();
   if (!stats_path.empty()) {
@@ -300,7 +313,7 @@ int main(int argc, char** argv) {
   std::printf(
       "harmoloc: %llu cycles in %.1f s, %llu frames (%llu dropped, %llu corrupt), %llu encoder "
       "samples, %llu fixes (%llu off the map), %llu link frames sent (%llu dropped); cycle "
-      "median %.0f us, p99 %.0f us, max %.0f us, %llu overruns\n",
+      "median %.0f us, p99 %.0f us, max %.0f us, %llu overruns, %llu skipped ticks\n",
       static_cast<unsigned long long>(c.cycles),
       static_cast<double>(clock.now_ns() - start_ns) * 1e-9,
       static_cast<unsigned long long>(c.frames),
@@ -313,6 +326,7 @@ int main(int argc, char** argv) {
       static_cast<unsigned long long>(run.link.frames_dropped),
       static_cast<double>(h.quantile_ns(0.5)) / 1000.0,
       static_cast<double>(h.quantile_ns(0.99)) / 1000.0, static_cast<double>(h.max_ns()) / 1000.0,
-      static_cast<unsigned long long>(c.overruns));
+      static_cast<unsigned long long>(c.overruns),
+      static_cast<unsigned long long>(pacer.skipped_ticks()));
   return 0;
 }

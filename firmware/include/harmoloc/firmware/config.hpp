@@ -17,11 +17,21 @@
 
 namespace harmoloc::firmware {
 
+/// What starts a cycle (firmware/cycle_pacer.hpp; docs/architecture.md, "Pacing and overruns").
+enum class Pacing : std::uint8_t {
+  kCamera,  ///< the arrival of a frame (acquire waits at most one period)
+  kTimer,   ///< an absolute grid of the monotonic clock; the newest ready frame, or none
+};
+
 struct CycleConfig {
   double rate_hz = 30.0;
   double budget_ms = 15.0;            ///< compute budget per cycle; a cycle over it is an overrun
   double camera_timeout_ms = 250.0;   ///< no usable frame for this long: odometry only
   double encoder_timeout_ms = 250.0;  ///< no encoder data for this long: vision only
+  Pacing pacing = Pacing::kCamera;
+  /// This many overruns in a row raise the overrun alarm (STATUSTEXT, HEARTBEAT CRITICAL); as
+  /// many cycles in a row within the budget clear it.
+  std::uint32_t overrun_alarm_cycles = 3;
 };
 
 struct FilterConfig {

@@ -79,6 +79,7 @@ struct CycleCounters {
   /// cloud is moved to where the gap's travel takes the pose of the last sample before it.
   std::uint64_t encoder_gaps_bridged = 0;
   std::uint64_t overruns = 0;
+  std::uint64_t overrun_alarms = 0;  ///< times the overrun alarm was raised
   std::uint64_t resamples = 0;
   std::uint64_t no_consensus = 0;       ///< frames whose boards mostly disagreed with the estimate
   std::uint64_t distrusted_boards = 0;  ///< sum over frames of boards below motion index 1/2
@@ -102,8 +103,11 @@ class LocalizationCycle {
                     hal::PixelFormat pixel_format = hal::PixelFormat::kRgb24);
 
   /// Runs one cycle. The data clock follows the frames; a cycle without a frame advances it
-  /// by one period.
+  /// by one period. The camera is given until one period after the cycle's start.
   CycleResult run_once();
+  /// The same with the camera's deadline given (CyclePacer::wait_for_cycle(): a period ahead
+  /// when camera-paced, now when timer-paced, so that acquire does not wait).
+  CycleResult run_once(std::uint64_t acquire_deadline_ns);
 
   const PoseOutput& pose() const { return pose_; }
   /// Whether the particles are weighed board by board (a forward map and that model chosen).
@@ -137,7 +141,16 @@ class LocalizationCycle {
   /// default.
   void set_live_clock(bool live) { live_clock_ = live; }
 
+  /// Paced runs (a live board, or a replay at the recording's rate): cycle.overrun_alarm_cycles
+  /// overruns in a row raise the overrun alarm (STATUSTEXT, HEARTBEAT at least CRITICAL) and as
+  /// many cycles within the budget clear it (STATUSTEXT). Off by default: an unpaced replay
+  /// counts its overruns but keeps them off the link, which stays deterministic.
+  void set_overrun_alarm(bool enabled) { overrun_alarm_enabled_ = enabled; }
+  bool overrun_alarm() const { return overrun_alarm_; }
+
  private:
+  CycleResult run(std::uint64_t acquire_deadline_ns, bool have_deadline);
+  void account_overrun(bool overrun);
   void publish();
   // The link's inbound side and the commands (mavlink_commands.cpp).
   void service_link();
@@ -177,6 +190,11 @@ class LocalizationCycle {
   algorithms::KidnapDetector kidnap_;
   algorithms::KidnapVerdict kidnap_verdict_ = algorithms::KidnapVerdict::kNone;
   const char* pending_text_ = nullptr;  ///< a STATUSTEXT this cycle's publish sends
+  /// The overrun alarm's STATUSTEXT, raised or cleared at the end of the previous cycle.
+  const char* pending_overrun_text_ = nullptr;
+  bool overrun_alarm_enabled_ = false;
+  bool overrun_alarm_ = false;
+  std::uint32_t overrun_streak_ = 0;  ///< overruns in a row (alarm off) or cycles within (on)
   mavlink::Encoder mavlink_;
   mavlink::Signer signer_;
   mavlink::CommandReceiver receiver_;

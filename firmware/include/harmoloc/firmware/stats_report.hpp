@@ -14,6 +14,10 @@ struct RunCounters {
   hal::CameraCounters camera;
   hal::EncoderCounters encoders;
   hal::LinkCounters link;
+  /// What started the cycles: "camera", "timer" or "replay" (unpaced, as fast as possible).
+  const char* pacing = "replay";
+  /// Timer pacing: grid points skipped because a cycle ran past them.
+  std::uint64_t skipped_ticks = 0;
   /// How late the cycle woke after its absolute deadline (paced runs only; nullptr otherwise).
   const LatencyHistogram* wakeup_latency = nullptr;
   /// Process resources after start-up and at the end (negative: not measured).
