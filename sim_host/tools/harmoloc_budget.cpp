@@ -45,6 +45,13 @@ int main(int argc, char** argv) {
     std::printf("overruns   %llu\n", static_cast<unsigned long long>(overruns));
     std::ifstream in(stats_path);
     const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
+    if (j.is_object() && j.contains("pacing") && j["pacing"].is_object()) {
+      const auto& p = j["pacing"];
+      std::printf("pacing     %s, %llu skipped ticks, %llu overrun alarms\n",
+                  p.value("mode", std::string("?")).c_str(),
+                  static_cast<unsigned long long>(p.value("skipped_ticks", 0ULL)),
+                  static_cast<unsigned long long>(p.value("overrun_alarms", 0ULL)));
+    }
     if (j.is_object() && j.contains("wakeup_latency") && j["wakeup_latency"].is_object()) {
       const auto& w = j["wakeup_latency"];
       std::printf(
