@@ -125,31 +125,20 @@ std::size_t format_encoder_csv_line(const EncoderSample& sample, char* buffer, s
 
 bool EncoderRecorder::open(const std::string& path) {
   close();
-  file_ = std::fopen(path.c_str(), "w");
-  if (file_ == nullptr) return false;
-  buffer_ = new char[kBufferBytes];
-  std::setvbuf(file_, buffer_, _IOFBF, kBufferBytes);
-  std::fprintf(file_, "%s\n", kEncoderCsvHeader);
+  if (!out_.open(path)) return false;
+  std::fprintf(out_.file(), "%s\n", kEncoderCsvHeader);
   any_ = false;
   written_ = 0;
-  return std::ferror(file_) == 0;
+  return std::ferror(out_.file()) == 0;
 }
 
 bool EncoderRecorder::close() {
-  bool ok = true;
-  if (file_ != nullptr) {
-    ok = std::ferror(file_) == 0;
-    ok = std::fclose(file_) == 0 && ok;
-    file_ = nullptr;
-  }
-  delete[] buffer_;
-  buffer_ = nullptr;
-  return ok;
+  return out_.close();
 }
 
 hal::EncoderStatus EncoderRecorder::read(std::uint64_t data_time_ns, hal::EncoderCounts& counts) {
   const hal::EncoderStatus s = inner_.read(data_time_ns, counts);
-  if (s != hal::EncoderStatus::kFresh || file_ == nullptr) return s;
+  if (s != hal::EncoderStatus::kFresh || !out_.is_open()) return s;
   counter_bits_ = counts.counter_bits;
   if (any_ && counts.timestamp_ns <= last_ns_) return s;
   const std::uint32_t mask =
@@ -158,7 +147,7 @@ hal::EncoderStatus EncoderRecorder::read(std::uint64_t data_time_ns, hal::Encode
   const std::size_t n = format_encoder_csv_line(
       EncoderSample{counts.timestamp_ns, counts.left_ticks & mask, counts.right_ticks & mask}, line,
       sizeof line);
-  std::fwrite(line, 1, n, file_);
+  out_.append(line, n);
   any_ = true;
   last_ns_ = counts.timestamp_ns;
   ++written_;

@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "harmoloc/hal/wheel_encoders.hpp"
+#include "harmoloc/sim_host/buffered_output.hpp"
 
 namespace harmoloc::sim_host {
 
@@ -79,10 +80,8 @@ class EncoderRecorder final : public hal::WheelEncoders {
   std::uint8_t counter_bits() const { return counter_bits_; }
 
  private:
-  static constexpr std::size_t kBufferBytes = 1 << 16;
   hal::WheelEncoders& inner_;
-  std::FILE* file_ = nullptr;
-  char* buffer_ = nullptr;
+  BufferedOutput out_;
   bool any_ = false;
   std::uint64_t last_ns_ = 0;
   std::uint64_t written_ = 0;
