@@ -60,7 +60,8 @@ std::string stats_json(const LocalizationCycle& cycle, const RunCounters& run) {
     << ", \"size_mismatch\": " << c.frame_size_mismatch << ", \"stale\": " << c.stale_frames
     << "},\n"
     << "  \"encoders\": {\"samples\": " << run.encoders.samples
-    << ", \"gaps_bridged\": " << c.encoder_gaps_bridged << ", \"ignored_id\": " << run.encoders.ignored_id
+    << ", \"gaps_bridged\": " << c.encoder_gaps_bridged
+    << ", \"ignored_id\": " << run.encoders.ignored_id
     << ", \"bad_length\": " << run.encoders.bad_length
     << ", \"glitches\": " << run.encoders.glitches
     << ", \"bus_errors\": " << run.encoders.bus_errors << ", \"bus_off\": " << run.encoders.bus_off

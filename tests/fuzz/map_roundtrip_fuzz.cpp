@@ -81,7 +81,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     // map's dissimilarity bound at 1, no forward map.
     HARMOLOC_FUZZ_CHECK(input[8] == 2 || g_map.model.max_dissimilarity == 1.0F,
                         "a version 1 map decodes with a dissimilarity bound");
-    HARMOLOC_FUZZ_CHECK(!g_map.forward.present(), "a version 1 or 2 map decodes with a forward map");
+    HARMOLOC_FUZZ_CHECK(!g_map.forward.present(),
+                        "a version 1 or 2 map decodes with a forward map");
     HARMOLOC_FUZZ_CHECK(!decode_map(encoded.data(), encoded.size(), g_again),
                         "a re-encoded version 1 or 2 map does not decode");
     HARMOLOC_FUZZ_CHECK(same_model(g_map, g_again), "decode(encode(version 1 or 2 map)) differs");

@@ -253,7 +253,7 @@ TEST(FilterScenario, DegradedModesAndRecovery) {
   EXPECT_GT(spread(9.9), spread(9.0));
   EXPECT_GT(spread(9.9), 1.3 * spread(8.0));
   EXPECT_LT(spread(10.5), spread(9.9));  // the camera back: it shrinks again
-  EXPECT_LT(truth_error(9.9), 0.05);  // dead reckoning holds for 2 s
+  EXPECT_LT(truth_error(9.9), 0.05);     // dead reckoning holds for 2 s
   EXPECT_EQ(at(10.3).health, hf::Health::kNominal);
   // Encoders gone 13-15 s: vision only.
   EXPECT_EQ(at(13.5).health, hf::Health::kVisionOnly);
