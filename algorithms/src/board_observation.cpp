@@ -36,6 +36,24 @@ bool frame_implausible(const ForwardMap& map, const std::array<float, kMaxBoards
   return modelled > 0 && 2 * beyond > modelled;
 }
 
+double board_preference(const ForwardMap& map, const BoardFeatures& observed, double ax_m,
+                        double ay_m, double bx_m, double by_m, const BoardModelParams& params) {
+  std::array<float, kMaxBoards> ea{}, eb{};
+  expected_features(map, locate(map, ax_m, ay_m), ea.data());
+  expected_features(map, locate(map, bx_m, by_m), eb.data());
+  const std::size_t boards = std::min<std::size_t>({map.board_count, observed.count, kMaxBoards});
+  const double c = params.outlier_floor;
+  double sum = 0.0;
+  for (std::size_t b = 0; b < boards; ++b) {
+    if (!(map.sigma[b] > 0.0F)) continue;
+    const double width = params.sigma_scale * static_cast<double>(map.sigma[b]);
+    const double ra = (static_cast<double>(observed.value[b]) - static_cast<double>(ea[b])) / width;
+    const double rb = (static_cast<double>(observed.value[b]) - static_cast<double>(eb[b])) / width;
+    sum += std::log(std::exp(-0.5 * ra * ra) + c) - std::log(std::exp(-0.5 * rb * rb) + c);
+  }
+  return sum;
+}
+
 void BoardReliability::reset(const BoardModelParams& params) {
   static_probability_.fill(params.motion_index_max);
 }
@@ -49,6 +67,21 @@ BoardAssessment BoardReliability::assess(const ForwardMap& map, const BoardFeatu
   const GridPoint at = locate(map, estimate.x_m, estimate.y_m);
   std::array<float, kMaxBoards> expected{};
   expected_features(map, at, expected.data());
+  // The range of what the map expects within the spread around the estimate (a cross of four
+  // points): a board whose area falls inside it, or nearest its edge, is judged by that.
+  std::array<float, kMaxBoards> lo = expected, hi = expected;
+  if (params.position_spread_m > 0.0) {
+    const double d = params.position_spread_m;
+    const double offsets[4][2] = {{d, 0.0}, {-d, 0.0}, {0.0, d}, {0.0, -d}};
+    std::array<float, kMaxBoards> e{};
+    for (const auto& o : offsets) {
+      expected_features(map, locate(map, estimate.x_m + o[0], estimate.y_m + o[1]), e.data());
+      for (std::size_t b = 0; b < kMaxBoards; ++b) {
+        lo[b] = std::min(lo[b], e[b]);
+        hi[b] = std::max(hi[b], e[b]);
+      }
+    }
+  }
 
   std::array<double, kMaxBoards> inv_var{};
   for (std::size_t b = 0; b < update.boards; ++b) {
@@ -57,7 +90,10 @@ BoardAssessment BoardReliability::assess(const ForwardMap& map, const BoardFeatu
     if (!update.use[b]) continue;
     const double width = params.sigma_scale * static_cast<double>(map.sigma[b]);
     inv_var[b] = 1.0 / (width * width);
-    const double r = static_cast<double>(observed.value[b]) - static_cast<double>(expected[b]);
+    const float o = observed.value[b];
+    const double r = o < lo[b]   ? static_cast<double>(o) - static_cast<double>(lo[b])
+                     : o > hi[b] ? static_cast<double>(o) - static_cast<double>(hi[b])
+                                 : 0.0;
     a.chi2[b] = static_cast<float>(r * r * inv_var[b]);
     ++a.modelled;
     if (static_cast<double>(a.chi2[b]) < params.consensus_chi2)

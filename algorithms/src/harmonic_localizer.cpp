@@ -26,29 +26,48 @@ inline float squared_distance(const float* a, const float* b, std::size_t d, con
   return s;
 }
 
-// Eq. 9; with @p weight (0 or 1 per feature) only over the features it keeps.
+// Eq. 9 with the model's feature weights (times @p mask, 0 or 1 per feature, when given). The
+// known-place test compares the features the mask keeps, all of them with equal weight, against
+// the sample nearest in that plain distance.
 HarmonicFix query(const HarmonicModel& model,
-                  const std::array<float, HarmonicModel::kMaxFeatures>& features,
-                  const float* weight, float kernel_scale) {
+                  const std::array<float, HarmonicModel::kMaxFeatures>& features, const float* mask,
+                  float kernel_scale) {
   HarmonicFix fix;
   const std::size_t n = model.sample_count;
   const std::size_t d = model.feature_count;
   if (n == 0 || d == 0) return fix;
+  std::array<float, HarmonicModel::kMaxFeatures> kernel_weight{};
+  std::array<float, HarmonicModel::kMaxFeatures> test_weight{};
+  bool weighted = false, any_kernel = false;
+  for (std::size_t k = 0; k < d; ++k) {
+    test_weight[k] = mask == nullptr ? 1.0F : mask[k];
+    kernel_weight[k] = test_weight[k] * model.feature_weight[k];
+    weighted = weighted || kernel_weight[k] != 1.0F;
+    any_kernel = any_kernel || kernel_weight[k] > 0.0F;
+  }
+  // Every feature the kernel would use is masked: the plain features carry the fix.
+  if (!any_kernel) kernel_weight = test_weight;
+  const bool separate_test = weighted && test_weight != kernel_weight;
 
   // Each distance is computed once and kept (16 KiB of stack at full capacity).
   std::array<float, HarmonicModel::kMaxSamples> d2;  // only the first n are written and read
   float d2_min = std::numeric_limits<float>::infinity();
+  float test_min = std::numeric_limits<float>::infinity();
   std::size_t nearest = 0;
   for (std::size_t j = 0; j < n; ++j) {
-    d2[j] = weight == nullptr ? squared_distance(features.data(), model.sample(j), d)
-                              : squared_distance(features.data(), model.sample(j), d, weight);
-    if (d2[j] < d2_min) {
-      d2_min = d2[j];
+    d2[j] = weighted ? squared_distance(features.data(), model.sample(j), d, kernel_weight.data())
+                     : squared_distance(features.data(), model.sample(j), d);
+    if (d2[j] < d2_min) d2_min = d2[j];
+    const float t = separate_test
+                        ? squared_distance(features.data(), model.sample(j), d, test_weight.data())
+                        : d2[j];
+    if (t < test_min) {
+      test_min = t;
       nearest = j;
     }
   }
 
-  fix.nearest_distance = std::sqrt(static_cast<double>(d2_min));
+  fix.nearest_distance = std::sqrt(static_cast<double>(test_min));
   if (!std::isfinite(d2_min)) return fix;  // distances overflowed: not a place on this map
 
   double sum_wx = 0.0, sum_wy = 0.0, sum_wx_fx = 0.0, sum_wy_fy = 0.0;
@@ -76,7 +95,7 @@ HarmonicFix query(const HarmonicModel& model,
   double diff_sum = 0.0, sum = 0.0;
   const float* near = model.sample(nearest);
   for (std::size_t k = 0; k < d; ++k) {
-    if (weight != nullptr && weight[k] == 0.0F) continue;
+    if (test_weight[k] == 0.0F) continue;
     any_board = any_board || features[k] > 0.0F;
     diff_sum += std::fabs(static_cast<double>(features[k]) - static_cast<double>(near[k]));
     sum += static_cast<double>(features[k]) + static_cast<double>(near[k]);
@@ -100,14 +119,20 @@ HarmonicFix harmonic_query(const HarmonicModel& model,
                            const FeatureMask& use) {
   std::array<float, HarmonicModel::kMaxFeatures> weight{};
   std::size_t used = 0;
+  float full = 0.0F, kept = 0.0F;
   for (std::size_t k = 0; k < model.feature_count; ++k) {
     weight[k] = use[k] ? 1.0F : 0.0F;
     used += use[k] ? 1U : 0U;
+    full += model.feature_weight[k];
+    kept += weight[k] * model.feature_weight[k];
   }
   if (used == model.feature_count) return query(model, features, nullptr, 1.0F);
   if (used == 0) return HarmonicFix{};
+  // The kernel widths scaled by the weight left over the weight in full, so that the weights
+  // keep their spread with fewer features.
   return query(model, features, weight.data(),
-               static_cast<float>(model.feature_count) / static_cast<float>(used));
+               kept > 0.0F ? full / kept
+                           : static_cast<float>(model.feature_count) / static_cast<float>(used));
 }
 
 }  // namespace harmoloc::algorithms

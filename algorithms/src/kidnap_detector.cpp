@@ -13,6 +13,8 @@ void KidnapDetector::reset() {
   window_lost_evidence_ = 0;
   evidence_run_ = 0;
   lost_run_ = 0;
+  sum_x_ = sum_y_ = 0.0;
+  consistent_ = 0;
 }
 
 KidnapVerdict KidnapDetector::step(const KidnapInput& in, const KidnapParams& p) {
@@ -31,9 +33,30 @@ KidnapVerdict KidnapDetector::step(const KidnapInput& in, const KidnapParams& p)
     return KidnapVerdict::kKidnapped;
   }
 
-  // With a fix: it is a known place far from the estimate. Without: the boards contradict it.
-  const bool evidence = !in.consensus && in.fix_known && in.fix_distance_m >= p.fix_distance_m;
+  // With a fix: it is a known place far from the estimate, and the boards prefer it. Without:
+  // the boards contradict the estimate.
+  bool evidence =
+      in.fix_known && in.fix_distance_m >= p.fix_distance_m && in.preference >= p.preference_min;
   const bool lost_evidence = !in.consensus && !in.fix_known && in.contradiction;
+  if (evidence) {
+    // Consistent with the previous evidence (the same place, give or take the robot's motion)?
+    // If not, this frame starts a new stretch.
+    if (consistent_ > 0 &&
+        std::hypot(in.fix_x_m - last_x_, in.fix_y_m - last_y_) > p.consistency_m) {
+      consistent_ = 0;
+      sum_x_ = sum_y_ = 0.0;
+      evidence_run_ = 0;
+      window_evidence_ = 0;
+    }
+    sum_x_ += in.fix_x_m;
+    sum_y_ += in.fix_y_m;
+    ++consistent_;
+    last_x_ = in.fix_x_m;
+    last_y_ = in.fix_y_m;
+  } else if (!evidence && evidence_run_ == 0 && window_left_ == 0) {
+    consistent_ = 0;
+    sum_x_ = sum_y_ = 0.0;
+  }
   evidence_run_ = evidence ? evidence_run_ + 1 : 0;
   lost_run_ = lost_evidence ? lost_run_ + 1 : 0;
   if (triggered && window_left_ == 0) {
@@ -52,6 +75,8 @@ KidnapVerdict KidnapDetector::step(const KidnapInput& in, const KidnapParams& p)
   if (confirmed || evidence_run_ >= p.divergence_frames) {
     ++counters_.kidnaps;
     if (!confirmed) ++counters_.divergences;
+    evidence_x_m_ = consistent_ > 0 ? sum_x_ / static_cast<double>(consistent_) : in.fix_x_m;
+    evidence_y_m_ = consistent_ > 0 ? sum_y_ / static_cast<double>(consistent_) : in.fix_y_m;
     reset();
     return KidnapVerdict::kKidnapped;
   }

@@ -9,6 +9,11 @@ namespace harmoloc::algorithms {
 
 namespace {
 
+// Calibration entry ids (version 4).
+constexpr std::uint32_t kCalibrationFixRmseX = 1;
+constexpr std::uint32_t kCalibrationFixRmseY = 2;
+constexpr std::uint32_t kCalibrationPassSpread = 3;
+
 constexpr std::uint8_t kMagic[8] = {'H', 'A', 'R', 'M', 'O', 'M', 'A', 'P'};
 
 class Writer {
@@ -173,6 +178,7 @@ std::vector<std::uint8_t> encode_map(const MapFile& map) {
   w.f32(m.gamma_y);
   w.f32(m.max_nearest_distance);
   w.f32(m.max_dissimilarity);
+  for (std::size_t k = 0; k < m.feature_count; ++k) w.f32(m.feature_weight[k]);
   for (std::size_t i = 0; i < m.sample_count; ++i) {
     for (std::size_t k = 0; k < m.feature_count; ++k) w.f32(m.sample(i)[k]);
     w.f32(m.target_x_m[i]);
@@ -199,6 +205,19 @@ std::vector<std::uint8_t> encode_map(const MapFile& map) {
       for (std::size_t c = 0; c < f.cell_count(); ++c) w.f32(f.heading_rad[c]);
     }
   }
+  // Version 4: the calibration, as (id, value) entries.
+  const MapCalibration& cal = map.calibration;
+  if (cal.present) {
+    w.u32(3);
+    w.u32(kCalibrationFixRmseX);
+    w.f32(cal.fix_rmse_x_m);
+    w.u32(kCalibrationFixRmseY);
+    w.f32(cal.fix_rmse_y_m);
+    w.u32(kCalibrationPassSpread);
+    w.f32(cal.pass_spread_m);
+  } else {
+    w.u32(0);
+  }
   w.u32(crc32(w.out.data(), w.out.size()));
   return std::move(w.out);
 }
@@ -219,7 +238,7 @@ MapError decode_map(const std::uint8_t* data, std::size_t size, MapFile& map) {
   std::uint32_t version = 0;
   if (!r.u32(version, "version")) return r.error;
   if (version < 1 || version > kMapFormatVersion)
-    return MapError{"unsupported map format version (this firmware reads versions 1 to 3)", 8};
+    return MapError{"unsupported map format version (this firmware reads versions 1 to 4)", 8};
   if (crc32(data, body) != stored) return MapError{"checksum mismatch: the map is corrupt", body};
 
   std::uint32_t boards = 0;
@@ -271,6 +290,17 @@ MapError decode_map(const std::uint8_t* data, std::size_t size, MapFile& map) {
     return r.error;
   if (!(m.max_dissimilarity > 0.0F && m.max_dissimilarity <= 1.0F))
     return MapError{"known-place dissimilarity bound outside (0, 1]", r.pos()};
+  m.feature_weight.fill(1.0F);  // before version 4: every feature in the kernel
+  if (version >= 4) {
+    bool any = false;
+    for (std::size_t k = 0; k < m.feature_count; ++k) {
+      if (!r.f32(m.feature_weight[k], "feature weights")) return r.error;
+      if (!(m.feature_weight[k] >= 0.0F && m.feature_weight[k] <= 1.0F))
+        return MapError{"feature weight outside 0..1", r.pos()};
+      any = any || m.feature_weight[k] > 0.0F;
+    }
+    if (!any) return MapError{"every feature weight is 0", r.pos()};
+  }
   if (!finite_positive(m.area_scale) || !finite_positive(m.sigma_x) ||
       !finite_positive(m.sigma_y) || !finite_positive(m.max_nearest_distance) ||
       !std::isfinite(m.gamma_x) || !std::isfinite(m.gamma_y)) {
@@ -303,10 +333,34 @@ MapError decode_map(const std::uint8_t* data, std::size_t size, MapFile& map) {
   if (version >= 3) {
     if (const MapError e = decode_forward(r, boards, map.forward)) return e;
   }
+  map.calibration = MapCalibration{};
+  if (version >= 4) {
+    std::uint32_t entries = 0;
+    if (!r.u32(entries, "truncated: the calibration is missing")) return r.error;
+    if (entries > 64) return MapError{"too many calibration entries", r.pos()};
+    for (std::uint32_t i = 0; i < entries; ++i) {
+      std::uint32_t id = 0;
+      float value = 0.0F;
+      if (!r.u32(id, "truncated calibration") || !r.f32(value, "truncated calibration"))
+        return r.error;
+      if (!std::isfinite(value) || value < 0.0F || value > 100.0F)
+        return MapError{"calibration value not finite or out of range (0..100)", r.pos()};
+      if (id == kCalibrationFixRmseX)
+        map.calibration.fix_rmse_x_m = value;
+      else if (id == kCalibrationFixRmseY)
+        map.calibration.fix_rmse_y_m = value;
+      else if (id == kCalibrationPassSpread)
+        map.calibration.pass_spread_m = value;
+      else
+        return MapError{"unknown calibration entry (a newer trainer?)", r.pos()};
+    }
+    map.calibration.present = entries > 0;
+  }
   if (r.pos() != body) {
-    return MapError{
-        version >= 3 ? "trailing bytes after the forward map" : "trailing bytes after the samples",
-        r.pos()};
+    return MapError{version >= 4   ? "trailing bytes after the calibration"
+                    : version >= 3 ? "trailing bytes after the forward map"
+                                   : "trailing bytes after the samples",
+                    r.pos()};
   }
   return MapError{};
 }

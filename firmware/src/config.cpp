@@ -56,6 +56,18 @@ class Checker {
     return v;
   }
 
+  // A number in [lo, hi], or the string "auto" (returned as -1: derived from the map).
+  double number_or_auto(const toml::table& t, const char* key, const std::string& where,
+                        double fallback, double lo, double hi) const {
+    const toml::node* n = t.get(key);
+    if (n == nullptr) return fallback;
+    if (auto s = n->value_exact<std::string>()) {
+      if (*s == "auto") return -1.0;
+      fail(n, where + key + " must be a number or \"auto\"");
+    }
+    return number(t, key, where, fallback, lo, hi);
+  }
+
   std::int64_t integer(const toml::table& t, const char* key, const std::string& where,
                        std::int64_t fallback, std::int64_t lo, std::int64_t hi) const {
     const toml::node* n = t.get(key);
@@ -183,8 +195,8 @@ void read_kidnap(const Checker& check, const toml::table& root, KidnapConfig& k)
   const std::string w = "kidnap.";
   check.only(*t, w,
              {"enabled", "change_threshold", "confirm", "window_frames", "evidence_frames",
-              "fix_distance_m", "divergence_frames", "lost_frames", "reseed", "position_sigma_m",
-              "yaw_sigma_deg"});
+              "fix_distance_m", "preference_min", "consistency_m", "divergence_frames",
+              "lost_frames", "reseed", "position_sigma_m", "yaw_sigma_deg"});
   k.enabled = flag(check, *t, "enabled", w, k.enabled);
   auto& d = k.detector;
   d.change_threshold = check.number(*t, "change_threshold", w, d.change_threshold, 0.0, 1.0);
@@ -195,7 +207,9 @@ void read_kidnap(const Checker& check, const toml::table& root, KidnapConfig& k)
       static_cast<int>(check.integer(*t, "evidence_frames", w, d.evidence_frames, 1, 1000));
   if (d.evidence_frames > d.window_frames)
     check.fail(t, "kidnap.evidence_frames must not exceed window_frames");
-  d.fix_distance_m = check.number(*t, "fix_distance_m", w, d.fix_distance_m, 0.0, 100.0);
+  d.fix_distance_m = check.number_or_auto(*t, "fix_distance_m", w, d.fix_distance_m, 0.0, 100.0);
+  d.preference_min = check.number(*t, "preference_min", w, d.preference_min, 0.0, 1000.0);
+  d.consistency_m = check.number_or_auto(*t, "consistency_m", w, d.consistency_m, 0.0, 100.0);
   d.divergence_frames =
       static_cast<int>(check.integer(*t, "divergence_frames", w, d.divergence_frames, 1, 100000));
   d.lost_frames = static_cast<int>(check.integer(*t, "lost_frames", w, d.lost_frames, 1, 100000));
@@ -314,6 +328,9 @@ FirmwareConfig default_config() {
     c.board_names.names[i] = boards[i].first;
     c.thresholds.boards[i] = boards[i].second;
   }
+  // Derived from the map's calibration at start-up (docs/filter.md): they depend on the scene.
+  c.kidnap.detector.fix_distance_m = -1.0;
+  c.kidnap.detector.consistency_m = -1.0;
   return c;
 }
 

@@ -50,7 +50,11 @@ LocalizationCycle::LocalizationCycle(const FirmwareConfig& config, const algorit
       period_ns_(static_cast<std::uint64_t>(std::llround(1e9 / config.cycle.rate_hz))),
       budget_ns_(static_cast<std::uint64_t>(std::llround(config.cycle.budget_ms * 1e6))) {
   filter_.configure(config.filter.particles, config.filter.seed, config.filter.noise);
-  reliability_.reset(config.observation.boards);
+  kidnap_params_ = derived_kidnap_params(config.kidnap.detector, map.calibration);
+  board_params_ = config.observation.boards;
+  if (map.calibration.present && board_params_.position_spread_m == 0.0)
+    board_params_.position_spread_m = static_cast<double>(map.calibration.pass_spread_m);
+  reliability_.reset(board_params_);
   if (use_boards_) board_maxima_ = algorithms::board_maxima(map.forward);
   if (config.link.has_signing_key) signer_.configure(config.link.signing_key, config.link.link_id);
   mavlink_.set_signer(&signer_);
@@ -59,6 +63,25 @@ LocalizationCycle::LocalizationCycle(const FirmwareConfig& config, const algorit
     yuyv_table_.build(classifier_, colour_table_storage_.get());
   else
     colour_table_.build(classifier_, colour_table_storage_.get());
+}
+
+algorithms::KidnapParams derived_kidnap_params(const algorithms::KidnapParams& configured,
+                                               const algorithms::MapCalibration& calibration) {
+  algorithms::KidnapParams p = configured;
+  // The harmonic fix's own error on frames of other passes, measured by the trainer. Without a
+  // calibration (maps before version 4) the values of those versions' defaults.
+  const double fix_rmse_m = calibration.present
+                                ? std::hypot(static_cast<double>(calibration.fix_rmse_x_m),
+                                             static_cast<double>(calibration.fix_rmse_y_m))
+                                : -1.0;
+  // Far: well beyond what the fix's own error explains (6 sigma), at least 10 cm, at most 1 m.
+  if (p.fix_distance_m < 0.0)
+    p.fix_distance_m = fix_rmse_m > 0.0 ? std::clamp(6.0 * fix_rmse_m, 0.10, 1.0) : 0.25;
+  // Consistent: two fixes of the same place a frame apart differ by their error (4 sigma) plus
+  // what the robot drives in a frame.
+  if (p.consistency_m < 0.0)
+    p.consistency_m = fix_rmse_m > 0.0 ? std::clamp(4.0 * fix_rmse_m + 0.03, 0.05, 0.5) : 0.15;
+  return p;
 }
 
 namespace {
@@ -349,7 +372,7 @@ void LocalizationCycle::account_overrun(bool overrun) {
 bool LocalizationCycle::update_with_boards(
     const algorithms::AreaVector& areas,
     const std::array<float, algorithms::HarmonicModel::kMaxFeatures>& features) {
-  const algorithms::BoardModelParams& params = config_.observation.boards;
+  const algorithms::BoardModelParams& params = board_params_;
   const algorithms::Pose2 estimate = filter_.mean_position();
   const algorithms::BoardFeatures observed =
       algorithms::board_features(map_.model.area_scale, areas);
@@ -367,25 +390,42 @@ bool LocalizationCycle::update_with_boards(
         assessment_.consensus && static_cast<double>(assessment_.chi2[b]) >= params.consensus_chi2;
     use[k] = !reliability_.distrusted(b) && !outlier;
   }
-  for (std::size_t b = 0; b < board_update_.boards; ++b)
-    counters_.distrusted_boards += board_update_.use[b] && reliability_.distrusted(b) ? 1U : 0U;
+  std::size_t modelled = 0, distrusted = 0;
+  for (std::size_t b = 0; b < board_update_.boards; ++b) {
+    if (!board_update_.use[b]) continue;
+    ++modelled;
+    distrusted += reliability_.distrusted(b) ? 1U : 0U;
+  }
+  counters_.distrusted_boards += distrusted;
   robust_fix_ = algorithms::harmonic_query(map_.model, features, use);
+  // Most boards distrusted at once: it is the estimate that is wrong, not the boards. The fix
+  // then takes every board.
+  const bool boards_doubted = modelled > 0 && 2 * distrusted >= modelled;
+  const algorithms::HarmonicFix& evidence_fix = boards_doubted ? fix_.fix : robust_fix_;
 
   if (config_.kidnap.enabled) {
     algorithms::KidnapInput in;
     in.match = match;
     in.consensus = assessment_.consensus;
-    in.fix_known = robust_fix_.known_place;
-    in.fix_distance_m = std::hypot(robust_fix_.x_m - estimate.x_m, robust_fix_.y_m - estimate.y_m);
+    in.fix_known = evidence_fix.known_place;
+    in.fix_x_m = evidence_fix.x_m;
+    in.fix_y_m = evidence_fix.y_m;
+    in.fix_distance_m =
+        std::hypot(evidence_fix.x_m - estimate.x_m, evidence_fix.y_m - estimate.y_m);
+    if (in.fix_known && in.fix_distance_m >= kidnap_params_.fix_distance_m) {
+      in.preference =
+          algorithms::board_preference(map_.forward, observed, evidence_fix.x_m, evidence_fix.y_m,
+                                       estimate.x_m, estimate.y_m, params);
+    }
     in.contradiction = assessment_.exceeding > 0;
-    kidnap_verdict_ = kidnap_.step(in, config_.kidnap.detector);
+    kidnap_verdict_ = kidnap_.step(in, kidnap_params_);
     const algorithms::KidnapCounters& k = kidnap_.counters();
     counters_.kidnap_triggers = k.triggers;
     counters_.kidnaps = k.kidnaps;
     counters_.lost = k.lost;
     if (kidnap_verdict_ == algorithms::KidnapVerdict::kKidnapped) {
-      if (config_.kidnap.reseed == ReseedStrategy::kAroundFix && robust_fix_.known_place)
-        reseed_around(robust_fix_.x_m, robust_fix_.y_m);
+      if (config_.kidnap.reseed == ReseedStrategy::kAroundFix && evidence_fix.known_place)
+        reseed_around(kidnap_.evidence_x_m(), kidnap_.evidence_y_m());
       else
         reseed_globally();
       pending_text_ = "harmoloc: kidnap detected, relocalized";
@@ -407,6 +447,8 @@ void LocalizationCycle::reseed_around(double x_m, double y_m) {
                      config_.kidnap.yaw_sigma_deg * algorithms::kPi / 180.0, !heading);
   if (gap_ == EncoderGap::kDiffused) gap_ = EncoderGap::kReseeded;
   kidnap_.reset();
+  // What the boards' motion indices learnt was learnt against the old, wrong estimate.
+  reliability_.reset(board_params_);
   ++reset_counter_;
 }
 
@@ -423,6 +465,7 @@ void LocalizationCycle::reseed_globally() {
   }
   if (gap_ == EncoderGap::kDiffused) gap_ = EncoderGap::kReseeded;
   kidnap_.reset();
+  reliability_.reset(board_params_);
   ++reset_counter_;
 }
 

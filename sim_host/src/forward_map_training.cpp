@@ -18,17 +18,27 @@ struct Positioned {
   double x_m, y_m, yaw_rad, t_s;
   bool has_yaw;
   const std::vector<float>* features;
+  double travel_m;  // < 0: unknown (then passes are told apart by time)
 };
+
+// Whether @p p is of the same pass as a frame at (@p t_s, @p travel_m), for validation.
+bool same_pass(const Positioned& p, double t_s, double travel_m, double exclude_s,
+               double exclude_m) {
+  if (travel_m >= 0.0 && p.travel_m >= 0.0) return std::fabs(p.travel_m - travel_m) < exclude_m;
+  return std::fabs(p.t_s - t_s) < exclude_s;
+}
 
 // Kernel-weighted mean of the frames' features at (x, y); weights relative to the nearest
 // frame, so that a place far from every frame takes its nearest frames' values. Frames within
 // @p exclude_s of @p t_s are left out (validation against other passes). Returns false when
 // no frame is left.
 bool kernel_mean(const std::vector<Positioned>& frames, double x, double y, double bandwidth_m,
-                 std::size_t boards, double t_s, double exclude_s, double* out) {
+                 std::size_t boards, double t_s, double travel_m, double exclude_s,
+                 double exclude_m, double* out) {
+  const bool exclude = exclude_s > 0.0 || exclude_m > 0.0;
   double d2_min = std::numeric_limits<double>::infinity();
   for (const Positioned& p : frames) {
-    if (exclude_s > 0.0 && std::fabs(p.t_s - t_s) < exclude_s) continue;
+    if (exclude && same_pass(p, t_s, travel_m, exclude_s, exclude_m)) continue;
     d2_min = std::min(d2_min, (p.x_m - x) * (p.x_m - x) + (p.y_m - y) * (p.y_m - y));
   }
   if (!std::isfinite(d2_min)) return false;
@@ -36,7 +46,7 @@ bool kernel_mean(const std::vector<Positioned>& frames, double x, double y, doub
   double sum_w = 0.0;
   for (std::size_t b = 0; b < boards; ++b) out[b] = 0.0;
   for (const Positioned& p : frames) {
-    if (exclude_s > 0.0 && std::fabs(p.t_s - t_s) < exclude_s) continue;
+    if (exclude && same_pass(p, t_s, travel_m, exclude_s, exclude_m)) continue;
     const double e = ((p.x_m - x) * (p.x_m - x) + (p.y_m - y) * (p.y_m - y) - d2_min) * inv;
     if (e > 30.0) continue;
     const double w = std::exp(-e);
@@ -46,6 +56,15 @@ bool kernel_mean(const std::vector<Positioned>& frames, double x, double y, doub
   for (std::size_t b = 0; b < boards; ++b) out[b] /= sum_w;
   return true;
 }
+
+}  // namespace
+
+namespace {
+
+// Fits the grid to frames that already have a position (shared by both ways of placing them).
+ForwardMapReport fit_grid(std::vector<Positioned>& frames, std::size_t board_count,
+                          const ForwardMapOptions& opt, algorithms::ForwardMap& out,
+                          ForwardMapReport report);
 
 }  // namespace
 
@@ -72,7 +91,7 @@ ForwardMapReport train_forward_map(const std::vector<std::vector<float>>& featur
     // The labels around this frame, if close enough in time to interpolate between.
     const auto next = std::lower_bound(labels.begin(), labels.end(), t,
                                        [](const StampedPose& l, double v) { return l.t_s < v; });
-    Positioned p{0.0, 0.0, 0.0, t, false, &f};
+    Positioned p{0.0, 0.0, 0.0, t, false, &f, -1.0};
     bool placed = false;
     if (next != labels.end() && std::fabs(next->t_s - t) < 1e-6) {
       p.x_m = next->pose.x_m;
@@ -105,6 +124,38 @@ ForwardMapReport train_forward_map(const std::vector<std::vector<float>>& featur
     }
     frames.push_back(p);
   }
+  report.has_heading = labels_have_yaw;
+  return fit_grid(frames, board_count, opt, out, report);
+}
+
+ForwardMapReport train_forward_map_placed(const std::vector<std::vector<float>>& features,
+                                          const std::vector<PlacedFrame>& placed,
+                                          std::size_t board_count, const ForwardMapOptions& opt,
+                                          algorithms::ForwardMap& out) {
+  ForwardMapReport report;
+  if (board_count == 0 || board_count > kMaxBoards)
+    throw std::runtime_error("forward map: board count out of range");
+  std::vector<Positioned> frames;
+  frames.reserve(placed.size());
+  for (const PlacedFrame& f : placed) {
+    const std::vector<float>& v = features.at(f.index);
+    bool seen = false;
+    for (std::size_t b = 0; b < board_count; ++b) seen = seen || v[b] > 0.0F;
+    if (!seen) continue;
+    ++report.frames;
+    ++report.by_odometry;
+    frames.push_back(
+        Positioned{f.pose.x_m, f.pose.y_m, f.pose.yaw_rad, f.t_s, true, &v, f.travel_m});
+  }
+  report.has_heading = true;
+  return fit_grid(frames, board_count, opt, out, report);
+}
+
+namespace {
+
+ForwardMapReport fit_grid(std::vector<Positioned>& frames, std::size_t board_count,
+                          const ForwardMapOptions& opt, algorithms::ForwardMap& out,
+                          ForwardMapReport report) {
   if (frames.size() < 8) {
     throw std::runtime_error("forward map: only " + std::to_string(frames.size()) +
                              " frames could be positioned (at least 8 needed)");
@@ -125,12 +176,44 @@ ForwardMapReport train_forward_map(const std::vector<std::vector<float>>& featur
   std::vector<double> mean(board_count);
   double best = std::numeric_limits<double>::infinity();
   std::vector<double> best_sq;
+  // Frames with another pass close by in position: within twice the median distance from a
+  // frame to the nearest frame of another pass. Elsewhere (the turn at the end of a route driven
+  // once each way) leaving the own pass out leaves nothing near, and the residual would measure
+  // extrapolation, not the noise a new run over the same place shows.
+  std::vector<char> comparable(frames.size(), 0);
+  {
+    std::vector<double> nearest(frames.size(), std::numeric_limits<double>::infinity());
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+      const Positioned& p = frames[i];
+      double best = std::numeric_limits<double>::infinity();
+      for (const Positioned& q : frames) {
+        if (same_pass(q, p.t_s, p.travel_m, opt.exclude_same_pass_s, opt.exclude_same_pass_m))
+          continue;
+        best =
+            std::min(best, (q.x_m - p.x_m) * (q.x_m - p.x_m) + (q.y_m - p.y_m) * (q.y_m - p.y_m));
+      }
+      nearest[i] = std::sqrt(best);
+    }
+    std::vector<double> finite;
+    for (double d : nearest) {
+      if (std::isfinite(d)) finite.push_back(d);
+    }
+    if (!finite.empty()) {
+      auto mid = finite.begin() + static_cast<std::ptrdiff_t>(finite.size() / 2);
+      std::nth_element(finite.begin(), mid, finite.end());
+      report.pass_spread_m = *mid;
+      const double bound = std::max(2.0 * *mid, 0.01);
+      for (std::size_t i = 0; i < frames.size(); ++i) comparable[i] = nearest[i] <= bound ? 1 : 0;
+    }
+  }
   for (double h : opt.bandwidths_m) {
     std::vector<double> sq(board_count, 0.0);
     std::size_t n = 0;
-    for (const Positioned& p : frames) {
-      if (!kernel_mean(frames, p.x_m, p.y_m, h, board_count, p.t_s, opt.exclude_same_pass_s,
-                       mean.data())) {
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+      const Positioned& p = frames[i];
+      if (!comparable[i]) continue;
+      if (!kernel_mean(frames, p.x_m, p.y_m, h, board_count, p.t_s, p.travel_m,
+                       opt.exclude_same_pass_s, opt.exclude_same_pass_m, mean.data())) {
         continue;
       }
       ++n;
@@ -161,7 +244,8 @@ ForwardMapReport train_forward_map(const std::vector<std::vector<float>>& featur
     report.bandwidth_m = opt.bandwidths_m.front();
     best_sq.assign(board_count, 0.0);
     for (const Positioned& p : frames) {
-      kernel_mean(frames, p.x_m, p.y_m, report.bandwidth_m, board_count, p.t_s, 0.0, mean.data());
+      kernel_mean(frames, p.x_m, p.y_m, report.bandwidth_m, board_count, p.t_s, -1.0, 0.0, 0.0,
+                  mean.data());
       for (std::size_t b = 0; b < board_count; ++b) {
         const double r = static_cast<double>((*p.features)[b]) - mean[b];
         best_sq[b] += r * r / static_cast<double>(frames.size());
@@ -210,12 +294,11 @@ ForwardMapReport train_forward_map(const std::vector<std::vector<float>>& featur
     report.sigma[b] = std::max(std::sqrt(best_sq[b]), std::max(1e-3 * peak, 1e-4));
     out.sigma[b] = static_cast<float>(report.sigma[b]);
   }
-  report.has_heading = labels_have_yaw;
-  out.has_heading = labels_have_yaw;
+  out.has_heading = report.has_heading;
   for (std::uint32_t r = 0; r < out.rows; ++r) {
     for (std::uint32_t c = 0; c < out.columns; ++c) {
       const double x = x0 + c * cell, y = y0 + r * cell;
-      kernel_mean(frames, x, y, report.bandwidth_m, board_count, 0.0, 0.0, mean.data());
+      kernel_mean(frames, x, y, report.bandwidth_m, board_count, 0.0, -1.0, 0.0, 0.0, mean.data());
       float* e = out.cell(c, r);
       for (std::size_t b = 0; b < board_count; ++b)
         e[b] = modelled[b] ? static_cast<float>(mean[b]) : 0.0F;
@@ -236,5 +319,7 @@ ForwardMapReport train_forward_map(const std::vector<std::vector<float>>& featur
   }
   return report;
 }
+
+}  // namespace
 
 }  // namespace harmoloc::sim_host

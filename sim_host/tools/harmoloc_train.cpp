@@ -39,8 +39,22 @@ int main(int argc, char** argv) {
   input->add_option("--dataset", dataset, "dataset folder of the training run (frames)");
   input->add_option("--areas", areas, "area log of the training run (harmoloc --record-areas)");
   input->require_option(1);
-  app.add_option("--labels", labels, "labelled poses (TUM), timestamps equal to frame timestamps")
+  app.add_option("--labels", labels,
+                 "labelled poses (TUM) on the run's clock; with wheel odometry any times within "
+                 "the run,\nwithout it timestamps equal to frame timestamps")
       ->required();
+  std::string encoders;
+  app.add_option("--encoders", encoders,
+                 "with --areas: the run's encoder log (candump -l log or GPIO recording), decoded\n"
+                 "with the config's [can] layout and [odometry] geometry; a dataset folder brings "
+                 "its own");
+  std::string placed_path;
+  app.add_option("--placed", placed_path,
+                 "write where the odometry placed every frame (TUM), to check the placement");
+  bool no_odometry = false;
+  app.add_flag("--no-odometry", no_odometry,
+               "do not place the frames by the wheel odometry between the labels: seed 000's\n"
+               "labelled + unlabelled samples only (the forward map then interpolates labels)");
   app.add_option("--out", out, "map file to write")->required();
   app.add_option("--config", config_path,
                  "firmware config whose colour thresholds to use (default: built-in)");
@@ -78,6 +92,12 @@ int main(int argc, char** argv) {
     opt.dataset_dir = dataset;
     opt.areas_path = areas;
     opt.labels_path = labels;
+    opt.encoders_path = encoders;
+    opt.can_layout = config.can_layout;
+    opt.geometry = config.geometry;
+    opt.use_odometry = !no_odometry;
+    if (!encoders.empty() && areas.empty())
+      throw std::runtime_error("--encoders goes with --areas (a dataset folder has its own log)");
     opt.thresholds = config.thresholds;
     opt.unlabelled = unlabelled;
     opt.unlabelled_ratio = ratio;
@@ -102,18 +122,47 @@ int main(int argc, char** argv) {
     algorithms::MapFile& map = *map_storage;
     const sim_host::TrainReport r = sim_host::train_map(opt, map);
     const std::vector<std::uint8_t> bytes = algorithms::encode_map(map);
+    if (!placed_path.empty()) {
+      if (!r.placement.used)
+        throw std::runtime_error("--placed: the frames were not placed by odometry");
+      std::vector<sim_host::StampedPose> poses;
+      for (std::size_t i = 0; i < r.placement.poses.size(); ++i) {
+        if (r.placement.placed[i])
+          poses.push_back(sim_host::StampedPose{r.placement.times_s[i], r.placement.poses[i]});
+      }
+      sim_host::write_tum(placed_path, poses);
+    }
     std::ofstream f(out, std::ios::binary);
     f.write(reinterpret_cast<const char*>(bytes.data()),
             static_cast<std::streamsize>(bytes.size()));
     if (!f) throw std::runtime_error(out + ": cannot write");
     if (!quiet) {
       const auto& names = config.board_names;
-      std::printf(
-          "frames        %zu (%zu without any board in view); labels matched %zu, unmatched %zu\n",
-          r.frames, r.empty_frames, r.labelled, r.labels_unmatched);
-      std::printf("samples       %zu labelled + %zu unlabelled (ratio 1:%.1f)\n", r.labelled,
-                  r.unlabelled,
-                  static_cast<double>(r.unlabelled) / static_cast<double>(r.labelled));
+      const sim_host::PlacementReport& pl = r.placement;
+      if (pl.used) {
+        std::printf(
+            "frames        %zu (%zu without any board in view, %zu too far outside the "
+            "labelled stretch)\n",
+            r.frames, r.empty_frames, pl.beyond_labels);
+        std::printf(
+            "placement     %zu frames placed by wheel odometry between %zu labels over %.2f m "
+            "(a label every %.0f cm);\n"
+            "              labels predicted from their neighbours' odometry: median %.1f mm, "
+            "worst %.1f mm (label %d)\n",
+            pl.frames, r.labelled, pl.travel_m, 100.0 * pl.label_spacing_m,
+            1000.0 * pl.median_label_residual_m, 1000.0 * pl.worst_label_residual_m,
+            pl.worst_label + 1);
+        std::printf("samples       %zu placed frames (every frame a sample, evenly spread)\n",
+                    r.unlabelled);
+      } else {
+        std::printf(
+            "frames        %zu (%zu without any board in view); labels matched %zu, unmatched "
+            "%zu\n",
+            r.frames, r.empty_frames, r.labelled, r.labels_unmatched);
+        std::printf("samples       %zu labelled + %zu unlabelled (ratio 1:%.1f)\n", r.labelled,
+                    r.unlabelled,
+                    static_cast<double>(r.unlabelled) / static_cast<double>(r.labelled));
+      }
       if (!r.constant_boards.empty()) {
         std::printf("boards        left out, area never changes: %s\n",
                     board_list(r.constant_boards, names).c_str());
@@ -124,7 +173,7 @@ int main(int argc, char** argv) {
                       board_list(step.boards, names).c_str(), 100.0 * step.cv_rmse_x_m,
                       100.0 * step.cv_rmse_y_m);
         } else {
-          std::printf("boards        drop %s (CV improves by 25%% or more): x %.2f cm, y %.2f cm\n",
+          std::printf("boards        drop %s (CV improves enough): x %.2f cm, y %.2f cm\n",
                       names.names[static_cast<std::size_t>(step.dropped)].c_str(),
                       100.0 * step.cv_rmse_x_m, 100.0 * step.cv_rmse_y_m);
         }
@@ -133,9 +182,14 @@ int main(int argc, char** argv) {
                   r.board_steps.size() > 1 || !opt.boards.empty() || all_boards ||
                           opt.method == sim_host::TrainMethod::kPaper
                       ? ""
-                      : " (no board's removal improves CV by 25% or more)");
+                      : " (no board's removal improves CV enough)");
       const auto axis = [&](const char* name, const sim_host::AxisReport& a) {
-        if (a.neighbours > 0) {
+        if (pl.used) {
+          std::printf(
+              "%s axis        query sigma %.4g  (CV RMSE %.2f cm, frames predicted from other "
+              "passes)\n",
+              name, a.sigma, 100.0 * a.cv_rmse_m);
+        } else if (a.neighbours > 0) {
           std::printf(
               "%s axis        %d-neighbour graph, gamma %.3g, query sigma %.4g  (%d-fold CV "
               "RMSE %.2f cm)\n",
@@ -162,13 +216,22 @@ int main(int argc, char** argv) {
                         names.names[b].c_str(), fw.sigma[b]);
           sig += fw.sigma[b] > 0.0 ? item : "";
         }
-        std::printf(
-            "forward map   %ux%u cells of %.1f cm from %zu frames (%zu placed by labels, %zu by "
-            "the map), kernel %.1f cm, heading %s\n",
-            map.forward.columns, map.forward.rows, 100.0 * static_cast<double>(map.forward.cell_m),
-            fw.interpolated + fw.from_harmonic, fw.interpolated, fw.from_harmonic,
-            100.0 * fw.bandwidth_m,
-            fw.has_heading ? "from the labels" : "unknown (labels have none)");
+        if (fw.by_odometry > 0) {
+          std::printf(
+              "forward map   %ux%u cells of %.1f cm from %zu frames placed by odometry, kernel "
+              "%.1f cm, heading from the placement\n",
+              map.forward.columns, map.forward.rows,
+              100.0 * static_cast<double>(map.forward.cell_m), fw.by_odometry,
+              100.0 * fw.bandwidth_m);
+        } else {
+          std::printf(
+              "forward map   %ux%u cells of %.1f cm from %zu frames (%zu placed by labels, %zu "
+              "by the map), kernel %.1f cm, heading %s\n",
+              map.forward.columns, map.forward.rows,
+              100.0 * static_cast<double>(map.forward.cell_m), fw.interpolated + fw.from_harmonic,
+              fw.interpolated, fw.from_harmonic, 100.0 * fw.bandwidth_m,
+              fw.has_heading ? "from the labels" : "unknown (labels have none)");
+        }
         std::printf("board noise   %s (%% of frame, against other passes)\n", sig.c_str());
       }
       if (r.segment_ms > 0.0) {

@@ -45,13 +45,15 @@ double FrameRecord::position_error_m() const {
   return std::hypot(estimate.x_m - truth.x_m, estimate.y_m - truth.y_m);
 }
 
-TrainedMap train_on_scenario(const Scenario& scenario, std::uint64_t seed,
-                             const Progress& progress) {
+TrainedMap train_on_scenario(const Scenario& scenario, std::uint64_t seed, const Progress& progress,
+                             const algorithms::ThresholdSet* thresholds,
+                             const TrainOptions* options) {
   ScenarioRun run(scenario, seed);
-  const firmware::FirmwareConfig config = firmware::default_config();
+  const algorithms::ThresholdSet set =
+      thresholds != nullptr ? *thresholds : firmware::default_config().thresholds;
   std::vector<std::uint8_t> table_storage(algorithms::ColourTable::kEntries);
   algorithms::ColourTable table;
-  table.build(algorithms::BoardClassifier(config.thresholds), table_storage.data());
+  table.build(algorithms::BoardClassifier(set), table_storage.data());
   AreaSeries series;
   series.image_width_px = scenario.camera.width_px;
   series.image_height_px = scenario.camera.height_px;
@@ -66,11 +68,32 @@ TrainedMap train_on_scenario(const Scenario& scenario, std::uint64_t seed,
     if (progress && (k % 100 == 0 || k + 1 == run.frame_count()))
       progress(k + 1, run.frame_count());
   }
-  TrainOptions opt;
-  opt.thresholds = config.thresholds;
+  series.odometry = odometry_from_can(run.encoder_frames(), scenario.can_layout, scenario.robot);
+  TrainOptions opt = options != nullptr ? *options : TrainOptions{};
+  opt.thresholds = set;
   TrainedMap t;
   t.map = std::make_unique<algorithms::MapFile>();
   t.report = train_on_areas(series, run.labels(), opt, *t.map);
+  t.frames = run.frame_count();
+  const PlacementReport& pl = t.report.placement;
+  if (pl.used) {
+    double se = 0.0, sh = 0.0;
+    std::size_t n = 0;
+    for (std::size_t k = 0; k < run.frame_count(); ++k) {
+      if (!pl.placed[k]) continue;
+      const algorithms::Pose2& a = pl.poses[k];
+      const algorithms::Pose2& b = run.truth(k);
+      se += (a.x_m - b.x_m) * (a.x_m - b.x_m) + (a.y_m - b.y_m) * (a.y_m - b.y_m);
+      const double h = algorithms::wrap_angle_rad(a.yaw_rad - b.yaw_rad);
+      sh += h * h;
+      ++n;
+    }
+    if (n > 0) {
+      t.placement_rmse_m = std::sqrt(se / static_cast<double>(n));
+      t.placement_heading_rmse_deg =
+          std::sqrt(sh / static_cast<double>(n)) * 180.0 / algorithms::kPi;
+    }
+  }
   return t;
 }
 
@@ -102,6 +125,7 @@ RunRecord replay_scenario(const Scenario& scenario, std::uint64_t seed,
     f.valid = out.valid;
     f.health = out.health;
     const firmware::FixOutput& fix = cycle->last_fix();
+    f.fix_present = fix.present;
     f.fix_known = fix.present && fix.fix.known_place;
     f.fix = algorithms::Pose2{fix.fix.x_m, fix.fix.y_m, 0.0};
     f.verdict = cycle->kidnap_verdict();

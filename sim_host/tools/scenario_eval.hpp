@@ -25,13 +25,20 @@ namespace harmoloc::sim_host {
 using Progress = std::function<void(std::size_t done, std::size_t total)>;
 
 /// Simulates @p scenario with @p seed in memory, segments every frame and trains a map on it
-/// with its labels (the firmware's default thresholds).
+/// with its labels and its wheel odometry (the firmware's default thresholds, or @p thresholds).
 struct TrainedMap {
   std::unique_ptr<algorithms::MapFile> map;
   TrainReport report;
+  /// RMS distance between where the trainer placed the frames and where they were (0 when
+  /// the frames were not placed by odometry).
+  double placement_rmse_m = 0.0;
+  double placement_heading_rmse_deg = 0.0;
+  std::size_t frames = 0;
 };
 TrainedMap train_on_scenario(const Scenario& scenario, std::uint64_t seed,
-                             const Progress& progress = nullptr);
+                             const Progress& progress = nullptr,
+                             const algorithms::ThresholdSet* thresholds = nullptr,
+                             const TrainOptions* options = nullptr);
 
 /// One frame of a replay.
 struct FrameRecord {
@@ -40,7 +47,8 @@ struct FrameRecord {
   algorithms::Pose2 estimate;
   bool valid = false;
   firmware::Health health = firmware::Health::kNotInitialized;
-  bool fix_known = false;  ///< the harmonic localizer's own fix is a known place
+  bool fix_present = false;  ///< the harmonic localizer computed a fix (a usable frame)
+  bool fix_known = false;    ///< the harmonic localizer's own fix is a known place
   algorithms::Pose2 fix;
   algorithms::KidnapVerdict verdict = algorithms::KidnapVerdict::kNone;
   std::uint8_t distrusted = 0;  ///< bit b: board b's motion index is below one half

@@ -90,7 +90,7 @@ expect_error "sim: scenario with a typo" "unknown key 'camera.widht_px'" "$BIN/h
 printf '1 2 3\n' > "$out/bad_labels.tum"
 expect_error "train: malformed labels" "bad_labels.tum:1" "$BIN/harmoloc-train" --dataset "$out/good" --labels "$out/bad_labels.tum" --out "$out/x.hmap"
 printf '5.0 1 1 0 0 0 0 1\n' > "$out/far_labels.tum"
-expect_error "train: labels that match no frame" "labels match" "$BIN/harmoloc-train" --dataset "$out/good" --labels "$out/far_labels.tum" --out "$out/x.hmap"
+expect_error "train: labels that match no frame" "outside the run" "$BIN/harmoloc-train" --dataset "$out/good" --labels "$out/far_labels.tum" --out "$out/x.hmap"
 expect_error "report: missing truth" "harmoloc-report" "$BIN/harmoloc-report" --truth "$out/nope.tum" --estimate "$out/t.tum" --out "$out/r"
 
 echo "OK: $cases bad inputs rejected with one line and exit status 2"

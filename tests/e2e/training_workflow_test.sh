@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # The training workflow of docs/training.md as a robot owner runs it: record the area log of a run
-# with the firmware before any map exists, train from the log and the labels, replay with the new
-# map. The map must equal the one trained from the frames, the fixes must be accurate, and every
-# mismatch between log, config and map is refused with one line.
+# with the firmware before any map exists, train from the log, the encoder log and the labels,
+# replay with the new map. The map must equal the one trained from the frames, the fixes must be
+# accurate, and every mismatch between log, config and map is refused with one line.
 source "$(dirname "$0")/lib.sh" "$@"
 out="$WORK/training"
 rm -rf "$out"; mkdir -p "$out"
@@ -10,7 +10,7 @@ rm -rf "$out"; mkdir -p "$out"
 frames=$(($(wc -l < "$WORK/train/frames.csv") - 1))
 [ "$(($(wc -l < "$out/areas.csv") - 3))" -eq "$frames" ] || fail "area log has not one line per frame"
 [ "$(json_number "$out/rec.json" localizer.fixes)" -eq 0 ] || fail "a run without a map used fixes"
-"$BIN/harmoloc-train" --areas "$out/areas.csv" --labels "$WORK/train/labels.tum" --out "$out/from_areas.hmap" > "$out/train.txt"
+"$BIN/harmoloc-train" --areas "$out/areas.csv" --encoders "$WORK/train/encoders.log" --labels "$WORK/train/labels.tum" --out "$out/from_areas.hmap" > "$out/train.txt"
 cat "$out/train.txt"
 cmp "$out/from_areas.hmap" "$WORK/tiny.hmap" || fail "the map trained from the area log differs from the one trained from the frames"
 grep -q "^boards  *start with" "$out/train.txt" || fail "the trainer did not say which boards it started from"

@@ -145,7 +145,15 @@ TEST(Trainer, FromAreaLogEqualsFromFrames) {
   const hs::TrainReport ra = hs::train_map(opt, *a);
   opt.dataset_dir.clear();
   opt.areas_path = dir.path("areas.csv");
+  // The area log brings no odometry: the run's encoder log goes beside it, decoded with the
+  // robot's layout and geometry (the config's, which are the metadata's here).
+  const hs::DatasetMetadata meta = hs::read_metadata(run);
+  opt.encoders_path = run + "/encoders.log";
+  opt.can_layout = meta.encoder_layout;
+  opt.geometry = meta.geometry;
   const hs::TrainReport rb = hs::train_map(opt, *b);
+  EXPECT_TRUE(ra.placement.used);
+  EXPECT_TRUE(rb.placement.used);
   EXPECT_EQ(ha::encode_map(*a), ha::encode_map(*b));
   EXPECT_EQ(ra.labelled, rb.labelled);
   EXPECT_GT(ra.labelled, 4U);

@@ -33,10 +33,12 @@ constexpr std::size_t kOffBoardIndex = kOffFeatureCount + 4;
 constexpr std::size_t kOffAreaScale = kOffBoardIndex + kFeatures;
 constexpr std::size_t kOffSigmaX = kOffAreaScale + 4;
 constexpr std::size_t kOffDissimilarity = kOffAreaScale + 6 * 4;
-constexpr std::size_t kOffSamples = kOffAreaScale + 7 * 4;
+constexpr std::size_t kOffWeights = kOffAreaScale + 7 * 4;  // version 4
+constexpr std::size_t kOffSamples = kOffWeights + kFeatures * 4;
 // Version 3: the forward map's grid size (0 x 0 here: none), then the CRC.
 constexpr std::size_t kOffForward = kOffSamples + kSamples * (kFeatures + 2) * 4;
-constexpr std::size_t kExpectedSize = kOffForward + 8 + 4;
+// The forward map's grid size (0, 0: none), the calibration's entry count (0), the CRC.
+constexpr std::size_t kExpectedSize = kOffForward + 8 + 4 + 4;
 
 std::unique_ptr<ha::MapFile> make_map() {
   auto map = std::make_unique<ha::MapFile>();
@@ -158,18 +160,103 @@ TEST(MapCodec, BadMagic) {
 
 TEST(MapCodec, UnsupportedVersion) {
   std::vector<std::uint8_t> b = ha::encode_map(*make_map());
-  put_u32(b, kOffVersion, 4);
+  put_u32(b, kOffVersion, 5);
   EXPECT_NE(decode_error(b).find("version"), std::string::npos) << decode_error(b);
   fix_crc(b);
   EXPECT_NE(decode_error(b).find("version"), std::string::npos) << decode_error(b);
+}
+
+// Removes the version 4 calibration's entry count (a map without calibration) before the CRC.
+static void strip_calibration(std::vector<std::uint8_t>& b) {
+  b.erase(b.end() - 8, b.end() - 4);
+}
+
+// Removes the version 4 feature weights (after the calibration: offsets before it stay).
+static void strip_weights(std::vector<std::uint8_t>& b) {
+  b.erase(b.begin() + static_cast<std::ptrdiff_t>(kOffWeights),
+          b.begin() + static_cast<std::ptrdiff_t>(kOffWeights + 4 * kFeatures));
+}
+
+// Maps written before the calibration existed (version 3) still load, without it.
+TEST(MapCodec, ReadsVersionThree) {
+  auto map = make_map();
+  map->calibration.present = true;
+  map->calibration.fix_rmse_x_m = 0.02F;
+  std::vector<std::uint8_t> b = ha::encode_map(*make_map());
+  strip_calibration(b);
+  strip_weights(b);
+  put_u32(b, kOffVersion, 3);
+  fix_crc(b);
+  auto out = std::make_unique<ha::MapFile>();
+  out->calibration = map->calibration;  // whatever the object held before is replaced
+  const ha::MapError e = ha::decode_map(b.data(), b.size(), *out);
+  ASSERT_FALSE(e) << e.what;
+  EXPECT_FALSE(out->calibration.present);
+  for (std::size_t k = 0; k < kFeatures; ++k) EXPECT_EQ(out->model.feature_weight[k], 1.0F);
+}
+
+TEST(MapCodec, FeatureWeightsRoundTripAndChecks) {
+  auto map = make_map();
+  map->model.feature_weight[1] = 0.0F;
+  std::vector<std::uint8_t> bytes = ha::encode_map(*map);
+  auto out = std::make_unique<ha::MapFile>();
+  ASSERT_FALSE(ha::decode_map(bytes.data(), bytes.size(), *out));
+  EXPECT_EQ(out->model.feature_weight[0], 1.0F);
+  EXPECT_EQ(out->model.feature_weight[1], 0.0F);
+  for (float v : {-0.5F, 1.5F, std::numeric_limits<float>::quiet_NaN()}) {
+    std::vector<std::uint8_t> b = bytes;
+    put_f32(b, kOffWeights, v);
+    fix_crc(b);
+    EXPECT_NE(decode_error(b).find("feature weight"), std::string::npos) << decode_error(b);
+  }
+  std::vector<std::uint8_t> b = bytes;
+  for (std::size_t k = 0; k < kFeatures; ++k) put_f32(b, kOffWeights + 4 * k, 0.0F);
+  fix_crc(b);
+  EXPECT_NE(decode_error(b).find("every feature weight"), std::string::npos) << decode_error(b);
+}
+
+TEST(MapCodec, CalibrationRoundTripAndChecks) {
+  auto map = make_map();
+  map->calibration.present = true;
+  map->calibration.fix_rmse_x_m = 0.021F;
+  map->calibration.fix_rmse_y_m = 0.034F;
+  map->calibration.pass_spread_m = 0.012F;
+  const std::vector<std::uint8_t> bytes = ha::encode_map(*map);
+  ASSERT_EQ(bytes.size(), kExpectedSize + 24);
+  auto out = std::make_unique<ha::MapFile>();
+  ASSERT_FALSE(ha::decode_map(bytes.data(), bytes.size(), *out));
+  EXPECT_TRUE(out->calibration.present);
+  EXPECT_EQ(out->calibration.fix_rmse_x_m, 0.021F);
+  EXPECT_EQ(out->calibration.fix_rmse_y_m, 0.034F);
+  EXPECT_EQ(out->calibration.pass_spread_m, 0.012F);
+  EXPECT_EQ(ha::encode_map(*out), bytes);
+  // An entry this firmware does not know, a value out of range or not finite: refused.
+  const std::size_t first_id = kExpectedSize - 4;
+  std::vector<std::uint8_t> b = bytes;
+  put_u32(b, first_id, 77);
+  fix_crc(b);
+  EXPECT_NE(decode_error(b).find("unknown calibration"), std::string::npos) << decode_error(b);
+  for (float v : {-1.0F, 1e6F, std::numeric_limits<float>::quiet_NaN(),
+                  std::numeric_limits<float>::infinity()}) {
+    b = bytes;
+    put_f32(b, first_id + 4, v);
+    fix_crc(b);
+    EXPECT_NE(decode_error(b).find("calibration value"), std::string::npos) << decode_error(b);
+  }
+  b = bytes;
+  put_u32(b, kExpectedSize - 8, 100000);  // the entry count
+  fix_crc(b);
+  EXPECT_NE(decode_error(b).find("calibration"), std::string::npos) << decode_error(b);
 }
 
 // Maps written before the forward map existed (version 2) still load, without it.
 TEST(MapCodec, ReadsVersionTwo) {
   const auto map = make_map();
   std::vector<std::uint8_t> b = ha::encode_map(*map);
+  strip_calibration(b);
   b.erase(b.begin() + static_cast<std::ptrdiff_t>(kOffForward),
           b.begin() + static_cast<std::ptrdiff_t>(kOffForward + 8));
+  strip_weights(b);
   put_u32(b, kOffVersion, 2);
   fix_crc(b);
   auto out = std::make_unique<ha::MapFile>();
@@ -188,8 +275,10 @@ TEST(MapCodec, ReadsVersionTwo) {
 TEST(MapCodec, ReadsVersionOne) {
   const auto map = make_map();
   std::vector<std::uint8_t> b = ha::encode_map(*map);
+  strip_calibration(b);
   b.erase(b.begin() + static_cast<std::ptrdiff_t>(kOffForward),
           b.begin() + static_cast<std::ptrdiff_t>(kOffForward + 8));
+  strip_weights(b);
   b.erase(b.begin() + static_cast<std::ptrdiff_t>(kOffDissimilarity),
           b.begin() + static_cast<std::ptrdiff_t>(kOffDissimilarity + 4));
   put_u32(b, kOffVersion, 1);
@@ -378,7 +467,7 @@ constexpr std::size_t kOffHeading = kOffRoute + 6 * 4;
 TEST(MapCodec, ForwardMapRoundTripAndLayout) {
   const auto map = make_map_with_forward();
   const std::vector<std::uint8_t> bytes = ha::encode_map(*map);
-  ASSERT_EQ(bytes.size(), kOffHeading + 6 * 4 + 4);
+  ASSERT_EQ(bytes.size(), kOffHeading + 6 * 4 + 4 + 4);
   EXPECT_EQ(get_u32(bytes, kOffGridSize), 3U);
   EXPECT_EQ(get_u32(bytes, kOffGridSize + 4), 2U);
   EXPECT_EQ(get_u32(bytes, kOffForwardBoards), kBoards);

@@ -392,12 +392,17 @@ ha::KidnapInput nominal(double match) {
   return in;
 }
 
+// The fix is a known place 1.2 m away, the boards clearly prefer it, the fixes are the same
+// place frame after frame.
 ha::KidnapInput kidnapped(double match) {
   ha::KidnapInput in;
   in.match = match;
   in.consensus = false;
   in.fix_known = true;
   in.fix_distance_m = 1.2;
+  in.fix_x_m = 2.0;
+  in.fix_y_m = 1.0;
+  in.preference = 20.0;
   return in;
 }
 
@@ -437,17 +442,50 @@ TEST(KidnapDetector, ATriggerNeedsEvidenceWithinItsWindow) {
   EXPECT_EQ(d.step(kidnapped(1e-6), p), ha::KidnapVerdict::kKidnapped);
   EXPECT_EQ(d.counters().kidnaps, 1U);
   EXPECT_EQ(d.counters().divergences, 0U);
-  // Evidence that is too near (the fix 10 cm away) or without a known fix does not count.
+  EXPECT_DOUBLE_EQ(d.evidence_x_m(), 2.0);
+  EXPECT_DOUBLE_EQ(d.evidence_y_m(), 1.0);
+  // Evidence that is too near (the fix 10 cm away), without a known fix, or that the boards do
+  // not prefer to the estimate does not count.
   ha::KidnapDetector e;
   e.step(nominal(1.0), p);
   ha::KidnapInput near = kidnapped(1e-6);
   near.fix_distance_m = 0.1;
   ha::KidnapInput unknown = kidnapped(1e-6);
   unknown.fix_known = false;
+  ha::KidnapInput indifferent = kidnapped(1e-6);
+  indifferent.preference = 1.0;
   EXPECT_EQ(e.step(near, p), ha::KidnapVerdict::kTriggered);
-  for (int i = 0; i < 8; ++i)
-    EXPECT_EQ(e.step(i % 2 ? near : unknown, p), ha::KidnapVerdict::kNone);
+  for (int i = 0; i < 9; ++i)
+    EXPECT_EQ(e.step(i % 3 == 0   ? near
+                     : i % 3 == 1 ? unknown
+                                  : indifferent,
+                     p),
+              ha::KidnapVerdict::kNone);
   EXPECT_EQ(e.counters().kidnaps, 0U);
+}
+
+// Fixes that jump between places from frame to frame (an ambiguous view) are not one place: the
+// evidence starts over at each jump, and the kidnap is confirmed where the fixes settle.
+TEST(KidnapDetector, EvidenceMustBeOnePlace) {
+  ha::KidnapParams p;
+  p.consistency_m = 0.15;
+  ha::KidnapDetector d;
+  d.step(nominal(1.0), p);
+  ha::KidnapInput a = kidnapped(1.0), b = kidnapped(1.0);
+  b.fix_x_m = 3.0;  // a metre from a
+  for (int i = 0; i < 4 * p.divergence_frames; ++i)
+    ASSERT_EQ(d.step(i % 2 ? b : a, p), ha::KidnapVerdict::kNone) << i;  // ends on b
+  // Settled on a (with 3 cm of noise): confirmed after divergence_frames, at their mean.
+  ha::KidnapVerdict v = ha::KidnapVerdict::kNone;
+  int frames = 0;
+  while (v != ha::KidnapVerdict::kKidnapped && frames < 100) {
+    ha::KidnapInput in = a;
+    in.fix_x_m += frames % 2 ? 0.03 : -0.03;
+    v = d.step(in, p);
+    ++frames;
+  }
+  EXPECT_EQ(frames, p.divergence_frames);
+  EXPECT_NEAR(d.evidence_x_m(), 2.0, 0.01);
 }
 
 TEST(KidnapDetector, LongEvidenceWithoutATriggerIsADivergence) {

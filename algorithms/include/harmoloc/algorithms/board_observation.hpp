@@ -59,6 +59,12 @@ struct BoardModelParams {
   double route_free_m = 0.03;   ///< distance from the training run that costs nothing
   double route_sigma_m = 0.03;  ///< beyond it, a Gaussian fall-off of this width
   bool robust = true;           ///< false: seed 001's plain product of Gaussians (w = 1, s = 1)
+  /// How far from the estimate a board's area may be explained when the boards are assessed
+  /// (consensus, motion index, scaling): the spread between passes of the training run over
+  /// one place, from the map's calibration (0: at the estimate only). Where a board's area
+  /// changes steeply with position (entering the field of view), a centimetre of wander is many
+  /// sigma; that is no reason to distrust the board.
+  double position_spread_m = 0.0;
   /// A frame in which more than half of the modelled boards show more than this many times the
   /// largest area the forward map expects for them anywhere is no view of the mapped scene (a
   /// frame of noise, a blinded sensor): it is not used. 0 turns the check off.
@@ -91,6 +97,13 @@ struct BoardAssessment {
   std::size_t exceeding = 0;
   bool consensus = false;  ///< enough boards agree with the estimate
 };
+
+/// How much better the boards fit place a than place b: the sum over the modelled boards of
+/// log(l(a) / l(b)), l = exp(-chi2 / 2) + c with chi2 in k sigma (the robust term with every
+/// board trusted, so that no board can contribute more than ln(1 / c)). Nats; positive when a
+/// fits better. For the kidnap test: do the boards prefer the global fix to the estimate?
+double board_preference(const ForwardMap& map, const BoardFeatures& observed, double ax_m,
+                        double ay_m, double bx_m, double by_m, const BoardModelParams& params);
 
 /// The per-board state that lives from frame to frame: each board's motion index.
 class BoardReliability {

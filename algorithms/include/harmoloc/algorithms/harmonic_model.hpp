@@ -18,6 +18,11 @@ struct HarmonicModel {
   std::uint32_t feature_count = 0;
   /// Which boards (indices into the threshold set) are features, in feature order.
   std::array<std::uint8_t, kMaxFeatures> board_index{};
+  /// Each feature's weight in eq. 9's distance (1: used, 0: left out of the kernel by the
+  /// trainer's board selection). The known-place test compares every feature regardless, so a
+  /// board the kernel does without still tells a strange view from a trained one. Maps before
+  /// version 4 have 1 everywhere.
+  std::array<float, kMaxFeatures> feature_weight{1, 1, 1, 1, 1, 1, 1, 1};
   /// feature = area_px * area_scale. The trainer sets 100 / (width * height): percent of frame.
   float area_scale = 0.0F;
   /// Kernel widths of W = exp(-sigma * ||O_i - O_j||^2), per output axis, in 1/feature^2.

@@ -4,9 +4,12 @@
 /// when its change rate P = min(|d_t - d_t-1| / d_t-1, 1) exceeds 0.5. On its own that fires on
 /// every occluded board and on ordinary frame-to-frame noise, so here a trigger only opens a
 /// short window in which the kidnap must be confirmed by evidence that does not come from the
-/// cloud: the boards do not agree with the estimate (no consensus) and the harmonic localizer's
-/// global fix, a known place computed without the distrusted boards, lies far from it. The
-/// same evidence held for long without a trigger (a slow divergence) also counts. Without a
+/// cloud: the harmonic localizer's global fix is a known place far from the estimate, the
+/// boards fit the fix's place clearly better than the estimate's (a likelihood ratio over the
+/// forward map, robust per board), and the fixes agree with each other from frame to frame. The
+/// fix leaves out the boards the filter distrusts, unless it distrusts most of them: that the
+/// boards all disagree at once says the estimate, not the boards, is wrong. The same evidence
+/// held for a few frames in a row without a trigger also counts. Without a
 /// usable fix (the robot put down off the trained route), the boards alone must show that the
 /// estimate is wrong: most disagree, and at least one shows more area than expected there,
 /// which no occlusion can do (a person in front of the camera only hides boards); the filter is
@@ -22,17 +25,26 @@ struct KidnapParams {
   int window_frames = 6;          ///< frames after a trigger in which to confirm it
   int evidence_frames = 3;        ///< frames of evidence needed within the window
   double fix_distance_m = 0.25;   ///< evidence: the global fix is at least this far away
-  int divergence_frames = 30;     ///< evidence in this many frames in a row, without a trigger
-  int lost_frames = 90;           ///< the same for the evidence without a fix: lost
+  /// Evidence: the boards' log-likelihood ratio of the fix's place over the estimate's, in nats
+  /// (ln 100: the frame is a hundred times likelier at the fix).
+  double preference_min = 4.6;
+  /// Evidence fixes farther apart than this from one frame to the next are not the same place:
+  /// the count starts over.
+  double consistency_m = 0.15;
+  int divergence_frames = 8;  ///< evidence in this many frames in a row, without a trigger
+  int lost_frames = 90;       ///< the same for the evidence without a fix: lost
 };
 
 /// What the cycle saw this frame.
 struct KidnapInput {
-  double match = 0.0;           ///< d_t: the sum of unnormalised weights after the update
-  bool consensus = true;        ///< most boards agree with the estimate
-  bool fix_known = false;       ///< the global fix is a known place
-  double fix_distance_m = 0.0;  ///< from the global fix to the estimate
-  bool contradiction = false;   ///< a disagreeing board shows more area than expected
+  double match = 0.0;                   ///< d_t: the sum of unnormalised weights after the update
+  bool consensus = true;                ///< most boards agree with the estimate
+  bool fix_known = false;               ///< the global fix is a known place
+  double fix_distance_m = 0.0;          ///< from the global fix to the estimate
+  double fix_x_m = 0.0, fix_y_m = 0.0;  ///< the global fix
+  /// The boards' log-likelihood ratio of the fix's place over the estimate's (nats).
+  double preference = 0.0;
+  bool contradiction = false;  ///< a disagreeing board shows more area than expected
 };
 
 enum class KidnapVerdict : std::uint8_t {
@@ -60,6 +72,10 @@ class KidnapDetector {
 
   /// Seed 004's P of the last frame.
   double probability() const { return probability_; }
+  /// Where the evidence of the last confirmed kidnap put the robot: the mean of its consistent
+  /// fixes.
+  double evidence_x_m() const { return evidence_x_m_; }
+  double evidence_y_m() const { return evidence_y_m_; }
   const KidnapCounters& counters() const { return counters_; }
 
  private:
@@ -70,6 +86,11 @@ class KidnapDetector {
   int window_lost_evidence_ = 0;
   int evidence_run_ = 0;
   int lost_run_ = 0;
+  // The current stretch of consistent evidence: its fixes' sum and count, the last fix.
+  double sum_x_ = 0.0, sum_y_ = 0.0;
+  int consistent_ = 0;
+  double last_x_ = 0.0, last_y_ = 0.0;
+  double evidence_x_m_ = 0.0, evidence_y_m_ = 0.0;
   KidnapCounters counters_{};
 };
 

@@ -13,9 +13,22 @@
 
 namespace harmoloc::algorithms {
 
-/// Version 2 added the known-place dissimilarity bound, version 3 the forward map; versions 1
-/// and 2 are still read (without what they lack).
-constexpr std::uint32_t kMapFormatVersion = 3;
+/// Version 2 added the known-place dissimilarity bound, version 3 the forward map, version 4
+/// the calibration measured on the training run; versions 1 to 3 are still read (without what
+/// they lack).
+constexpr std::uint32_t kMapFormatVersion = 4;
+
+/// What the trainer measured on the training run that the firmware derives its scene-dependent
+/// settings from (docs/map-format.md): nothing of it is a constant tuned to one scene.
+struct MapCalibration {
+  bool present = false;  ///< false in maps before version 4
+  /// RMS error of the harmonic fix per axis on frames predicted from other passes (metres).
+  float fix_rmse_x_m = 0.0F;
+  float fix_rmse_y_m = 0.0F;
+  /// Median distance from a training frame to the nearest frame of another pass (metres): how
+  /// far apart two runs over one place lie (wander, placement).
+  float pass_spread_m = 0.0F;
+};
 
 struct MapFile {
   std::uint32_t image_width_px = 0;
@@ -23,6 +36,7 @@ struct MapFile {
   ThresholdSet thresholds;
   HarmonicModel model;
   ForwardMap forward;  ///< absent (columns 0) in maps before version 3
+  MapCalibration calibration;
 };
 
 /// Serialises @p map (host/trainer side; allocates).

@@ -92,6 +92,12 @@ struct CycleCounters {
 
 enum class CycleResult : std::uint8_t { kRan, kEnded };
 
+/// The kidnap test's parameters with those left "auto" in the config (negative) derived from the
+/// map's calibration: how far a fix must be, and how close successive fixes, measured against
+/// the harmonic fix's own error on the training run.
+algorithms::KidnapParams derived_kidnap_params(const algorithms::KidnapParams& configured,
+                                               const algorithms::MapCalibration& calibration);
+
 class LocalizationCycle {
  public:
   /// @p map must outlive the cycle (the firmware keeps it in static storage). The colour table
@@ -188,6 +194,10 @@ class LocalizationCycle {
   algorithms::BoardAssessment assessment_{};
   algorithms::HarmonicFix robust_fix_{};
   algorithms::KidnapDetector kidnap_;
+  /// The kidnap test's parameters with the scene-dependent ones derived from the map.
+  algorithms::KidnapParams kidnap_params_;
+  /// The boards' model with the scene-dependent parts taken from the map's calibration.
+  algorithms::BoardModelParams board_params_;
   algorithms::KidnapVerdict kidnap_verdict_ = algorithms::KidnapVerdict::kNone;
   const char* pending_text_ = nullptr;  ///< a STATUSTEXT this cycle's publish sends
   /// The overrun alarm's STATUSTEXT, raised or cleared at the end of the previous cycle.

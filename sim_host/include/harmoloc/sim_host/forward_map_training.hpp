@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "harmoloc/algorithms/forward_map.hpp"
+#include "harmoloc/algorithms/geometry.hpp"
 #include "harmoloc/algorithms/harmonic_model.hpp"
 #include "harmoloc/sim_host/tum.hpp"
 
@@ -21,15 +22,21 @@ struct ForwardMapOptions {
   double min_cell_m = 0.02;      ///< finest cell; coarser when the region needs more cells
   std::vector<double> bandwidths_m{0.01, 0.015, 0.02, 0.03, 0.05};  ///< candidates
   double exclude_same_pass_s = 1.0;  ///< validation leaves out frames this close in time
+  /// With frames placed by odometry: validation leaves out frames this close in travel instead
+  /// (a robot that stands still does not start another pass).
+  double exclude_same_pass_m = 0.10;
 };
 
 struct ForwardMapReport {
   std::size_t frames = 0;         ///< frames with a board in view
   std::size_t interpolated = 0;   ///< positioned from labels
   std::size_t from_harmonic = 0;  ///< positioned by the harmonic map (known place)
+  std::size_t by_odometry = 0;    ///< placed by odometry between the labels
   double bandwidth_m = 0.0;
   std::vector<double> sigma;     ///< per board (feature units), 0 = not modelled
   double validation_rmse = 0.0;  ///< over all modelled boards, feature units
+  /// Median distance from a frame to the nearest frame of another pass (metres).
+  double pass_spread_m = 0.0;
   bool has_heading = false;
 };
 
@@ -42,5 +49,20 @@ ForwardMapReport train_forward_map(const std::vector<std::vector<float>>& featur
                                    const std::vector<StampedPose>& labels,
                                    const algorithms::HarmonicModel& model, std::size_t board_count,
                                    const ForwardMapOptions& options, algorithms::ForwardMap& out);
+
+/// A frame with the pose the odometry placed it at (trainer.cpp).
+struct PlacedFrame {
+  std::size_t index = 0;  ///< into the run's frames
+  double t_s = 0.0;
+  double travel_m = 0.0;  ///< distance driven since the start of the run
+  algorithms::Pose2 pose;
+};
+
+/// Fits @p out to frames placed by odometry (every frame has a pose with heading); the kernel
+/// width and each board's noise are validated against other passes by travel.
+ForwardMapReport train_forward_map_placed(const std::vector<std::vector<float>>& features,
+                                          const std::vector<PlacedFrame>& placed,
+                                          std::size_t board_count, const ForwardMapOptions& options,
+                                          algorithms::ForwardMap& out);
 
 }  // namespace harmoloc::sim_host

@@ -13,6 +13,7 @@
 #include "harmoloc/algorithms/map_codec.hpp"
 #include "harmoloc/algorithms/segmentation.hpp"
 #include "harmoloc/sim_host/forward_map_training.hpp"
+#include "harmoloc/sim_host/training_odometry.hpp"
 #include "harmoloc/sim_host/tum.hpp"
 
 namespace harmoloc::sim_host {
@@ -26,7 +27,29 @@ enum class TrainMethod {
 struct TrainOptions {
   std::string dataset_dir;  ///< a dataset folder to segment, or
   std::string areas_path;   ///< an area log recorded by the firmware (harmoloc --record-areas)
+  /// With an area log: the run's encoder log (candump log or GPIO recording), decoded with
+  /// can_layout and geometry (the config's). A dataset folder brings its own.
+  std::string encoders_path;
+  algorithms::EncoderFrameLayout can_layout;
+  algorithms::DiffDriveGeometry geometry;
   std::string labels_path;
+  /// Place every frame by the wheel odometry between the labels (when the run has odometry):
+  /// the forward map and, where cross-validation prefers it, the harmonic map use every frame.
+  bool use_odometry = true;
+  /// Placement: a label farther than this from where the odometry between its neighbours puts
+  /// it, and farther than label_outlier_ratio x the labels' median such distance, is refused.
+  double label_outlier_m = 0.10;
+  double label_outlier_ratio = 8.0;
+  /// Frames before the first label or after the last are used while the odometry has carried
+  /// them at most this far from it.
+  double max_extrapolation_m = 0.5;
+  /// Harmonic samples when every frame is placed (evenly spread over the run; capacity 4096).
+  int max_placed_samples = 2048;
+  /// Frames held out in cross-validation (evenly spread).
+  int max_cv_queries = 400;
+  /// Cross-validation leaves out a held-out frame's own pass: the frames within this much
+  /// travel of it.
+  double same_pass_m = 0.10;
   algorithms::ThresholdSet thresholds;
   int unlabelled = -1;            ///< how many unlabelled frames; -1: ratio x labelled
   double unlabelled_ratio = 2.2;  ///< seed 000's best: 64 labelled + 140 unlabelled
@@ -55,6 +78,24 @@ struct BoardStep {
   double cv_rmse_x_m = 0, cv_rmse_y_m = 0;
 };
 
+/// How the frames were placed by odometry between the labels.
+struct PlacementReport {
+  bool used = false;
+  std::size_t frames = 0;         ///< frames placed (with a board in view)
+  std::size_t beyond_labels = 0;  ///< of the run's frames, too far outside the labelled stretch
+  double travel_m = 0.0;          ///< distance driven over the run
+  double label_spacing_m = 0.0;   ///< median travel between consecutive labels
+  double median_label_residual_m = 0.0;  ///< leave-one-out, see algorithms::PlacementResult
+  double worst_label_residual_m = 0.0;
+  int worst_label = -1;               ///< 0-based index into the labels
+  bool harmonic_from_placed = false;  ///< the harmonic map uses every placed frame
+  double cv_rmse_placed_x_m = 0, cv_rmse_placed_y_m = 0;  ///< on the labelled frames
+  double cv_rmse_labels_x_m = 0, cv_rmse_labels_y_m = 0;  ///< the labels-only model, same test
+  std::vector<algorithms::Pose2> poses;                   ///< per frame of the run (where placed)
+  std::vector<double> times_s;  ///< per frame of the run, the dataset clock
+  std::vector<bool> placed;
+};
+
 struct TrainReport {
   std::size_t frames = 0, labelled = 0, unlabelled = 0, labels_unmatched = 0, empty_frames = 0;
   AxisReport x, y;
@@ -64,6 +105,7 @@ struct TrainReport {
   double known_place_bound = 0;    ///< nearest-sample distance bound, feature units
   double dissimilarity_bound = 0;  ///< Bray-Curtis bound to the nearest sample
   double segment_ms = 0, train_ms = 0;
+  PlacementReport placement;
   bool has_forward_map = false;
   ForwardMapReport forward;
   double forward_ms = 0;
@@ -75,6 +117,7 @@ struct AreaSeries {
   std::vector<std::uint64_t> timestamp_ns;
   std::vector<algorithms::AreaVector> areas;
   double segment_ms = 0;
+  OdometryTrack odometry;  ///< the run's wheel odometry; empty when unknown
 };
 
 /// Segments a dataset folder with @p thresholds (the firmware's own segmentation).
@@ -88,7 +131,14 @@ AreaSeries read_area_series(const std::string& areas_path,
 TrainReport train_on_areas(const AreaSeries& run, const std::vector<StampedPose>& labels,
                            const TrainOptions& options, algorithms::MapFile& map);
 
-/// Reads the run (dataset_dir or areas_path) and the labels, then trains.
+/// Refuses a map no robot should use, with one line naming the reason: coordinates outside the
+/// labelled region (plus the extrapolation margin), or a cross-validated error above a quarter of
+/// the labels' extent.
+void check_trained_map(const TrainReport& report, const std::vector<StampedPose>& labels,
+                       const algorithms::MapFile& map, const TrainOptions& options);
+
+/// Reads the run (dataset_dir or areas_path) and the labels, trains, and checks the map
+/// (check_trained_map).
 TrainReport train_map(const TrainOptions& options, algorithms::MapFile& map);
 
 }  // namespace harmoloc::sim_host

@@ -1,0 +1,222 @@
+#include "harmoloc/algorithms/kernel_selection.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include "harmoloc/algorithms/harmonic_training.hpp"
+
+namespace harmoloc::algorithms {
+
+namespace {
+
+Eigen::MatrixXd columns_of(const Eigen::MatrixXd& m, const std::vector<int>& columns) {
+  Eigen::MatrixXd out(m.rows(), static_cast<Eigen::Index>(columns.size()));
+  for (std::size_t c = 0; c < columns.size(); ++c)
+    out.col(static_cast<Eigen::Index>(c)) = m.col(columns[c]);
+  return out;
+}
+
+// Squared distances from each query to each sample, +inf where the sample is of the query's own
+// pass (within same_pass_m of travel).
+Eigen::MatrixXd held_out_distances(const PlacedSamples& samples, const PlacedSamples& queries,
+                                   const std::vector<int>& columns, double same_pass_m) {
+  Eigen::MatrixXd d2 = squared_distances(columns_of(queries.features, columns),
+                                         columns_of(samples.features, columns));
+  for (Eigen::Index q = 0; q < d2.rows(); ++q) {
+    const double tq = queries.travel_m[static_cast<std::size_t>(q)];
+    // Samples come in travel order: the excluded ones are one contiguous stretch.
+    const auto lo =
+        std::lower_bound(samples.travel_m.begin(), samples.travel_m.end(), tq - same_pass_m);
+    const auto hi =
+        std::upper_bound(samples.travel_m.begin(), samples.travel_m.end(), tq + same_pass_m);
+    for (auto it = lo; it < hi; ++it)
+      d2(q, static_cast<Eigen::Index>(it - samples.travel_m.begin())) =
+          std::numeric_limits<double>::infinity();
+  }
+  return d2;
+}
+
+// Which queries have another pass close by in position: the nearest other-pass sample within
+// twice the median such distance over all queries. Elsewhere (the turn at the end of a route
+// driven once each way) leaving the own pass out leaves nothing to compare with, and the error
+// would measure extrapolation, not a new run over the same place.
+std::vector<char> queries_with_other_pass(const PlacedSamples& samples,
+                                          const PlacedSamples& queries, double same_pass_m) {
+  const auto m = samples.xy.rows();
+  std::vector<double> nearest(static_cast<std::size_t>(queries.xy.rows()),
+                              std::numeric_limits<double>::infinity());
+  for (Eigen::Index q = 0; q < queries.xy.rows(); ++q) {
+    const double tq = queries.travel_m[static_cast<std::size_t>(q)];
+    double best = std::numeric_limits<double>::infinity();
+    for (Eigen::Index j = 0; j < m; ++j) {
+      if (std::fabs(samples.travel_m[static_cast<std::size_t>(j)] - tq) < same_pass_m) continue;
+      const double dx = samples.xy(j, 0) - queries.xy(q, 0),
+                   dy = samples.xy(j, 1) - queries.xy(q, 1);
+      best = std::min(best, dx * dx + dy * dy);
+    }
+    nearest[static_cast<std::size_t>(q)] = std::sqrt(best);
+  }
+  std::vector<double> finite;
+  for (double d : nearest) {
+    if (std::isfinite(d)) finite.push_back(d);
+  }
+  std::vector<char> out(nearest.size(), 0);
+  if (finite.empty()) return out;
+  auto mid = finite.begin() + static_cast<std::ptrdiff_t>(finite.size() / 2);
+  std::nth_element(finite.begin(), mid, finite.end());
+  const double bound = std::max(2.0 * *mid, 0.01);
+  for (std::size_t q = 0; q < nearest.size(); ++q) out[q] = nearest[q] <= bound ? 1 : 0;
+  return out;
+}
+
+double median_finite(const Eigen::MatrixXd& m) {
+  std::vector<double> v;
+  v.reserve(static_cast<std::size_t>(m.size()));
+  for (Eigen::Index i = 0; i < m.size(); ++i) {
+    const double x = m.data()[i];
+    if (std::isfinite(x) && x > 0.0) v.push_back(x);
+  }
+  if (v.empty()) return 1.0;
+  auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+  std::nth_element(v.begin(), mid, v.end());
+  return *mid > 0.0 ? *mid : 1.0;
+}
+
+}  // namespace
+
+std::pair<KernelAxis, KernelAxis> cross_validate_kernel(const PlacedSamples& samples,
+                                                        const PlacedSamples& queries,
+                                                        const std::vector<int>& columns,
+                                                        const KernelSelectionOptions& options) {
+  if (columns.empty()) throw std::invalid_argument("cross_validate_kernel: no columns");
+  Eigen::MatrixXd d2 = held_out_distances(samples, queries, columns, options.same_pass_m);
+  const double median = median_finite(d2);
+  // Relative to each query's nearest allowed sample (as the firmware computes eq. 9).
+  std::vector<char> usable = queries_with_other_pass(samples, queries, options.same_pass_m);
+  for (Eigen::Index q = 0; q < d2.rows(); ++q) {
+    const double lo = d2.row(q).minCoeff();
+    if (!std::isfinite(lo)) usable[static_cast<std::size_t>(q)] = 0;
+    if (!usable[static_cast<std::size_t>(q)]) continue;
+    d2.row(q).array() -= lo;
+  }
+  const double s0 = std::ldexp(1.0, options.sigma_exponent_min) / median;
+  Eigen::MatrixXd w = (-s0 * d2.array()).exp().matrix();  // inf -> weight 0
+  std::pair<KernelAxis, KernelAxis> best;
+  best.first.cv_mse = best.second.cv_mse = std::numeric_limits<double>::infinity();
+  std::size_t count = 0;
+  for (char u : usable) count += u ? 1U : 0U;
+  if (count == 0)
+    throw std::runtime_error("cross-validation: no frame has another pass to compare with");
+  for (int e = options.sigma_exponent_min; e <= options.sigma_exponent_max; ++e) {
+    const Eigen::MatrixXd p = w * samples.xy;
+    const Eigen::VectorXd sum = w.rowwise().sum();
+    double se[2] = {0.0, 0.0};
+    for (Eigen::Index q = 0; q < w.rows(); ++q) {
+      if (!usable[static_cast<std::size_t>(q)]) continue;
+      for (int a = 0; a < 2; ++a) {
+        const double err = p(q, a) / sum(q) - queries.xy(q, a);
+        se[a] += err * err;
+      }
+    }
+    const double sigma = std::ldexp(1.0, e) / median;
+    for (int a = 0; a < 2; ++a) {
+      const double mse = se[a] / static_cast<double>(count);
+      KernelAxis& b = a == 0 ? best.first : best.second;
+      if (std::isfinite(mse) && mse < b.cv_mse) b = KernelAxis{sigma, mse};
+    }
+    w = w.cwiseProduct(w);  // sigma doubles: each weight squares
+  }
+  return best;
+}
+
+void other_pass_nearest(const PlacedSamples& samples, const PlacedSamples& queries,
+                        const std::vector<int>& columns, double same_pass_m,
+                        std::vector<double>& distance, std::vector<double>& dissimilarity) {
+  distance.clear();
+  dissimilarity.clear();
+  const Eigen::MatrixXd d2 = held_out_distances(samples, queries, columns, same_pass_m);
+  const Eigen::MatrixXd fq = columns_of(queries.features, columns);
+  const Eigen::MatrixXd fs = columns_of(samples.features, columns);
+  const std::vector<char> usable = queries_with_other_pass(samples, queries, same_pass_m);
+  for (Eigen::Index q = 0; q < d2.rows(); ++q) {
+    Eigen::Index j = 0;
+    const double lo = d2.row(q).minCoeff(&j);
+    if (!std::isfinite(lo) || !usable[static_cast<std::size_t>(q)]) continue;
+    distance.push_back(std::sqrt(lo));
+    const double num = (fq.row(q) - fs.row(j)).cwiseAbs().sum();
+    const double den = (fq.row(q) + fs.row(j)).sum();
+    dissimilarity.push_back(den > 0.0 ? num / den : 1.0);
+  }
+}
+
+KernelSelection select_kernel_model(const PlacedSamples& samples, const PlacedSamples& queries,
+                                    const KernelSelectionOptions& options) {
+  KernelSelection out;
+  std::vector<int> columns;
+  for (Eigen::Index c = 0; c < samples.features.cols(); ++c) {
+    if (samples.features.col(c).maxCoeff() > samples.features.col(c).minCoeff())
+      columns.push_back(static_cast<int>(c));
+  }
+  if (columns.empty()) throw std::runtime_error("no board's area changes along the run");
+  auto current = cross_validate_kernel(samples, queries, columns, options);
+  out.steps.push_back(
+      KernelSelectionStep{columns, current.first.cv_mse, current.second.cv_mse, -1});
+  while (options.select_features && columns.size() > 1) {
+    double best_score = std::numeric_limits<double>::infinity();
+    std::size_t best_drop = 0;
+    std::pair<KernelAxis, KernelAxis> best_choice;
+    for (std::size_t d = 0; d < columns.size(); ++d) {
+      std::vector<int> trial = columns;
+      trial.erase(trial.begin() + static_cast<std::ptrdiff_t>(d));
+      const auto c = cross_validate_kernel(samples, queries, trial, options);
+      const double score = c.first.cv_mse + c.second.cv_mse;
+      if (score < best_score) {
+        best_score = score;
+        best_drop = d;
+        best_choice = c;
+      }
+    }
+    const double now = current.first.cv_mse + current.second.cv_mse;
+    if (!(best_score < now * (1.0 - options.min_improvement))) break;
+    const int dropped = columns[best_drop];
+    columns.erase(columns.begin() + static_cast<std::ptrdiff_t>(best_drop));
+    current = best_choice;
+    out.steps.push_back(
+        KernelSelectionStep{columns, current.first.cv_mse, current.second.cv_mse, dropped});
+  }
+  out.columns = columns;
+  out.x = current.first;
+  out.y = current.second;
+
+  // Diagnostics of the chosen model: nearest other-pass sample and the held-out error.
+  Eigen::MatrixXd d2 = held_out_distances(samples, queries, columns, options.same_pass_m);
+  const Eigen::MatrixXd fq = columns_of(queries.features, columns);
+  const Eigen::MatrixXd fs = columns_of(samples.features, columns);
+  const std::vector<char> usable = queries_with_other_pass(samples, queries, options.same_pass_m);
+  for (Eigen::Index q = 0; q < d2.rows(); ++q) {
+    Eigen::Index j = 0;
+    const double lo = d2.row(q).minCoeff(&j);
+    if (!std::isfinite(lo) || !usable[static_cast<std::size_t>(q)]) continue;
+    out.nearest_distance.push_back(std::sqrt(lo));
+    const double num = (fq.row(q) - fs.row(j)).cwiseAbs().sum();
+    const double den = (fq.row(q) + fs.row(j)).sum();
+    out.nearest_dissimilarity.push_back(den > 0.0 ? num / den : 1.0);
+    double px = 0, py = 0, sx = 0, sy = 0;
+    for (Eigen::Index s = 0; s < d2.cols(); ++s) {
+      const double ex = d2(q, s) - lo;
+      if (!std::isfinite(ex)) continue;
+      const double wx = std::exp(-out.x.sigma * ex), wy = std::exp(-out.y.sigma * ex);
+      px += wx * samples.xy(s, 0);
+      py += wy * samples.xy(s, 1);
+      sx += wx;
+      sy += wy;
+    }
+    out.error_x_m.push_back(px / sx - queries.xy(q, 0));
+    out.error_y_m.push_back(py / sy - queries.xy(q, 1));
+  }
+  return out;
+}
+
+}  // namespace harmoloc::algorithms

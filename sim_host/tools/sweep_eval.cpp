@@ -1,0 +1,185 @@
+#include "sweep_eval.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+#include <stdexcept>
+
+#include "harmoloc/sim_host/random_scene.hpp"
+#include "scenario_eval.hpp"
+
+namespace harmoloc::sim_host {
+
+namespace {
+
+// Seeds of a scene's runs: training, test, kidnaps, dynamic, long (distinct noise streams).
+constexpr std::uint64_t kTrainSeed = 1, kTestSeed = 2, kKidnapSeed = 3, kDynamicSeed = 4,
+                        kLongSeed = 5;
+
+std::string describe(const Scenario& s) {
+  std::ostringstream o;
+  o << s.camera.width_px << "x" << s.camera.height_px << ", " << s.boards.size() << " boards, k1 "
+    << s.camera.radial_k << ", " << s.name;
+  return o.str();
+}
+
+firmware::FirmwareConfig config_for(const algorithms::ThresholdSet& thresholds,
+                                    const SweepOptions& options) {
+  firmware::FirmwareConfig c = firmware::default_config();
+  c.thresholds = thresholds;
+  c.filter.seed = options.filter_seed;
+  return c;
+}
+
+// First known-place fix, time until the error stays under @p bound for good (from the first
+// fix), and the errors after first fix + settle.
+struct Settled {
+  double first_fix_s = -1.0, converge_s = -1.0;
+  ErrorStats after;
+};
+
+Settled settle(const RunRecord& run, double settle_s, double bound_m) {
+  Settled s;
+  for (const FrameRecord& f : run.frames) {
+    if (f.fix_known) {
+      s.first_fix_s = f.t_s;
+      break;
+    }
+  }
+  if (s.first_fix_s < 0.0) return s;
+  double last_bad = s.first_fix_s;
+  for (const FrameRecord& f : run.frames) {
+    if (f.t_s < s.first_fix_s) continue;
+    if (!f.valid || f.position_error_m() >= bound_m) last_bad = f.t_s;
+  }
+  s.converge_s = last_bad - s.first_fix_s;
+  s.after = error_stats(run, s.first_fix_s + settle_s, 1e300);
+  return s;
+}
+
+std::string board_names(const TrainReport& r, const Scenario& scene) {
+  std::string out;
+  for (int b : r.boards) {
+    if (!out.empty()) out += " ";
+    out += static_cast<std::size_t>(b) < scene.boards.size()
+               ? scene.boards[static_cast<std::size_t>(b)].name
+               : std::to_string(b + 1);
+  }
+  return out;
+}
+
+}  // namespace
+
+SceneResult evaluate_scene(const Scenario& scene, const algorithms::ThresholdSet& thresholds,
+                           std::uint64_t seed, const SweepOptions& opt,
+                           const SweepProgress& progress) {
+  const auto t_start = std::chrono::steady_clock::now();
+  SceneResult r;
+  r.seed = seed;
+  r.summary = describe(scene);
+  const auto step = [&](const std::string& s) {
+    if (progress) progress(s);
+  };
+  try {
+    step("training");
+    const TrainedMap trained = train_on_scenario(scene, kTrainSeed, nullptr, &thresholds);
+    const TrainReport& tr = trained.report;
+    r.train_ms = tr.train_ms + tr.forward_ms;
+    r.train_frames = trained.frames;
+    if (tr.placement.used) {
+      r.placement_rmse_m = trained.placement_rmse_m;
+      r.placement_heading_rmse_deg = trained.placement_heading_rmse_deg;
+    }
+    r.cv_rmse_x_m = tr.x.cv_rmse_m;
+    r.cv_rmse_y_m = tr.y.cv_rmse_m;
+    r.boards_used = board_names(tr, scene);
+    const algorithms::MapFile& map = *trained.map;
+    const firmware::FirmwareConfig config = config_for(thresholds, opt);
+
+    if (opt.nominal) {
+      step("test run");
+      const RunRecord run =
+          replay_scenario(with_other_lighting(scene, kTestSeed), kTestSeed, map, config);
+      double sx = 0, sy = 0, kx = 0, ky = 0;
+      std::size_t n = 0, known = 0;
+      for (const FrameRecord& f : run.frames) {
+        if (!f.fix_present) continue;
+        const double ex = f.fix.x_m - f.truth.x_m, ey = f.fix.y_m - f.truth.y_m;
+        sx += ex * ex;
+        sy += ey * ey;
+        ++n;
+        if (f.fix_known) {
+          kx += ex * ex;
+          ky += ey * ey;
+          ++known;
+        }
+      }
+      if (n > 0) {
+        r.fix_mse_x_m2 = sx / static_cast<double>(n);
+        r.fix_mse_y_m2 = sy / static_cast<double>(n);
+        r.fix_known_fraction = static_cast<double>(known) / static_cast<double>(n);
+      }
+      if (known > 0) {
+        r.fix_known_mse_x_m2 = kx / static_cast<double>(known);
+        r.fix_known_mse_y_m2 = ky / static_cast<double>(known);
+      }
+      const Settled s = settle(run, opt.settle_s, 0.05);
+      r.first_fix_s = s.first_fix_s;
+      r.converge_s = s.converge_s;
+      if (s.after.frames > 0) {
+        r.fused_rmse_m = s.after.rmse_m;
+        r.fused_heading_rmse_deg = s.after.heading_rmse_deg;
+        r.fused_max_m = s.after.max_m;
+      }
+    }
+    if (opt.kidnap && opt.kidnaps > 0) {
+      step("kidnaps");
+      const Scenario k = kidnap_variant(scene, opt.kidnaps);
+      const RunRecord run = replay_scenario(k, kKidnapSeed, map, config);
+      const KidnapSummary ks = kidnap_summary(run, 0.10, 0.5, 1.0);
+      r.kidnaps = ks.outcomes.size();
+      r.kidnaps_detected = ks.detected;
+      r.kidnaps_recovered_1s = ks.recovered_within;
+      r.kidnap_mean_recovery_s = ks.recovered_ever > 0 ? ks.mean_recovery_s : -1.0;
+      for (const KidnapOutcome& o : ks.outcomes) {
+        if (!(o.detected && o.recovered_after_s >= 0.0 && o.recovered_after_s <= 1.0))
+          r.kidnap_misses_t_s.push_back(o.t_s);
+      }
+    }
+    if (opt.dynamic) {
+      step("dynamic");
+      const RunRecord run = replay_scenario(dynamic_variant(scene), kDynamicSeed, map, config);
+      const Settled s = settle(run, opt.settle_s, 0.05);
+      if (s.after.frames > 0) {
+        r.dynamic_max_m = s.after.max_m;
+        r.dynamic_rmse_m = s.after.rmse_m;
+      }
+    }
+    if (opt.long_run && opt.long_minutes > 0.0) {
+      step("long run");
+      const Scenario l = long_variant(scene, opt.long_minutes);
+      const RunRecord run = replay_scenario(l, kLongSeed, map, config);
+      r.long_minutes = run.frames.empty() ? 0.0 : run.frames.back().t_s / 60.0;
+      r.long_false_alarms = run.counters.kidnaps;
+      const Settled s = settle(run, opt.settle_s, 0.05);
+      if (s.after.frames > 0) {
+        r.long_max_m = s.after.max_m;
+        r.long_rmse_m = s.after.rmse_m;
+      }
+    }
+  } catch (const std::exception& e) {
+    r.error = e.what();
+  }
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+  return r;
+}
+
+SceneResult evaluate_random_scene(std::uint64_t seed, const SweepOptions& options,
+                                  const SweepProgress& progress) {
+  const Scenario scene = random_scenario(seed);
+  return evaluate_scene(scene, thresholds_for(scene), seed, options, progress);
+}
+
+}  // namespace harmoloc::sim_host

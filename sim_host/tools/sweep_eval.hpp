@@ -1,0 +1,79 @@
+#pragma once
+/// @file The sweep over random scenes (docs/sweep.md): for one scene of the random family, train
+/// a map on its training run exactly as a robot owner would (its own colour windows, 64 labels,
+/// the wheel odometry), then replay through the firmware's own cycle a test run of the same
+/// route (other noise, other lighting), a run with kidnaps, a run with a person walking through
+/// and a board moved, and a long nominal run for false alarms; and score each against the
+/// targets. Everything is rendered in memory; nothing in the estimator knows the scene.
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "harmoloc/algorithms/segmentation.hpp"
+#include "harmoloc/sim_host/scenario.hpp"
+
+namespace harmoloc::sim_host {
+
+struct SweepOptions {
+  bool nominal = true;
+  bool kidnap = true;
+  bool dynamic = true;
+  bool long_run = true;
+  int kidnaps = 20;            ///< kidnaps in the kidnap run (each >= 1 m)
+  double long_minutes = 10.0;  ///< length of the long nominal run
+  std::uint64_t filter_seed = 1;
+  /// Errors count from this long after the first fix (the start-up target: under 5 cm within it).
+  double settle_s = 2.0;
+};
+
+/// What one scene scored. Distances in metres, MSE in m^2; -1 where not measured.
+struct SceneResult {
+  std::uint64_t seed = 0;
+  std::string summary;  ///< the scene in a line (resolution, boards, lens, route)
+  std::string error;    ///< non-empty when a step failed (the message)
+  // Training.
+  double train_ms = 0.0;
+  std::size_t train_frames = 0;
+  double placement_rmse_m = -1.0;
+  double placement_heading_rmse_deg = -1.0;
+  double cv_rmse_x_m = -1.0, cv_rmse_y_m = -1.0;
+  std::string boards_used;
+  // Nominal test run.
+  double fix_mse_x_m2 = -1.0, fix_mse_y_m2 = -1.0;  ///< every frame with a fix
+  double fix_known_fraction = -1.0;                 ///< of those, flagged a known place
+  double fix_known_mse_x_m2 = -1.0, fix_known_mse_y_m2 = -1.0;
+  double first_fix_s = -1.0;   ///< run time of the first known-place fix
+  double converge_s = -1.0;    ///< from the first fix until the error stays under 5 cm
+  double fused_rmse_m = -1.0;  ///< after first fix + settle_s
+  double fused_heading_rmse_deg = -1.0;
+  double fused_max_m = -1.0;  ///< after first fix + settle_s
+  // Kidnap run.
+  std::size_t kidnaps = 0, kidnaps_detected = 0, kidnaps_recovered_1s = 0;
+  double kidnap_mean_recovery_s = -1.0;
+  std::vector<double> kidnap_misses_t_s;  ///< run times of the kidnaps not back within 1 s
+  // Dynamic run (a person walks through, a board is moved).
+  double dynamic_max_m = -1.0;
+  double dynamic_rmse_m = -1.0;
+  // Long nominal run.
+  double long_minutes = 0.0;
+  std::size_t long_false_alarms = 0;
+  double long_max_m = -1.0;
+  double long_rmse_m = -1.0;
+  double seconds = 0.0;  ///< wall time of the scene's evaluation
+};
+
+using SweepProgress = std::function<void(const std::string& step)>;
+
+/// Evaluates the random scene @p seed.
+SceneResult evaluate_random_scene(std::uint64_t seed, const SweepOptions& options,
+                                  const SweepProgress& progress = nullptr);
+
+/// Evaluates an explicit scene with the given colour windows (the project's own default scene
+/// is evaluated this way beside the random ones).
+SceneResult evaluate_scene(const Scenario& scene, const algorithms::ThresholdSet& thresholds,
+                           std::uint64_t seed, const SweepOptions& options,
+                           const SweepProgress& progress = nullptr);
+
+}  // namespace harmoloc::sim_host
