@@ -185,14 +185,14 @@ ForwardMapReport fit_grid(std::vector<Positioned>& frames, std::size_t board_cou
     std::vector<double> nearest(frames.size(), std::numeric_limits<double>::infinity());
     for (std::size_t i = 0; i < frames.size(); ++i) {
       const Positioned& p = frames[i];
-      double best = std::numeric_limits<double>::infinity();
+      double closest = std::numeric_limits<double>::infinity();
       for (const Positioned& q : frames) {
         if (same_pass(q, p.t_s, p.travel_m, opt.exclude_same_pass_s, opt.exclude_same_pass_m))
           continue;
-        best =
-            std::min(best, (q.x_m - p.x_m) * (q.x_m - p.x_m) + (q.y_m - p.y_m) * (q.y_m - p.y_m));
+        closest =
+            std::min(closest, (q.x_m - p.x_m) * (q.x_m - p.x_m) + (q.y_m - p.y_m) * (q.y_m - p.y_m));
       }
-      nearest[i] = std::sqrt(best);
+      nearest[i] = std::sqrt(closest);
     }
     std::vector<double> finite;
     for (double d : nearest) {

@@ -21,7 +21,7 @@ constexpr std::uint64_t kTrainSeed = 1, kTestSeed = 2, kKidnapSeed = 3, kDynamic
 std::string describe(const Scenario& s) {
   std::ostringstream o;
   o << s.camera.width_px << "x" << s.camera.height_px << ", " << s.boards.size() << " boards, k1 "
-    << s.camera.radial_k << ", " << s.name;
+    << s.camera.k1 << ", " << s.route.waypoints_m.size() << " waypoints, " << s.name;
   return o.str();
 }
 
@@ -179,7 +179,7 @@ SceneResult evaluate_scene(const Scenario& scene, const algorithms::ThresholdSet
 SceneResult evaluate_random_scene(std::uint64_t seed, const SweepOptions& options,
                                   const SweepProgress& progress) {
   const Scenario scene = random_scenario(seed);
-  return evaluate_scene(scene, thresholds_for(scene), seed, options, progress);
+  return evaluate_scene(scene, threshold_set(thresholds_for(scene)), seed, options, progress);
 }
 
 }  // namespace harmoloc::sim_host
