@@ -49,7 +49,11 @@ double board_preference(const ForwardMap& map, const BoardFeatures& observed, do
     const double width = params.sigma_scale * static_cast<double>(map.sigma[b]);
     const double ra = (static_cast<double>(observed.value[b]) - static_cast<double>(ea[b])) / width;
     const double rb = (static_cast<double>(observed.value[b]) - static_cast<double>(eb[b])) / width;
-    sum += std::log(std::exp(-0.5 * ra * ra) + c) - std::log(std::exp(-0.5 * rb * rb) + c);
+    double term = std::log(std::exp(-0.5 * ra * ra) + c) - std::log(std::exp(-0.5 * rb * rb) + c);
+    // A board showing less than place b expects may be hidden (a person, a box): it cannot speak
+    // for place a. Only boards that show more than b expects, or fit b, do.
+    if (rb < 0.0) term = std::min(term, 0.0);
+    sum += term;
   }
   return sum;
 }

@@ -398,10 +398,11 @@ bool LocalizationCycle::update_with_boards(
   }
   counters_.distrusted_boards += distrusted;
   robust_fix_ = algorithms::harmonic_query(map_.model, features, use);
-  // Most boards distrusted at once: it is the estimate that is wrong, not the boards. The fix
-  // then takes every board.
-  const bool boards_doubted = modelled > 0 && 2 * distrusted >= modelled;
-  const algorithms::HarmonicFix& evidence_fix = boards_doubted ? fix_.fix : robust_fix_;
+  // The kidnap test takes the fix of every board: leaving out the boards that disagree with the
+  // estimate would pull the fix towards the estimate exactly when the estimate is wrong. A
+  // moved or hidden board cannot fake a kidnap with it: the boards must also prefer the fix's
+  // place (board_preference, where a board showing less than expected does not count).
+  const algorithms::HarmonicFix& evidence_fix = fix_.fix;
 
   if (config_.kidnap.enabled) {
     algorithms::KidnapInput in;
