@@ -43,17 +43,27 @@ double board_preference(const ForwardMap& map, const BoardFeatures& observed, do
   expected_features(map, locate(map, bx_m, by_m), eb.data());
   const std::size_t boards = std::min<std::size_t>({map.board_count, observed.count, kMaxBoards});
   const double c = params.outlier_floor;
-  double sum = 0.0;
+  std::array<double, kMaxBoards> term{}, rb{};
+  std::size_t modelled = 0, fitting = 0, exceeding = 0;
   for (std::size_t b = 0; b < boards; ++b) {
     if (!(map.sigma[b] > 0.0F)) continue;
     const double width = params.sigma_scale * static_cast<double>(map.sigma[b]);
     const double ra = (static_cast<double>(observed.value[b]) - static_cast<double>(ea[b])) / width;
-    const double rb = (static_cast<double>(observed.value[b]) - static_cast<double>(eb[b])) / width;
-    double term = std::log(std::exp(-0.5 * ra * ra) + c) - std::log(std::exp(-0.5 * rb * rb) + c);
-    // A board showing less than place b expects may be hidden (a person, a box): it cannot speak
-    // for place a. Only boards that show more than b expects, or fit b, do.
-    if (rb < 0.0) term = std::min(term, 0.0);
-    sum += term;
+    rb[b] = (static_cast<double>(observed.value[b]) - static_cast<double>(eb[b])) / width;
+    term[b] = std::log(std::exp(-0.5 * ra * ra) + c) - std::log(std::exp(-0.5 * rb[b] * rb[b]) + c);
+    ++modelled;
+    if (rb[b] * rb[b] < params.consensus_chi2)
+      ++fitting;
+    else if (rb[b] > 0.0)
+      ++exceeding;
+  }
+  // The frame looks like place b with boards hidden (a person, a box): most boards fit b and
+  // the others only show less. Those cannot speak for place a.
+  const bool hidden_at_b = exceeding == 0 && 2 * fitting >= modelled;
+  double sum = 0.0;
+  for (std::size_t b = 0; b < boards; ++b) {
+    if (!(map.sigma[b] > 0.0F)) continue;
+    sum += hidden_at_b && rb[b] < 0.0 ? std::min(term[b], 0.0) : term[b];
   }
   return sum;
 }

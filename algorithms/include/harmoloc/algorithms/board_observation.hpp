@@ -101,9 +101,10 @@ struct BoardAssessment {
 /// How much better the boards fit place a than place b: the sum over the modelled boards of
 /// log(l(a) / l(b)), l = exp(-chi2 / 2) + c with chi2 in k sigma (the robust term with every
 /// board trusted, so that no board can contribute more than ln(1 / c)). Nats; positive when a
-/// fits better. A board that shows less than place b expects could be hidden and contributes
-/// nothing in a's favour (an occlusion must not make the estimate look wrong). For the kidnap
-/// test: do the boards prefer the global fix (a) to the estimate (b)?
+/// fits better. When the frame looks like place b with boards hidden (most boards fit b within
+/// the consensus bound, the others show less than b expects, none more), the boards that show
+/// less contribute nothing in a's favour: an occlusion must not make the estimate look wrong.
+/// For the kidnap test: do the boards prefer the global fix (a) to the estimate (b)?
 double board_preference(const ForwardMap& map, const BoardFeatures& observed, double ax_m,
                         double ay_m, double bx_m, double by_m, const BoardModelParams& params);
 
