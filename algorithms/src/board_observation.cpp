@@ -47,12 +47,16 @@ double board_preference(const ForwardMap& map, const BoardFeatures& observed, do
   std::size_t modelled = 0, fitting = 0, exceeding = 0;
   for (std::size_t b = 0; b < boards; ++b) {
     if (!(map.sigma[b] > 0.0F)) continue;
-    const double width = params.sigma_scale * static_cast<double>(map.sigma[b]);
+    // The trained noise itself, not widened by sigma_scale: that widening is for weighing a
+    // cloud frame after frame; here two places are compared, and the evidence must hold for
+    // several frames before it counts.
+    const double width = static_cast<double>(map.sigma[b]);
     const double ra = (static_cast<double>(observed.value[b]) - static_cast<double>(ea[b])) / width;
     rb[b] = (static_cast<double>(observed.value[b]) - static_cast<double>(eb[b])) / width;
     term[b] = std::log(std::exp(-0.5 * ra * ra) + c) - std::log(std::exp(-0.5 * rb[b] * rb[b]) + c);
     ++modelled;
-    if (rb[b] * rb[b] < params.consensus_chi2)
+    const double k2 = params.sigma_scale * params.sigma_scale;  // the consensus bound's units
+    if (rb[b] * rb[b] < params.consensus_chi2 * k2)
       ++fitting;
     else if (rb[b] > 0.0)
       ++exceeding;

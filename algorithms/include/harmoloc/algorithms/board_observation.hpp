@@ -99,7 +99,7 @@ struct BoardAssessment {
 };
 
 /// How much better the boards fit place a than place b: the sum over the modelled boards of
-/// log(l(a) / l(b)), l = exp(-chi2 / 2) + c with chi2 in k sigma (the robust term with every
+/// log(l(a) / l(b)), l = exp(-chi2 / 2) + c with chi2 in the trained sigma (the robust term with every
 /// board trusted, so that no board can contribute more than ln(1 / c)). Nats; positive when a
 /// fits better. When the frame looks like place b with boards hidden (most boards fit b within
 /// the consensus bound, the others show less than b expects, none more), the boards that show
