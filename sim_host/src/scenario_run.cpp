@@ -91,6 +91,7 @@ ScenarioRun::ScenarioRun(const Scenario& scenario, std::uint64_t seed)
     StampedPose p{static_cast<double>(stamps_ns_[k]) * 1e-9, truth_[k]};
     p.pose.x_m += 0.003 * label_rng.normal();
     p.pose.y_m += 0.003 * label_rng.normal();
+    if (!scenario_.labels_with_heading) p.pose.yaw_rad = 0.0;  // a position-only reference
     labels_.push_back(p);
   }
 }
