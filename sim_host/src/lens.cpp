@@ -164,4 +164,41 @@ Intrinsics intrinsics_of(const CameraSpec& c) {
   return in;
 }
 
+CameraFrame camera_frame_of(const CameraSpec& c, const algorithms::Pose2& robot) {
+  using algorithms::kPi;
+  CameraFrame f{};
+  const double psi = robot.yaw_rad + c.mount_yaw_deg * kPi / 180.0;
+  const double pitch = c.pitch_deg * kPi / 180.0;
+  f.origin[0] = robot.x_m + c.forward_offset_m * std::cos(robot.yaw_rad);
+  f.origin[1] = robot.y_m + c.forward_offset_m * std::sin(robot.yaw_rad);
+  f.origin[2] = c.height_m;
+  f.forward[0] = std::cos(psi) * std::cos(pitch);
+  f.forward[1] = std::sin(psi) * std::cos(pitch);
+  f.forward[2] = std::sin(pitch);
+  f.right[0] = std::sin(psi);
+  f.right[1] = -std::cos(psi);
+  f.right[2] = 0.0;
+  // down = forward x right
+  f.down[0] = f.forward[1] * f.right[2] - f.forward[2] * f.right[1];
+  f.down[1] = f.forward[2] * f.right[0] - f.forward[0] * f.right[2];
+  f.down[2] = f.forward[0] * f.right[1] - f.forward[1] * f.right[0];
+  return f;
+}
+
+bool project_point(const CameraSpec& camera, const LensModel& lens, const CameraFrame& f,
+                   const double p[3], double& u, double& v) {
+  const double w[3] = {p[0] - f.origin[0], p[1] - f.origin[1], p[2] - f.origin[2]};
+  const double z = w[0] * f.forward[0] + w[1] * f.forward[1] + w[2] * f.forward[2];
+  if (!(z > 0.01)) return false;
+  const double x = (w[0] * f.right[0] + w[1] * f.right[1] + w[2] * f.right[2]) / z;
+  const double y = (w[0] * f.down[0] + w[1] * f.down[1] + w[2] * f.down[2]) / z;
+  if (!(std::hypot(x, y) < lens.max_radius())) return false;
+  double xd = 0.0, yd = 0.0;
+  lens.distort(x, y, xd, yd);
+  const Intrinsics in = intrinsics_of(camera);
+  u = in.focal_px * xd + in.cx_px;
+  v = in.focal_px * yd + in.cy_px;
+  return true;
+}
+
 }  // namespace harmoloc::sim_host

@@ -475,6 +475,15 @@ std::vector<std::array<double, 2>> route_curve(const RouteSpec& route, double st
   return out;
 }
 
+double run_duration_s(const Scenario& scenario) {
+  const RouteSpec& r = scenario.route;
+  const bool loop = r.shape == RouteShape::kLoop;
+  const double length = route_length_m(r);
+  double leg_s = 0.0;
+  leg_distance(0.0, loop ? r.laps * length : length, r.speed_mps, r.acceleration_mps2, leg_s);
+  return loop ? leg_s + 2.0 * r.pause_s : r.laps * 2.0 * (r.pause_s + leg_s) + r.pause_s;
+}
+
 double route_length_m(const RouteSpec& route) {
   return make_path(route.waypoints_m, route.shape == RouteShape::kLoop).length();
 }

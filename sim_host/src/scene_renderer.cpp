@@ -68,22 +68,13 @@ inline std::uint64_t mix64(std::uint64_t z) {
 
 void camera_frame(const Scenario& s, const Pose2& robot, double origin[3], double right[3],
                   double down[3], double fwd[3]) {
-  const CameraSpec& c = s.camera;
-  const double psi = robot.yaw_rad + c.mount_yaw_deg * kPi / 180.0;
-  const double pitch = c.pitch_deg * kPi / 180.0;
-  origin[0] = robot.x_m + c.forward_offset_m * std::cos(robot.yaw_rad);
-  origin[1] = robot.y_m + c.forward_offset_m * std::sin(robot.yaw_rad);
-  origin[2] = c.height_m;
-  fwd[0] = std::cos(psi) * std::cos(pitch);
-  fwd[1] = std::sin(psi) * std::cos(pitch);
-  fwd[2] = std::sin(pitch);
-  right[0] = std::sin(psi);
-  right[1] = -std::cos(psi);
-  right[2] = 0.0;
-  // down = forward x right
-  down[0] = fwd[1] * right[2] - fwd[2] * right[1];
-  down[1] = fwd[2] * right[0] - fwd[0] * right[2];
-  down[2] = fwd[0] * right[1] - fwd[1] * right[0];
+  const CameraFrame f = camera_frame_of(s.camera, robot);
+  for (int i = 0; i < 3; ++i) {
+    origin[i] = f.origin[i];
+    right[i] = f.right[i];
+    down[i] = f.down[i];
+    fwd[i] = f.forward[i];
+  }
 }
 
 }  // namespace

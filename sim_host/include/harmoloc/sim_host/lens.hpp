@@ -4,6 +4,7 @@
 /// along), and the pinhole intrinsics a CameraSpec implies. A pixel whose distorted coordinates
 /// have no preimage on the lens's monotonic region is outside the image circle: black.
 
+#include "harmoloc/algorithms/geometry.hpp"
 #include "harmoloc/sim_host/scenario.hpp"
 
 namespace harmoloc::sim_host {
@@ -45,5 +46,21 @@ struct Intrinsics {
   double cx_px, cy_px;
 };
 Intrinsics intrinsics_of(const CameraSpec& camera);
+
+/// Where the camera is and how it is turned for the robot at a pose (map frame): its optical
+/// centre and its axes (x right, y down, z forward, as the renderer's rays).
+struct CameraFrame {
+  double origin[3];
+  double right[3];
+  double down[3];
+  double forward[3];
+};
+CameraFrame camera_frame_of(const CameraSpec& camera, const algorithms::Pose2& robot_pose);
+
+/// Projects a map-frame point into the image: distorted pixel coordinates (@p u right, @p v
+/// down, pixel centres at whole numbers). False when the point is behind the camera (less than
+/// 1 cm ahead) or outside the lens's monotonic region (u, v are then not set).
+bool project_point(const CameraSpec& camera, const LensModel& lens, const CameraFrame& frame,
+                   const double point[3], double& u, double& v);
 
 }  // namespace harmoloc::sim_host

@@ -55,6 +55,10 @@ std::vector<MotionSample> simulate_motion(const Scenario& scenario, double step_
 /// sampled about every @p step_m metres: [x, y] points.
 std::vector<std::array<double, 2>> route_curve(const RouteSpec& route, double step_m);
 
+/// How long a run of @p scenario lasts (seconds): its laps with their pauses, as simulate_motion
+/// samples it.
+double run_duration_s(const Scenario& scenario);
+
 /// The curve's length (a loop: once round).
 double route_length_m(const RouteSpec& route);
 
