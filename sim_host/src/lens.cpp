@@ -106,8 +106,13 @@ bool LensModel::undistort(double xd, double yd, double& x, double& y) const {
     y = yd * s;
     return radial_ok;
   }
-  // Tangential terms: 2-D Newton on F(x, y) = distort(x, y) - (xd, yd), from the radial solution
-  // (or the distorted point itself beyond the radial image circle), with step halving.
+  // Tangential terms move a point by at most 3 (|p1| + |p2|) r^2 <= that at r_max: beyond the
+  // radial image circle by more than that, there is no preimage.
+  if (!radial_ok && r_max_ < kNoLimit &&
+      rd > rd_max_ + 3.0 * (std::fabs(p1_) + std::fabs(p2_)) * r_max_ * r_max_ + 1e-9)
+    return false;
+  // 2-D Newton on F(x, y) = distort(x, y) - (xd, yd), from the radial solution (or the
+  // distorted point itself beyond the radial image circle), with step halving.
   double s = radial_ok && rd > 0.0 ? ru / rd : 1.0;
   x = xd * s;
   y = yd * s;
@@ -136,7 +141,8 @@ bool LensModel::undistort(double xd, double yd, double& x, double& y) const {
     if (!(std::fabs(det) > 1e-300)) break;
     const double dx = (j[3] * ex - j[1] * ey) / det, dy = (j[0] * ey - j[2] * ex) / det;
     double step = 1.0;
-    for (int h = 0; h < 30; ++h, step *= 0.5) {
+    bool improved = false;
+    for (int h = 0; h < 20 && !improved; ++h, step *= 0.5) {
       double nx = x - step * dx, ny = y - step * dy, nex = 0.0, ney = 0.0;
       const double nerr = residual(nx, ny, nex, ney);
       if (nerr < err) {
@@ -145,9 +151,10 @@ bool LensModel::undistort(double xd, double yd, double& x, double& y) const {
         ex = nex;
         ey = ney;
         err = nerr;
-        break;
+        improved = true;
       }
     }
+    if (!improved) break;  // stuck: no preimage near here
   }
   if (!(err <= kForwardTolerance)) return false;
   if (!(std::hypot(x, y) < r_max_)) return false;

@@ -455,8 +455,8 @@ Scenario from_file(const std::string& file, int depth) {
   if (const toml::table* c = t["camera"].as_table()) {
     only(*c, file, "camera.",
          {"width_px", "height_px", "horizontal_fov_deg", "radial_k", "k1", "k2", "k3", "p1", "p2",
-          "principal_offset_px", "vignetting", "height_m", "pitch_deg", "mount_yaw_deg", "rate_hz",
-          "pixel_noise", "light_gain"});
+          "principal_offset_px", "vignetting", "height_m", "pitch_deg", "mount_yaw_deg",
+          "forward_offset_m", "rate_hz", "pixel_noise", "light_gain"});
     set_int(*c, "width_px", s.camera.width_px, file, "camera.", 16, 4096);
     set_int(*c, "height_px", s.camera.height_px, file, "camera.", 16, 4096);
     set_num(*c, "horizontal_fov_deg", s.camera.horizontal_fov_deg, file, "camera.", 10, 150);
@@ -477,6 +477,7 @@ Scenario from_file(const std::string& file, int depth) {
     set_num(*c, "height_m", s.camera.height_m, file, "camera.", 0.01, 5);
     set_num(*c, "pitch_deg", s.camera.pitch_deg, file, "camera.", -60, 60);
     set_num(*c, "mount_yaw_deg", s.camera.mount_yaw_deg, file, "camera.", -180, 180);
+    set_num(*c, "forward_offset_m", s.camera.forward_offset_m, file, "camera.", -2, 2);
     set_num(*c, "rate_hz", s.camera.rate_hz, file, "camera.", 1, 240);
     set_num(*c, "pixel_noise", s.camera.pixel_noise, file, "camera.", 0, 50);
     set_num(*c, "light_gain", s.camera.light_gain, file, "camera.", 0.1, 3);
@@ -717,7 +718,8 @@ std::string scenario_to_toml(const Scenario& s) {
     << "\nprincipal_offset_px = [" << n(c.principal_offset_x_px) << ", "
     << n(c.principal_offset_y_px) << "]\nvignetting = " << n(c.vignetting)
     << "\nheight_m = " << n(c.height_m) << "\npitch_deg = " << n(c.pitch_deg)
-    << "\nmount_yaw_deg = " << n(c.mount_yaw_deg) << "\nrate_hz = " << n(c.rate_hz)
+    << "\nmount_yaw_deg = " << n(c.mount_yaw_deg)
+    << "\nforward_offset_m = " << n(c.forward_offset_m) << "\nrate_hz = " << n(c.rate_hz)
     << "\npixel_noise = " << n(c.pixel_noise) << "\nlight_gain = " << n(c.light_gain) << "\n";
   o << "\n[lighting]\ndrift_amplitude = " << n(s.lighting.drift_amplitude)
     << "\ndrift_period_s = " << n(s.lighting.drift_period_s)

@@ -64,9 +64,10 @@ add_executable(sim_host_test
   ${HARMOLOC_UNIT_DIR}/area_log_test.cpp
   ${HARMOLOC_UNIT_DIR}/dataset_test.cpp
   ${HARMOLOC_UNIT_DIR}/fakes_test.cpp
+  ${HARMOLOC_UNIT_DIR}/random_scene_test.cpp
   ${HARMOLOC_UNIT_DIR}/simulator_test.cpp)
 target_link_libraries(sim_host_test PRIVATE harmoloc_sim_dataset harmoloc_sim_fakes harmoloc_simulator
-  harmoloc_trainer
+  harmoloc_trainer harmoloc_config
   harmoloc_drivers_common harmoloc_algorithms GTest::gtest_main harmoloc_warnings)
 gtest_discover_tests(sim_host_test DISCOVERY_TIMEOUT 60)
 
