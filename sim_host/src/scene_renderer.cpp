@@ -502,8 +502,8 @@ void SceneRenderer::render(const Pose2& robot_pose, algorithms::Pcg32& rng,
           value[1] += noise_[(h >> kNoiseBits) & kNoiseMask];
           value[2] += noise_[(h >> (2 * kNoiseBits)) & kNoiseMask];
         }
-        for (int ch = 0; ch < 3; ++ch) {
-          out[ch] = static_cast<std::uint8_t>(std::clamp(value[ch], 0.0F, 255.0F) + 0.5F);
+        for (int ch = 0; ch < 3; ++ch) {  // min and max: no branches
+          out[ch] = static_cast<std::uint8_t>(std::min(std::max(value[ch], 0.0F), 255.0F) + 0.5F);
         }
       }
     }

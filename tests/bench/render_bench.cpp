@@ -1,13 +1,15 @@
 // The scene simulator's rendering speed (docs/scenarios.md): one frame of desk-shuttle at
 // 320x240, 640x480 and 1280x720 (the same field of view, so the same scene at more pixels), the
-// robot at poses spread along its route; and the true areas (visible_board_pixels) at 320x240.
-// Time per frame and per pixel (items per second: pixels).
+// robot at poses spread along its route; the true areas (visible_board_pixels) at 320x240; and
+// random scenes (random_scene.hpp) at their own resolutions. Time per frame and per pixel (items
+// per second: pixels).
 #include <benchmark/benchmark.h>
 
 #include <cstdint>
 #include <vector>
 
 #include "harmoloc/algorithms/random.hpp"
+#include "harmoloc/sim_host/random_scene.hpp"
 #include "harmoloc/sim_host/route.hpp"
 #include "harmoloc/sim_host/scenario.hpp"
 #include "harmoloc/sim_host/scene_renderer.hpp"
@@ -70,6 +72,12 @@ void BM_VisibleBoardPixels(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations() * s.camera.width_px * s.camera.height_px);
 }
 
+// Random scenes: seed 5 is 320x240 (shuttle, 3 boards), 4 is 640x480 (shuttle, 8 boards), 1 is
+// 1280x720 (loop, 8 boards, two on stands).
+void BM_RenderRandom(benchmark::State& state) {
+  render_scene(state, hs::random_scenario(static_cast<std::uint64_t>(state.range(0))), 0.0);
+}
+
 void resolutions(benchmark::internal::Benchmark* b) {
   b->Args({320, 240})->Args({640, 480})->Args({1280, 720});
 }
@@ -79,5 +87,6 @@ void resolutions(benchmark::internal::Benchmark* b) {
 BENCHMARK(BM_RenderDesk)->Apply(resolutions)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_RenderDeskOccluded)->Args({320, 240})->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_VisibleBoardPixels)->Args({320, 240})->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_RenderRandom)->Arg(5)->Arg(4)->Arg(1)->Unit(benchmark::kMillisecond);
 
 BENCHMARK_MAIN();
