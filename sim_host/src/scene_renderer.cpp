@@ -463,12 +463,16 @@ int SceneRenderer::trace(const double o[3], const double d[3], const std::uint16
 
 void SceneRenderer::render(const Pose2& robot_pose, algorithms::Pcg32& rng,
                            std::vector<std::uint8_t>& rgb) const {
+  // The frame's noise key: each pixel's noise depends on it and the pixel's index only.
+  const std::uint64_t hi = rng.next_u32();
+  render(robot_pose, (hi << 32U) | rng.next_u32(), rgb);
+}
+
+void SceneRenderer::render(const Pose2& robot_pose, std::uint64_t key,
+                           std::vector<std::uint8_t>& rgb) const {
   const CameraSpec& c = scenario_.camera;
   const std::size_t width = c.width_px;
   rgb.resize(rays_.size() * 3U);
-  // The frame's noise key: each pixel's noise depends on it and the pixel's index only.
-  const std::uint64_t hi = rng.next_u32();
-  const std::uint64_t key = (hi << 32U) | rng.next_u32();
   const bool noisy = !noise_.empty();
   const auto gain = static_cast<float>(gain_);
   double o[3], r[3], dn[3], f[3];

@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <set>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "harmoloc/algorithms/geometry.hpp"
@@ -372,6 +373,27 @@ TEST(RandomScene, SameSeedSameSceneAndFrames) {
   EXPECT_NE(frames_hash(a, 3, 3), frames_hash(a, 4, 3));  // the run's seed: the noise
   EXPECT_EQ(a.name, "random-7");
   EXPECT_NE(a.description.find("feasible at attempt"), std::string::npos) << a.description;
+}
+
+TEST(RandomScene, FramesRenderInAnyOrderAndOnThreadsToTheSameBytes) {
+  hs::Scenario s = hs::random_scenario(5);
+  s.route.speed_mps = 0.3;  // a short run
+  hs::ScenarioRun run(s, 2);
+  const std::size_t n = std::min<std::size_t>(run.frame_count(), 24);
+  std::vector<std::vector<std::uint8_t>> in_order(n), threaded(n);
+  for (std::size_t k = 0; k < n; ++k) run.render(k, in_order[k]);
+  // Two threads, each with its own renderer, frames taken backwards and interleaved.
+  std::vector<std::thread> workers;
+  for (std::size_t t = 0; t < 2; ++t) {
+    workers.emplace_back([&, t] {
+      hs::SceneRenderer mine(run.scenario());
+      for (std::size_t k = n; k-- > 0;) {
+        if (k % 2 == t) run.render_frame(k, mine, threaded[k]);
+      }
+    });
+  }
+  for (std::thread& w : workers) w.join();
+  for (std::size_t k = 0; k < n; ++k) EXPECT_EQ(threaded[k], in_order[k]) << k;
 }
 
 TEST(RandomScene, ScenarioFileGivesTheSameScene) {

@@ -41,6 +41,10 @@ class SceneRenderer {
   /// index only.
   void render(const algorithms::Pose2& robot_pose, algorithms::Pcg32& rng,
               std::vector<std::uint8_t>& rgb) const;
+  /// The same with the frame's noise key given: what render() does after drawing it as
+  /// (next_u32() << 32) | next_u32().
+  void render(const algorithms::Pose2& robot_pose, std::uint64_t noise_key,
+              std::vector<std::uint8_t>& rgb) const;
 
   /// How many pixels of each board are visible (before noise): the true areas, for tests.
   std::vector<std::uint32_t> visible_board_pixels(const algorithms::Pose2& robot_pose) const;
