@@ -4,7 +4,6 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
-#include <limits>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
@@ -482,8 +481,7 @@ std::optional<BoardSpec> candidate(Draw& d, const Scenario& s, const Views& v, s
   // The wall ahead.
   double wall_t = 1e9;
   const Wall* wall = nullptr;
-  static thread_local std::vector<Wall> walls;
-  walls = walls_of(s.room);
+  const std::vector<Wall> walls = walls_of(s.room);
   for (const Wall& w : walls) {
     const double denom = dx * w.nx + dy * w.ny;
     if (denom >= -1e-9) continue;
