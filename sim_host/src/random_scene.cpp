@@ -751,15 +751,16 @@ Scenario random_scenario(std::uint64_t seed) {
 
 std::vector<std::pair<std::string, algorithms::ColourThreshold>> thresholds_for(const Scenario& s) {
   std::vector<std::pair<std::string, algorithms::ColourThreshold>> out;
-  // Saturation: between the most saturated thing that is not a board and the least saturated
-  // board.
+  // Saturation: between the most saturated thing in the room that is not a board and the least
+  // saturated board. People walking through are not counted (they come and go; the variants'
+  // people are dressed at most as saturated as the walls), so that a scene and its derived runs
+  // share one set of windows, and a map trained on the one serves the others.
   double room_s = 0.0;
   for (const Rgb& c : {s.room.floor_colour, s.room.floor_tile_colour, s.room.wall_colour,
                        s.room.side_wall_colour, s.room.ceiling_colour, Rgb{80, 80, 80}})
     room_s = std::max(room_s, saturation_of(c));
   if (s.desk.present)
     room_s = std::max({room_s, saturation_of(s.desk.colour), saturation_of(s.desk.top_colour)});
-  for (const OccluderSpec& o : s.occluders) room_s = std::max(room_s, saturation_of(o.colour));
   double board_s = 255.0, board_v = 255.0;
   std::vector<double> hues;
   for (const BoardSpec& b : s.boards) {

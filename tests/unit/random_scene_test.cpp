@@ -593,6 +593,20 @@ TEST(RandomScene, LongVariantLastsTheMinutes) {
   EXPECT_TRUE(l.occluders.empty() && l.board_moves.empty() && l.kidnaps.count == 0);
 }
 
+TEST(RandomScene, DerivedRunsShareTheScenesWindowsAndRobot) {
+  // A map trained on the scene must serve its derived runs: the firmware refuses a map whose
+  // windows differ from the config's.
+  const hs::Scenario s = hs::random_scenario(4);
+  // All but the first line (it names the scene).
+  const auto body = [](const std::string& text) { return text.substr(text.find('\n')); };
+  const std::string config = body(hs::firmware_config_toml(s));
+  for (const hs::Scenario& v : {hs::with_other_lighting(s, 5), hs::kidnap_variant(s, 3),
+                                hs::dynamic_variant(s), hs::long_variant(s, 3.0)}) {
+    SCOPED_TRACE(v.name);
+    EXPECT_EQ(body(hs::firmware_config_toml(v)), config);
+  }
+}
+
 TEST(RandomScene, LabelsCarryTheHeadingOrYawZero) {
   hs::Scenario s = hs::random_scenario(1);
   for (const bool heading : {true, false}) {

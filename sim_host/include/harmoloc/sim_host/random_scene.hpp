@@ -45,7 +45,8 @@ FeasibilityReport check_feasibility(const Scenario& scenario);
 /// The HSV windows a careful user would set for @p scenario's boards, in board order: a hue
 /// window around each board's hue, narrow enough to keep off its neighbours (wrapping through 0
 /// where needed: min > max), saturation_min between the room's colours and the boards', and a
-/// value range wide enough for the vignetting and the lighting's range.
+/// value range wide enough for the vignetting and the lighting's range. The same for a scene and
+/// its derived runs below (other lighting, kidnaps, people, moved boards, long runs).
 std::vector<std::pair<std::string, algorithms::ColourThreshold>> thresholds_for(
     const Scenario& scenario);
 /// The same as a ThresholdSet (names dropped), for segment_rgb24 and the trainer.
