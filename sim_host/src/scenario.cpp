@@ -1,6 +1,7 @@
 #include "harmoloc/sim_host/scenario.hpp"
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <filesystem>
 #include <sstream>
@@ -8,6 +9,7 @@
 
 #include <toml++/toml.h>
 
+#include "harmoloc/sim_host/route.hpp"
 #include "toml_text.hpp"
 
 namespace harmoloc::sim_host {
@@ -230,21 +232,93 @@ Rgb colour_of(const toml::table& t, const std::string& file, const std::string& 
              static_cast<std::uint8_t>(c[2])};
 }
 
-// Hue (degrees), saturation and value (0..255) as the firmware's 8-bit HSV segmentation sees them.
-void hsv_of(const Rgb& c, double& hue_deg, double& saturation, double& value) {
-  const double r = c.r, g = c.g, b = c.b;
-  const double hi = std::max({r, g, b}), lo = std::min({r, g, b});
-  value = hi;
-  saturation = hi > 0.0 ? 255.0 * (hi - lo) / hi : 0.0;
-  hue_deg = 0.0;
-  if (hi > lo) {
-    if (hi == r)
-      hue_deg = 60.0 * (g - b) / (hi - lo);
-    else if (hi == g)
-      hue_deg = 120.0 + 60.0 * (b - r) / (hi - lo);
-    else
-      hue_deg = 240.0 + 60.0 * (r - g) / (hi - lo);
-    if (hue_deg < 0.0) hue_deg += 360.0;
+bool boolean(const toml::table& t, const char* key, bool fallback, const std::string& file,
+             const std::string& section) {
+  const toml::node* n = t.get(key);
+  if (n == nullptr) return fallback;
+  const auto v = n->value_exact<bool>();
+  if (!v) fail(file, section + key + " must be true or false");
+  return *v;
+}
+
+// A colour under @p key (not "colour"): [r, g, b], 0..255 each.
+void set_colour(const toml::table& t, const char* key, Rgb& out, const std::string& file,
+                const std::string& section) {
+  const toml::node* n = t.get(key);
+  if (n == nullptr) return;
+  const auto c = numbers(n, 3, file, section + key);
+  for (double v : c) {
+    if (!(v >= 0 && v <= 255)) fail(file, section + key + " values must be 0..255");
+  }
+  out = Rgb{static_cast<std::uint8_t>(c[0]), static_cast<std::uint8_t>(c[1]),
+            static_cast<std::uint8_t>(c[2])};
+}
+
+// An interval [lo, hi] with lo < hi, both within +-@p bound.
+void set_interval(const toml::table& t, const char* key, std::array<double, 2>& out,
+                  const std::string& file, const std::string& section, double bound) {
+  const toml::node* n = t.get(key);
+  if (n == nullptr) return;
+  const auto v = numbers(n, 2, file, section + key);
+  if (!(std::fabs(v[0]) <= bound && std::fabs(v[1]) <= bound && v[0] < v[1])) {
+    std::ostringstream m;
+    m << section << key << " must be [min, max] with min < max, within +-" << bound;
+    fail(file, m.str());
+  }
+  out = {v[0], v[1]};
+}
+
+void read_room(const toml::table& t, const std::string& file, Scenario& s) {
+  if (const toml::node* n = t.get("room")) {
+    const toml::table* r = n->as_table();
+    if (r == nullptr) fail(file, "room must be a table ([room])");
+    only(*r, file, "room.",
+         {"x_m", "y_m", "height_m", "floor_colour", "floor_tile_colour", "tile_m", "wall_colour",
+          "side_wall_colour", "ceiling_colour"});
+    set_interval(*r, "x_m", s.room.x_m, file, "room.", kMaxCoordinate_m);
+    set_interval(*r, "y_m", s.room.y_m, file, "room.", kMaxCoordinate_m);
+    set_num(*r, "height_m", s.room.height_m, file, "room.", 0.5, 20);
+    set_colour(*r, "floor_colour", s.room.floor_colour, file, "room.");
+    set_colour(*r, "floor_tile_colour", s.room.floor_tile_colour, file, "room.");
+    set_num(*r, "tile_m", s.room.tile_m, file, "room.", 0, 10);
+    set_colour(*r, "wall_colour", s.room.wall_colour, file, "room.");
+    set_colour(*r, "side_wall_colour", s.room.side_wall_colour, file, "room.");
+    set_colour(*r, "ceiling_colour", s.room.ceiling_colour, file, "room.");
+  }
+  if (const toml::node* n = t.get("desk")) {
+    const toml::table* d = n->as_table();
+    if (d == nullptr) fail(file, "desk must be a table ([desk])");
+    only(*d, file, "desk.", {"present", "x_m", "front_y_m", "height_m", "colour", "top_colour"});
+    s.desk.present = boolean(*d, "present", s.desk.present, file, "desk.");
+    set_interval(*d, "x_m", s.desk.x_m, file, "desk.", kMaxCoordinate_m);
+    set_num(*d, "front_y_m", s.desk.front_y_m, file, "desk.", -kMaxCoordinate_m, kMaxCoordinate_m);
+    set_num(*d, "height_m", s.desk.height_m, file, "desk.", 0.05, 5);
+    set_colour(*d, "colour", s.desk.colour, file, "desk.");
+    set_colour(*d, "top_colour", s.desk.top_colour, file, "desk.");
+  }
+  if (!(s.desk.front_y_m < s.room.y_m[1]))
+    fail(file, "desk.front_y_m must be before the wall at room.y_m[1]");
+  if (const toml::node* n = t.get("lighting")) {
+    const toml::table* l = n->as_table();
+    if (l == nullptr) fail(file, "lighting must be a table ([lighting])");
+    only(*l, file, "lighting.", {"drift_amplitude", "drift_period_s", "drift_phase_deg", "steps"});
+    set_num(*l, "drift_amplitude", s.lighting.drift_amplitude, file, "lighting.", 0, 0.9);
+    set_num(*l, "drift_period_s", s.lighting.drift_period_s, file, "lighting.", 1, kMaxEventTime_s);
+    set_num(*l, "drift_phase_deg", s.lighting.drift_phase_deg, file, "lighting.", -360, 360);
+    if (const toml::node* st = l->get("steps")) {
+      const toml::array* a = st->as_array();
+      if (a == nullptr) fail(file, "lighting.steps must be an array of [t_s, gain]");
+      s.lighting.steps.clear();
+      for (const toml::node& e : *a) {
+        const auto v = numbers(&e, 2, file, "lighting.steps[]");
+        if (!(v[0] >= 0.0 && v[0] <= kMaxEventTime_s))
+          fail(file, "lighting.steps times must be 0..1e6 s");
+        if (!(v[1] >= 0.1 && v[1] <= 3.0)) fail(file, "lighting.steps gains must be 0.1..3");
+        if (!s.lighting.steps.empty() && !(v[0] > s.lighting.steps.back()[0]))
+          fail(file, "lighting.steps times must increase");
+        s.lighting.steps.push_back({v[0], v[1]});
+      }
+    }
   }
 }
 
@@ -362,8 +436,9 @@ Scenario from_file(const std::string& file, int depth) {
     fail(file, s.str());
   }
   only(t, file, "",
-       {"base", "name", "description", "labelled_frames", "start_time_s", "camera", "route",
-        "encoders", "robot", "boards", "occluders", "board_moves", "kidnaps"});
+       {"base", "name", "description", "labelled_frames", "labels_with_heading", "start_time_s",
+        "room", "desk", "lighting", "camera", "route", "encoders", "robot", "boards", "occluders",
+        "board_moves", "kidnaps"});
   const std::string base = t["base"].value_or(std::string("desk-shuttle"));
   Scenario s;
   try {
@@ -375,24 +450,50 @@ Scenario from_file(const std::string& file, int depth) {
   s.description = t["description"].value_or(std::string("from ") + file);
   set_int(t, "labelled_frames", s.labelled_frames, file, "", 2, 4096);
   set_num(t, "start_time_s", s.start_time_s, file, "", 0, 4e9);
+  s.labels_with_heading = boolean(t, "labels_with_heading", s.labels_with_heading, file, "");
+  read_room(t, file, s);
   if (const toml::table* c = t["camera"].as_table()) {
     only(*c, file, "camera.",
-         {"width_px", "height_px", "horizontal_fov_deg", "radial_k", "height_m", "pitch_deg",
-          "mount_yaw_deg", "rate_hz", "pixel_noise", "light_gain"});
+         {"width_px", "height_px", "horizontal_fov_deg", "radial_k", "k1", "k2", "k3", "p1", "p2",
+          "principal_offset_px", "vignetting", "height_m", "pitch_deg", "mount_yaw_deg",
+          "forward_offset_m", "rate_hz", "pixel_noise", "light_gain"});
     set_int(*c, "width_px", s.camera.width_px, file, "camera.", 16, 4096);
     set_int(*c, "height_px", s.camera.height_px, file, "camera.", 16, 4096);
     set_num(*c, "horizontal_fov_deg", s.camera.horizontal_fov_deg, file, "camera.", 10, 150);
-    set_num(*c, "radial_k", s.camera.radial_k, file, "camera.", -1, 1);
+    if (c->get("radial_k") != nullptr && c->get("k1") != nullptr)
+      fail(file, "camera.radial_k and camera.k1 are the same coefficient: give one");
+    set_num(*c, "radial_k", s.camera.k1, file, "camera.", -1, 1);
+    set_num(*c, "k1", s.camera.k1, file, "camera.", -1, 1);
+    set_num(*c, "k2", s.camera.k2, file, "camera.", -1, 1);
+    set_num(*c, "k3", s.camera.k3, file, "camera.", -1, 1);
+    set_num(*c, "p1", s.camera.p1, file, "camera.", -0.1, 0.1);
+    set_num(*c, "p2", s.camera.p2, file, "camera.", -0.1, 0.1);
+    if (const toml::node* pp = c->get("principal_offset_px")) {
+      const auto v = numbers(pp, 2, file, "camera.principal_offset_px");
+      s.camera.principal_offset_x_px = v[0];
+      s.camera.principal_offset_y_px = v[1];
+    }
+    set_num(*c, "vignetting", s.camera.vignetting, file, "camera.", 0, 1);
     set_num(*c, "height_m", s.camera.height_m, file, "camera.", 0.01, 5);
     set_num(*c, "pitch_deg", s.camera.pitch_deg, file, "camera.", -60, 60);
     set_num(*c, "mount_yaw_deg", s.camera.mount_yaw_deg, file, "camera.", -180, 180);
+    set_num(*c, "forward_offset_m", s.camera.forward_offset_m, file, "camera.", -2, 2);
     set_num(*c, "rate_hz", s.camera.rate_hz, file, "camera.", 1, 240);
     set_num(*c, "pixel_noise", s.camera.pixel_noise, file, "camera.", 0, 50);
     set_num(*c, "light_gain", s.camera.light_gain, file, "camera.", 0.1, 3);
   }
   if (const toml::table* r = t["route"].as_table()) {
     only(*r, file, "route.",
-         {"waypoints", "speed_mps", "acceleration_mps2", "pause_s", "laps", "wander_m"});
+         {"shape", "waypoints", "speed_mps", "acceleration_mps2", "pause_s", "laps", "wander_m"});
+    if (const toml::node* shape = r->get("shape")) {
+      const auto v = shape->value_exact<std::string>();
+      if (v && *v == "shuttle")
+        s.route.shape = RouteShape::kShuttle;
+      else if (v && *v == "loop")
+        s.route.shape = RouteShape::kLoop;
+      else
+        fail(file, "route.shape must be \"shuttle\" or \"loop\"");
+    }
     if (const toml::array* w = (*r)["waypoints"].as_array()) {
       s.route.waypoints_m.clear();
       for (const toml::node& p : *w) {
@@ -401,6 +502,8 @@ Scenario from_file(const std::string& file, int depth) {
       }
       if (s.route.waypoints_m.size() < 2) fail(file, "route.waypoints needs at least 2 points");
     }
+    if (s.route.shape == RouteShape::kLoop && s.route.waypoints_m.size() < 3)
+      fail(file, "route.waypoints needs at least 3 points for a loop");
     set_num(*r, "speed_mps", s.route.speed_mps, file, "route.", 0.01, 2);
     set_num(*r, "acceleration_mps2", s.route.acceleration_mps2, file, "route.", 0.01, 10);
     set_num(*r, "pause_s", s.route.pause_s, file, "route.", 0, 60);
@@ -430,7 +533,8 @@ Scenario from_file(const std::string& file, int depth) {
     for (const toml::node& n : *boards) {
       const toml::table* b = n.as_table();
       if (b == nullptr) fail(file, "[[boards]] entries must be tables");
-      only(*b, file, "boards.", {"name", "colour", "centre", "size", "facing_deg"});
+      only(*b, file, "boards.",
+           {"name", "colour", "centre", "size", "facing_deg", "shape", "tilt_deg", "stand"});
       BoardSpec spec;
       spec.name = (*b)["name"].value_or(std::string("board") + std::to_string(s.boards.size() + 1));
       const auto c = numbers(b->get("colour"), 3, file, "boards.colour");
@@ -450,6 +554,19 @@ Scenario from_file(const std::string& file, int depth) {
       double facing = -90.0;
       set_num(*b, "facing_deg", facing, file, "boards.", -360, 360);
       spec.facing_yaw_rad = facing * kDeg;
+      if (const toml::node* shape = b->get("shape")) {
+        const auto v = shape->value_exact<std::string>();
+        if (v && *v == "rectangle")
+          spec.shape = BoardShape::kRectangle;
+        else if (v && *v == "ellipse")
+          spec.shape = BoardShape::kEllipse;
+        else
+          fail(file, "boards.shape must be \"rectangle\" or \"ellipse\"");
+      }
+      double tilt = 0.0;
+      set_num(*b, "tilt_deg", tilt, file, "boards.", -60, 60);
+      spec.tilt_rad = tilt * kDeg;
+      spec.stand = boolean(*b, "stand", false, file, "boards.");
       s.boards.push_back(spec);
     }
     if (s.boards.empty() || s.boards.size() > 8) fail(file, "1 to 8 boards");
@@ -460,10 +577,48 @@ Scenario from_file(const std::string& file, int depth) {
   s.can_layout.right_offset = bytes;
   s.can_layout.length = static_cast<std::uint8_t>(2 * bytes);
   if (s.camera.width_px % 2 != 0) fail(file, "camera.width_px must be even");
+  if (!(std::fabs(s.camera.principal_offset_x_px) <= 0.5 * s.camera.width_px &&
+        std::fabs(s.camera.principal_offset_y_px) <= 0.5 * s.camera.height_px))
+    fail(file, "camera.principal_offset_px must be within half the image size");
+  if (s.route.shape == RouteShape::kLoop) {
+    std::string why;
+    if (route_crosses_itself(s.route, &why)) fail(file, "route: " + why);
+  }
   return s;
 }
 
 }  // namespace
+
+void hsv_of(const Rgb& c, double& hue_deg, double& saturation, double& value) {
+  const double r = c.r, g = c.g, b = c.b;
+  const double hi = std::max({r, g, b}), lo = std::min({r, g, b});
+  value = hi;
+  saturation = hi > 0.0 ? 255.0 * (hi - lo) / hi : 0.0;
+  hue_deg = 0.0;
+  if (hi > lo) {
+    if (hi == r)
+      hue_deg = 60.0 * (g - b) / (hi - lo);
+    else if (hi == g)
+      hue_deg = 120.0 + 60.0 * (b - r) / (hi - lo);
+    else
+      hue_deg = 240.0 + 60.0 * (r - g) / (hi - lo);
+    if (hue_deg < 0.0) hue_deg += 360.0;
+  }
+}
+
+double light_gain_at(const Scenario& s, double t_s) {
+  const LightingSpec& l = s.lighting;
+  double gain = s.camera.light_gain;
+  if (l.drift_amplitude != 0.0) {
+    gain *= 1.0 + l.drift_amplitude * std::sin(2.0 * algorithms::kPi * t_s / l.drift_period_s +
+                                               l.drift_phase_deg * kDeg);
+  }
+  double step = 1.0;
+  for (const auto& st : l.steps) {
+    if (st[0] <= t_s) step = st[1];
+  }
+  return gain * step;
+}
 
 std::vector<std::pair<std::string, std::string>> builtin_scenarios() {
   std::vector<std::pair<std::string, std::string>> out;
@@ -499,62 +654,116 @@ Scenario load_scenario_at_depth(const std::string& name_or_file, int depth) {
 
 }  // namespace
 
+namespace {
+
+// The shortest decimal that reads back as the same double (scenario files round-trip exactly).
+std::string num_text(double v) {
+  char buf[64];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v);
+  return std::string(buf, r.ptr);
+}
+
+// Degrees computed from radians: 12 significant digits, so that -75 stays -75 (a scenario's
+// angles are whole or decimal degrees; they read back to the same radians).
+std::string deg_text(double rad) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.12g", rad / kDeg);
+  return buf;
+}
+
+std::string rgb_text(const Rgb& c) {
+  return "[" + std::to_string(int{c.r}) + ", " + std::to_string(int{c.g}) + ", " +
+         std::to_string(int{c.b}) + "]";
+}
+
+template <std::size_t N>
+std::string array_text(const std::array<double, N>& a) {
+  std::string out = "[";
+  for (std::size_t i = 0; i < N; ++i) out += (i ? ", " : "") + num_text(a[i]);
+  return out + "]";
+}
+
+template <std::size_t N>
+std::string list_text(const std::vector<std::array<double, N>>& list) {
+  std::string out = "[";
+  for (std::size_t i = 0; i < list.size(); ++i) out += (i ? ", " : "") + array_text(list[i]);
+  return out + "]";
+}
+
+}  // namespace
+
 std::string scenario_to_toml(const Scenario& s) {
+  const auto n = num_text;
   std::ostringstream o;
-  o.precision(10);
+  const CameraSpec& c = s.camera;
   o << "# Scenario as simulated (format: docs/scenarios.md)\n"
     << "name = " << toml_string(s.name) << "\n"
     << "description = " << toml_string(s.description) << "\n"
     << "labelled_frames = " << s.labelled_frames << "\n"
-    << "start_time_s = " << s.start_time_s << "\n\n[camera]\n"
-    << "width_px = " << s.camera.width_px << "\nheight_px = " << s.camera.height_px
-    << "\nhorizontal_fov_deg = " << s.camera.horizontal_fov_deg
-    << "\nradial_k = " << s.camera.radial_k << "\nheight_m = " << s.camera.height_m
-    << "\npitch_deg = " << s.camera.pitch_deg << "\nmount_yaw_deg = " << s.camera.mount_yaw_deg
-    << "\nrate_hz = " << s.camera.rate_hz << "\npixel_noise = " << s.camera.pixel_noise
-    << "\nlight_gain = " << s.camera.light_gain << "\n\n[route]\nwaypoints = [";
-  for (std::size_t i = 0; i < s.route.waypoints_m.size(); ++i) {
-    o << (i ? ", " : "") << "[" << s.route.waypoints_m[i][0] << ", " << s.route.waypoints_m[i][1]
-      << "]";
-  }
-  o << "]\nspeed_mps = " << s.route.speed_mps
-    << "\nacceleration_mps2 = " << s.route.acceleration_mps2 << "\npause_s = " << s.route.pause_s
-    << "\nlaps = " << s.route.laps << "\nwander_m = " << s.route.wander_m
-    << "\n\n[encoders]\nrate_hz = " << s.encoders.rate_hz
-    << "\nslip_sigma = " << s.encoders.slip_sigma
-    << "\nleft_scale_error = " << s.encoders.left_scale_error
-    << "\nright_scale_error = " << s.encoders.right_scale_error
+    << "labels_with_heading = " << (s.labels_with_heading ? "true" : "false") << "\n"
+    << "start_time_s = " << n(s.start_time_s) << "\n";
+  o << "\n[room]\nx_m = " << array_text(s.room.x_m) << "\ny_m = " << array_text(s.room.y_m)
+    << "\nheight_m = " << n(s.room.height_m) << "\nfloor_colour = " << rgb_text(s.room.floor_colour)
+    << "\nfloor_tile_colour = " << rgb_text(s.room.floor_tile_colour)
+    << "\ntile_m = " << n(s.room.tile_m) << "\nwall_colour = " << rgb_text(s.room.wall_colour)
+    << "\nside_wall_colour = " << rgb_text(s.room.side_wall_colour)
+    << "\nceiling_colour = " << rgb_text(s.room.ceiling_colour) << "\n";
+  o << "\n[desk]\npresent = " << (s.desk.present ? "true" : "false")
+    << "\nx_m = " << array_text(s.desk.x_m) << "\nfront_y_m = " << n(s.desk.front_y_m)
+    << "\nheight_m = " << n(s.desk.height_m) << "\ncolour = " << rgb_text(s.desk.colour)
+    << "\ntop_colour = " << rgb_text(s.desk.top_colour) << "\n";
+  o << "\n[camera]\nwidth_px = " << c.width_px << "\nheight_px = " << c.height_px
+    << "\nhorizontal_fov_deg = " << n(c.horizontal_fov_deg) << "\nk1 = " << n(c.k1)
+    << "\nk2 = " << n(c.k2) << "\nk3 = " << n(c.k3) << "\np1 = " << n(c.p1) << "\np2 = " << n(c.p2)
+    << "\nprincipal_offset_px = [" << n(c.principal_offset_x_px) << ", "
+    << n(c.principal_offset_y_px) << "]\nvignetting = " << n(c.vignetting)
+    << "\nheight_m = " << n(c.height_m) << "\npitch_deg = " << n(c.pitch_deg)
+    << "\nmount_yaw_deg = " << n(c.mount_yaw_deg)
+    << "\nforward_offset_m = " << n(c.forward_offset_m) << "\nrate_hz = " << n(c.rate_hz)
+    << "\npixel_noise = " << n(c.pixel_noise) << "\nlight_gain = " << n(c.light_gain) << "\n";
+  o << "\n[lighting]\ndrift_amplitude = " << n(s.lighting.drift_amplitude)
+    << "\ndrift_period_s = " << n(s.lighting.drift_period_s)
+    << "\ndrift_phase_deg = " << n(s.lighting.drift_phase_deg)
+    << "\nsteps = " << list_text(s.lighting.steps) << "\n";
+  o << "\n[route]\nshape = " << (s.route.shape == RouteShape::kLoop ? "\"loop\"" : "\"shuttle\"")
+    << "\nwaypoints = " << list_text(s.route.waypoints_m)
+    << "\nspeed_mps = " << n(s.route.speed_mps)
+    << "\nacceleration_mps2 = " << n(s.route.acceleration_mps2)
+    << "\npause_s = " << n(s.route.pause_s) << "\nlaps = " << s.route.laps
+    << "\nwander_m = " << n(s.route.wander_m);
+  o << "\n\n[encoders]\nrate_hz = " << n(s.encoders.rate_hz)
+    << "\nslip_sigma = " << n(s.encoders.slip_sigma)
+    << "\nleft_scale_error = " << n(s.encoders.left_scale_error)
+    << "\nright_scale_error = " << n(s.encoders.right_scale_error)
     << "\ninitial_left = " << s.encoders.initial_left
     << "\ninitial_right = " << s.encoders.initial_right
     << "\ncounter_bits = " << int{s.can_layout.counter_bits}
-    << "\n\n[robot]\nwheel_radius_m = " << s.robot.wheel_radius_m
-    << "\ntrack_m = " << s.robot.track_m << "\nticks_per_rev = " << s.robot.ticks_per_rev << "\n";
+    << "\n\n[robot]\nwheel_radius_m = " << n(s.robot.wheel_radius_m)
+    << "\ntrack_m = " << n(s.robot.track_m) << "\nticks_per_rev = " << n(s.robot.ticks_per_rev)
+    << "\n";
   for (const BoardSpec& b : s.boards) {
-    o << "\n[[boards]]\nname = " << toml_string(b.name) << "\ncolour = [" << int{b.colour.r} << ", "
-      << int{b.colour.g} << ", " << int{b.colour.b} << "]\ncentre = [" << b.centre_x_m << ", "
-      << b.centre_y_m << ", " << b.centre_z_m << "]\nsize = [" << b.width_m << ", " << b.height_m
-      << "]\nfacing_deg = " << b.facing_yaw_rad / kDeg << "\n";
+    o << "\n[[boards]]\nname = " << toml_string(b.name) << "\ncolour = " << rgb_text(b.colour)
+      << "\ncentre = [" << n(b.centre_x_m) << ", " << n(b.centre_y_m) << ", " << n(b.centre_z_m)
+      << "]\nsize = [" << n(b.width_m) << ", " << n(b.height_m)
+      << "]\nfacing_deg = " << deg_text(b.facing_yaw_rad)
+      << "\nshape = " << (b.shape == BoardShape::kEllipse ? "\"ellipse\"" : "\"rectangle\"")
+      << "\ntilt_deg = " << deg_text(b.tilt_rad) << "\nstand = " << (b.stand ? "true" : "false")
+      << "\n";
   }
-  // Events only when there are any: a scenario without them writes what it always wrote.
+  // Events only when there are any.
   for (const OccluderSpec& oc : s.occluders) {
-    o << "\n[[occluders]]\nname = " << toml_string(oc.name) << "\ncolour = [" << int{oc.colour.r}
-      << ", " << int{oc.colour.g} << ", " << int{oc.colour.b} << "]\nradius_m = " << oc.radius_m
-      << "\nheight_m = " << oc.height_m << "\npath = [";
-    for (std::size_t i = 0; i < oc.path.size(); ++i) {
-      o << (i ? ", " : "") << "[" << oc.path[i][0] << ", " << oc.path[i][1] << ", " << oc.path[i][2]
-        << "]";
-    }
-    o << "]\n";
+    o << "\n[[occluders]]\nname = " << toml_string(oc.name) << "\ncolour = " << rgb_text(oc.colour)
+      << "\nradius_m = " << n(oc.radius_m) << "\nheight_m = " << n(oc.height_m)
+      << "\npath = " << list_text(oc.path) << "\n";
   }
   for (const BoardMoveSpec& m : s.board_moves) {
-    o << "\n[[board_moves]]\nboard = " << toml_string(m.board) << "\nat_s = " << m.at_s
-      << "\noffset_m = [" << m.offset_m[0] << ", " << m.offset_m[1] << ", " << m.offset_m[2]
-      << "]\nturn_deg = " << m.turn_deg << "\n";
+    o << "\n[[board_moves]]\nboard = " << toml_string(m.board) << "\nat_s = " << n(m.at_s)
+      << "\noffset_m = " << array_text(m.offset_m) << "\nturn_deg = " << n(m.turn_deg) << "\n";
   }
   if (s.kidnaps.count > 0) {
-    o << "\n[kidnaps]\ncount = " << s.kidnaps.count << "\nfirst_s = " << s.kidnaps.first_s
-      << "\ninterval_s = " << s.kidnaps.interval_s
-      << "\nmin_distance_m = " << s.kidnaps.min_distance_m << "\n";
+    o << "\n[kidnaps]\ncount = " << s.kidnaps.count << "\nfirst_s = " << n(s.kidnaps.first_s)
+      << "\ninterval_s = " << n(s.kidnaps.interval_s)
+      << "\nmin_distance_m = " << n(s.kidnaps.min_distance_m) << "\n";
   }
   return o.str();
 }

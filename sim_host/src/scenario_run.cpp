@@ -27,9 +27,9 @@ Scenario checked(const Scenario& scenario) {
 }  // namespace
 
 ScenarioRun::ScenarioRun(const Scenario& scenario, std::uint64_t seed)
-    : scenario_(checked(scenario)), seed_(seed), renderer_(scenario_), image_rng_(seed, 2) {
-  algorithms::Pcg32 motion_rng(seed, 1), encoder_rng(seed, 3), label_rng(seed, 4),
-      kidnap_rng(seed, 5);
+    : scenario_(checked(scenario)), seed_(seed), renderer_(scenario_) {
+  algorithms::Pcg32 motion_rng(seed, 1), image_rng(seed, 2), encoder_rng(seed, 3),
+      label_rng(seed, 4), kidnap_rng(seed, 5);
   motion_ = simulate_motion(scenario_, kMotionStep_s, motion_rng, &route_, &kidnap_rng, &kidnaps_);
   const double duration = route_.duration_s;
 
@@ -41,6 +41,9 @@ ScenarioRun::ScenarioRun(const Scenario& scenario, std::uint64_t seed)
     const double t = frame_time_s(k);
     truth_.push_back(sample_at(motion_, t).pose);
     stamps_ns_.push_back(dataset_time_ns(scenario_.start_time_s, t));
+    // Each frame's noise key, in frame order (as SceneRenderer::render(pose, rng, rgb) draws it).
+    const std::uint64_t hi = image_rng.next_u32();
+    noise_keys_.push_back((hi << 32U) | image_rng.next_u32());
   }
 
   // Wheel encoders on the CAN bus: free-running counters with slip and a radius error.
@@ -91,6 +94,7 @@ ScenarioRun::ScenarioRun(const Scenario& scenario, std::uint64_t seed)
     StampedPose p{static_cast<double>(stamps_ns_[k]) * 1e-9, truth_[k]};
     p.pose.x_m += 0.003 * label_rng.normal();
     p.pose.y_m += 0.003 * label_rng.normal();
+    if (!scenario_.labels_with_heading) p.pose.yaw_rad = 0.0;  // a position-only reference
     labels_.push_back(p);
   }
 }
@@ -107,9 +111,14 @@ void ScenarioRun::render(std::size_t k, std::vector<std::uint8_t>& rgb) {
              ? "frame " + std::to_string(next_frame_) + " is next (frames render in order)"
              : "all " + std::to_string(frame_count()) + " frames are rendered"));
   }
-  renderer_.set_time(frame_time_s(k));
-  renderer_.render(truth_[k], image_rng_, rgb);
+  render_frame(k, renderer_, rgb);
   ++next_frame_;
+}
+
+void ScenarioRun::render_frame(std::size_t k, SceneRenderer& renderer,
+                               std::vector<std::uint8_t>& rgb) const {
+  renderer.set_time(frame_time_s(k));
+  renderer.render(truth_.at(k), noise_keys_.at(k), rgb);
 }
 
 std::vector<std::uint32_t> ScenarioRun::visible_board_pixels(std::size_t k) {

@@ -2,10 +2,13 @@
 // for a simulated scenario run.
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
+#include <optional>
 
 #include <CLI/CLI.hpp>
 
+#include "harmoloc/sim_host/random_scene.hpp"
 #include "harmoloc/sim_host/scenario.hpp"
 #include "harmoloc/sim_host/simulate.hpp"
 
@@ -17,14 +20,41 @@ int main(int argc, char** argv) {
       "groundtruth.tum,\n"
       "labels.tum (the poses an external reference would label), metadata.toml, scenario.toml\n"
       "and, for a run with kidnaps, kidnaps.csv.\n"
+      "--random SEED draws a scene of the random family instead (room, boards, lens, resolution,\n"
+      "noise, lighting, robot, route, labels; the same seed gives the same scene) and also writes\n"
+      "harmoloc.toml, a firmware config with its boards' colour windows and the robot's geometry.\n"
       "See docs/dataset-format.md and docs/scenarios.md.",
       "harmoloc-sim"};
   std::string scenario_name = "desk-shuttle";
   std::string out_dir;
   std::uint64_t seed = 1;
+  std::optional<std::uint64_t> random_seed, run_seed, lighting_seed;
+  std::string variant;
+  int kidnaps = 10;
+  double minutes = 10.0;
   bool list = false, quiet = false;
-  app.add_option("--scenario", scenario_name, "built-in scenario name or a scenario .toml file")
-      ->capture_default_str();
+  auto* scenario_opt =
+      app.add_option("--scenario", scenario_name, "built-in scenario name or a scenario .toml file")
+          ->capture_default_str();
+  app.add_option("--random", random_seed,
+                 "draw the random scene of this seed (docs/scenarios.md, Random scenes) instead "
+                 "of --scenario; writes harmoloc.toml too")
+      ->excludes(scenario_opt);
+  app.add_option("--variant", variant,
+                 "with --random: kidnap (--kidnaps of them), dynamic (a person hides a board, a "
+                 "board moves), long (--minutes of driving)")
+      ->check(CLI::IsMember({"kidnap", "dynamic", "long"}));
+  app.add_option("--run-seed", run_seed,
+                 "with --random: the run's seed (pixel noise, slip, wander, labels); default the "
+                 "scene's SEED (or --seed)");
+  app.add_option("--lighting", lighting_seed,
+                 "with --random: other lighting for the run, drawn from this seed (a test run)");
+  app.add_option("--kidnaps", kidnaps, "--variant kidnap: how many")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 1000));
+  app.add_option("--minutes", minutes, "--variant long: how long the run lasts at least")
+      ->capture_default_str()
+      ->check(CLI::Range(0.1, 1000.0));
   app.add_option("--out", out_dir,
                  "dataset folder to write (created; existing files are overwritten)");
   app.add_option("--seed", seed, "random seed: pixel noise, wheel slip, route wander, label noise")
@@ -42,8 +72,26 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "harmoloc-sim: --out DIR is required (see --help)\n");
     return 2;
   }
+  if (!random_seed && (!variant.empty() || run_seed || lighting_seed)) {
+    std::fprintf(stderr,
+                 "harmoloc-sim: --variant, --run-seed and --lighting go with --random SEED\n");
+    return 2;
+  }
   try {
-    const Scenario scenario = load_scenario(scenario_name);
+    Scenario scenario;
+    if (random_seed) {
+      scenario = random_scenario(*random_seed);
+      if (lighting_seed) scenario = with_other_lighting(scenario, *lighting_seed);
+      if (variant == "kidnap") scenario = kidnap_variant(scenario, kidnaps);
+      if (variant == "dynamic") scenario = dynamic_variant(scenario);
+      if (variant == "long") scenario = long_variant(scenario, minutes);
+      if (run_seed)
+        seed = *run_seed;
+      else if (app.count("--seed") == 0)
+        seed = *random_seed;
+    } else {
+      scenario = load_scenario(scenario_name);
+    }
     if (!quiet) {
       std::fprintf(stderr,
                    "harmoloc-sim: scenario '%s' (%ux%u, %.0f Hz, %zu boards, %s), seed %llu -> "
@@ -58,6 +106,11 @@ int main(int argc, char** argv) {
       if (!quiet && done == total) std::fprintf(stderr, "\n");
     };
     const SimulationSummary s = simulate_dataset(scenario, seed, out_dir, progress);
+    if (random_seed) {
+      const std::string config = (std::filesystem::path(out_dir) / "harmoloc.toml").string();
+      std::ofstream(config) << firmware_config_toml(scenario);
+      if (!quiet) std::fprintf(stderr, "  %s\n", scenario.description.c_str());
+    }
     std::printf(
         "wrote %s: %zu frames, %zu encoder frames, %zu labels; route %.2f m, %.1f s, heading "
         "within +-%.0f deg; %s\n",

@@ -1,4 +1,5 @@
-# Unit tests (GoogleTest), one executable per area. Included from tests/CMakeLists.txt after
+# Unit tests (GoogleTest), one executable per area; label unit (ctest -L unit), the drivers'
+# tests label drivers. Included from tests/CMakeLists.txt after
 # enable_testing(), find_package(GTest) and include(GoogleTest); CMAKE_CURRENT_SOURCE_DIR is tests/.
 set(HARMOLOC_UNIT_DIR ${CMAKE_CURRENT_SOURCE_DIR}/unit)
 
@@ -16,7 +17,7 @@ add_executable(algorithms_test
   ${HARMOLOC_UNIT_DIR}/map_codec_test.cpp)
 target_link_libraries(algorithms_test PRIVATE harmoloc_algorithms harmoloc_training GTest::gtest_main
   harmoloc_warnings)
-gtest_discover_tests(algorithms_test DISCOVERY_TIMEOUT 60)
+gtest_discover_tests(algorithms_test DISCOVERY_TIMEOUT 60 PROPERTIES LABELS unit)
 
 # firmware/: configuration, MAVLink framing, the link's inbound side and its commands, latency
 # histogram, map loading.
@@ -32,7 +33,7 @@ add_executable(firmware_test
   ${HARMOLOC_UNIT_DIR}/device_config_test.cpp)
 target_link_libraries(firmware_test PRIVATE harmoloc_firmware harmoloc_config harmoloc_algorithms
   harmoloc::nettle GTest::gtest_main harmoloc_warnings)
-gtest_discover_tests(firmware_test DISCOVERY_TIMEOUT 60)
+gtest_discover_tests(firmware_test DISCOVERY_TIMEOUT 60 PROPERTIES LABELS unit)
 
 # drivers/ without devices: quadrature decoding, sequence gaps, V4L2 format negotiation, the SPSC
 # ring, SocketCAN frame handling, the serial link's raw mode. Nothing here links libcamera, so it
@@ -65,11 +66,12 @@ add_executable(sim_host_test
   ${HARMOLOC_UNIT_DIR}/area_log_test.cpp
   ${HARMOLOC_UNIT_DIR}/dataset_test.cpp
   ${HARMOLOC_UNIT_DIR}/fakes_test.cpp
+  ${HARMOLOC_UNIT_DIR}/random_scene_test.cpp
   ${HARMOLOC_UNIT_DIR}/simulator_test.cpp)
 target_link_libraries(sim_host_test PRIVATE harmoloc_sim_dataset harmoloc_sim_fakes harmoloc_simulator
-  harmoloc_trainer
+  harmoloc_trainer harmoloc_config
   harmoloc_drivers_common harmoloc_algorithms GTest::gtest_main harmoloc_warnings)
-gtest_discover_tests(sim_host_test DISCOVERY_TIMEOUT 60)
+gtest_discover_tests(sim_host_test DISCOVERY_TIMEOUT 60 PROPERTIES LABELS unit)
 
 # Segmentation against OpenCV itself: HSV of all 2^24 colours, board classes, simulated and
 # adversarial frames, YUYV. harmoloc_opencv_reference is defined in tests/CMakeLists.txt after
@@ -79,5 +81,5 @@ if(TARGET harmoloc_opencv_reference OR HARMOLOC_HAVE_OPENCV)
   add_executable(segmentation_opencv_test ${HARMOLOC_UNIT_DIR}/segmentation_opencv_test.cpp)
   target_link_libraries(segmentation_opencv_test PRIVATE harmoloc_opencv_reference
     harmoloc_algorithms harmoloc_simulator GTest::gtest_main harmoloc_warnings)
-  gtest_discover_tests(segmentation_opencv_test DISCOVERY_TIMEOUT 60)
+  gtest_discover_tests(segmentation_opencv_test DISCOVERY_TIMEOUT 60 PROPERTIES LABELS unit)
 endif()

@@ -1,9 +1,12 @@
 #pragma once
-/// @file The robot's motion along a scenario's route: a smooth curve through the waypoints,
-/// driven forward and then backward (a differential-drive robot keeps the desk in view that
-/// way), with a trapezoidal speed profile. Sampled at a fine fixed step.
+/// @file The robot's motion along a scenario's route: a smooth curve through the waypoints, either
+/// driven forward and then backward (a shuttle: a differential-drive robot keeps the desk in view
+/// that way) or round a closed curve forward only (a loop), with a trapezoidal speed profile.
+/// Sampled at a fine fixed step.
 
+#include <array>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "harmoloc/algorithms/geometry.hpp"
@@ -47,6 +50,21 @@ std::vector<MotionSample> simulate_motion(const Scenario& scenario, double step_
                                           algorithms::Pcg32& rng, RouteStats* stats,
                                           algorithms::Pcg32* kidnap_rng = nullptr,
                                           std::vector<KidnapEvent>* kidnaps = nullptr);
+
+/// The route's curve (Catmull-Rom through the waypoints; closed for a loop, ending at its start)
+/// sampled about every @p step_m metres: [x, y] points.
+std::vector<std::array<double, 2>> route_curve(const RouteSpec& route, double step_m);
+
+/// How long a run of @p scenario lasts (seconds): its laps with their pauses, as simulate_motion
+/// samples it.
+double run_duration_s(const Scenario& scenario);
+
+/// The curve's length (a loop: once round).
+double route_length_m(const RouteSpec& route);
+
+/// True when the route's curve crosses or touches itself (closer than 5 cm between parts that are
+/// not neighbours along it); @p why (if given) then says where.
+bool route_crosses_itself(const RouteSpec& route, std::string* why = nullptr);
 
 /// A run time (seconds from the start) on the dataset's clock: @p start_time_s (whole
 /// microseconds) plus @p t_s, in nanoseconds.

@@ -9,7 +9,6 @@
 
 #include "harmoloc/algorithms/can_encoder_layout.hpp"
 #include "harmoloc/algorithms/geometry.hpp"
-#include "harmoloc/algorithms/random.hpp"
 #include "harmoloc/sim_host/route.hpp"
 #include "harmoloc/sim_host/scenario.hpp"
 #include "harmoloc/sim_host/scene_renderer.hpp"
@@ -40,6 +39,12 @@ class ScenarioRun {
   void render(std::size_t k, std::vector<std::uint8_t>& rgb);
   /// The frame render() will accept next.
   std::size_t next_frame() const { return next_frame_; }
+
+  /// Renders frame @p k with @p renderer, a SceneRenderer of this run's scenario() that the
+  /// caller owns (one per thread): the same bytes render(k) gives, in any order and from any
+  /// number of threads at once (each frame's noise key is drawn up front, in frame order, from the
+  /// image stream). Sets @p renderer's time to the frame's.
+  void render_frame(std::size_t k, SceneRenderer& renderer, std::vector<std::uint8_t>& rgb) const;
 
   /// The true pixel count of each board in frame @p k (before noise), with the scene as it is at
   /// that frame's time (board moves, occluders): what a perfect segmentation would count. Any
@@ -74,8 +79,8 @@ class ScenarioRun {
   std::vector<algorithms::CanFrame> encoder_frames_;
   std::size_t counter_frames_ = 0;
   std::vector<StampedPose> labels_;
+  std::vector<std::uint64_t> noise_keys_;  ///< per frame, from the image stream (seed, 2)
   SceneRenderer renderer_;
-  algorithms::Pcg32 image_rng_;
   std::size_t next_frame_ = 0;
 };
 

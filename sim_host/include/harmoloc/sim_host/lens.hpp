@@ -1,0 +1,66 @@
+#pragma once
+/// @file The simulated camera's lens: OpenCV's radial (k1, k2, k3) and tangential (p1, p2)
+/// distortion in normalised coordinates, its inverse (what the renderer traces a pixel's ray
+/// along), and the pinhole intrinsics a CameraSpec implies. A pixel whose distorted coordinates
+/// have no preimage on the lens's monotonic region is outside the image circle: black.
+
+#include "harmoloc/algorithms/geometry.hpp"
+#include "harmoloc/sim_host/scenario.hpp"
+
+namespace harmoloc::sim_host {
+
+class LensModel {
+ public:
+  LensModel() = default;
+  LensModel(double k1, double k2, double k3, double p1, double p2);
+  explicit LensModel(const CameraSpec& camera)
+      : LensModel(camera.k1, camera.k2, camera.k3, camera.p1, camera.p2) {}
+
+  /// Undistorted (x, y) -> distorted, normalised coordinates (the forward model).
+  void distort(double x, double y, double& xd, double& yd) const;
+  /// Distorted -> undistorted: false when (xd, yd) has no preimage with radius below
+  /// max_radius() (outside the image circle). Radial lenses solve the radius in 1-D; with p1 or
+  /// p2 a 2-D Newton iteration starts from the radial solution and is accepted only when the
+  /// forward model maps it back within 1e-9 and the map is orientation-preserving there.
+  bool undistort(double xd, double yd, double& x, double& y) const;
+  /// The radius of the monotonic region: the first radius where d/dr [r (1 + k1 r^2 + k2 r^4 +
+  /// k3 r^6)] reaches 0 (kNoLimit when it never does within that).
+  double max_radius() const { return r_max_; }
+  /// The radial factor's derivative d/dr [r (1 + k1 r^2 + ...)] at @p r (> 0: monotonic).
+  double radial_slope(double r) const;
+  bool radial_only() const { return p1_ == 0.0 && p2_ == 0.0; }
+
+  static constexpr double kNoLimit = 1e9;
+
+ private:
+  bool undistort_radius(double rd, double& r) const;
+
+  double k1_ = 0.0, k2_ = 0.0, k3_ = 0.0, p1_ = 0.0, p2_ = 0.0;
+  double r_max_ = kNoLimit;
+  double rd_max_ = kNoLimit;  ///< the distorted radius at r_max_
+};
+
+/// The camera's pinhole intrinsics: focal length (pixels, square pixels) and principal point.
+struct Intrinsics {
+  double focal_px;
+  double cx_px, cy_px;
+};
+Intrinsics intrinsics_of(const CameraSpec& camera);
+
+/// Where the camera is and how it is turned for the robot at a pose (map frame): its optical
+/// centre and its axes (x right, y down, z forward, as the renderer's rays).
+struct CameraFrame {
+  double origin[3];
+  double right[3];
+  double down[3];
+  double forward[3];
+};
+CameraFrame camera_frame_of(const CameraSpec& camera, const algorithms::Pose2& robot_pose);
+
+/// Projects a map-frame point into the image: distorted pixel coordinates (@p u right, @p v
+/// down, pixel centres at whole numbers). False when the point is behind the camera (less than
+/// 1 cm ahead) or outside the lens's monotonic region (u, v are then not set).
+bool project_point(const CameraSpec& camera, const LensModel& lens, const CameraFrame& frame,
+                   const double point[3], double& u, double& v);
+
+}  // namespace harmoloc::sim_host
