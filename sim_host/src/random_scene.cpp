@@ -264,7 +264,9 @@ std::optional<RouteSpec> draw_route(Draw& d, RouteShape shape) {
   r.acceleration_mps2 = q(d.u(0.1, 0.4), 1000.0);
   r.pause_s = q(d.u(0.3, 1.5), 100.0);
   r.wander_m = q(d.u(0.0, 0.02), 1e4);
-  r.laps = 1;
+  // Every place at least twice in the training run: forth and back, or twice round a loop
+  // (the trainer checks each frame against the other passes).
+  r.laps = shape == RouteShape::kLoop ? 2 : 1;
   if (r.shape == RouteShape::kLoop) {
     // A perturbed ellipse, either way round.
     const double aspect = d.u(1.5, 3.5);

@@ -64,11 +64,6 @@ double distrusted_share(const hs::RunRecord& r, std::size_t b, double from_s, do
   }
   return n > 0 ? static_cast<double>(d) / static_cast<double>(n) : 0.0;
 }
-bool distrusted_all(const hs::RunRecord& r, std::size_t b, double from_s, double to_s) {
-  for (const auto& f : r.frames)
-    if (f.t_s >= from_s && f.t_s < to_s && (f.distrusted >> b & 1U) == 0) return false;
-  return true;
-}
 
 }  // namespace
 

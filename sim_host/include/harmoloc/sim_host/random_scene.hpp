@@ -17,7 +17,7 @@
 
 namespace harmoloc::sim_host {
 
-/// The random scene of @p seed: its training run (one lap; a loop once round), 64 labels. Its
+/// The random scene of @p seed: its training run (one lap; a loop twice round), 64 labels. Its
 /// description says what was drawn and how many attempts the feasibility check took.
 Scenario random_scenario(std::uint64_t seed);
 
