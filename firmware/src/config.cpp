@@ -157,7 +157,7 @@ void read_observation(const Checker& check, const toml::table& root, Observation
   if (t == nullptr) return;
   const std::string w = "observation.";
   check.only(*t, w,
-             {"model", "robust", "sigma_scale", "tempering", "outlier_floor", "dcs_phi",
+             {"model", "fix_term", "robust", "sigma_scale", "tempering", "outlier_floor", "dcs_phi",
               "consensus_chi2", "consensus_fraction", "motion_index_rate", "motion_index_min",
               "motion_index_max", "route_free_m", "route_sigma_m", "implausible_ratio"});
   const std::string model = check.text(*t, "model", w, "boards");
@@ -167,6 +167,7 @@ void read_observation(const Checker& check, const toml::table& root, Observation
     o.model = ObservationModel::kFix;
   else
     check.fail(t->get("model"), "observation.model must be \"boards\" or \"fix\"");
+  o.fix_term = flag(check, *t, "fix_term", w, o.fix_term);
   auto& b = o.boards;
   b.robust = flag(check, *t, "robust", w, b.robust);
   b.sigma_scale = check.number(*t, "sigma_scale", w, b.sigma_scale, 0.1, 100.0);
@@ -220,7 +221,8 @@ void read_kidnap(const Checker& check, const toml::table& root, KidnapConfig& k)
     k.reseed = ReseedStrategy::kUniform;
   else
     check.fail(t->get("reseed"), "kidnap.reseed must be \"fix\" or \"uniform\"");
-  k.position_sigma_m = check.number(*t, "position_sigma_m", w, k.position_sigma_m, 0.001, 10.0);
+  k.position_sigma_m =
+      check.number_or_auto(*t, "position_sigma_m", w, k.position_sigma_m, 0.001, 10.0);
   k.yaw_sigma_deg = check.number(*t, "yaw_sigma_deg", w, k.yaw_sigma_deg, 0.0, 360.0);
 }
 
@@ -331,6 +333,8 @@ FirmwareConfig default_config() {
   // Derived from the map's calibration at start-up (docs/filter.md): they depend on the scene.
   c.kidnap.detector.fix_distance_m = -1.0;
   c.kidnap.detector.consistency_m = -1.0;
+  c.kidnap.position_sigma_m = -1.0;
+  c.filter.init_position_sigma_m = -1.0;
   return c;
 }
 
@@ -485,8 +489,8 @@ FirmwareConfig load_config(const std::string& path) {
         check.number(*t, "outlier_probability", "filter.", f.outlier_probability, 0.0, 0.9);
     f.resample_threshold =
         check.number(*t, "resample_threshold", "filter.", f.resample_threshold, 0.0, 1.0);
-    f.init_position_sigma_m =
-        check.number(*t, "init_position_sigma_m", "filter.", f.init_position_sigma_m, 0.001, 10.0);
+    f.init_position_sigma_m = check.number_or_auto(*t, "init_position_sigma_m", "filter.",
+                                                   f.init_position_sigma_m, 0.001, 10.0);
     f.vision_only_speed_mps =
         check.number(*t, "vision_only_speed_mps", "filter.", f.vision_only_speed_mps, 0.0, 10.0);
   }

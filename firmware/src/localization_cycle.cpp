@@ -52,6 +52,22 @@ LocalizationCycle::LocalizationCycle(const FirmwareConfig& config, const algorit
   filter_.configure(config.filter.particles, config.filter.seed, config.filter.noise);
   kidnap_params_ = derived_kidnap_params(config.kidnap.detector, map.calibration);
   board_params_ = config.observation.boards;
+  // The fix's own error per axis on the training run (0 without a calibration).
+  const double fix_rmse = map.calibration.present
+                              ? std::hypot(static_cast<double>(map.calibration.fix_rmse_x_m),
+                                           static_cast<double>(map.calibration.fix_rmse_y_m)) /
+                                    std::sqrt(2.0)
+                              : 0.0;
+  if (config.observation.fix_term && fix_rmse > 0.0)
+    fix_term_sigma_m_ = std::max(fix_rmse, 0.005) * std::sqrt(board_params_.tempering);
+  // Where a re-seed puts the particles: around a fix, as far as the fix's own error reaches
+  // (twice it; 5 cm and 4 cm for maps without a calibration). Configured values win.
+  init_sigma_m_ = config.filter.init_position_sigma_m >= 0.0 ? config.filter.init_position_sigma_m
+                  : fix_rmse > 0.0                           ? std::clamp(2.0 * fix_rmse, 0.02, 1.0)
+                                                             : 0.05;
+  reseed_sigma_m_ = config.kidnap.position_sigma_m >= 0.0 ? config.kidnap.position_sigma_m
+                    : fix_rmse > 0.0                      ? std::clamp(2.0 * fix_rmse, 0.02, 1.0)
+                                                          : 0.04;
   if (map.calibration.present && board_params_.position_spread_m == 0.0)
     board_params_.position_spread_m = static_cast<double>(map.calibration.pass_spread_m);
   reliability_.reset(board_params_);
@@ -377,8 +393,6 @@ bool LocalizationCycle::update_with_boards(
   const algorithms::BoardFeatures observed =
       algorithms::board_features(map_.model.area_scale, areas);
   assessment_ = reliability_.assess(map_.forward, observed, estimate, params, board_update_);
-  const double match = filter_.update_boards(board_update_);
-  if (filter_.resample_if_needed(config_.filter.resample_threshold)) ++counters_.resamples;
   if (!assessment_.consensus) ++counters_.no_consensus;
 
   // The global fix without the boards that are not to be trusted now: those the motion index
@@ -398,6 +412,18 @@ bool LocalizationCycle::update_with_boards(
   }
   counters_.distrusted_boards += distrusted;
   robust_fix_ = algorithms::harmonic_query(map_.model, features, use);
+
+  const double match = filter_.update_boards(board_update_);
+  // The fix (without the distrusted boards) as a second view of the same frame: where the
+  // forward map is coarse or its boards noisy, the boards' terms are flat along the route, and
+  // the fix still knows where the robot is. Its width is the fix's own error on the training run
+  // (the map's calibration), widened as the boards' terms are tempered; an outlier floor keeps a
+  // wrong fix from dragging the cloud.
+  if (fix_term_sigma_m_ > 0.0 && robust_fix_.known_place) {
+    filter_.update_position(robust_fix_.x_m, robust_fix_.y_m, fix_term_sigma_m_,
+                            config_.filter.outlier_probability);
+  }
+  if (filter_.resample_if_needed(config_.filter.resample_threshold)) ++counters_.resamples;
   // The kidnap test takes the fix of every board: leaving out the boards that disagree with the
   // estimate would pull the fix towards the estimate exactly when the estimate is wrong. A
   // moved or hidden board cannot fake a kidnap with it: the boards must also prefer the fix's
@@ -442,8 +468,7 @@ void LocalizationCycle::reseed_around(double x_m, double y_m) {
   const algorithms::ForwardMap& f = map_.forward;
   const bool heading = use_boards_ && f.has_heading;
   const double yaw = heading ? static_cast<double>(algorithms::route_heading(f, x_m, y_m)) : 0.0;
-  const double sigma_m = filter_.initialized() ? config_.kidnap.position_sigma_m
-                                               : config_.filter.init_position_sigma_m;
+  const double sigma_m = filter_.initialized() ? reseed_sigma_m_ : init_sigma_m_;
   filter_.initialize(Pose2{x_m, y_m, yaw}, sigma_m,
                      config_.kidnap.yaw_sigma_deg * algorithms::kPi / 180.0, !heading);
   if (gap_ == EncoderGap::kDiffused) gap_ = EncoderGap::kReseeded;
@@ -462,7 +487,7 @@ void LocalizationCycle::reseed_globally() {
   } else {
     const algorithms::HarmonicModel& m = map_.model;
     filter_.initialize_around_points(m.target_x_m.data(), m.target_y_m.data(), m.sample_count,
-                                     config_.kidnap.position_sigma_m);
+                                     reseed_sigma_m_);
   }
   if (gap_ == EncoderGap::kDiffused) gap_ = EncoderGap::kReseeded;
   kidnap_.reset();

@@ -64,7 +64,7 @@ mavlink::MavResult LocalizationCycle::execute(const mavlink::CommandLong& comman
 }
 
 mavlink::MavResult LocalizationCycle::relocalize(std::int32_t& how) {
-  const double sigma_m = config_.filter.init_position_sigma_m;
+  const double sigma_m = init_sigma_m_;
   const auto camera_timeout_ns = static_cast<std::uint64_t>(config_.cycle.camera_timeout_ms * 1e6);
   if (ever_fix_ && data_time_ns_ - last_fix_ns_ <= camera_timeout_ns) {
     // The camera sees a trained place now: that fix is a global position (seed 004's recovery,
@@ -90,8 +90,7 @@ mavlink::MavResult LocalizationCycle::relocalize(std::int32_t& how) {
 
 mavlink::MavResult LocalizationCycle::set_pose(const mavlink::CommandLong& command) {
   mavlink::SetPoseRequest r;
-  const mavlink::MavResult checked =
-      mavlink::read_set_pose(command, config_.filter.init_position_sigma_m, r);
+  const mavlink::MavResult checked = mavlink::read_set_pose(command, init_sigma_m_, r);
   if (checked != mavlink::MavResult::kAccepted) return checked;
   reseed_ = Reseed{Reseed::Kind::kAround, algorithms::Pose2{r.x_m, r.y_m, r.yaw_rad},
                    r.position_sigma_m, r.yaw_sigma_rad, false};

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <sstream>
 #include <stdexcept>
 
@@ -550,7 +551,46 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<StampedPose>
   algorithms::KernelSelectionOptions ko;
   ko.same_pass_m = opt.same_pass_m;
   ko.select_features = opt.select_boards && opt.boards.empty();
-  const algorithms::KernelSelection sel = algorithms::select_kernel_model(samples, queries, ko);
+  algorithms::KernelSelection sel = algorithms::select_kernel_model(samples, queries, ko);
+
+  // The same with each board's feature in units of its noise (the forward map measures it
+  // against other passes): a large board's few percent of noise then no longer drowns a small
+  // board's informative change. Kept where cross-validation prefers it.
+  std::vector<double> scale(candidates.size(), 1.0);
+  const auto forward = std::make_unique<algorithms::ForwardMap>();
+  bool have_forward = false;
+  ForwardMapReport forward_report;
+  double forward_ms = 0.0;
+  if (opt.forward_map) {
+    const auto t_forward = std::chrono::steady_clock::now();
+    forward_report = train_forward_map_placed(all, frames, boards, opt.forward, *forward);
+    forward_ms = ms_since(t_forward);
+    have_forward = true;
+  }
+  if (have_forward && opt.noise_weighted_kernel) {
+    const ForwardMapReport& noise = forward_report;
+    double largest = 0.0;
+    for (std::size_t c = 0; c < candidates.size(); ++c) {
+      const double sigma = noise.sigma[static_cast<std::size_t>(candidates[c])];
+      scale[c] = sigma > 0.0 ? 1.0 / sigma : 0.0;
+      largest = std::max(largest, scale[c]);
+    }
+    if (largest > 0.0) {
+      for (double& v : scale) v = v > 0.0 ? v / largest : 1.0;  // kernel weights scale^2 <= 1
+      const auto scaled = [&](algorithms::PlacedSamples s) {
+        for (std::size_t c = 0; c < candidates.size(); ++c)
+          s.features.col(static_cast<Eigen::Index>(c)) *= scale[c];
+        return s;
+      };
+      algorithms::KernelSelection weighted =
+          algorithms::select_kernel_model(scaled(samples), scaled(queries), ko);
+      if (weighted.x.cv_mse + weighted.y.cv_mse < sel.x.cv_mse + sel.y.cv_mse) {
+        sel = std::move(weighted);
+        report.noise_weighted = true;
+      }
+    }
+  }
+  if (!report.noise_weighted) std::fill(scale.begin(), scale.end(), 1.0);
 
   // Every board whose area changes is a feature; the ones the selection dropped stay in the
   // map with weight 0 in the kernel, so that the known-place test still compares them.
@@ -602,8 +642,10 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<StampedPose>
   for (std::size_t k = 0; k < features_in_map.size(); ++k) {
     const int c = features_in_map[k];
     model.board_index[k] = static_cast<std::uint8_t>(candidates[static_cast<std::size_t>(c)]);
-    model.feature_weight[k] =
-        std::find(sel.columns.begin(), sel.columns.end(), c) != sel.columns.end() ? 1.0F : 0.0F;
+    const bool chosen = std::find(sel.columns.begin(), sel.columns.end(), c) != sel.columns.end();
+    model.feature_weight[k] = chosen ? static_cast<float>(scale[static_cast<std::size_t>(c)] *
+                                                          scale[static_cast<std::size_t>(c)])
+                                     : 0.0F;
   }
   model.area_scale = area_scale;
   model.sigma_x = static_cast<float>(report.x.sigma);
@@ -625,12 +667,12 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<StampedPose>
   map.calibration.fix_rmse_x_m = static_cast<float>(pr.cv_rmse_placed_x_m);
   map.calibration.fix_rmse_y_m = static_cast<float>(pr.cv_rmse_placed_y_m);
 
-  if (opt.forward_map) {
-    const auto t_forward = std::chrono::steady_clock::now();
-    report.forward = train_forward_map_placed(all, frames, boards, opt.forward, map.forward);
+  if (have_forward) {
+    map.forward = *forward;
+    report.forward = forward_report;
     map.calibration.pass_spread_m = static_cast<float>(report.forward.pass_spread_m);
     report.has_forward_map = true;
-    report.forward_ms = ms_since(t_forward);
+    report.forward_ms = forward_ms;
   }
   return report;
 }

@@ -178,6 +178,11 @@ int main(int argc, char** argv) {
                       100.0 * step.cv_rmse_x_m, 100.0 * step.cv_rmse_y_m);
         }
       }
+      if (pl.used) {
+        std::printf("kernel        %s\n",
+                    r.noise_weighted ? "each board in units of its noise (CV prefers it)"
+                                     : "board areas as they are (CV prefers it to noise units)");
+      }
       std::printf("features      %s%s\n", board_list(r.boards, names).c_str(),
                   r.board_steps.size() > 1 || !opt.boards.empty() || all_boards ||
                           opt.method == sim_host::TrainMethod::kPaper

@@ -184,10 +184,12 @@ TEST(MavlinkCommands, SetPoseMovesTheOdometryThereAndIsAcked) {
   const mv::InboundCounters c = r.cycle->inbound_counters();
   EXPECT_EQ(c.commands_accepted, 1U);
   EXPECT_EQ(c.frames_in, 1U);
-  // Defaults for the spreads: 0 takes the config's init_position_sigma_m and 0.05 rad.
+  // Defaults for the spreads: 0 takes the start-up spread (filter.init_position_sigma_m, "auto"
+  // by default: this test's map has no calibration, so 5 cm) and 0.05 rad.
   r.send_and_run(tf::command(mv::kCmdSetPose, {-2.0F, 1.0F, -3.0F, 0, 0, 0, 0}));
   const double var_x = r.cycle->pose().covariance(0, 0);
-  EXPECT_NEAR(std::sqrt(var_x), r.config.filter.init_position_sigma_m, 0.01);
+  EXPECT_EQ(r.config.filter.init_position_sigma_m, -1.0);
+  EXPECT_NEAR(std::sqrt(var_x), 0.05, 0.01);
   EXPECT_NEAR(r.cycle->pose().pose.x_m, -2.0, 0.02);
   EXPECT_NEAR(r.cycle->pose().pose.y_m, -1.0, 0.02);
 }

@@ -56,6 +56,9 @@ enum class ObservationModel : std::uint8_t {
 
 struct ObservationConfig {
   ObservationModel model = ObservationModel::kBoards;
+  /// With the per-board model, also weigh the particles by the harmonic fix (a version 4 map's
+  /// calibration gives its width).
+  bool fix_term = true;
   algorithms::BoardModelParams boards;
 };
 

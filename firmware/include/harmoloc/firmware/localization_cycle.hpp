@@ -198,6 +198,11 @@ class LocalizationCycle {
   algorithms::KidnapParams kidnap_params_;
   /// The boards' model with the scene-dependent parts taken from the map's calibration.
   algorithms::BoardModelParams board_params_;
+  /// Width of the harmonic fix's term in the per-board update (0: none; maps before version 4).
+  double fix_term_sigma_m_ = 0.0;
+  /// Spread of the particles around a fix at start-up and at a kidnap's re-seed (metres).
+  double init_sigma_m_ = 0.05;
+  double reseed_sigma_m_ = 0.04;
   algorithms::KidnapVerdict kidnap_verdict_ = algorithms::KidnapVerdict::kNone;
   const char* pending_text_ = nullptr;  ///< a STATUSTEXT this cycle's publish sends
   /// The overrun alarm's STATUSTEXT, raised or cleared at the end of the previous cycle.

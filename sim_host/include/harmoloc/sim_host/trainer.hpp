@@ -45,6 +45,8 @@ struct TrainOptions {
   double max_extrapolation_m = 0.5;
   /// Harmonic samples when every frame is placed (evenly spread over the run; capacity 4096).
   int max_placed_samples = 2048;
+  /// Also try the kernel with each board in units of its noise (kept where CV prefers it).
+  bool noise_weighted_kernel = true;
   /// Frames held out in cross-validation (evenly spread).
   int max_cv_queries = 400;
   /// Cross-validation leaves out a held-out frame's own pass: the frames within this much
@@ -106,6 +108,7 @@ struct TrainReport {
   double dissimilarity_bound = 0;  ///< Bray-Curtis bound to the nearest sample
   double segment_ms = 0, train_ms = 0;
   PlacementReport placement;
+  bool noise_weighted = false;  ///< the kernel weighs each board by its noise (CV preferred it)
   bool has_forward_map = false;
   ForwardMapReport forward;
   double forward_ms = 0;
