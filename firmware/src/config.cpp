@@ -9,6 +9,8 @@
 
 #include <toml++/toml.h>
 
+#include "harmoloc/drivers/input_file.hpp"
+
 namespace harmoloc::firmware {
 
 namespace {
@@ -92,16 +94,13 @@ class Checker {
 // Reads a MAVLink signing key: exactly 32 raw bytes, or 64 hex digits (surrounding whitespace
 // allowed). Returns an empty string on success, else what is wrong.
 std::string read_signing_key(const std::string& path, std::array<std::uint8_t, 32>& key) {
-  // A regular file only: a FIFO or a terminal could block start-up.
-  std::error_code ec;
-  const auto status = std::filesystem::status(path, ec);
-  if (ec || !std::filesystem::exists(status)) return path + ": cannot open";
-  if (!std::filesystem::is_regular_file(status)) return path + ": not a regular file";
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return path + ": cannot open";
-  std::string bytes(200, '\0');
-  in.read(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-  bytes.resize(static_cast<std::size_t>(in.gcount()));
+  // A regular file only, opened non-blocking: a FIFO or a terminal could block start-up.
+  std::string bytes;
+  if (const std::string e =
+          drivers::read_regular_file(path, drivers::input_limits::kKeyBytes, bytes);
+      !e.empty()) {
+    return path + ": " + e;
+  }
   const std::string what = path + ": must hold a 32-byte key, raw or as 64 hex digits";
   if (bytes.size() == key.size()) {
     for (std::size_t i = 0; i < key.size(); ++i) key[i] = static_cast<std::uint8_t>(bytes[i]);
@@ -320,9 +319,18 @@ FirmwareConfig default_config() {
 FirmwareConfig load_config(const std::string& path) {
   const Checker check(path);
   toml::table root;
-  if (!std::ifstream(path)) throw std::runtime_error(path + ": cannot open");
+  // Whatever cannot be read as a config stops start-up (a directory or /dev/zero must not run
+  // on the built-in defaults); its size and nesting are checked before toml++ sees it.
+  std::string text;
+  if (const std::string e =
+          drivers::read_regular_file(path, drivers::input_limits::kTomlBytes, text);
+      !e.empty()) {
+    throw std::runtime_error(path + ": " + e);
+  }
+  if (const std::string e = drivers::check_toml_nesting(text); !e.empty())
+    throw std::runtime_error(path + ": " + e);
   try {
-    root = toml::parse_file(path);
+    root = toml::parse(text, path);
   } catch (const toml::parse_error& e) {
     std::ostringstream s;
     s << path << ": line " << e.source().begin.line << ": " << e.description();

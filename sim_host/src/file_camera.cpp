@@ -8,15 +8,19 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include "harmoloc/drivers/input_file.hpp"
 #include "harmoloc/sim_host/frame_index.hpp"
 
 namespace harmoloc::sim_host {
 
 namespace {
 
-// Reads up to @p size bytes; returns how many were read, or -1 on error. No allocation.
+// Reads up to @p size bytes of a regular file; returns how many were read, or -1 on error (a
+// FIFO, device or folder put in the frame's place is not read: opened non-blocking and refused,
+// so the cycle never waits on it). No allocation.
 long read_file(const char* path, std::uint8_t* buffer, std::size_t size) {
-  const int fd = ::open(path, O_RDONLY | O_CLOEXEC);
+  const char* why = nullptr;
+  const int fd = drivers::open_regular_file(path, &why);
   if (fd < 0) return -1;
   std::size_t got = 0;
   while (got < size) {
@@ -44,6 +48,9 @@ FileCamera::FileCamera(const std::string& dataset_dir, const DatasetMetadata& me
   for (const FrameEntry& e : entries) {
     const std::string path = (fs::path(dataset_dir) / e.file).string();
     std::error_code ec;
+    const auto status = fs::status(path, ec);
+    if (!ec && !fs::is_regular_file(status))
+      throw std::runtime_error("frame " + e.file + ": not a regular file");
     const auto size = fs::file_size(path, ec);
     if (ec) throw std::runtime_error("frame " + e.file + ": " + ec.message());
     if (metadata.pixel_format == hal::PixelFormat::kRgb24) {
