@@ -445,9 +445,10 @@ FirmwareConfig load_config(const std::string& path) {
   }
 
   if (const toml::table* t = check.section(root, "filter")) {
-    check.only(*t, "filter.",
-               {"particles", "seed", "alpha", "fix_sigma_m", "outlier_probability",
-                "resample_threshold", "init_position_sigma_m", "vision_only_speed_mps"});
+    check.only(
+        *t, "filter.",
+        {"particles", "seed", "alpha", "fix_sigma_m", "outlier_probability", "resample_threshold",
+         "init_position_sigma_m", "vision_only_speed_mps", "map_margin_m"});
     auto& f = c.filter;
     f.particles = static_cast<std::size_t>(
         check.integer(*t, "particles", "filter.", static_cast<std::int64_t>(f.particles), 16,
@@ -480,6 +481,7 @@ FirmwareConfig load_config(const std::string& path) {
         check.number(*t, "init_position_sigma_m", "filter.", f.init_position_sigma_m, 0.001, 10.0);
     f.vision_only_speed_mps =
         check.number(*t, "vision_only_speed_mps", "filter.", f.vision_only_speed_mps, 0.0, 10.0);
+    f.map_margin_m = check.number(*t, "map_margin_m", "filter.", f.map_margin_m, 0.0, 100.0);
   }
 
   read_observation(check, root, c.observation);

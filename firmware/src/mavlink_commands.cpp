@@ -46,7 +46,7 @@ void LocalizationCycle::service_link() {
   pose_.pose = e.mean;
   pose_.covariance = e.covariance;
   pose_.valid = true;
-  pose_.health = assess_health();
+  pose_.health = published_health();
 }
 
 mavlink::MavResult LocalizationCycle::execute(const mavlink::CommandLong& command,

@@ -70,7 +70,8 @@ std::string stats_json(const LocalizationCycle& cycle, const RunCounters& run) {
     << ", \"frames_dropped\": " << run.link.frames_dropped
     << ", \"bytes_sent\": " << run.link.bytes_sent << ", \"errors\": " << run.link.errors << "},\n"
     << "  \"localizer\": {\"fixes\": " << c.fixes_used << ", \"unknown_place\": " << c.unknown_place
-    << ", \"implausible_frames\": " << c.implausible_frames << "},\n"
+    << ", \"implausible_frames\": " << c.implausible_frames
+    << ", \"off_map_cycles\": " << c.off_map_cycles << "},\n"
     << "  \"filter\": {\"observation\": \"" << (cycle.uses_boards() ? "boards" : "fix")
     << "\", \"resamples\": " << c.resamples << ", \"no_consensus\": " << c.no_consensus
     << ", \"distrusted_board_frames\": " << c.distrusted_boards

@@ -102,6 +102,7 @@ outlier_probability = 0.1
 resample_threshold = 0.6
 init_position_sigma_m = 0.2
 vision_only_speed_mps = 0.5
+map_margin_m = 2.5
 
 [link]
 system_id = 7
@@ -158,6 +159,7 @@ heartbeat_hz = 2
   EXPECT_DOUBLE_EQ(c.filter.resample_threshold, 0.6);
   EXPECT_DOUBLE_EQ(c.filter.init_position_sigma_m, 0.2);
   EXPECT_DOUBLE_EQ(c.filter.vision_only_speed_mps, 0.5);
+  EXPECT_DOUBLE_EQ(c.filter.map_margin_m, 2.5);
 
   EXPECT_EQ(c.link.system_id, 7);
   EXPECT_EQ(c.link.component_id, 100);

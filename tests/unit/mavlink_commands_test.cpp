@@ -466,3 +466,75 @@ TEST(OverrunAlarm, NeedsOverrunsInARowAndIsOffOnAnUnpacedReplay) {
   EXPECT_EQ(replay.cycle->counters().overruns, 10U);
   EXPECT_EQ(replay.cycle->counters().overrun_alarms, 0U);
 }
+
+namespace {
+
+// Wheel counters that stand still and report every cycle (odometry present: the health can be
+// nominal).
+class StillEncoders final : public hh::WheelEncoders {
+ public:
+  hh::EncoderStatus read(std::uint64_t data_time_ns, hh::EncoderCounts& c) override {
+    c = hh::EncoderCounts{};
+    c.timestamp_ns = data_time_ns;
+    c.counter_bits = 32;
+    return hh::EncoderStatus::kFresh;
+  }
+  hh::EncoderCounters counters() const override { return {}; }
+};
+
+}  // namespace
+
+// A label at 1e30 once gave a map the firmware accepted and a pose of 3.7e28 m published as
+// nominal. The map loader now refuses such maps; and whatever puts the pose outside the mapped
+// region (the box around the training positions, plus filter.map_margin_m = 1 m), here a set-pose
+// command, the pose goes out invalid (quality -1, HEARTBEAT EMERGENCY, its own STATUSTEXT),
+// never nominal, and is counted. Back inside, it is nominal again.
+TEST(MapRegion, APoseOutsideTheMappedRegionIsNeverNominal) {
+  Rig r;
+  StillEncoders encoders;
+  r.camera.frames = true;
+  r.config.link.heartbeat_hz = 50.0;  // a HEARTBEAT every cycle
+  r.cycle = std::make_unique<hf::LocalizationCycle>(r.config, test_map(), r.camera, encoders,
+                                                    r.link, r.clock);
+  for (int i = 0; i < 5; ++i) r.run();
+  ASSERT_EQ(r.cycle->pose().health, hf::Health::kNominal);
+  // The training positions span x 1..3, y 0.5..2.5 (map frame): the region is x 0..4, y -0.5..3.5.
+  struct Case {
+    float x_frd, y_frd;
+    bool inside;
+  };
+  const Case cases[] = {{3.9F, -3.4F, true},   {4.2F, -1.0F, false}, {2.0F, 0.7F, false},
+                        {-0.5F, -1.0F, false}, {2.0F, -1.0F, true},  {1.0e4F, 0.0F, false}};
+  for (const Case& c : cases) {
+    auto frames =
+        r.send_and_run(tf::command(mv::kCmdSetPose, {c.x_frd, c.y_frd, 0, 0.001F, 0, 0, 0}));
+    const auto odo = of_type(frames, 331);
+    ASSERT_EQ(odo.size(), 1U);
+    const auto hb = of_type(frames, 0);
+    ASSERT_EQ(hb.size(), 1U);
+    if (c.inside) {
+      EXPECT_EQ(r.cycle->pose().health, hf::Health::kNominal) << c.x_frd << ", " << c.y_frd;
+      EXPECT_GE(odometry_of(odo[0]).quality, 0);
+      EXPECT_EQ(hb[0].payload[7], 4);  // ACTIVE
+    } else {
+      EXPECT_EQ(r.cycle->pose().health, hf::Health::kInvalid) << c.x_frd << ", " << c.y_frd;
+      EXPECT_EQ(odometry_of(odo[0]).quality, -1);
+      EXPECT_EQ(hb[0].payload[7], 6);  // EMERGENCY
+    }
+    // The following cycles (the filter, without the fixes' pull, stays near the set pose) keep it.
+    frames = r.run();
+    EXPECT_EQ(r.cycle->pose().health == hf::Health::kNominal, c.inside) << c.x_frd;
+  }
+  // Counted by what was published (a set-pose takes effect in the publish stage, after the
+  // cycle's health was counted by the update stage).
+  EXPECT_EQ(r.cycle->counters().off_map_cycles, 8U);
+  EXPECT_EQ(r.cycle->counters().cycles_in_health[4], 7U);
+  // Each change between on and off the map said so once.
+  std::vector<std::string> texts;
+  for (const auto& f : tf::decode(r.link.written, nullptr))
+    if (f.msg_id == 253) texts.push_back(statustext_of(f));
+  const std::vector<std::string> expected = {
+      "harmoloc: pose nominal", "harmoloc: pose invalid (outside the mapped region)",
+      "harmoloc: pose nominal", "harmoloc: pose invalid (outside the mapped region)"};
+  EXPECT_EQ(texts, expected);
+}

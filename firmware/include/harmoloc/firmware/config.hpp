@@ -46,6 +46,9 @@ struct FilterConfig {
   double resample_threshold = 0.5;    ///< resample when N_eff < this fraction of particles
   double init_position_sigma_m = 0.05;
   double vision_only_speed_mps = 0.3;  ///< how fast the robot may move when odometry is missing
+  /// How far beyond the mapped region (the box around the map's training positions and its
+  /// forward map) a pose may lie and still be published as more than invalid.
+  double map_margin_m = 1.0;
 };
 
 /// What the particles are weighed by.

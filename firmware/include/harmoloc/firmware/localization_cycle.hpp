@@ -74,6 +74,8 @@ struct CycleCounters {
   std::uint64_t fixes_used = 0;
   std::uint64_t unknown_place = 0;
   std::uint64_t implausible_frames = 0;  ///< frames no place on the map can look like (unused)
+  /// Cycles whose pose lay outside the mapped region plus filter.map_margin_m (published invalid).
+  std::uint64_t off_map_cycles = 0;
   std::uint64_t encoder_samples = 0;
   /// Encoder gaps the cloud spent diffusing (vision only), closed by their first sample: the
   /// cloud is moved to where the gap's travel takes the pose of the last sample before it.
@@ -160,6 +162,10 @@ class LocalizationCycle {
   mavlink::MavResult request_message(const mavlink::CommandLong& command);
   void send(std::size_t size);
   Health assess_health() const;
+  // The health that is published: assess_health(), except that a pose outside the mapped region
+  // (plus filter.map_margin_m) is invalid, never nominal.
+  Health published_health() const;
+  bool off_map(const algorithms::Pose2& pose) const;
   // The measurement update with the per-board model; returns whether the frame counts as vision.
   bool update_with_boards(
       const algorithms::AreaVector& areas,
@@ -225,6 +231,10 @@ class LocalizationCycle {
   std::uint64_t next_heartbeat_ns_ = 0;
   std::uint8_t reset_counter_ = 0;
   Health last_reported_health_ = Health::kNotInitialized;
+  bool last_reported_off_map_ = false;
+  /// The mapped region with its margin (map frame): where a published pose may be nominal.
+  double region_min_x_m_ = 0.0, region_max_x_m_ = 0.0;
+  double region_min_y_m_ = 0.0, region_max_y_m_ = 0.0;
   bool heartbeat_requested_ = false;  ///< a peer asked for one: sent this cycle, off schedule
   /// The re-seed of the filter the commands of this cycle ask for. Each replaces the whole
   /// cloud, so only the last is carried out: a burst of commands costs one re-seed.
