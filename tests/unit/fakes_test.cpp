@@ -227,6 +227,47 @@ TEST(FileCamera, StartupRejectsFramesThatAreNotRegularFiles) {
   ht::expect_one_line(construct_error(dir, m), "frame frames/000001.ppm: ", "not a regular file");
 }
 
+// A hole in the recording: with gap filling (camera-paced replays), one kNoFrame a period of the
+// metadata's rate (30 Hz here) until the next frame is due, and next_timestamp_ns() says when;
+// without it, the frames come back to back as before.
+TEST(FileCamera, HoleInTheRecordingGivesANoFrameTickEachPeriod) {
+  ht::TempDir dir;
+  hs::DatasetMetadata m = make_dataset(dir, 3);
+  constexpr std::uint64_t kP = 33'333'333;  // llround(1e9 / 30)
+  hs::write_frame_index(dir.path("frames.csv"), {{1'000'000'000ULL, "frames/000000.ppm"},
+                                                 {1'000'000'000ULL + kP, "frames/000001.ppm"},
+                                                 {1'200'000'000ULL, "frames/000002.ppm"}});
+  for (const bool fill : {true, false}) {
+    hs::FileCamera camera(dir.dir(), m);
+    camera.set_fill_gaps(fill);
+    std::vector<std::uint64_t> next;
+    std::vector<hal::CameraStatus> got;
+    hal::FrameView f;
+    for (;;) {
+      next.push_back(camera.next_timestamp_ns());
+      const hal::CameraStatus s = camera.acquire(f, 0);
+      if (s == hal::CameraStatus::kEnded) break;
+      got.push_back(s);
+    }
+    if (!fill) {
+      EXPECT_EQ(got.size(), 3U);
+      EXPECT_EQ(camera.gap_ticks(), 0U);
+      continue;
+    }
+    using S = hal::CameraStatus;
+    const std::vector<S> expected = {S::kFrame,   S::kFrame,   S::kNoFrame, S::kNoFrame,
+                                     S::kNoFrame, S::kNoFrame, S::kFrame};
+    EXPECT_EQ(got, expected);
+    EXPECT_EQ(camera.gap_ticks(), 4U);
+    EXPECT_EQ(camera.counters().frames, 3U);
+    const std::uint64_t t1 = 1'000'000'000ULL + kP;
+    EXPECT_EQ(next[2], t1 + kP);
+    EXPECT_EQ(next[5], t1 + 4 * kP);
+    EXPECT_EQ(next[6], 1'200'000'000ULL);
+    EXPECT_EQ(f.timestamp_ns, 1'200'000'000ULL);
+  }
+}
+
 TEST(FileCamera, NextFrameAfterACorruptOneStillWorks) {
   ht::TempDir dir;
   const hs::DatasetMetadata m = make_dataset(dir, 3);

@@ -257,6 +257,10 @@ int main(int argc, char** argv) {
   static firmware::LatencyHistogram wakeup_latency;
   // Timer pacing needs a clock to pace against: with --realtime only (a replay runs unpaced).
   const bool timer_paced = realtime && config.cycle.pacing == firmware::Pacing::kTimer;
+  // Camera-paced (and unpaced) replays see a hole in the recording as a live camera's cycle
+  // would: a no-frame cycle each period, so the health and the counters notice it. Timer pacing
+  // has those cycles from its own clock.
+  camera->set_fill_gaps(!timer_paced);
   static firmware::CyclePacer pacer(
       clock, config.cycle.pacing,
       static_cast<std::uint64_t>(std::llround(1e9 / config.cycle.rate_hz)));
