@@ -6,6 +6,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "harmoloc/sim_host/cli.hpp"
 #include "harmoloc/sim_host/report.hpp"
 
 int main(int argc, char** argv) {
@@ -26,7 +27,7 @@ int main(int argc, char** argv) {
   app.add_option("--budget-ms", budget_ms,
                  "budget to compare against (default: the one in the stats)");
   app.add_flag("--check", check, "exit 1 if the run does not fit the budget");
-  CLI11_PARSE(app, argc, argv);
+  if (const auto status = harmoloc::cli::parse(app, argc, argv)) return *status;
 
   try {
     const RunStats stats = read_stats(stats_path);

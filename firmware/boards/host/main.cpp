@@ -22,6 +22,7 @@
 #include "harmoloc/firmware/map_loader.hpp"
 #include "harmoloc/firmware/stats_report.hpp"
 #include "harmoloc/sim_host/area_log.hpp"
+#include "harmoloc/sim_host/cli.hpp"
 #include "harmoloc/sim_host/encoder_csv.hpp"
 #include "harmoloc/sim_host/file_camera.hpp"
 #include "harmoloc/sim_host/gpio_log_encoders.hpp"
@@ -156,7 +157,7 @@ int main(int argc, char** argv) {
                  "encoder counters run on across passes")
       ->check(CLI::Range(1U, 1000000U));
   app.add_flag("--quiet", quiet, "no progress output");
-  CLI11_PARSE(app, argc, argv);
+  if (const auto status = harmoloc::cli::parse(app, argc, argv)) return *status;
 
   // ---- start-up: everything is read, checked and reserved here ----
   firmware::FirmwareConfig config;

@@ -28,6 +28,7 @@
 #include "harmoloc/firmware/localization_cycle.hpp"
 #include "harmoloc/firmware/map_loader.hpp"
 #include "harmoloc/firmware/stats_report.hpp"
+#include "harmoloc/sim_host/cli.hpp"
 #include "harmoloc/sim_host/encoder_csv.hpp"
 #ifdef HARMOLOC_WITH_GPIOD
 #include "harmoloc/drivers/gpio_quadrature_encoders.hpp"
@@ -113,7 +114,7 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0.0, 1e9));
   app.add_option("--cycles", max_cycles, "stop after this many cycles (0: no limit)");
   app.add_flag("--quiet", quiet, "no progress output");
-  CLI11_PARSE(app, argc, argv);
+  if (const auto status = harmoloc::cli::parse(app, argc, argv)) return *status;
 
   // ---- start-up: everything is read, checked, opened and reserved here ----
   firmware::FirmwareConfig config;
