@@ -1,6 +1,8 @@
 #include "harmoloc/firmware/stats_report.hpp"
 
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <sstream>
 
 namespace harmoloc::firmware {
@@ -19,6 +21,8 @@ std::string stats_json(const LocalizationCycle& cycle, const RunCounters& run) {
   o.precision(6);
   o << "{\n  \"harmoloc_version\": \"" << HARMOLOC_VERSION << "\",\n"
     << "  \"board\": \"" << run.board << "\",\n"
+    << "  \"ended\": \"" << run.ended << "\",\n"
+    << "  \"outputs_failed\": " << run.outputs_failed << ",\n"
     << "  \"rate_hz\": " << run.rate_hz << ",\n"
     << "  \"budget_us\": " << us(cycle.budget_ns()) << ",\n"
     << "  \"cycles\": " << c.cycles << ",\n"
@@ -104,6 +108,18 @@ std::string stats_json(const LocalizationCycle& cycle, const RunCounters& run) {
   }
   o << "\n}\n";
   return o.str();
+}
+
+std::string write_stats(const std::string& path, const std::string& json) {
+  errno = 0;
+  std::FILE* f = std::fopen(path.c_str(), "w");
+  if (f == nullptr) return path + ": cannot write (" + std::strerror(errno) + ")";
+  const bool wrote = std::fwrite(json.data(), 1, json.size(), f) == json.size();
+  int error = wrote ? 0 : errno;
+  if (std::fclose(f) != 0 && error == 0) error = errno;
+  if (!wrote || error != 0)
+    return path + ": write failed (" + std::strerror(error != 0 ? error : EIO) + ")";
+  return {};
 }
 
 }  // namespace harmoloc::firmware
