@@ -490,7 +490,8 @@ FirmwareConfig load_config(const std::string& path) {
   if (const toml::table* t = check.section(root, "link")) {
     check.only(*t, "link.",
                {"system_id", "component_id", "baud", "heartbeat_hz", "accept_system_ids",
-                "accept_component_ids", "signing_key_file", "link_id", "device"});
+                "accept_component_ids", "signing_key_file", "signing_state_file",
+                "signing_max_ahead_s", "signing_clock", "link_id", "device"});
     c.link.system_id = static_cast<std::uint8_t>(
         check.integer(*t, "system_id", "link.", c.link.system_id, 1, 255));
     c.link.component_id = static_cast<std::uint8_t>(
@@ -524,6 +525,28 @@ FirmwareConfig load_config(const std::string& path) {
       if (!e.empty()) check.fail(t->get("signing_key_file"), "link.signing_key_file: " + e);
       c.link.has_signing_key = true;
     }
+    const std::string state = check.text(*t, "signing_state_file", "link.", "");
+    if (!state.empty()) {
+      std::filesystem::path state_path(state);
+      if (state_path.is_relative())
+        state_path = std::filesystem::path(path).parent_path() / state_path;
+      c.link.signing_state_file = state_path.string();
+    }
+    // Without it, a signed command captured on the line could be replayed after a restart.
+    if (c.link.has_signing_key && c.link.signing_state_file.empty()) {
+      check.fail(t->get("signing_key_file"),
+                 "link.signing_key_file needs link.signing_state_file (where the replay "
+                 "protection survives a restart, e.g. /var/lib/harmoloc/signing.state)");
+    }
+    c.link.signing_max_ahead_s =
+        check.number(*t, "signing_max_ahead_s", "link.", c.link.signing_max_ahead_s, 1.0, 86400.0);
+    const std::string clock = check.text(*t, "signing_clock", "link.", "wall");
+    if (clock == "wall")
+      c.link.signing_peer_clock = false;
+    else if (clock == "peer")
+      c.link.signing_peer_clock = true;
+    else
+      check.fail(t->get("signing_clock"), "link.signing_clock must be \"wall\" or \"peer\"");
   }
   if (const toml::table* t = check.section(root, "realtime")) {
     check.only(*t, "realtime.", {"enabled", "priority", "cpu", "lock_memory", "prefault_stack_kb"});

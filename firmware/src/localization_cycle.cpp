@@ -52,7 +52,14 @@ LocalizationCycle::LocalizationCycle(const FirmwareConfig& config, const algorit
   filter_.configure(config.filter.particles, config.filter.seed, config.filter.noise);
   reliability_.reset(config.observation.boards);
   if (use_boards_) board_maxima_ = algorithms::board_maxima(map.forward);
-  if (config.link.has_signing_key) signer_.configure(config.link.signing_key, config.link.link_id);
+  if (config.link.has_signing_key) {
+    mavlink::SigningOptions options;
+    options.max_ahead = static_cast<std::uint64_t>(config.link.signing_max_ahead_s *
+                                                   mavlink::kSigningUnitsPerSecond);
+    options.peer_clock = config.link.signing_peer_clock;
+    options.persistent = !config.link.signing_state_file.empty();
+    signer_.configure(config.link.signing_key, config.link.link_id, options);
+  }
   mavlink_.set_signer(&signer_);
   colour_table_storage_.reset(new std::uint8_t[algorithms::MaskTable::kStorageBytes]);
   if (pixel_format == hal::PixelFormat::kYuyv)

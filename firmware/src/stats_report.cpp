@@ -90,6 +90,7 @@ std::string stats_json(const LocalizationCycle& cycle, const RunCounters& run) {
     << ", \"rejected_unsigned\": " << in.rejected_unsigned
     << ", \"rejected_bad_signature\": " << in.rejected_bad_signature
     << ", \"rejected_replay\": " << in.rejected_replay
+    << ", \"rejected_future\": " << in.rejected_future
     << ", \"rejected_source\": " << in.rejected_source
     << ", \"ignored_messages\": " << in.ignored_messages
     << ", \"saturated_cycles\": " << in.saturated_cycles << "}";

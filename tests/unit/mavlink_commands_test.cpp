@@ -10,10 +10,13 @@
 #include <random>
 
 #include "harmoloc/algorithms/map_codec.hpp"
+#include "harmoloc/drivers/record_file.hpp"
 #include "harmoloc/firmware/config.hpp"
 #include "harmoloc/firmware/localization_cycle.hpp"
 #include "harmoloc/firmware/mavlink_inbound.hpp"
+#include "harmoloc/firmware/signing_startup.hpp"
 #include "mavlink_test_frames.hpp"
+#include "test_support.hpp"
 
 namespace ha = harmoloc::algorithms;
 namespace hf = harmoloc::firmware;
@@ -537,4 +540,74 @@ TEST(MapRegion, APoseOutsideTheMappedRegionIsNeverNominal) {
       "harmoloc: pose nominal", "harmoloc: pose invalid (outside the mapped region)",
       "harmoloc: pose nominal", "harmoloc: pose invalid (outside the mapped region)"};
   EXPECT_EQ(texts, expected);
+}
+
+// Issue 16 item 2: a signed set-pose captured on the line was accepted again after the firmware
+// restarted (the replay protection lived in memory only). The cycle now persists the signing
+// state (drivers::RecordFile, written by its own thread) and the next run restores it: the
+// captured command is a replay after a clean stop and after a crash alike. After a clean stop a
+// fresh command is taken at once; after a crash the last renewal (up to two minutes ahead) holds
+// until the clock passes it. Without the restore (the negative control) the replay is obeyed.
+TEST(SigningPersistence, ACapturedCommandIsNotTakenAgainAfterARestart) {
+  tf::Key key{};
+  for (std::size_t i = 0; i < key.size(); ++i) key[i] = static_cast<std::uint8_t>(3 * i + 1);
+  const std::uint64_t wall_us = mv::kSigningEpochUnixUs + 86'400'000'000ULL;  // 2015-01-02
+  const std::uint64_t now = mv::signing_timestamp_from_unix_us(wall_us);
+  enum class Stop { kClean, kCrash, kNoRestore };
+  for (const Stop stop : {Stop::kClean, Stop::kCrash, Stop::kNoRestore}) {
+    SCOPED_TRACE(stop == Stop::kClean   ? "clean stop"
+                 : stop == Stop::kCrash ? "crash"
+                                        : "no restore");
+    harmoloc::test::TempDir dir;
+    // One run of the firmware: its start-up, a few cycles, then its stop.
+    struct Run {
+      Run(const tf::Key& key, const std::string& state_file, std::uint64_t wall_us, bool restore)
+          : rig(&key) {
+        // The negative control is the firmware before the fix: no state file at all.
+        if (restore) rig.config.link.signing_state_file = state_file;
+        rig.start();
+        rig.cycle->set_signing_time(wall_us);
+        if (!restore) return;
+        hf::SigningStartup s;
+        EXPECT_EQ(hf::start_signing_state(rig.config.link,
+                                          mv::signing_timestamp_from_unix_us(wall_us), s),
+                  "");
+        store.start(state_file, s.durable);
+        rig.cycle->restore_signing_state(s.restored, &store, s.durable);
+      }
+      std::size_t acks(const tf::Bytes& bytes) {
+        return of_type(rig.send_and_run(bytes), 77).size();
+      }
+      Rig rig;
+      harmoloc::drivers::RecordFile store;
+    };
+    const std::string state_file = dir.path("signing.state");
+    const tf::Bytes captured =
+        tf::command(mv::kCmdSetPose, {1, 1, 0, 0, 0, 0, 0}, 255, 190, &key, now + 100);
+    {
+      Run first(key, state_file, wall_us, true);
+      EXPECT_EQ(first.acks(captured), 1U);
+      for (int i = 0; i < 5; ++i) first.rig.run();
+      first.store.stop();
+      if (stop == Stop::kClean) {
+        EXPECT_EQ(
+            hf::write_signing_state(first.rig.config.link, first.rig.cycle->final_signing_state()),
+            "");
+      }
+    }
+    // The restart, one second later.
+    Run second(key, state_file, wall_us + 1'000'000, stop != Stop::kNoRestore);
+    const std::size_t replayed = second.acks(captured);
+    const tf::Bytes fresh =
+        tf::command(mv::kCmdSetPose, {2, 1, 0, 0, 0, 0, 0}, 255, 190, &key, now + 100'000 + 500);
+    const std::size_t fresh_acks = second.acks(fresh);
+    const mv::InboundCounters c = second.rig.cycle->inbound_counters();
+    if (stop == Stop::kNoRestore) {
+      EXPECT_EQ(replayed, 1U) << "the negative control did not replay";
+      continue;
+    }
+    EXPECT_EQ(replayed, 0U) << "a captured command was obeyed after the restart";
+    EXPECT_EQ(c.rejected_replay, stop == Stop::kClean ? 1U : 2U);
+    EXPECT_EQ(fresh_acks, stop == Stop::kClean ? 1U : 0U);
+  }
 }

@@ -14,6 +14,7 @@
 
 #include "harmoloc/drivers/monotonic_clock.hpp"
 #include "harmoloc/drivers/realtime_setup.hpp"
+#include "harmoloc/drivers/record_file.hpp"
 #include "harmoloc/drivers/serial_link.hpp"
 #include "harmoloc/drivers/stop_signals.hpp"
 #include "harmoloc/firmware/config.hpp"
@@ -21,6 +22,7 @@
 #include "harmoloc/firmware/eigen_guard.hpp"
 #include "harmoloc/firmware/localization_cycle.hpp"
 #include "harmoloc/firmware/map_loader.hpp"
+#include "harmoloc/firmware/signing_startup.hpp"
 #include "harmoloc/firmware/stats_report.hpp"
 #include "harmoloc/sim_host/area_log.hpp"
 #include "harmoloc/sim_host/cli.hpp"
@@ -313,11 +315,25 @@ int main(int argc, char** argv) {
   auto cycle = std::make_unique<firmware::LocalizationCycle>(config, g_map, cycle_camera, *encoders,
                                                              link, clock, meta.pixel_format);
   cycle->set_overrun_alarm(realtime);
-  // The signing clock starts at the wall time (MAVLink signing timestamps are wall-clock based).
-  cycle->set_signing_time(
+  // The signing clock starts at the wall time (MAVLink signing timestamps are wall-clock based),
+  // unless the board has no clock (link.signing_clock = "peer": the first signed frame sets it);
+  // the replay protection carries on from what the previous run persisted.
+  const auto wall_us =
       static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::microseconds>(
                                      std::chrono::system_clock::now().time_since_epoch())
-                                     .count()));
+                                     .count());
+  if (!config.link.signing_peer_clock) cycle->set_signing_time(wall_us);
+  static drivers::RecordFile signing_store;
+  if (config.link.has_signing_key) {
+    firmware::SigningStartup signing;
+    if (const std::string e = firmware::start_signing_state(
+            config.link, firmware::mavlink::signing_timestamp_from_unix_us(wall_us), signing);
+        !e.empty()) {
+      return fail(e);
+    }
+    signing_store.start(config.link.signing_state_file, signing.durable);
+    cycle->restore_signing_state(signing.restored, &signing_store, signing.durable);
+  }
   if (!quiet) {
     std::fprintf(stderr,
                  "harmoloc: %zu frames %ux%u, %zu encoder %s, map of %u samples on %u boards, "
@@ -390,11 +406,20 @@ int main(int argc, char** argv) {
   if (!quiet && drivers::stop_signal() != 0)
     std::fprintf(stderr, "harmoloc: stopped by %s\n", run.ended);
   // Every output is flushed and closed whatever happened to the others, then the stats written.
+  if (config.link.has_signing_key) {
+    signing_store.stop();
+    if (const std::string e =
+            firmware::write_signing_state(config.link, cycle->final_signing_state());
+        !e.empty()) {
+      std::fprintf(stderr, "harmoloc: %s\n", e.c_str());
+      ++run.outputs_failed;
+    }
+  }
   g_trajectory.close();
   g_fixes.close();
   g_areas.close();
   const bool recorded = recorder.close();
-  run.outputs_failed = watch.finish();
+  run.outputs_failed += watch.finish();
   if (!record_encoders_path.empty() && recorded) {
     if (!quiet) {
       std::fprintf(stderr,

@@ -19,6 +19,7 @@
 
 #include "harmoloc/drivers/monotonic_clock.hpp"
 #include "harmoloc/drivers/realtime_setup.hpp"
+#include "harmoloc/drivers/record_file.hpp"
 #include "harmoloc/drivers/serial_link.hpp"
 #include "harmoloc/drivers/socketcan_encoders.hpp"
 #include "harmoloc/drivers/stop_signals.hpp"
@@ -28,6 +29,7 @@
 #include "harmoloc/firmware/eigen_guard.hpp"
 #include "harmoloc/firmware/localization_cycle.hpp"
 #include "harmoloc/firmware/map_loader.hpp"
+#include "harmoloc/firmware/signing_startup.hpp"
 #include "harmoloc/firmware/stats_report.hpp"
 #include "harmoloc/sim_host/cli.hpp"
 #include "harmoloc/sim_host/encoder_csv.hpp"
@@ -240,10 +242,25 @@ int main(int argc, char** argv) {
   static firmware::CyclePacer pacer(
       clock, config.cycle.pacing,
       static_cast<std::uint64_t>(std::llround(1e9 / config.cycle.rate_hz)));
-  cycle->set_signing_time(
+  // The signing clock starts at the wall time (MAVLink signing timestamps are wall-clock based),
+  // unless the board has no clock (link.signing_clock = "peer": the first signed frame sets it);
+  // the replay protection carries on from what the previous run persisted.
+  const auto wall_us =
       static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::microseconds>(
                                      std::chrono::system_clock::now().time_since_epoch())
-                                     .count()));
+                                     .count());
+  if (!config.link.signing_peer_clock) cycle->set_signing_time(wall_us);
+  static drivers::RecordFile signing_store;
+  if (config.link.has_signing_key) {
+    firmware::SigningStartup signing;
+    if (const std::string e = firmware::start_signing_state(
+            config.link, firmware::mavlink::signing_timestamp_from_unix_us(wall_us), signing);
+        !e.empty()) {
+      return fail(e);
+    }
+    signing_store.start(config.link.signing_state_file, signing.durable);
+    cycle->restore_signing_state(signing.restored, &signing_store, signing.durable);
+  }
   if (!quiet) {
     std::fprintf(stderr, "harmoloc: camera %s\n", camera_text.c_str());
     std::fprintf(stderr, "harmoloc: encoders %s\n", encoders_text.c_str());
@@ -308,6 +325,15 @@ int main(int argc, char** argv) {
   if (!quiet && drivers::stop_signal() != 0)
     std::fprintf(stderr, "harmoloc: stopped by %s\n", run.ended);
   // Every output is flushed and closed whatever happened to the others, then the stats written.
+  if (config.link.has_signing_key) {
+    signing_store.stop();
+    if (const std::string e =
+            firmware::write_signing_state(config.link, cycle->final_signing_state());
+        !e.empty()) {
+      std::fprintf(stderr, "harmoloc: %s\n", e.c_str());
+      ++run.outputs_failed;
+    }
+  }
   if (trajectory != nullptr && std::fclose(trajectory) != 0 && trajectory_error == 0) {
     trajectory_error = errno != 0 ? errno : EIO;
     std::fprintf(stderr, "harmoloc: %s: write failed (%s)\n", trajectory_path.c_str(),

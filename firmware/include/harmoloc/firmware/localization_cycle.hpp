@@ -20,6 +20,7 @@
 #include "harmoloc/firmware/mavlink_v2.hpp"
 #include "harmoloc/hal/camera.hpp"
 #include "harmoloc/hal/clock.hpp"
+#include "harmoloc/hal/persistent_record.hpp"
 #include "harmoloc/hal/pose_link.hpp"
 #include "harmoloc/hal/wheel_encoders.hpp"
 
@@ -133,8 +134,17 @@ class LocalizationCycle {
   mavlink::InboundCounters inbound_counters() const { return receiver_.counters(); }
 
   /// Sets the link's signing clock to the wall time @p unix_time_us (start-up; a board without
-  /// a real-time clock leaves it, and the clock follows the peers' signed frames).
+  /// a real-time clock, link.signing_clock = "peer", leaves it: its first accepted signed frame
+  /// sets it).
   void set_signing_time(std::uint64_t unix_time_us);
+  /// Start-up, with a signing key: what the previous run persisted (nothing at or below its
+  /// high-water mark is accepted), and where the cycle persists the state from now on (ahead
+  /// of need, at most once a second; firmware/mavlink_signing.hpp). @p store may be nullptr.
+  void restore_signing_state(const mavlink::SigningState& state, hal::PersistentRecord* store,
+                             std::uint64_t durable_high_water);
+  /// The signing state to write at a clean stop.
+  mavlink::SigningState final_signing_state() const { return signer_.final_state(); }
+  const mavlink::Signer& signer() const { return signer_; }
 
   /// Live boards (real devices): the data clock is the monotonic clock the devices stamp their
   /// data with. A cycle without a frame takes the clock's time instead of the last frame's time
@@ -203,6 +213,8 @@ class LocalizationCycle {
   std::uint32_t overrun_streak_ = 0;  ///< overruns in a row (alarm off) or cycles within (on)
   mavlink::Encoder mavlink_;
   mavlink::Signer signer_;
+  hal::PersistentRecord* signing_store_ = nullptr;
+  std::array<char, hal::PersistentRecord::kMaxBytes> signing_record_{};
   mavlink::CommandReceiver receiver_;
   const bool use_boards_;
   mavlink::FrameBuffer frame_buffer_{};
