@@ -1,11 +1,11 @@
 // harmoloc-budget: the timing budget table of a run, from the firmware's stats JSON.
 #include <cstdio>
-#include <fstream>
 #include <sstream>
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "harmoloc/drivers/input_file.hpp"
 #include "harmoloc/sim_host/cli.hpp"
 #include "harmoloc/sim_host/report.hpp"
 
@@ -45,8 +45,10 @@ int main(int argc, char** argv) {
     }
     const std::uint64_t overruns = stats.overruns.value_or(0);
     std::printf("overruns   %llu\n", static_cast<unsigned long long>(overruns));
-    std::ifstream in(stats_path);
-    const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
+    std::string text;  // read_stats checked the file; read again the same careful way
+    harmoloc::drivers::read_regular_file(stats_path, harmoloc::drivers::input_limits::kStatsBytes,
+                                         text);
+    const nlohmann::json j = nlohmann::json::parse(text, nullptr, false);
     if (j.is_object() && j.contains("pacing") && j["pacing"].is_object()) {
       const auto& p = j["pacing"];
       std::printf("pacing     %s, %llu skipped ticks, %llu overrun alarms\n",
