@@ -10,4 +10,4 @@ target_link_libraries(harmoloc_report
   PRIVATE harmoloc_warnings)
 
 add_executable(harmoloc-report ${CMAKE_CURRENT_SOURCE_DIR}/tools/harmoloc_report.cpp)
-target_link_libraries(harmoloc-report PRIVATE harmoloc_report CLI11::CLI11 harmoloc_warnings)
+target_link_libraries(harmoloc-report PRIVATE harmoloc_report harmoloc_cli harmoloc_warnings)

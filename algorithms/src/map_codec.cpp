@@ -328,6 +328,10 @@ MapError decode_map(const std::uint8_t* data, std::size_t size, MapFile& map) {
     if (!std::isfinite(m.target_x_m[i]) || !std::isfinite(m.target_y_m[i])) {
       return MapError{"sample coordinate not finite", r.pos()};
     }
+    if (!(std::fabs(m.target_x_m[i]) <= kMaxMapCoordinate_m &&
+          std::fabs(m.target_y_m[i]) <= kMaxMapCoordinate_m)) {
+      return MapError{"sample coordinate farther than 10 km from the origin", r.pos()};
+    }
   }
   map.forward.columns = map.forward.rows = 0;
   if (version >= 3) {

@@ -9,6 +9,8 @@
 
 #include <toml++/toml.h>
 
+#include "harmoloc/drivers/input_file.hpp"
+
 namespace harmoloc::firmware {
 
 namespace {
@@ -104,16 +106,13 @@ class Checker {
 // Reads a MAVLink signing key: exactly 32 raw bytes, or 64 hex digits (surrounding whitespace
 // allowed). Returns an empty string on success, else what is wrong.
 std::string read_signing_key(const std::string& path, std::array<std::uint8_t, 32>& key) {
-  // A regular file only: a FIFO or a terminal could block start-up.
-  std::error_code ec;
-  const auto status = std::filesystem::status(path, ec);
-  if (ec || !std::filesystem::exists(status)) return path + ": cannot open";
-  if (!std::filesystem::is_regular_file(status)) return path + ": not a regular file";
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return path + ": cannot open";
-  std::string bytes(200, '\0');
-  in.read(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-  bytes.resize(static_cast<std::size_t>(in.gcount()));
+  // A regular file only, opened non-blocking: a FIFO or a terminal could block start-up.
+  std::string bytes;
+  if (const std::string e =
+          drivers::read_regular_file(path, drivers::input_limits::kKeyBytes, bytes);
+      !e.empty()) {
+    return path + ": " + e;
+  }
   const std::string what = path + ": must hold a 32-byte key, raw or as 64 hex digits";
   if (bytes.size() == key.size()) {
     for (std::size_t i = 0; i < key.size(); ++i) key[i] = static_cast<std::uint8_t>(bytes[i]);
@@ -341,9 +340,18 @@ FirmwareConfig default_config() {
 FirmwareConfig load_config(const std::string& path) {
   const Checker check(path);
   toml::table root;
-  if (!std::ifstream(path)) throw std::runtime_error(path + ": cannot open");
+  // Whatever cannot be read as a config stops start-up (a directory or /dev/zero must not run
+  // on the built-in defaults); its size and nesting are checked before toml++ sees it.
+  std::string text;
+  if (const std::string e =
+          drivers::read_regular_file(path, drivers::input_limits::kTomlBytes, text);
+      !e.empty()) {
+    throw std::runtime_error(path + ": " + e);
+  }
+  if (const std::string e = drivers::check_toml_nesting(text); !e.empty())
+    throw std::runtime_error(path + ": " + e);
   try {
-    root = toml::parse_file(path);
+    root = toml::parse(text, path);
   } catch (const toml::parse_error& e) {
     std::ostringstream s;
     s << path << ": line " << e.source().begin.line << ": " << e.description();
@@ -458,9 +466,10 @@ FirmwareConfig load_config(const std::string& path) {
   }
 
   if (const toml::table* t = check.section(root, "filter")) {
-    check.only(*t, "filter.",
-               {"particles", "seed", "alpha", "fix_sigma_m", "outlier_probability",
-                "resample_threshold", "init_position_sigma_m", "vision_only_speed_mps"});
+    check.only(
+        *t, "filter.",
+        {"particles", "seed", "alpha", "fix_sigma_m", "outlier_probability", "resample_threshold",
+         "init_position_sigma_m", "vision_only_speed_mps", "map_margin_m"});
     auto& f = c.filter;
     f.particles = static_cast<std::size_t>(
         check.integer(*t, "particles", "filter.", static_cast<std::int64_t>(f.particles), 16,
@@ -493,6 +502,7 @@ FirmwareConfig load_config(const std::string& path) {
                                                    f.init_position_sigma_m, 0.001, 10.0);
     f.vision_only_speed_mps =
         check.number(*t, "vision_only_speed_mps", "filter.", f.vision_only_speed_mps, 0.0, 10.0);
+    f.map_margin_m = check.number(*t, "map_margin_m", "filter.", f.map_margin_m, 0.0, 100.0);
   }
 
   read_observation(check, root, c.observation);
@@ -501,7 +511,8 @@ FirmwareConfig load_config(const std::string& path) {
   if (const toml::table* t = check.section(root, "link")) {
     check.only(*t, "link.",
                {"system_id", "component_id", "baud", "heartbeat_hz", "accept_system_ids",
-                "accept_component_ids", "signing_key_file", "link_id", "device"});
+                "accept_component_ids", "signing_key_file", "signing_state_file",
+                "signing_max_ahead_s", "signing_clock", "link_id", "device"});
     c.link.system_id = static_cast<std::uint8_t>(
         check.integer(*t, "system_id", "link.", c.link.system_id, 1, 255));
     c.link.component_id = static_cast<std::uint8_t>(
@@ -535,6 +546,28 @@ FirmwareConfig load_config(const std::string& path) {
       if (!e.empty()) check.fail(t->get("signing_key_file"), "link.signing_key_file: " + e);
       c.link.has_signing_key = true;
     }
+    const std::string state = check.text(*t, "signing_state_file", "link.", "");
+    if (!state.empty()) {
+      std::filesystem::path state_path(state);
+      if (state_path.is_relative())
+        state_path = std::filesystem::path(path).parent_path() / state_path;
+      c.link.signing_state_file = state_path.string();
+    }
+    // Without it, a signed command captured on the line could be replayed after a restart.
+    if (c.link.has_signing_key && c.link.signing_state_file.empty()) {
+      check.fail(t->get("signing_key_file"),
+                 "link.signing_key_file needs link.signing_state_file (where the replay "
+                 "protection survives a restart, e.g. /var/lib/harmoloc/signing.state)");
+    }
+    c.link.signing_max_ahead_s =
+        check.number(*t, "signing_max_ahead_s", "link.", c.link.signing_max_ahead_s, 1.0, 86400.0);
+    const std::string clock = check.text(*t, "signing_clock", "link.", "wall");
+    if (clock == "wall")
+      c.link.signing_peer_clock = false;
+    else if (clock == "peer")
+      c.link.signing_peer_clock = true;
+    else
+      check.fail(t->get("signing_clock"), "link.signing_clock must be \"wall\" or \"peer\"");
   }
   if (const toml::table* t = check.section(root, "realtime")) {
     check.only(*t, "realtime.", {"enabled", "priority", "cpu", "lock_memory", "prefault_stack_kb"});

@@ -72,13 +72,44 @@ LocalizationCycle::LocalizationCycle(const FirmwareConfig& config, const algorit
     board_params_.position_spread_m = static_cast<double>(map.calibration.pass_spread_m);
   reliability_.reset(board_params_);
   if (use_boards_) board_maxima_ = algorithms::board_maxima(map.forward);
-  if (config.link.has_signing_key) signer_.configure(config.link.signing_key, config.link.link_id);
+  if (config.link.has_signing_key) {
+    mavlink::SigningOptions options;
+    options.max_ahead = static_cast<std::uint64_t>(config.link.signing_max_ahead_s *
+                                                   mavlink::kSigningUnitsPerSecond);
+    options.peer_clock = config.link.signing_peer_clock;
+    options.persistent = !config.link.signing_state_file.empty();
+    signer_.configure(config.link.signing_key, config.link.link_id, options);
+  }
   mavlink_.set_signer(&signer_);
   colour_table_storage_.reset(new std::uint8_t[algorithms::MaskTable::kStorageBytes]);
   if (pixel_format == hal::PixelFormat::kYuyv)
     yuyv_table_.build(classifier_, colour_table_storage_.get());
   else
     colour_table_.build(classifier_, colour_table_storage_.get());
+  // The mapped region: the box around the training positions and the forward map's cells.
+  const algorithms::HarmonicModel& m = map.model;
+  double x0 = 0.0, x1 = 0.0, y0 = 0.0, y1 = 0.0;
+  for (std::size_t i = 0; i < m.sample_count; ++i) {
+    const auto x = static_cast<double>(m.target_x_m[i]), y = static_cast<double>(m.target_y_m[i]);
+    x0 = i == 0 ? x : std::min(x0, x);
+    x1 = i == 0 ? x : std::max(x1, x);
+    y0 = i == 0 ? y : std::min(y0, y);
+    y1 = i == 0 ? y : std::max(y1, y);
+  }
+  if (map.forward.present()) {
+    const algorithms::ForwardMap& f = map.forward;
+    const auto fx0 = static_cast<double>(f.origin_x_m), fy0 = static_cast<double>(f.origin_y_m);
+    const auto cell = static_cast<double>(f.cell_m);
+    x0 = std::min(x0, fx0);
+    y0 = std::min(y0, fy0);
+    x1 = std::max(x1, fx0 + cell * (f.columns - 1U));
+    y1 = std::max(y1, fy0 + cell * (f.rows - 1U));
+  }
+  const double margin = config.filter.map_margin_m;
+  region_min_x_m_ = x0 - margin;
+  region_max_x_m_ = x1 + margin;
+  region_min_y_m_ = y0 - margin;
+  region_max_y_m_ = y1 + margin;
 }
 
 algorithms::KidnapParams derived_kidnap_params(const algorithms::KidnapParams& configured,
@@ -129,6 +160,18 @@ Health LocalizationCycle::assess_health() const {
   if (vision && odometry) return Health::kNominal;
   if (odometry) return Health::kOdometryOnly;
   if (vision) return Health::kVisionOnly;
+  return Health::kInvalid;
+}
+
+bool LocalizationCycle::off_map(const Pose2& p) const {
+  // Written so that a NaN is off the map too.
+  return !(p.x_m >= region_min_x_m_ && p.x_m <= region_max_x_m_ && p.y_m >= region_min_y_m_ &&
+           p.y_m <= region_max_y_m_);
+}
+
+Health LocalizationCycle::published_health() const {
+  const Health h = assess_health();
+  if (h == Health::kNotInitialized || !off_map(pose_.pose)) return h;
   return Health::kInvalid;
 }
 
@@ -348,7 +391,7 @@ CycleResult LocalizationCycle::run(std::uint64_t acquire_deadline_ns, bool have_
       }
     }
     pose_.data_time_ns = data_time_ns_;
-    pose_.health = assess_health();
+    pose_.health = published_health();
     ++counters_.cycles_in_health[static_cast<std::size_t>(pose_.health)];
   }
 
@@ -531,7 +574,10 @@ void LocalizationCycle::publish() {
     next_heartbeat_ns_ = (next_heartbeat_ns_ == 0 ? data_time_ns_ : next_heartbeat_ns_) + step;
     if (next_heartbeat_ns_ <= data_time_ns_) next_heartbeat_ns_ = data_time_ns_ + step;
   }
-  if (health != last_reported_health_) {
+  // Invalid because the pose is off the map says so in its own words.
+  const bool off = pose_.valid && health == Health::kInvalid && off_map(pose_.pose);
+  if (off) ++counters_.off_map_cycles;
+  if (health != last_reported_health_ || off != last_reported_off_map_) {
     static constexpr const char* kText[] = {
         "harmoloc: waiting for a first fix", "harmoloc: pose nominal",
         "harmoloc: odometry only (no camera fix)", "harmoloc: vision only (no encoder data)",
@@ -539,8 +585,12 @@ void LocalizationCycle::publish() {
     const std::uint8_t severity = health == Health::kNominal   ? mavlink::kSeverityInfo
                                   : health == Health::kInvalid ? mavlink::kSeverityCritical
                                                                : mavlink::kSeverityWarning;
-    send(mavlink_.statustext(severity, kText[static_cast<std::size_t>(health)], frame_buffer_));
+    send(mavlink_.statustext(severity,
+                             off ? "harmoloc: pose invalid (outside the mapped region)"
+                                 : kText[static_cast<std::size_t>(health)],
+                             frame_buffer_));
     last_reported_health_ = health;
+    last_reported_off_map_ = off;
   }
   if (pending_overrun_text_ != nullptr) {
     send(mavlink_.statustext(overrun_alarm_ ? mavlink::kSeverityWarning : mavlink::kSeverityInfo,

@@ -1,26 +1,20 @@
 #include "harmoloc/firmware/map_loader.hpp"
 
-#include <cstdio>
-#include <filesystem>
 #include <sstream>
-#include <vector>
+
+#include "harmoloc/drivers/input_file.hpp"
 
 namespace harmoloc::firmware {
 
 std::string load_map(const std::string& path, algorithms::MapFile& map) {
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) return "map " + path + ": is a directory";
-  std::FILE* f = std::fopen(path.c_str(), "rb");
-  if (f == nullptr) return "map " + path + ": cannot open";
-  std::vector<std::uint8_t> bytes;
-  std::uint8_t chunk[65536];
-  std::size_t n = 0;
-  while ((n = std::fread(chunk, 1, sizeof chunk, f)) > 0)
-    bytes.insert(bytes.end(), chunk, chunk + n);
-  const bool failed = std::ferror(f) != 0;
-  std::fclose(f);
-  if (failed) return "map " + path + ": read error";
-  const algorithms::MapError error = algorithms::decode_map(bytes.data(), bytes.size(), map);
+  // A regular file no larger than the format allows, checked before a byte is read.
+  std::string bytes;
+  if (const std::string e = drivers::read_regular_file(path, algorithms::kMaxMapFileBytes, bytes);
+      !e.empty()) {
+    return "map " + path + ": " + e;
+  }
+  const algorithms::MapError error = algorithms::decode_map(
+      reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size(), map);
   if (error)
     return "map " + path + ": " + error.what + " (at byte " + std::to_string(error.offset) + ")";
   return {};

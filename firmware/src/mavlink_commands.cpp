@@ -16,8 +16,30 @@ void LocalizationCycle::set_signing_time(std::uint64_t unix_time_us) {
   signer_.set_time(mavlink::signing_timestamp_from_unix_us(unix_time_us), clock_.now_ns());
 }
 
+void LocalizationCycle::restore_signing_state(const mavlink::SigningState& state,
+                                              hal::PersistentRecord* store,
+                                              std::uint64_t durable_high_water) {
+  signer_.restore(state);
+  signer_.set_durable(durable_high_water);
+  signing_store_ = store;
+}
+
 void LocalizationCycle::service_link() {
-  signer_.advance(clock_.now_ns());
+  const std::uint64_t now_ns = clock_.now_ns();
+  signer_.advance(now_ns);
+  if (signing_store_ != nullptr) {
+    // The replay protection's state goes to storage ahead of need: a high-water mark above what
+    // may be accepted in the next half minute (or above a frame that is waiting for it).
+    signer_.set_durable(signing_store_->durable_tag());
+    if (signer_.persist_due(now_ns)) {
+      const mavlink::SigningState state = signer_.snapshot(now_ns);
+      const std::size_t n =
+          mavlink::format_signing_state(state, signing_record_.data(), signing_record_.size());
+      if (n > 0)
+        signing_store_->offer(reinterpret_cast<const std::uint8_t*>(signing_record_.data()), n,
+                              state.high_water);
+    }
+  }
   receiver_.begin_cycle();
   reseed_ = Reseed{};
   mavlink::CommandLong command;
@@ -46,7 +68,7 @@ void LocalizationCycle::service_link() {
   pose_.pose = e.mean;
   pose_.covariance = e.covariance;
   pose_.valid = true;
-  pose_.health = assess_health();
+  pose_.health = published_health();
 }
 
 mavlink::MavResult LocalizationCycle::execute(const mavlink::CommandLong& command,

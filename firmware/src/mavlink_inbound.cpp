@@ -142,6 +142,9 @@ bool CommandReceiver::admit(const RxFrame& frame, CommandLong& out) {
       case SignatureCheck::kReplay:
         ++counters_.rejected_replay;
         return false;
+      case SignatureCheck::kTooFarAhead:
+        ++counters_.rejected_future;
+        return false;
     }
   }
   return true;

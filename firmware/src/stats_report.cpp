@@ -1,6 +1,8 @@
 #include "harmoloc/firmware/stats_report.hpp"
 
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <sstream>
 
 namespace harmoloc::firmware {
@@ -19,6 +21,8 @@ std::string stats_json(const LocalizationCycle& cycle, const RunCounters& run) {
   o.precision(6);
   o << "{\n  \"harmoloc_version\": \"" << HARMOLOC_VERSION << "\",\n"
     << "  \"board\": \"" << run.board << "\",\n"
+    << "  \"ended\": \"" << run.ended << "\",\n"
+    << "  \"outputs_failed\": " << run.outputs_failed << ",\n"
     << "  \"rate_hz\": " << run.rate_hz << ",\n"
     << "  \"budget_us\": " << us(cycle.budget_ns()) << ",\n"
     << "  \"cycles\": " << c.cycles << ",\n"
@@ -70,7 +74,8 @@ std::string stats_json(const LocalizationCycle& cycle, const RunCounters& run) {
     << ", \"frames_dropped\": " << run.link.frames_dropped
     << ", \"bytes_sent\": " << run.link.bytes_sent << ", \"errors\": " << run.link.errors << "},\n"
     << "  \"localizer\": {\"fixes\": " << c.fixes_used << ", \"unknown_place\": " << c.unknown_place
-    << ", \"implausible_frames\": " << c.implausible_frames << "},\n"
+    << ", \"implausible_frames\": " << c.implausible_frames
+    << ", \"off_map_cycles\": " << c.off_map_cycles << "},\n"
     << "  \"filter\": {\"observation\": \"" << (cycle.uses_boards() ? "boards" : "fix")
     << "\", \"resamples\": " << c.resamples << ", \"no_consensus\": " << c.no_consensus
     << ", \"distrusted_board_frames\": " << c.distrusted_boards
@@ -85,6 +90,7 @@ std::string stats_json(const LocalizationCycle& cycle, const RunCounters& run) {
     << ", \"rejected_unsigned\": " << in.rejected_unsigned
     << ", \"rejected_bad_signature\": " << in.rejected_bad_signature
     << ", \"rejected_replay\": " << in.rejected_replay
+    << ", \"rejected_future\": " << in.rejected_future
     << ", \"rejected_source\": " << in.rejected_source
     << ", \"ignored_messages\": " << in.ignored_messages
     << ", \"saturated_cycles\": " << in.saturated_cycles << "}";
@@ -103,6 +109,18 @@ std::string stats_json(const LocalizationCycle& cycle, const RunCounters& run) {
   }
   o << "\n}\n";
   return o.str();
+}
+
+std::string write_stats(const std::string& path, const std::string& json) {
+  errno = 0;
+  std::FILE* f = std::fopen(path.c_str(), "w");
+  if (f == nullptr) return path + ": cannot write (" + std::strerror(errno) + ")";
+  const bool wrote = std::fwrite(json.data(), 1, json.size(), f) == json.size();
+  int error = wrote ? 0 : errno;
+  if (std::fclose(f) != 0 && error == 0) error = errno;
+  if (!wrote || error != 0)
+    return path + ": write failed (" + std::strerror(error != 0 ? error : EIO) + ")";
+  return {};
 }
 
 }  // namespace harmoloc::firmware

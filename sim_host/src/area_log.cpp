@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "harmoloc/algorithms/crc32.hpp"
+#include "harmoloc/drivers/input_file.hpp"
 
 namespace harmoloc::sim_host {
 
@@ -62,8 +63,13 @@ std::uint32_t thresholds_fingerprint(const algorithms::ThresholdSet& thresholds)
 }
 
 AreaLog read_area_log(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(path + ": cannot read");
+  std::string content;
+  if (const std::string e =
+          drivers::read_regular_file(path, drivers::input_limits::kRecordingBytes, content);
+      !e.empty()) {
+    throw std::runtime_error(path + ": cannot read: " + e);
+  }
+  std::istringstream in(content);
   AreaLog log;
   std::string line;
   std::size_t n = 0;

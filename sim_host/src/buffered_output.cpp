@@ -1,9 +1,13 @@
 #include "harmoloc/sim_host/buffered_output.hpp"
 
+#include <cerrno>
+
 namespace harmoloc::sim_host {
 
 bool BufferedOutput::open(const std::string& path) {
   close();
+  error_ = 0;
+  path_ = path;
   file_ = std::fopen(path.c_str(), "w");
   if (file_ == nullptr) return false;
   buffer_ = new char[kBufferBytes];
@@ -12,14 +16,19 @@ bool BufferedOutput::open(const std::string& path) {
 }
 
 void BufferedOutput::append(const char* bytes, std::size_t size) {
-  if (file_ != nullptr) std::fwrite(bytes, 1, size, file_);
+  if (file_ == nullptr) return;
+  errno = 0;
+  if (std::fwrite(bytes, 1, size, file_) != size && error_ == 0) error_ = errno != 0 ? errno : EIO;
 }
 
 bool BufferedOutput::close() {
   bool ok = true;
   if (file_ != nullptr) {
+    errno = 0;
     ok = std::ferror(file_) == 0;
     ok = std::fclose(file_) == 0 && ok;
+    if (!ok && error_ == 0) error_ = errno != 0 ? errno : EIO;
+    ok = ok && error_ == 0;
     file_ = nullptr;
   }
   delete[] buffer_;

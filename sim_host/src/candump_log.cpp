@@ -2,8 +2,10 @@
 
 #include <cctype>
 #include <cstdio>
-#include <fstream>
+#include <sstream>
 #include <stdexcept>
+
+#include "harmoloc/drivers/input_file.hpp"
 
 namespace harmoloc::sim_host {
 
@@ -120,11 +122,16 @@ bool parse_candump_line(const std::string& line, CanFrame& frame, std::string& r
 }
 
 std::vector<CanFrame> read_candump_log(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(path + ": cannot open");
+  std::string content;
+  if (const std::string e =
+          drivers::read_regular_file(path, drivers::input_limits::kRecordingBytes, content);
+      !e.empty()) {
+    throw std::runtime_error(path + ": " + e);
+  }
+  std::istringstream in(content);
   std::vector<CanFrame> frames;
   std::string line, reason;
-  int line_no = 0;
+  int line_no = 0, previous_line = 0;
   while (std::getline(in, line)) {
     ++line_no;
     if (line.empty() || line == "\r") continue;
@@ -132,7 +139,25 @@ std::vector<CanFrame> read_candump_log(const std::string& path) {
     if (!parse_candump_line(line, frame, reason)) {
       throw std::runtime_error(path + ":" + std::to_string(line_no) + ": " + reason);
     }
+    // candump writes a bus's frames in the order the kernel stamped them. A line dated before
+    // the one above it would be handed out at once and move the pose by whatever its counts say
+    // (a 57 cm jump), and one dated far ahead holds back every line after it: odometry off for
+    // the rest of the run. Either is a damaged log.
+    if (!frames.empty() && frame.timestamp_ns < frames.back().timestamp_ns) {
+      const auto seconds = [](std::uint64_t ns) {
+        char text[32];
+        std::snprintf(text, sizeof text, "%llu.%06llu",
+                      static_cast<unsigned long long>(ns / 1000000000ULL),
+                      static_cast<unsigned long long>(ns / 1000ULL % 1000000ULL));
+        return std::string(text);
+      };
+      throw std::runtime_error(
+          path + ":" + std::to_string(line_no) + ": timestamp " + seconds(frame.timestamp_ns) +
+          " is before line " + std::to_string(previous_line) + "'s " +
+          seconds(frames.back().timestamp_ns) + " (lines must be in time order)");
+    }
     frames.push_back(frame);
+    previous_line = line_no;
   }
   return frames;
 }

@@ -5,6 +5,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "harmoloc/drivers/input_file.hpp"
+
 namespace harmoloc::sim_host {
 
 namespace {
@@ -79,12 +81,12 @@ bool parse_encoder_csv_line(const char* line, std::size_t size, std::uint8_t cou
 }
 
 std::vector<EncoderSample> read_encoder_csv(const std::string& path, std::uint8_t counter_bits) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw std::runtime_error(path + ": cannot open");
-  std::ostringstream whole;
-  whole << in.rdbuf();
-  if (in.bad()) throw std::runtime_error(path + ": read failed");
-  const std::string text = whole.str();
+  std::string text;
+  if (const std::string e =
+          drivers::read_regular_file(path, drivers::input_limits::kRecordingBytes, text);
+      !e.empty()) {
+    throw std::runtime_error(path + ": " + e);
+  }
   const auto at = [&path](std::size_t line_no, const std::string& why) {
     return std::runtime_error(path + ":" + std::to_string(line_no) + ": " + why);
   };

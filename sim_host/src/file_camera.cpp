@@ -1,6 +1,7 @@
 #include "harmoloc/sim_host/file_camera.hpp"
 
 #include <cerrno>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <stdexcept>
@@ -8,15 +9,19 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include "harmoloc/drivers/input_file.hpp"
 #include "harmoloc/sim_host/frame_index.hpp"
 
 namespace harmoloc::sim_host {
 
 namespace {
 
-// Reads up to @p size bytes; returns how many were read, or -1 on error. No allocation.
+// Reads up to @p size bytes of a regular file; returns how many were read, or -1 on error (a
+// FIFO, device or folder put in the frame's place is not read: opened non-blocking and refused,
+// so the cycle never waits on it). No allocation.
 long read_file(const char* path, std::uint8_t* buffer, std::size_t size) {
-  const int fd = ::open(path, O_RDONLY | O_CLOEXEC);
+  const char* why = nullptr;
+  const int fd = drivers::open_regular_file(path, &why);
   if (fd < 0) return -1;
   std::size_t got = 0;
   while (got < size) {
@@ -44,6 +49,9 @@ FileCamera::FileCamera(const std::string& dataset_dir, const DatasetMetadata& me
   for (const FrameEntry& e : entries) {
     const std::string path = (fs::path(dataset_dir) / e.file).string();
     std::error_code ec;
+    const auto status = fs::status(path, ec);
+    if (!ec && !fs::is_regular_file(status))
+      throw std::runtime_error("frame " + e.file + ": not a regular file");
     const auto size = fs::file_size(path, ec);
     if (ec) throw std::runtime_error("frame " + e.file + ": " + ec.message());
     if (metadata.pixel_format == hal::PixelFormat::kRgb24) {
@@ -75,6 +83,7 @@ FileCamera::FileCamera(const std::string& dataset_dir, const DatasetMetadata& me
     stamps_.push_back(e.timestamp_ns);
   }
   file_size_ = data_offset_ + pixel_bytes;
+  period_ns_ = static_cast<std::uint64_t>(std::llround(1e9 / metadata.frame_rate_hz));
   buffer_.resize(file_size_ + 1);  // one spare byte detects a file that grew after start-up
   view_.width_px = metadata.image_width_px;
   view_.height_px = metadata.image_height_px;
@@ -85,7 +94,13 @@ FileCamera::FileCamera(const std::string& dataset_dir, const DatasetMetadata& me
 }
 
 std::uint64_t FileCamera::next_timestamp_ns() const {
-  if (next_ < stamps_.size()) return stamps_[next_] + loop_ * span_ns_;
+  if (next_ < stamps_.size()) {
+    const std::uint64_t next = stamps_[next_] + loop_ * span_ns_;
+    if (fill_gaps_ && have_last_ && next > last_ns_ + period_ns_ + period_ns_ / 2)
+      return last_ns_ + period_ns_;
+    return next;
+  }
+  // The next pass of a --loop replay (no ticks across the seam: it is not in the recording).
   if (loop_ + 1 < loops_ && !stamps_.empty()) return stamps_.front() + (loop_ + 1) * span_ns_;
   return 0;
 }
@@ -94,8 +109,18 @@ hal::CameraStatus FileCamera::acquire(hal::FrameView& frame, std::uint64_t /*dea
   if (next_ >= paths_.size() && loop_ + 1 < loops_) {
     ++loop_;
     next_ = 0;
+    have_last_ = false;
   }
   if (next_ >= paths_.size()) return hal::CameraStatus::kEnded;
+  const std::uint64_t due = stamps_[next_] + loop_ * span_ns_;
+  if (fill_gaps_ && have_last_ && due > last_ns_ + period_ns_ + period_ns_ / 2) {
+    // A hole in the recording: this period brought no frame.
+    last_ns_ += period_ns_;
+    ++gap_ticks_;
+    return hal::CameraStatus::kNoFrame;
+  }
+  last_ns_ = due;
+  have_last_ = true;
   const std::size_t i = next_++;
   const long n = read_file(paths_[i].c_str(), buffer_.data(), buffer_.size());
   const char* why = nullptr;

@@ -3,13 +3,21 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <sstream>
 #include <stdexcept>
+
+#include "harmoloc/drivers/input_file.hpp"
 
 namespace harmoloc::sim_host {
 
 std::vector<FrameEntry> read_frame_index(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(path + ": cannot open");
+  std::string content;
+  if (const std::string e =
+          drivers::read_regular_file(path, drivers::input_limits::kRecordingBytes, content);
+      !e.empty()) {
+    throw std::runtime_error(path + ": " + e);
+  }
+  std::istringstream in(content);
   std::vector<FrameEntry> frames;
   std::string line;
   int line_no = 0;

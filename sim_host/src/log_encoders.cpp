@@ -1,11 +1,30 @@
 #include "harmoloc/sim_host/log_encoders.hpp"
 
+#include <cstdio>
+#include <stdexcept>
+
 #include "harmoloc/sim_host/candump_log.hpp"
 
 namespace harmoloc::sim_host {
 
 LogEncoders::LogEncoders(const std::string& log_path, const algorithms::EncoderFrameLayout& layout)
-    : LogEncoders(read_candump_log(log_path), layout) {}
+    : LogEncoders(read_candump_log(log_path), layout) {
+  // A log without one encoder frame would run the whole replay vision-only, looking fine.
+  std::size_t usable = 0;
+  for (const algorithms::CanFrame& f : frames_) {
+    std::uint32_t l = 0, r = 0;
+    if (algorithms::decode_encoder_frame(layout_, f, l, r) == algorithms::CanDecode::kOk) ++usable;
+  }
+  if (frames_.empty()) throw std::runtime_error(log_path + ": no CAN frames in the log");
+  if (usable == 0) {
+    char id[16];
+    std::snprintf(id, sizeof id, "0x%X", layout_.id);
+    throw std::runtime_error(log_path + ": none of its " + std::to_string(frames_.size()) +
+                             " frames is an encoder frame (ID " + id + ", " +
+                             std::to_string(layout_.length) +
+                             " bytes; the [can] layout of the config or metadata)");
+  }
+}
 
 LogEncoders::LogEncoders(std::vector<algorithms::CanFrame> frames,
                          const algorithms::EncoderFrameLayout& layout)

@@ -8,6 +8,7 @@
 
 #include <toml++/toml.h>
 
+#include "harmoloc/drivers/input_file.hpp"
 #include "toml_text.hpp"
 
 namespace harmoloc::sim_host {
@@ -58,9 +59,16 @@ DatasetMetadata read_metadata(const std::string& dataset_dir) {
   const std::string path = (std::filesystem::path(dataset_dir) / "metadata.toml").string();
   if (!std::filesystem::exists(path))
     fail("not found in " + dataset_dir + " (is it a dataset folder?)");
+  std::string content;
+  if (const std::string e =
+          drivers::read_regular_file(path, drivers::input_limits::kTomlBytes, content);
+      !e.empty()) {
+    fail(e);
+  }
+  if (const std::string e = drivers::check_toml_nesting(content); !e.empty()) fail(e);
   toml::table t;
   try {
-    t = toml::parse_file(path);
+    t = toml::parse(content, path);
   } catch (const toml::parse_error& e) {
     std::ostringstream s;
     s << "line " << e.source().begin.line << ": " << e.description();
@@ -141,6 +149,15 @@ DatasetMetadata read_metadata(const std::string& dataset_dir) {
   if (g.left_direction == 0 || g.right_direction == 0) fail("robot.*_direction must be 1 or -1");
 
   m.ground_truth = text(t, "ground_truth", "file", "");
+  // The files the metadata names are the dataset's own: inside its folder (a path out of it
+  // could name /dev/zero, a FIFO or another user's file).
+  const auto inside = [&dataset_dir](const std::string& key, const std::string& value) {
+    if (const std::string e = drivers::check_inside(dataset_dir, value); !e.empty())
+      fail(key + " '" + value + "' " + e);
+  };
+  inside("camera.frames_index", m.frames_index);
+  inside("encoders.log", m.encoder_log);
+  if (!m.ground_truth.empty()) inside("ground_truth.file", m.ground_truth);
   return m;
 }
 

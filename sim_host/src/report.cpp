@@ -10,6 +10,8 @@
 #include <sstream>
 #include <system_error>
 
+#include "harmoloc/drivers/input_file.hpp"
+
 namespace harmoloc::sim_host {
 
 namespace {
@@ -659,12 +661,13 @@ RunStats parse_stats(const std::string& text, const std::string& origin) {
 }
 
 RunStats read_stats(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw ReportError(path + ": cannot open");
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) throw ReportError(path + ": read failed");
-  return parse_stats(text.str(), path);
+  std::string text;
+  if (const std::string e =
+          drivers::read_regular_file(path, drivers::input_limits::kStatsBytes, text);
+      !e.empty()) {
+    throw ReportError(path + ": " + e);
+  }
+  return parse_stats(text, path);
 }
 
 // ---------------------------------------------------------------------------------------------

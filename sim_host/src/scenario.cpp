@@ -9,6 +9,7 @@
 
 #include <toml++/toml.h>
 
+#include "harmoloc/drivers/input_file.hpp"
 #include "harmoloc/sim_host/route.hpp"
 #include "toml_text.hpp"
 
@@ -427,9 +428,16 @@ void read_events(const toml::table& t, const std::string& file, Scenario& s) {
 Scenario load_scenario_at_depth(const std::string& name_or_file, int depth);
 
 Scenario from_file(const std::string& file, int depth) {
+  std::string content;
+  if (const std::string e =
+          drivers::read_regular_file(file, drivers::input_limits::kTomlBytes, content);
+      !e.empty()) {
+    fail(file, e);
+  }
+  if (const std::string e = drivers::check_toml_nesting(content); !e.empty()) fail(file, e);
   toml::table t;
   try {
-    t = toml::parse_file(file);
+    t = toml::parse(content, file);
   } catch (const toml::parse_error& e) {
     std::ostringstream s;
     s << "line " << e.source().begin.line << ": " << e.description();
@@ -645,7 +653,8 @@ Scenario load_scenario_at_depth(const std::string& name_or_file, int depth) {
     Scenario s = make();
     if (s.name == name_or_file) return s;
   }
-  if (std::filesystem::is_regular_file(name_or_file)) return from_file(name_or_file, depth);
+  // A file that is not a regular one (a folder, a FIFO) is refused by from_file, by name.
+  if (std::filesystem::exists(name_or_file)) return from_file(name_or_file, depth);
   std::string names;
   for (const auto& [name, text] : builtin_scenarios()) names += (names.empty() ? "" : ", ") + name;
   throw std::runtime_error("unknown scenario '" + name_or_file + "' (built-in: " + names +

@@ -5,6 +5,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "harmoloc/drivers/input_file.hpp"
+
 namespace harmoloc::sim_host {
 
 using algorithms::Pose2;
@@ -14,8 +16,13 @@ double yaw_from_quaternion(double qx, double qy, double qz, double qw) {
 }
 
 std::vector<StampedPose> read_tum(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(path + ": cannot open");
+  std::string content;
+  if (const std::string e =
+          drivers::read_regular_file(path, drivers::input_limits::kRecordingBytes, content);
+      !e.empty()) {
+    throw std::runtime_error(path + ": " + e);
+  }
+  std::istringstream in(content);
   std::vector<StampedPose> out;
   std::string line;
   int line_no = 0;

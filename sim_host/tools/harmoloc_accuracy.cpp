@@ -17,6 +17,7 @@
 
 #include "harmoloc/algorithms/harmonic_localizer.hpp"
 #include "harmoloc/firmware/config.hpp"
+#include "harmoloc/sim_host/cli.hpp"
 #include "harmoloc/sim_host/line_chart.hpp"
 #include "harmoloc/sim_host/scenario.hpp"
 #include "harmoloc/sim_host/simulate.hpp"
@@ -157,7 +158,7 @@ int main(int argc, char** argv) {
   app.add_option("--min-improvement", min_improvement,
                  "trainer: drop a board only if CV improves by more than this fraction")
       ->capture_default_str();
-  CLI11_PARSE(app, argc, argv);
+  if (const auto status = harmoloc::cli::parse(app, argc, argv)) return *status;
 
   try {
     std::vector<std::string> routes;

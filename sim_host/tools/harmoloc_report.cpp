@@ -11,6 +11,7 @@
 #include <iostream>
 #include <string>
 
+#include "harmoloc/sim_host/cli.hpp"
 #include "harmoloc/sim_host/report.hpp"
 
 namespace {
@@ -74,7 +75,7 @@ int main(int argc, char** argv) {
           },
           "S >= 0")
       ->type_name("S");
-  CLI11_PARSE(app, argc, argv);
+  if (const auto status = harmoloc::cli::parse(app, argc, argv)) return *status;
 
   try {
     const harmoloc::sim_host::Report report = harmoloc::sim_host::load_report(inputs);

@@ -14,6 +14,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "harmoloc/sim_host/cli.hpp"
 #include "harmoloc/sim_host/line_chart.hpp"
 #include "scenario_eval.hpp"
 
@@ -166,7 +167,7 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"nominal", "occlusion", "moved", "kidnap", "false-alarms"}))
       ->capture_default_str();
   app.add_flag("--quiet", quiet, "only the table");
-  CLI11_PARSE(app, argc, argv);
+  if (const auto status = harmoloc::cli::parse(app, argc, argv)) return *status;
   if (quick) {
     kidnaps = 10;
     minutes = 1.0;

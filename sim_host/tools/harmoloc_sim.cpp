@@ -8,6 +8,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "harmoloc/sim_host/cli.hpp"
 #include "harmoloc/sim_host/random_scene.hpp"
 #include "harmoloc/sim_host/scenario.hpp"
 #include "harmoloc/sim_host/simulate.hpp"
@@ -61,7 +62,7 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_flag("--list", list, "list the built-in scenarios and exit");
   app.add_flag("--quiet", quiet, "no progress output");
-  CLI11_PARSE(app, argc, argv);
+  if (const auto status = harmoloc::cli::parse(app, argc, argv)) return *status;
 
   if (list) {
     for (const auto& [name, text] : builtin_scenarios())

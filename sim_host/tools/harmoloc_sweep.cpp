@@ -16,6 +16,7 @@
 #include <nlohmann/json.hpp>
 
 #include "harmoloc/firmware/config.hpp"
+#include "harmoloc/sim_host/cli.hpp"
 #include "harmoloc/sim_host/scenario.hpp"
 #include "sweep_eval.hpp"
 
@@ -327,7 +328,7 @@ int main(int argc, char** argv) {
   app.add_flag("--quick", quick, "a short sweep: 5 kidnaps, a 1-minute long run");
   app.add_flag("--no-default-scene", no_default, "leave out the project's own default scene");
   app.add_flag("--quiet", quiet, "no progress on stderr");
-  CLI11_PARSE(app, argc, argv);
+  if (const auto status = harmoloc::cli::parse(app, argc, argv)) return *status;
   if (quick) {
     opt.kidnaps = std::min(opt.kidnaps, 5);
     opt.long_minutes = std::min(opt.long_minutes, 1.0);

@@ -7,6 +7,7 @@
 #include <CLI/CLI.hpp>
 
 #include "harmoloc/firmware/config.hpp"
+#include "harmoloc/sim_host/cli.hpp"
 #include "harmoloc/sim_host/trainer.hpp"
 
 namespace {
@@ -83,7 +84,7 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::Range(2, 64));
   app.add_flag("--quiet", quiet, "print only the result line");
-  CLI11_PARSE(app, argc, argv);
+  if (const auto status = harmoloc::cli::parse(app, argc, argv)) return *status;
 
   try {
     const firmware::FirmwareConfig config =

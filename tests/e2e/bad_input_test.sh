@@ -83,6 +83,84 @@ make_dataset 40 "$out/other_size"
 sed -i 's/width_px = 160/width_px = 320/' "$out/other_size/metadata.toml"
 expect_error "map for another frame size" "trained on 160x120" run "$out/other_size" "$WORK/tiny.hmap"
 
+# Inputs of the adversarial probe (issue 16): each used to run (exit 0), crash, block or eat
+# memory. Every file read must be a regular file in its place, size-capped before it is read.
+expect_error "config that is a folder" "not a regular file (a directory)" run "$out/good" "$WORK/tiny.hmap" --config "$out"
+expect_error "config that is /dev/zero" "not a regular file (a character device)" run "$out/good" "$WORK/tiny.hmap" --config /dev/zero
+rm -f "$out/config.fifo"; mkfifo "$out/config.fifo"
+expect_error "config that is a FIFO" "not a regular file (a FIFO)" timeout 20 "$BIN/harmoloc" --dataset "$out/good" --map "$WORK/tiny.hmap" --config "$out/config.fifo" --quiet
+python3 -c "print('a.' * 50000 + 'a = 1')" > "$out/deep.toml"
+expect_error "config of 50,000 dotted keys" "nested 50001 deep" run "$out/good" "$WORK/tiny.hmap" --config "$out/deep.toml"
+make_dataset 40 "$out/deep_meta"
+python3 -c "print('a.' * 50000 + 'a = 1')" >> "$out/deep_meta/metadata.toml"
+expect_error "metadata of 50,000 dotted keys" "metadata.toml: line [0-9]*: nested 50002 deep" run "$out/deep_meta" "$WORK/tiny.hmap"
+make_dataset 40 "$out/zero_log"
+sed -i 's#^log = .*#log = "/dev/zero"#' "$out/zero_log/metadata.toml"
+expect_error "encoder log /dev/zero" "encoders.log '/dev/zero' must be a path relative" run "$out/zero_log" "$WORK/tiny.hmap"
+make_dataset 40 "$out/outside_index"
+sed -i 's#^frames_index = .*#frames_index = "../good/frames.csv"#' "$out/outside_index/metadata.toml"
+expect_error "frame index outside the dataset" "camera.frames_index '../good/frames.csv' must stay inside" run "$out/outside_index" "$WORK/tiny.hmap"
+make_dataset 40 "$out/fifo_log"
+rm "$out/fifo_log/encoders.log"; mkfifo "$out/fifo_log/encoders.log"
+expect_error "encoder log that is a FIFO" "encoders.log: not a regular file (a FIFO)" timeout 20 "$BIN/harmoloc" --dataset "$out/fifo_log" --map "$WORK/tiny.hmap" --quiet
+make_dataset 40 "$out/empty_log"
+: > "$out/empty_log/encoders.log"
+expect_error "empty encoder log" "encoders.log: no CAN frames" run "$out/empty_log" "$WORK/tiny.hmap"
+make_dataset 40 "$out/folder_log"
+rm "$out/folder_log/encoders.log"; mkdir "$out/folder_log/encoders.log"
+expect_error "encoder log that is a folder" "encoders.log: not a regular file (a directory)" run "$out/folder_log" "$WORK/tiny.hmap"
+make_dataset 40 "$out/foreign_log"
+sed -i 's/ 181#/ 182#/' "$out/foreign_log/encoders.log"
+expect_error "encoder log without encoder frames" "is an encoder frame (ID 0x181" run "$out/foreign_log" "$WORK/tiny.hmap"
+redate() {  # redate LOG LINE SECONDS: moves one candump line's timestamp by SECONDS
+  python3 - "$@" <<'PY'
+import sys
+path, n, shift = sys.argv[1], int(sys.argv[2]), float(sys.argv[3])
+lines = open(path).read().splitlines()
+s = lines[n - 1]
+lines[n - 1] = '(%.6f)' % (float(s[1:s.index(')')]) + shift) + s[s.index(')') + 1:]
+open(path, 'w').write('\n'.join(lines) + '\n')
+PY
+}
+make_dataset 40 "$out/past_line"
+redate "$out/past_line/encoders.log" 100 -5
+expect_error "encoder log line dated in the past" "encoders.log:100: timestamp .* is before line 99's" run "$out/past_line" "$WORK/tiny.hmap"
+make_dataset 40 "$out/future_line"
+redate "$out/future_line/encoders.log" 100 100000
+expect_error "encoder log line dated in the future" "encoders.log:101: timestamp .* is before line 100's" run "$out/future_line" "$WORK/tiny.hmap"
+# A map file far larger than any map (300 MB, sparse): refused from its size, unread (it used to
+# take 529 MB of memory).
+python3 - "$WORK/tiny.hmap" "$out/huge.hmap" <<'PY'
+import sys
+d = open(sys.argv[1], 'rb').read()
+with open(sys.argv[2], 'wb') as f:
+    f.write(d); f.truncate(300 * 1000 * 1000)
+PY
+expect_error "map of 300 MB" "300000000 bytes, more than the" run "$out/good" "$out/huge.hmap"
+peak_kb=$(python3 - "$BIN/harmoloc" "$out/good" "$out/huge.hmap" <<'PY'
+import resource, subprocess, sys
+subprocess.run([sys.argv[1], '--dataset', sys.argv[2], '--map', sys.argv[3], '--quiet'],
+               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+print(resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss)
+PY
+)
+[ "$peak_kb" -lt 100000 ] || fail "the 300 MB map took $peak_kb kB of memory"
+echo "ok  the 300 MB map was refused with a peak of $peak_kb kB"
+# A map whose training target is at 1e30 m (a label at 1e30 gave one; the firmware published
+# 3.7e28 m as a nominal pose).
+python3 - "$WORK/tiny.hmap" "$out/far.hmap" <<'PY'
+import struct, sys, zlib
+d = bytearray(open(sys.argv[1], 'rb').read())
+boards = struct.unpack_from('<I', d, 20)[0]
+off = 24 + 12 * boards
+n, f = struct.unpack_from('<II', d, off)
+off += 8 + f + 7 * 4
+struct.pack_into('<f', d, off + 4 * f, 1e30)  # sample 0's x
+struct.pack_into('<I', d, len(d) - 4, zlib.crc32(bytes(d[:-4])))
+open(sys.argv[2], 'wb').write(d)
+PY
+expect_error "map with a training target at 1e30 m" "sample coordinate farther than 10 km" run "$out/good" "$out/far.hmap"
+
 # The host tools.
 expect_error "sim: unknown scenario" "unknown scenario" "$BIN/harmoloc-sim" --scenario nowhere --out "$out/x" --quiet
 printf 'base = "tiny"\n[camera]\nwidht_px = 320\n' > "$out/typo_scenario.toml"

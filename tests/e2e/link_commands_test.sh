@@ -52,7 +52,9 @@ with open(f"{out}/link.key", "w") as f:
 os.chmod(f"{out}/link.key", 0o600)
 with open(f"{out}/harmoloc.toml", "w") as f:
     f.write('[link]\naccept_system_ids = [255]\naccept_component_ids = [190]\n'
-            'signing_key_file = "link.key"\nlink_id = 5\n')
+            'signing_key_file = "link.key"\nsigning_state_file = "signing.state"\nlink_id = 5\n')
+if os.path.exists(f"{out}/signing.state"):
+    os.remove(f"{out}/signing.state")
 
 now_ms = int(time.time() * 1000)
 def command(name, cmd, params, signed_with=key, sysid=255, compid=190, dt_ms=0, target=(1, 197)):
@@ -202,6 +204,34 @@ if s["frames_in"] != 11 or s["garbage_bytes"] < 2500:  # 10 frames, one sent twi
     fail(f"inbound counters: {s}")
 print(f"inbound: {s}")
 
+# ---- 1b. the restart: the set-pose captured in part 1 is a replay for the next run too --------
+# (issue 16: the replay protection lived in memory only, and the captured command moved the pose
+# again after a restart). The state file holds a high-water mark above every timestamp run 1
+# sent or accepted. A frame dated a year ahead is refused and moves nothing; a fresh one is taken.
+state = open(f"{out}/signing.state").read().split()
+captured_ts = (now_ms + 3) * 100 - 1420070400 * 100000  # 10 us since 2015-01-01
+if state[:3] != ["harmoloc-signing-state", "1", "high_water"] or int(state[3]) <= captured_ts:
+    fail(f"signing state after run 1: {state[:6]}")
+spec3 = [command("year_ahead", 31011, POSE, dt_ms=365 * 86400 * 1000),
+         command("fresh", 31011, [1.0, -1.0, 0.0, 0.001, 0.001], dt_ms=20000)]
+with open(f"{out}/spec3.json", "w") as f:
+    json.dump(spec3, f)
+node("frames", f"{out}/spec3.json", f"{out}/frames3.json")
+frames3 = {k: bytes.fromhex(v) for k, v in load_json(f"{out}/frames3.json").items()}
+with open(f"{out}/restart_in.bin", "wb") as f:
+    f.write(frames["set_pose"] + frames3["year_ahead"] + frames3["fresh"])
+r = subprocess.run([harmoloc, "--dataset", f"{out}/cut", "--map", f"{out}/../tiny.hmap",
+                    "--config", f"{out}/harmoloc.toml", "--link", f"{out}/restart_link.bin",
+                    "--link-in", f"{out}/restart_in.bin", "--stats", f"{out}/restart_stats.json",
+                    "--quiet"], stdout=subprocess.DEVNULL)
+if r.returncode != 0:
+    fail(f"harmoloc after the restart: exit {r.returncode}")
+s = stats_inbound(f"{out}/restart_stats.json")
+if (s["rejected_replay"], s["rejected_future"], s["commands_accepted"]) != (1, 1, 1):
+    fail(f"after the restart: replay {s['rejected_replay']}, future {s['rejected_future']}, "
+         f"accepted {s['commands_accepted']} (expected 1, 1, 1); all: {s}")
+print(f"restart: captured set-pose rejected as a replay, year-ahead frame rejected, fresh one taken")
+
 # ---- 2. --link-in from a file, no key: unsigned commands are taken, output is unsigned ---------
 spec2 = [command("set_pose", 31011, POSE, signed_with=None),
          command("request_heartbeat", 512, [0], signed_with=None)]
@@ -248,4 +278,15 @@ for case in missing short zeros; do
   [ "$(wc -l < "$out/err_$case.txt")" -eq 1 ] || fail "bad key file ($case): not one line: $(cat "$out/err_$case.txt")"
   grep -q "link.signing_key_file" "$out/err_$case.txt" || fail "bad key file ($case): $(cat "$out/err_$case.txt")"
 done
+# A key without a state file, or a damaged state file, stops start-up too (no guessing at the
+# replay protection).
+status=0
+printf '[link]\nsigning_key_file = "link.key"\n' > "$out/no_state.toml"
+"$BIN/harmoloc" --dataset "$out/cut" --map "$WORK/tiny.hmap" --config "$out/no_state.toml" --quiet > /dev/null 2> "$out/err_no_state.txt" || status=$?
+[ "$status" -eq 2 ] && [ "$(wc -l < "$out/err_no_state.txt")" -eq 1 ] && grep -q "needs link.signing_state_file" "$out/err_no_state.txt" || fail "key without a state file: exit $status: $(cat "$out/err_no_state.txt")"
+printf 'harmoloc-signing-state 1\nhigh_water banana\n' > "$out/damaged.state"
+printf '[link]\nsigning_key_file = "link.key"\nsigning_state_file = "damaged.state"\n' > "$out/damaged.toml"
+status=0
+"$BIN/harmoloc" --dataset "$out/cut" --map "$WORK/tiny.hmap" --config "$out/damaged.toml" --quiet > /dev/null 2> "$out/err_damaged.txt" || status=$?
+[ "$status" -eq 2 ] && [ "$(wc -l < "$out/err_damaged.txt")" -eq 1 ] && grep -q "damaged.state: line 2: high_water" "$out/err_damaged.txt" || fail "damaged state file: exit $status: $(cat "$out/err_damaged.txt")"
 echo "OK"

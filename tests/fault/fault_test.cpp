@@ -379,6 +379,73 @@ TEST(Fault, FrameFilesGoBadDuringTheRun) {
   EXPECT_EQ(r.counters.kidnaps, 0U);
 }
 
+// A hole of 5.6 s in the recording's frame index (168 frames missing: a camera outage while it
+// was recorded). The cycle is camera-paced in a replay: before, no cycle ran in the hole, the
+// data time jumped 5.6 s at the next frame and the health stayed nominal, the link silent.
+// FileCamera now hands out one no-frame tick per missing period (as a live camera's acquire()
+// times out each period): the cycle runs on at 30 Hz on odometry, the health says so within the
+// camera timeout, and the counter names the cause. Without the ticks (the negative control) the
+// old behaviour is back.
+TEST(Fault, HoleInTheFrameIndex) {
+  harmoloc::test::TempDir dir;
+  const std::string data = dir.path("tiny");
+  hs::simulate_dataset(hs::load_scenario("tiny"), 2, data, nullptr);
+  const std::string index = data + "/frames.csv";
+  const auto all = hs::read_frame_index(index);
+  constexpr std::size_t kFrom = 100, kMissing = 168;  // 3.33 s .. 8.93 s
+  std::vector<hs::FrameEntry> kept;
+  for (std::size_t k = 0; k < all.size(); ++k)
+    if (k < kFrom || k >= kFrom + kMissing) kept.push_back(all[k]);
+  hs::write_frame_index(index, kept);
+  const hs::DatasetMetadata meta = hs::read_metadata(data);
+  const SimRun sim("tiny", 2);
+  hf::FirmwareConfig config = sim.config();
+  config.geometry = meta.geometry;
+  config.can_layout = meta.encoder_layout;
+  const double hole_from = static_cast<double>(kFrom) * kPeriod_s;
+  const double hole_to = static_cast<double>(kFrom + kMissing) * kPeriod_s;
+  for (const bool fill : {true, false}) {
+    SCOPED_TRACE(fill ? "ticks in the hole" : "negative control: no ticks");
+    hs::FileCamera camera(data, meta);
+    camera.set_fill_gaps(fill);
+    hs::LogEncoders encoders(data + "/" + meta.encoder_log, config.can_layout);
+    harmoloc::fault::MemoryLink link(1U << 20);
+    const Replay r = harmoloc::fault::replay(sim, config, camera, encoders, link);
+    harmoloc::fault::StreamCheck stream;
+    stream.feed(link.bytes().data(), link.bytes().size());
+    const std::size_t odometry_only = r.cycles_in(hf::Health::kOdometryOnly, 0, 1e9);
+    std::printf(
+        "hole of %.1f s in frames.csv (%s): %zu cycles, no_frame %llu, odometry-only %zu, "
+        "health at 5 s %s, %llu STATUSTEXT, max error %.2f cm (in the hole %.2f cm), recovered "
+        "%.2f s after it\n",
+        hole_to - hole_from, fill ? "ticks" : "no ticks", r.cycles.size(),
+        static_cast<unsigned long long>(r.counters.no_frame), odometry_only,
+        hf::health_name(r.health_at(5.0)), static_cast<unsigned long long>(stream.statustexts),
+        100 * r.errors(3.0, 1e9).max_m, 100 * r.errors(hole_from, hole_to).max_m,
+        r.recovery_s(hole_to, kRecovered_m, 1.0));
+    if (!fill) {
+      EXPECT_EQ(r.cycles.size(), kept.size());
+      EXPECT_EQ(r.counters.no_frame, 0U);
+      EXPECT_EQ(odometry_only, 0U) << "the negative control noticed the hole";
+      continue;
+    }
+    EXPECT_EQ(r.cycles.size(), all.size());
+    EXPECT_EQ(r.counters.no_frame, kMissing);
+    EXPECT_EQ(camera.gap_ticks(), kMissing);
+    expect_cycle_keeps_its_rate(r);
+    expect_pose_flows(r, 3.0);
+    EXPECT_EQ(r.health_at(hole_from + 0.3), hf::Health::kOdometryOnly);
+    EXPECT_EQ(r.health_at(hole_to - kPeriod_s - 1e-3), hf::Health::kOdometryOnly);
+    EXPECT_NEAR(static_cast<double>(odometry_only), (hole_to - hole_from - 0.25) * 30.0, 2.0);
+    EXPECT_EQ(stream.statustexts, 3U);  // nominal, odometry only, nominal again
+    EXPECT_EQ(stream.crc_errors, 0U);
+    const double recovery = r.recovery_s(hole_to, kRecovered_m, 1.0);
+    EXPECT_GE(recovery, 0.0);
+    EXPECT_LE(recovery, 1.0);
+    EXPECT_EQ(r.counters.kidnaps, 0U);
+  }
+}
+
 // Images of noise from the camera itself (a sensor or bus fault): 10 frames in a row. Without the
 // implausibility check the robust filter takes them for a kidnap and re-seeds 30 cm away; with
 // it they are not used.

@@ -58,5 +58,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     HARMOLOC_FUZZ_CHECK(id != 0, "accepted component id 0");
   HARMOLOC_FUZZ_CHECK(c.link.has_signing_key == !c.link.signing_key_file.empty(),
                       "a key file named but no key, or a key without a file");
+  HARMOLOC_FUZZ_CHECK(!c.link.has_signing_key || !c.link.signing_state_file.empty(),
+                      "a key without a signing state file");
+  HARMOLOC_FUZZ_CHECK(c.link.signing_max_ahead_s >= 1.0 && c.link.signing_max_ahead_s <= 86400.0,
+                      "signing lead out of range");
   return 0;
 }

@@ -443,6 +443,53 @@ def mavlink_seeds(e2e):
     put("mavlink_inbound", "structured-unsigned.bin", bytes([0x02 | 6 << 2]) + prog)
 
 
+# --- large and deeply nested inputs (issue 16) ---------------------------------------------------
+
+def large_structure_seeds(e2e):
+    """The shapes of the adversarial probe: TOML nested past the 32-level bound (dotted keys,
+    table headers, arrays, inline tables) and just within it, and long lines, in each TOML
+    format; candump logs out of time order; a map whose training target is at 1e30 m."""
+    deep = {
+        "deep-dotted-33.toml": ".".join(["a"] * 33) + " = 1\n",
+        "deep-dotted-32.toml": ".".join(["a"] * 32) + " = 1\n",
+        "deep-dotted-5000.toml": ".".join(["a"] * 5000) + " = 1\n",
+        "deep-header.toml": "[" + ".".join(["t"] * 40) + "]\nx = 1\n",
+        "deep-arrays.toml": "x = " + "[" * 40 + "]" * 40 + "\n",
+        "deep-inline.toml": "x = " + "{a = " * 20 + "1" + "}" * 20 + "\n",
+        "deep-mixed.toml": "[a.b.c]\nd.e = [{f.g = [[{h = 1}]]}]\n",
+        "long-comment.toml": "# " + "x" * 60000 + "\n",
+        "long-string.toml": 'name = "' + "y" * 60000 + '"\n',
+        "many-keys.toml": "".join("k%d = %d\n" % (i, i) for i in range(3000)),
+    }
+    for target in ("config", "metadata", "scenario"):
+        for name, text in deep.items():
+            put(target, name, text)
+    put("candump_log", "bad-past-line.log",
+        "(1.000000) can0 181#00\n(1.010000) can0 181#01\n(0.500000) can0 181#02\n")
+    put("candump_log", "bad-future-line.log",
+        "(1.000000) can0 181#00\n(99999.010000) can0 181#01\n(1.020000) can0 181#02\n")
+    put("candump_log", "same-time.log", "(1.000000) can0 181#00\n(1.000000) can0 281#01\n")
+    red = (340.0, 15.0, 110, 60, 255)
+    for target in ("map_decode", "map_roundtrip"):
+        put(target, "far-target.hmap",
+            encode_map(2, 2, [red], [0], [1.0, 1.0, 1.0, 0.0, 0.0, 1.0], [([0.0], 1e30, 0.0)]))
+        put(target, "edge-target.hmap",
+            encode_map(2, 2, [red], [0], [1.0, 1.0, 1.0, 0.0, 0.0, 1.0], [([0.0], 1e4, -1e4)]))
+
+
+# --- the MAVLink signing state (docs/wire-protocol.md, "Signing") --------------------------------
+
+def signing_state_seeds(e2e):
+    head = "harmoloc-signing-state 1\n"
+    put("signing_state", "fresh.state", head + "high_water 12000000\n")
+    put("signing_state", "streams.state", head + "high_water 281474976710655\n" +
+        "".join("stream %d 190 %d %d\n" % (255 - i, i % 3, 1000 + i) for i in range(32)))
+    put("signing_state", "bad-header.state", "harmoloc-signing-state 2\nhigh_water 5\n")
+    put("signing_state", "bad-number.state", head + "high_water banana\n")
+    put("signing_state", "bad-stream.state", head + "high_water 5\nstream 1 2 3 6\n")
+    put("signing_state", "empty.state", "")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--e2e", default=os.path.join(ROOT, "build", "host", "tests", "e2e"),
@@ -451,7 +498,8 @@ def main():
     if not os.path.isdir(args.e2e):
         print("note: %s not found: only the hand-written seeds" % args.e2e, file=sys.stderr)
     for make in (map_seeds, config_seeds, metadata_seeds, frame_index_seeds, candump_seeds,
-                 encoder_csv_seeds, tum_seeds, scenario_seeds, segment_seeds, mavlink_seeds):
+                 encoder_csv_seeds, tum_seeds, scenario_seeds, segment_seeds, mavlink_seeds,
+                 large_structure_seeds, signing_state_seeds):
         make(args.e2e)
     total = 0
     for d, _, files in os.walk(CORPUS):

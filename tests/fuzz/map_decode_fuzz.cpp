@@ -31,6 +31,13 @@ void check_decoded(const MapFile& map) {
                       "decoded feature count out of range");
   for (std::size_t k = 0; k < m.feature_count; ++k)
     HARMOLOC_FUZZ_CHECK(m.board_index[k] < map.thresholds.count, "feature board out of range");
+  // Every training position is a place within 10 km of the origin (a label at 1e30 once gave a
+  // map the firmware accepted and a pose of 3.7e28 m: regressions/map_decode/target-at-1e30.hmap).
+  for (std::size_t i = 0; i < m.sample_count; ++i) {
+    HARMOLOC_FUZZ_CHECK(std::fabs(m.target_x_m[i]) <= kMaxMapCoordinate_m &&
+                            std::fabs(m.target_y_m[i]) <= kMaxMapCoordinate_m,
+                        "a training position farther than 10 km");
+  }
 
   // The cycle feeds the localizer area vectors; try an empty frame, a full frame and the first
   // training sample itself.

@@ -52,7 +52,11 @@ const mv::SigningKey kWrongKey = make_key(12);
 class FuzzLink final : public harmoloc::hal::PoseLink {
  public:
   FuzzLink(const Bytes& in, std::size_t chunk, bool keyed) : in_(in), chunk_(chunk), keyed_(keyed) {
-    if (keyed) checker_.configure(kKey, 0);
+    // The checker is a peer without a clock of its own: it takes its time from our first frame
+    // (else it would find our timestamps too far ahead of its clock at 0).
+    mv::SigningOptions peer;
+    peer.peer_clock = true;
+    if (keyed) checker_.configure(kKey, 0, peer);
   }
   harmoloc::hal::LinkWrite write_frame(const std::uint8_t* bytes, std::size_t size) override {
     mv::FrameParser p;

@@ -22,6 +22,7 @@
 
 #include "../unit/mavlink_test_frames.hpp"
 #include "harmoloc/drivers/monotonic_clock.hpp"
+#include "harmoloc/drivers/record_file.hpp"
 #include "harmoloc/drivers/serial_link.hpp"
 #include "harmoloc/firmware/config.hpp"
 #include "harmoloc/firmware/eigen_guard.hpp"
@@ -220,8 +221,14 @@ PassResult run_pass(const std::string& dataset, Fault fault) {
   sim_host::TumWriter trajectory;
   EXPECT_TRUE(trajectory.open(out + ".tum"));
   drivers::MonotonicClock clock;
+  // The signing state is persisted as on a board (its writer thread started here, at start-up):
+  // the cycle renews the high-water mark as its clock runs, without allocating.
+  config.link.signing_state_file = out + ".state";
+  drivers::RecordFile signing_store;
+  signing_store.start(config.link.signing_state_file, 0);
   auto cycle =
       std::make_unique<firmware::LocalizationCycle>(config, g_map, camera, *encoders, link, clock);
+  cycle->restore_signing_state(firmware::mavlink::SigningState{}, &signing_store, 1'000'000);
 
   PassResult r;
   firmware::forbid_eigen_heap();  // as the board mains do after start-up
@@ -233,6 +240,8 @@ PassResult run_pass(const std::string& dataset, Fault fault) {
     if (pose.valid) trajectory.write(pose.data_time_ns, pose.pose);
   }
   g_armed = false;
+  signing_store.stop();
+  EXPECT_GT(signing_store.durable_tag(), 1'000'000U) << "the signing state was never renewed";
   EXPECT_FALSE(firmware::eigen_heap_allowed());
   firmware::allow_eigen_heap();
   r.allocations = g_allocations;
@@ -252,6 +261,7 @@ PassResult run_pass(const std::string& dataset, Fault fault) {
   std::filesystem::remove(out + ".link");
   std::filesystem::remove(out + ".in");
   std::filesystem::remove(out + ".tum");
+  std::filesystem::remove(out + ".state");
   return r;
 }
 

@@ -3,6 +3,7 @@
 #include "harmoloc/firmware/config.hpp"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <string>
 
@@ -101,6 +102,7 @@ outlier_probability = 0.1
 resample_threshold = 0.6
 init_position_sigma_m = 0.2
 vision_only_speed_mps = 0.5
+map_margin_m = 2.5
 
 [link]
 system_id = 7
@@ -157,6 +159,7 @@ heartbeat_hz = 2
   EXPECT_DOUBLE_EQ(c.filter.resample_threshold, 0.6);
   EXPECT_DOUBLE_EQ(c.filter.init_position_sigma_m, 0.2);
   EXPECT_DOUBLE_EQ(c.filter.vision_only_speed_mps, 0.5);
+  EXPECT_DOUBLE_EQ(c.filter.map_margin_m, 2.5);
 
   EXPECT_EQ(c.link.system_id, 7);
   EXPECT_EQ(c.link.component_id, 100);
@@ -273,6 +276,39 @@ TEST(Config, MissingFile) {
   ht::expect_one_line(msg, path + ": ");
   // There is no line in a file that is not there.
   EXPECT_EQ(msg.find("line 0"), std::string::npos) << msg;
+}
+
+// Anything that cannot be read and parsed as a config stops start-up: before, a directory or
+// /dev/zero as --config ran on the built-in defaults (no signing key: unsigned commands obeyed).
+TEST(Config, WhatIsNotARegularFileIsRefused) {
+  ht::TempDir dir;
+  const std::string fifo = dir.path("harmoloc.fifo");
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  for (const std::string& path :
+       {dir.dir(), std::string("/dev/zero"), std::string("/dev/null"), fifo}) {
+    const std::string msg = ht::error_of([&] { hf::load_config(path); });
+    ASSERT_NE(msg, ht::kNoException) << path << " was read as a config";
+    ht::expect_one_line(msg, path + ": ", "not a regular file");
+  }
+}
+
+// A config of 50,000 dotted-key parts (100 KB) overflowed toml++'s stack (SIGSEGV); its nesting
+// is now checked before parsing. And a file far beyond any config's size is refused unread.
+TEST(Config, DeepOrHugeTomlIsRefusedBeforeParsing) {
+  ht::TempDir dir;
+  std::string deep;
+  for (int i = 0; i < 50000; ++i) deep += "a.";
+  expect_one_line_error(dir, deep + "a = 1\n", "nested 50001 deep", 1);
+  std::string tables;
+  for (int i = 0; i < 20000; ++i) tables += "[";
+  expect_one_line_error(dir, "x = " + tables + "\n", "nested", 1);
+  std::string inline_tables = "x = ";
+  for (int i = 0; i < 20000; ++i) inline_tables += "{a=";
+  expect_one_line_error(dir, inline_tables + "\n", "nested", 1);
+  // Within the bound, a dotted key works as before.
+  const std::string ok = dir.write("ok.toml", "cycle.rate_hz = 25\n");
+  EXPECT_EQ(hf::load_config(ok).cycle.rate_hz, 25.0);
+  expect_one_line_error(dir, "# " + std::string(300 * 1024, 'x') + "\n", "more than the 262144");
 }
 
 TEST(Config, UnparsableToml) {

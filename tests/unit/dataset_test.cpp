@@ -1,9 +1,11 @@
 // Dataset formats: TUM trajectories, the frame index and PPM headers, candump logs, metadata.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <filesystem>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -367,6 +369,27 @@ TEST(Candump, ReadLogNamesFileAndLine) {
   expect_file_line_error(ht::error_of([&] { hs::read_candump_log(p); }), p, 2);
 }
 
+// A line dated before the one above it made a 57 cm jump, and one dated ahead switched odometry
+// off for the rest of the run (exit 0, no counter); both now stop start-up at FILE:LINE. Equal
+// timestamps (two frames in one microsecond) are in order.
+TEST(Candump, LinesOutOfTimeOrderAreRefusedAtFileAndLine) {
+  ht::TempDir dir;
+  std::string p = dir.write("same.log",
+                            "(1.000000) can0 181#00\n(1.000000) can0 281#01\n"
+                            "(1.010000) can0 181#02\n");
+  EXPECT_EQ(hs::read_candump_log(p).size(), 3U);
+  p = dir.write("past.log",
+                "(1.000000) can0 181#00\n(1.010000) can0 181#01\n\n(0.500000) can0 181#02\n"
+                "(1.020000) can0 181#03\n");
+  std::string msg = ht::error_of([&] { hs::read_candump_log(p); });
+  ht::expect_one_line(msg, p + ":4: ", "timestamp 0.500000 is before line 2's 1.010000");
+  p = dir.write("future.log",
+                "(1.000000) can0 181#00\n(99999.010000) can0 181#01\n(1.020000) can0 181#02\n"
+                "(1.030000) can0 181#03\n");
+  msg = ht::error_of([&] { hs::read_candump_log(p); });
+  ht::expect_one_line(msg, p + ":3: ", "before line 2's 99999.010000");
+}
+
 // --- GPIO encoder recordings (encoders.csv) ---------------------------------------------------
 
 TEST(EncoderCsv, ParsesSignedAndUnsignedCountsWithinTheWidth) {
@@ -631,4 +654,51 @@ TEST(Metadata, ErrorsStartWithMetadataToml) {
   expect_meta_error(msg_for("format_version = 1.0\n" + rest), "format_version");
   expect_meta_error(msg_for("seed = 1e300\n" + good), "seed");
   expect_meta_error(msg_for("name = 3\n" + good), "name");
+}
+
+// The files the metadata names stay inside the dataset folder: before, frames_index and
+// [encoders] log could name /dev/zero (start-up grew to gigabytes) or a FIFO (start-up blocked).
+TEST(Metadata, NamedFilesStayInsideTheDataset) {
+  ht::TempDir dir;
+  const std::string good =
+      "format_version = 1\n[camera]\nwidth_px = 160\nheight_px = 120\nrate_hz = 30\n"
+      "[robot]\nwheel_radius_m = 0.05\ntrack_m = 0.3\nticks_per_rev = 4096\n";
+  const std::string data = dir.mkdir("data");
+  const auto error_for = [&](const std::string& section, const std::string& key,
+                             const std::string& value) {
+    std::string text = good;
+    const std::string line = key + " = \"" + value + "\"\n";
+    if (section == "camera")
+      text.insert(text.find("rate_hz"), line);
+    else
+      text += "[" + section + "]\n" + line;
+    dir.write("data/metadata.toml", text);
+    return ht::error_of([&] { hs::read_metadata(data); });
+  };
+  for (const std::string bad : {"../secret.csv", "/dev/zero", "frames/../../secret.csv"}) {
+    ht::expect_one_line(error_for("camera", "frames_index", bad),
+                        "metadata.toml: ", "camera.frames_index");
+    ht::expect_one_line(error_for("encoders", "log", bad), "metadata.toml: ", "encoders.log");
+    ht::expect_one_line(error_for("ground_truth", "file", bad),
+                        "metadata.toml: ", "ground_truth.file");
+  }
+  EXPECT_EQ(error_for("camera", "frames_index", "index/frames.csv"), ht::kNoException);
+}
+
+// metadata.toml itself: a folder, a FIFO or a deep TOML stops with one line (the 50,000-part
+// dotted key overflowed toml++'s stack).
+TEST(Metadata, NotARegularFileOrTooDeepIsRefused) {
+  ht::TempDir dir;
+  dir.mkdir("folder/metadata.toml");
+  ht::expect_one_line(ht::error_of([&] { hs::read_metadata(dir.path("folder")); }),
+                      "metadata.toml: ", "not a regular file (a directory)");
+  dir.mkdir("fifo");
+  ASSERT_EQ(::mkfifo(dir.path("fifo/metadata.toml").c_str(), 0600), 0);
+  ht::expect_one_line(ht::error_of([&] { hs::read_metadata(dir.path("fifo")); }),
+                      "metadata.toml: ", "not a regular file (a FIFO)");
+  std::string deep;
+  for (int i = 0; i < 50000; ++i) deep += "a.";
+  dir.write("metadata.toml", deep + "a = 1\n");
+  ht::expect_one_line(ht::error_of([&] { hs::read_metadata(dir.dir()); }),
+                      "metadata.toml: ", "line 1: nested 50001 deep");
 }

@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <stdlib.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -195,6 +196,78 @@ TEST(FileCamera, FrameCorruptedAfterStartupIsCountedAndSkipped) {
   EXPECT_EQ(camera.counters().frames, 1U);
 }
 
+// A frame file replaced by a FIFO (or a device) during the run blocked the cycle for ever in
+// open(2); it is now a corrupt frame, at once. A frame path leading out of the dataset (a
+// symbolic link) stops start-up.
+TEST(FileCamera, FrameReplacedByAFifoDoesNotBlock) {
+  ht::TempDir dir;
+  const hs::DatasetMetadata m = make_dataset(dir, 3);
+  hs::FileCamera camera(dir.dir(), m);
+  fs::remove(dir.path("frames/000001.ppm"));
+  ASSERT_EQ(::mkfifo(dir.path("frames/000001.ppm").c_str(), 0600), 0);
+  fs::remove(dir.path("frames/000002.ppm"));
+  fs::create_symlink("/dev/zero", dir.path("frames/000002.ppm"));
+  hal::FrameView f;
+  const auto t0 = std::chrono::steady_clock::now();
+  ASSERT_EQ(camera.acquire(f, 0), hal::CameraStatus::kFrame);
+  EXPECT_EQ(camera.acquire(f, 0), hal::CameraStatus::kCorrupt);
+  EXPECT_EQ(camera.acquire(f, 0), hal::CameraStatus::kCorrupt);
+  EXPECT_LT(std::chrono::steady_clock::now() - t0, std::chrono::seconds(1));
+  EXPECT_EQ(camera.counters().corrupt, 2U);
+}
+
+TEST(FileCamera, StartupRejectsFramesThatAreNotRegularFiles) {
+  ht::TempDir dir;
+  const hs::DatasetMetadata m = make_dataset(dir, 3);
+  fs::remove(dir.path("frames/000001.ppm"));
+  ASSERT_EQ(::mkfifo(dir.path("frames/000001.ppm").c_str(), 0600), 0);
+  ht::expect_one_line(construct_error(dir, m), "frame frames/000001.ppm: ", "not a regular file");
+  fs::remove(dir.path("frames/000001.ppm"));
+  fs::create_symlink("/dev/zero", dir.path("frames/000001.ppm"));
+  ht::expect_one_line(construct_error(dir, m), "frame frames/000001.ppm: ", "not a regular file");
+}
+
+// A hole in the recording: with gap filling (camera-paced replays), one kNoFrame a period of the
+// metadata's rate (30 Hz here) until the next frame is due, and next_timestamp_ns() says when;
+// without it, the frames come back to back as before.
+TEST(FileCamera, HoleInTheRecordingGivesANoFrameTickEachPeriod) {
+  ht::TempDir dir;
+  hs::DatasetMetadata m = make_dataset(dir, 3);
+  constexpr std::uint64_t kP = 33'333'333;  // llround(1e9 / 30)
+  hs::write_frame_index(dir.path("frames.csv"), {{1'000'000'000ULL, "frames/000000.ppm"},
+                                                 {1'000'000'000ULL + kP, "frames/000001.ppm"},
+                                                 {1'200'000'000ULL, "frames/000002.ppm"}});
+  for (const bool fill : {true, false}) {
+    hs::FileCamera camera(dir.dir(), m);
+    camera.set_fill_gaps(fill);
+    std::vector<std::uint64_t> next;
+    std::vector<hal::CameraStatus> got;
+    hal::FrameView f;
+    for (;;) {
+      next.push_back(camera.next_timestamp_ns());
+      const hal::CameraStatus s = camera.acquire(f, 0);
+      if (s == hal::CameraStatus::kEnded) break;
+      got.push_back(s);
+    }
+    if (!fill) {
+      EXPECT_EQ(got.size(), 3U);
+      EXPECT_EQ(camera.gap_ticks(), 0U);
+      continue;
+    }
+    using S = hal::CameraStatus;
+    const std::vector<S> expected = {S::kFrame,   S::kFrame,   S::kNoFrame, S::kNoFrame,
+                                     S::kNoFrame, S::kNoFrame, S::kFrame};
+    EXPECT_EQ(got, expected);
+    EXPECT_EQ(camera.gap_ticks(), 4U);
+    EXPECT_EQ(camera.counters().frames, 3U);
+    const std::uint64_t t1 = 1'000'000'000ULL + kP;
+    EXPECT_EQ(next[2], t1 + kP);
+    EXPECT_EQ(next[5], t1 + 4 * kP);
+    EXPECT_EQ(next[6], 1'200'000'000ULL);
+    EXPECT_EQ(f.timestamp_ns, 1'200'000'000ULL);
+  }
+}
+
 TEST(FileCamera, NextFrameAfterACorruptOneStillWorks) {
   ht::TempDir dir;
   const hs::DatasetMetadata m = make_dataset(dir, 3);
@@ -297,6 +370,25 @@ TEST(LogEncoders, FromALogFile) {
   const std::string msg =
       ht::error_of([&] { hs::LogEncoders from_bad_log(bad, ha::EncoderFrameLayout{}); });
   EXPECT_EQ(msg.rfind(bad + ":2: ", 0), 0U) << msg;
+}
+
+// An empty log, a folder in its place or a log without one encoder frame ran the whole replay
+// vision-only with exit status 0; each now stops start-up with one line naming the file.
+TEST(LogEncoders, ALogWithoutEncoderFramesIsRefused) {
+  ht::TempDir dir;
+  const auto error_of = [&](const std::string& path) {
+    return ht::error_of([&] { hs::LogEncoders enc(path, ha::EncoderFrameLayout{}); });
+  };
+  std::string p = dir.write("empty.log", "");
+  ht::expect_one_line(error_of(p), p + ": ", "no CAN frames");
+  p = dir.write("blank.log", "\n\n");
+  ht::expect_one_line(error_of(p), p + ": ", "no CAN frames");
+  p = dir.mkdir("folder.log");
+  ht::expect_one_line(error_of(p), p + ": ", "not a regular file (a directory)");
+  p = dir.write("foreign.log",
+                "(1.000000) can0 281#0100000002000000\n(1.010000) can0 181#01000000\n");
+  ht::expect_one_line(error_of(p), p + ": ",
+                      "none of its 2 frames is an encoder frame (ID 0x181, 8 bytes");
 }
 
 // --- GPIO encoder recordings ---------------------------------------------------------------------

@@ -429,6 +429,52 @@ TEST(MapCodec, NonFiniteOrNonPositiveParametersWithValidChecksum) {
   EXPECT_NE(decode_error(b).find("coordinate"), std::string::npos) << decode_error(b);
 }
 
+// A training target at 1e30 m (a label at 1e30 gave such a map, which the firmware accepted and
+// then published 3.7e28 m as a nominal pose) or anywhere beyond 10 km from the origin is refused;
+// 10 km itself is still a map.
+TEST(MapCodec, TargetsFartherThan10KmAreRefused) {
+  for (const float v : {1.0e30F, -1.0e30F, 10000.5F, -2.0e4F, 3.0e38F}) {
+    for (std::size_t axis = 0; axis < 2; ++axis) {
+      std::vector<std::uint8_t> b = ha::encode_map(*make_map());
+      const std::size_t record = (kFeatures + 2) * 4;
+      put_f32(b, kOffSamples + 2 * record + 4 * (kFeatures + axis), v);
+      fix_crc(b);
+      EXPECT_NE(decode_error(b).find("farther than 10 km"), std::string::npos)
+          << "axis " << axis << " value " << v << ": " << decode_error(b);
+    }
+  }
+  auto map = make_map();
+  map->model.target_x_m[0] = 1.0e4F;
+  map->model.target_y_m[1] = -1.0e4F;
+  EXPECT_EQ(decode_error(ha::encode_map(*map)), "");
+}
+
+// The largest map the format allows fits the loader's size cap exactly.
+TEST(MapCodec, LargestMapFitsTheSizeCap) {
+  auto map = make_map();
+  ha::HarmonicModel& m = map->model;
+  map->thresholds.count = ha::kMaxBoards;
+  for (std::size_t i = kBoards; i < ha::kMaxBoards; ++i)
+    map->thresholds.boards[i] = map->thresholds.boards[0];
+  m.feature_count = ha::HarmonicModel::kMaxFeatures;
+  for (std::size_t k = 0; k < m.feature_count; ++k) m.board_index[k] = static_cast<std::uint8_t>(k);
+  m.sample_count = ha::HarmonicModel::kMaxSamples;
+  for (std::size_t i = 0; i < m.sample_count; ++i) {
+    for (std::size_t k = 0; k < m.feature_count; ++k) m.sample(i)[k] = 1.0F;
+    m.target_x_m[i] = m.target_y_m[i] = 0.0F;
+  }
+  ha::ForwardMap& f = map->forward;
+  f.columns = 64;
+  f.rows = 64;
+  f.cell_m = 0.05F;
+  f.board_count = ha::kMaxBoards;
+  f.sigma.fill(0.1F);
+  f.has_heading = true;
+  const std::vector<std::uint8_t> b = ha::encode_map(*map);
+  EXPECT_EQ(b.size(), ha::kMaxMapFileBytes);
+  EXPECT_EQ(decode_error(b), "");
+}
+
 namespace {
 
 // A 3 x 2 grid over 6 boards, the fourth not modelled, with headings.

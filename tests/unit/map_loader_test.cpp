@@ -3,8 +3,10 @@
 #include "harmoloc/firmware/map_loader.hpp"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <cstdint>
+#include <cstdio>
 #include <memory>
 #include <string>
 #include <vector>
@@ -102,6 +104,32 @@ TEST(MapLoader, DirectoryIsNotAMap) {
   EXPECT_FALSE(msg.empty());
   EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
   EXPECT_EQ(msg.rfind("map ", 0), 0U) << msg;
+}
+
+// --map used to read the whole file before checking it (a 300 MB file took 529 MB of memory):
+// now anything larger than the format allows is refused from its size, unread; a FIFO or device
+// is refused without blocking.
+TEST(MapLoader, FileLargerThanAnyMapOrNotARegularFileIsRefusedUnread) {
+  ht::TempDir dir;
+  auto out = std::make_unique<ha::MapFile>();
+  std::vector<std::uint8_t> bytes = ha::encode_map(*make_map());
+  bytes.resize(ha::kMaxMapFileBytes + 1, 0);
+  std::string path = dir.write_bytes("big.map", bytes);
+  expect_one_line_about(hf::load_map(path, *out), path, "more than the");
+  path = dir.path("huge.map");
+  {
+    std::FILE* f = std::fopen(path.c_str(), "wb");
+    ASSERT_NE(f, nullptr);
+    std::fwrite(bytes.data(), 1, 64, f);
+    ASSERT_EQ(std::fseek(f, 300L * 1000 * 1000, SEEK_SET), 0);
+    std::fputc(0, f);
+    std::fclose(f);
+  }
+  expect_one_line_about(hf::load_map(path, *out), path, "300000001 bytes, more than the");
+  expect_one_line_about(hf::load_map("/dev/zero", *out), "/dev/zero", "not a regular file");
+  const std::string fifo = dir.path("map.fifo");
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  expect_one_line_about(hf::load_map(fifo, *out), fifo, "not a regular file (a FIFO)");
 }
 
 TEST(MapLoader, MatchingMapPasses) {

@@ -10,10 +10,13 @@
 #include <random>
 
 #include "harmoloc/algorithms/map_codec.hpp"
+#include "harmoloc/drivers/record_file.hpp"
 #include "harmoloc/firmware/config.hpp"
 #include "harmoloc/firmware/localization_cycle.hpp"
 #include "harmoloc/firmware/mavlink_inbound.hpp"
+#include "harmoloc/firmware/signing_startup.hpp"
 #include "mavlink_test_frames.hpp"
+#include "test_support.hpp"
 
 namespace ha = harmoloc::algorithms;
 namespace hf = harmoloc::firmware;
@@ -467,4 +470,146 @@ TEST(OverrunAlarm, NeedsOverrunsInARowAndIsOffOnAnUnpacedReplay) {
   }
   EXPECT_EQ(replay.cycle->counters().overruns, 10U);
   EXPECT_EQ(replay.cycle->counters().overrun_alarms, 0U);
+}
+
+namespace {
+
+// Wheel counters that stand still and report every cycle (odometry present: the health can be
+// nominal).
+class StillEncoders final : public hh::WheelEncoders {
+ public:
+  hh::EncoderStatus read(std::uint64_t data_time_ns, hh::EncoderCounts& c) override {
+    c = hh::EncoderCounts{};
+    c.timestamp_ns = data_time_ns;
+    c.counter_bits = 32;
+    return hh::EncoderStatus::kFresh;
+  }
+  hh::EncoderCounters counters() const override { return {}; }
+};
+
+}  // namespace
+
+// A label at 1e30 once gave a map the firmware accepted and a pose of 3.7e28 m published as
+// nominal. The map loader now refuses such maps; and whatever puts the pose outside the mapped
+// region (the box around the training positions, plus filter.map_margin_m = 1 m), here a set-pose
+// command, the pose goes out invalid (quality -1, HEARTBEAT EMERGENCY, its own STATUSTEXT),
+// never nominal, and is counted. Back inside, it is nominal again.
+TEST(MapRegion, APoseOutsideTheMappedRegionIsNeverNominal) {
+  Rig r;
+  StillEncoders encoders;
+  r.camera.frames = true;
+  r.config.link.heartbeat_hz = 50.0;  // a HEARTBEAT every cycle
+  r.cycle = std::make_unique<hf::LocalizationCycle>(r.config, test_map(), r.camera, encoders,
+                                                    r.link, r.clock);
+  for (int i = 0; i < 5; ++i) r.run();
+  ASSERT_EQ(r.cycle->pose().health, hf::Health::kNominal);
+  // The training positions span x 1..3, y 0.5..2.5 (map frame): the region is x 0..4, y -0.5..3.5.
+  struct Case {
+    float x_frd, y_frd;
+    bool inside;
+  };
+  const Case cases[] = {{3.9F, -3.4F, true},   {4.2F, -1.0F, false}, {2.0F, 0.7F, false},
+                        {-0.5F, -1.0F, false}, {2.0F, -1.0F, true},  {1.0e4F, 0.0F, false}};
+  for (const Case& c : cases) {
+    auto frames =
+        r.send_and_run(tf::command(mv::kCmdSetPose, {c.x_frd, c.y_frd, 0, 0.001F, 0, 0, 0}));
+    const auto odo = of_type(frames, 331);
+    ASSERT_EQ(odo.size(), 1U);
+    const auto hb = of_type(frames, 0);
+    ASSERT_EQ(hb.size(), 1U);
+    if (c.inside) {
+      EXPECT_EQ(r.cycle->pose().health, hf::Health::kNominal) << c.x_frd << ", " << c.y_frd;
+      EXPECT_GE(odometry_of(odo[0]).quality, 0);
+      EXPECT_EQ(hb[0].payload[7], 4);  // ACTIVE
+    } else {
+      EXPECT_EQ(r.cycle->pose().health, hf::Health::kInvalid) << c.x_frd << ", " << c.y_frd;
+      EXPECT_EQ(odometry_of(odo[0]).quality, -1);
+      EXPECT_EQ(hb[0].payload[7], 6);  // EMERGENCY
+    }
+    // The following cycles (the filter, without the fixes' pull, stays near the set pose) keep it.
+    frames = r.run();
+    EXPECT_EQ(r.cycle->pose().health == hf::Health::kNominal, c.inside) << c.x_frd;
+  }
+  // Counted by what was published (a set-pose takes effect in the publish stage, after the
+  // cycle's health was counted by the update stage).
+  EXPECT_EQ(r.cycle->counters().off_map_cycles, 8U);
+  EXPECT_EQ(r.cycle->counters().cycles_in_health[4], 7U);
+  // Each change between on and off the map said so once.
+  std::vector<std::string> texts;
+  for (const auto& f : tf::decode(r.link.written, nullptr))
+    if (f.msg_id == 253) texts.push_back(statustext_of(f));
+  const std::vector<std::string> expected = {
+      "harmoloc: pose nominal", "harmoloc: pose invalid (outside the mapped region)",
+      "harmoloc: pose nominal", "harmoloc: pose invalid (outside the mapped region)"};
+  EXPECT_EQ(texts, expected);
+}
+
+// Issue 16 item 2: a signed set-pose captured on the line was accepted again after the firmware
+// restarted (the replay protection lived in memory only). The cycle now persists the signing
+// state (drivers::RecordFile, written by its own thread) and the next run restores it: the
+// captured command is a replay after a clean stop and after a crash alike. After a clean stop a
+// fresh command is taken at once; after a crash the last renewal (up to two minutes ahead) holds
+// until the clock passes it. Without the restore (the negative control) the replay is obeyed.
+TEST(SigningPersistence, ACapturedCommandIsNotTakenAgainAfterARestart) {
+  tf::Key key{};
+  for (std::size_t i = 0; i < key.size(); ++i) key[i] = static_cast<std::uint8_t>(3 * i + 1);
+  const std::uint64_t wall_us = mv::kSigningEpochUnixUs + 86'400'000'000ULL;  // 2015-01-02
+  const std::uint64_t now = mv::signing_timestamp_from_unix_us(wall_us);
+  enum class Stop { kClean, kCrash, kNoRestore };
+  for (const Stop stop : {Stop::kClean, Stop::kCrash, Stop::kNoRestore}) {
+    SCOPED_TRACE(stop == Stop::kClean   ? "clean stop"
+                 : stop == Stop::kCrash ? "crash"
+                                        : "no restore");
+    harmoloc::test::TempDir dir;
+    // One run of the firmware: its start-up, a few cycles, then its stop.
+    struct Run {
+      Run(const tf::Key& key, const std::string& state_file, std::uint64_t wall_us, bool restore)
+          : rig(&key) {
+        // The negative control is the firmware before the fix: no state file at all.
+        if (restore) rig.config.link.signing_state_file = state_file;
+        rig.start();
+        rig.cycle->set_signing_time(wall_us);
+        if (!restore) return;
+        hf::SigningStartup s;
+        EXPECT_EQ(hf::start_signing_state(rig.config.link,
+                                          mv::signing_timestamp_from_unix_us(wall_us), s),
+                  "");
+        store.start(state_file, s.durable);
+        rig.cycle->restore_signing_state(s.restored, &store, s.durable);
+      }
+      std::size_t acks(const tf::Bytes& bytes) {
+        return of_type(rig.send_and_run(bytes), 77).size();
+      }
+      Rig rig;
+      harmoloc::drivers::RecordFile store;
+    };
+    const std::string state_file = dir.path("signing.state");
+    const tf::Bytes captured =
+        tf::command(mv::kCmdSetPose, {1, 1, 0, 0, 0, 0, 0}, 255, 190, &key, now + 100);
+    {
+      Run first(key, state_file, wall_us, true);
+      EXPECT_EQ(first.acks(captured), 1U);
+      for (int i = 0; i < 5; ++i) first.rig.run();
+      first.store.stop();
+      if (stop == Stop::kClean) {
+        EXPECT_EQ(
+            hf::write_signing_state(first.rig.config.link, first.rig.cycle->final_signing_state()),
+            "");
+      }
+    }
+    // The restart, one second later.
+    Run second(key, state_file, wall_us + 1'000'000, stop != Stop::kNoRestore);
+    const std::size_t replayed = second.acks(captured);
+    const tf::Bytes fresh =
+        tf::command(mv::kCmdSetPose, {2, 1, 0, 0, 0, 0, 0}, 255, 190, &key, now + 100'000 + 500);
+    const std::size_t fresh_acks = second.acks(fresh);
+    const mv::InboundCounters c = second.rig.cycle->inbound_counters();
+    if (stop == Stop::kNoRestore) {
+      EXPECT_EQ(replayed, 1U) << "the negative control did not replay";
+      continue;
+    }
+    EXPECT_EQ(replayed, 0U) << "a captured command was obeyed after the restart";
+    EXPECT_EQ(c.rejected_replay, stop == Stop::kClean ? 1U : 2U);
+    EXPECT_EQ(fresh_acks, stop == Stop::kClean ? 1U : 0U);
+  }
 }

@@ -41,6 +41,7 @@ TEST(MavlinkConfig, KeysReadBack) {
 accept_system_ids = [255, 254]
 accept_component_ids = []
 signing_key_file = "link.key"
+signing_state_file = "state/signing.state"
 link_id = 7
 )");
   const hf::FirmwareConfig c = hf::load_config(path);
@@ -50,6 +51,30 @@ link_id = 7
   ASSERT_TRUE(c.link.has_signing_key);
   for (std::size_t i = 0; i < 32; ++i) EXPECT_EQ(c.link.signing_key[i], i) << i;
   EXPECT_EQ(c.link.signing_key_file, "link.key");  // as written; read from the config's folder
+  EXPECT_EQ(c.link.signing_state_file, dir.path("state/signing.state"));  // from its folder
+  EXPECT_EQ(c.link.signing_max_ahead_s, 60.0);
+  EXPECT_FALSE(c.link.signing_peer_clock);
+}
+
+// Issue 16 item 2: with a key, the replay protection must survive a restart, so the config
+// must say where it is kept; the lead a frame may have and the clock's kind are checked.
+TEST(MavlinkConfig, SigningStateFileIsRequiredWithAKey) {
+  ht::TempDir dir;
+  dir.write("link.key", std::string(kHexKey) + "\n");
+  expect_error(dir, "[link]\nsigning_key_file = \"link.key\"\n",
+               "link.signing_key_file needs link.signing_state_file", 2);
+  const std::string ok =
+      "[link]\nsigning_key_file = \"link.key\"\nsigning_state_file = "
+      "\"/var/lib/harmoloc/signing.state\"\n";
+  const hf::FirmwareConfig c =
+      hf::load_config(dir.write("ok.toml", ok + "signing_clock = \"peer\"\n"
+                                                "signing_max_ahead_s = 5\n"));
+  EXPECT_EQ(c.link.signing_state_file, "/var/lib/harmoloc/signing.state");
+  EXPECT_TRUE(c.link.signing_peer_clock);
+  EXPECT_EQ(c.link.signing_max_ahead_s, 5.0);
+  expect_error(dir, ok + "signing_clock = \"gps\"\n", "link.signing_clock", 4);
+  expect_error(dir, ok + "signing_max_ahead_s = 0\n", "link.signing_max_ahead_s", 4);
+  expect_error(dir, ok + "signing_max_ahead_s = 100000\n", "link.signing_max_ahead_s", 4);
 }
 
 TEST(MavlinkConfig, RawKeyFileAndAbsolutePath) {
@@ -57,8 +82,8 @@ TEST(MavlinkConfig, RawKeyFileAndAbsolutePath) {
   std::vector<std::uint8_t> raw(32);
   for (std::size_t i = 0; i < raw.size(); ++i) raw[i] = static_cast<std::uint8_t>(255 - i);
   const std::string key = dir.write_bytes("raw.key", raw);
-  const std::string path =
-      dir.write("harmoloc.toml", "[link]\nsigning_key_file = \"" + key + "\"\n");
+  const std::string path = dir.write(
+      "harmoloc.toml", "[link]\nsigning_key_file = \"" + key + "\"\nsigning_state_file = \"s\"\n");
   const hf::FirmwareConfig c = hf::load_config(path);
   ASSERT_TRUE(c.link.has_signing_key);
   for (std::size_t i = 0; i < 32; ++i) EXPECT_EQ(c.link.signing_key[i], raw[i]);

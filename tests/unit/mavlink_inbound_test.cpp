@@ -337,7 +337,9 @@ TEST(MavlinkSigning, UnsignedBadAndReplayedFramesAreRejected) {
 TEST(MavlinkSigning, NewStreamWithinAMinuteOfTheLocalClock) {
   const tf::Key key = test_key();
   mv::Signer s;
-  s.configure(key, 0);
+  mv::SigningOptions lead;  // here a peer may be up to 2000 s ahead (the default is 60 s)
+  lead.max_ahead = 2000 * mv::kSigningUnitsPerSecond;
+  s.configure(key, 0, lead);
   s.set_time(100'000'000, 0);
   const auto verify = [&](std::uint64_t ts, std::uint8_t sys) {
     const tf::Bytes b = tf::command(mv::kCmdRelocalize, kNoParams, sys, 190, &key, ts);
@@ -375,6 +377,162 @@ TEST(MavlinkSigning, StreamTableEvictsTheLeastRecentlyUsed) {
   EXPECT_EQ(verify(2'000'001, 200), mv::SignatureCheck::kAccepted);  // evicts stream 2
   EXPECT_EQ(verify(1'000'002, 2), mv::SignatureCheck::kAccepted);    // forgotten: new, in window
   EXPECT_EQ(verify(2'000'000, 1), mv::SignatureCheck::kReplay);      // stream 1 kept
+}
+
+// Issue 16 item 2: one frame dated a year ahead moved the signing clock for good, after which
+// the peer's current frames were replays. A frame more than signing_max_ahead_s (60 s) ahead of
+// the local clock is refused and moves nothing.
+TEST(MavlinkSigning, FramesTooFarAheadAreRefusedAndMoveNothing) {
+  const tf::Key key = test_key();
+  mv::Signer s;
+  s.configure(key, 0);
+  s.set_time(100'000'000, 0);
+  const auto verify = [&](std::uint64_t ts, std::uint8_t sys = 255) {
+    const tf::Bytes b = tf::command(mv::kCmdRelocalize, kNoParams, sys, 190, &key, ts);
+    return s.verify(b.data(), b.size());
+  };
+  const std::uint64_t year = 365ULL * 86400ULL * mv::kSigningUnitsPerSecond;
+  EXPECT_EQ(verify(100'000'000 + year), mv::SignatureCheck::kTooFarAhead);
+  EXPECT_EQ(verify(100'000'000 + 6'000'001), mv::SignatureCheck::kTooFarAhead);  // 60 s + 10 us
+  EXPECT_EQ(s.now(), 100'000'000U);
+  EXPECT_EQ(verify(100'000'010), mv::SignatureCheck::kAccepted);  // the current frame is fine
+  EXPECT_EQ(verify(100'000'000 + 6'000'000), mv::SignatureCheck::kAccepted);  // 60 s: at the edge
+  // The clock moves on with time (1 s later), and the bound with it.
+  s.advance(1'000'000'000ULL);
+  EXPECT_EQ(verify(100'000'000 + 6'100'000, 1), mv::SignatureCheck::kAccepted);
+}
+
+// A board without a clock (signing_clock = "peer"): its clock is not trusted until the first
+// signed frame it accepts, which sets it; from then on the lead is bounded as on any board.
+TEST(MavlinkSigning, PeerClockIsSetByTheFirstAcceptedFrame) {
+  const tf::Key key = test_key();
+  mv::Signer s;
+  mv::SigningOptions options;
+  options.peer_clock = true;
+  s.configure(key, 0, options);
+  s.advance(0);
+  const auto verify = [&](std::uint64_t ts, std::uint8_t sys = 255) {
+    const tf::Bytes b = tf::command(mv::kCmdRelocalize, kNoParams, sys, 190, &key, ts);
+    return s.verify(b.data(), b.size());
+  };
+  const std::uint64_t t = 300'000'000'000ULL;  // about 95 years of units: far from 0
+  EXPECT_EQ(verify(t), mv::SignatureCheck::kAccepted);
+  EXPECT_EQ(s.now(), t);
+  s.advance(2'000'000'000ULL);  // 2 s later
+  EXPECT_EQ(s.now(), t + 200'000U);
+  EXPECT_EQ(verify(t + 200'000 + 6'000'001, 1), mv::SignatureCheck::kTooFarAhead);
+  EXPECT_EQ(verify(t + 200'000 + 100, 1), mv::SignatureCheck::kAccepted);
+}
+
+// What the previous run persisted: nothing at or below its high-water mark is taken (a signed
+// set-pose captured before a restart, or a day-old one on a board without a clock), and the
+// streams go on from their last timestamps.
+TEST(MavlinkSigning, RestoredStateRefusesWhatThePreviousRunCouldHaveAccepted) {
+  const tf::Key key = test_key();
+  for (const bool peer : {false, true}) {
+    SCOPED_TRACE(peer ? "board without a clock" : "board with a clock");
+    mv::Signer s;
+    mv::SigningOptions options;
+    options.peer_clock = peer;
+    s.configure(key, 0, options);
+    if (!peer) s.set_time(100'000'000, 0);  // the wall clock is (again) where it was
+    s.advance(0);
+    mv::SigningState state;
+    state.high_water = 100'500'000;
+    state.streams[0] = mv::SigningState::Stream{100'400'000, 200, 190, 0};
+    state.stream_count = 1;
+    s.restore(state);
+    const auto verify = [&](std::uint64_t ts, std::uint8_t sys) {
+      const tf::Bytes b = tf::command(mv::kCmdRelocalize, kNoParams, sys, 190, &key, ts);
+      return s.verify(b.data(), b.size());
+    };
+    EXPECT_EQ(s.now(), 100'500'000U);
+    EXPECT_EQ(verify(100'400'000, 255), mv::SignatureCheck::kReplay);    // captured last run
+    EXPECT_EQ(verify(100'500'000, 255), mv::SignatureCheck::kReplay);    // at the mark
+    EXPECT_EQ(verify(91'860'000, 255), mv::SignatureCheck::kReplay);     // a day-old capture
+    EXPECT_EQ(verify(100'500'001, 255), mv::SignatureCheck::kAccepted);  // newer than the mark
+    EXPECT_EQ(verify(100'500'002, 200), mv::SignatureCheck::kAccepted);  // the restored stream
+    // Frames sent carry timestamps above the mark: a peer's replay check never trips on them.
+    mv::Encoder enc(1, 197);
+    enc.set_signer(&s);
+    mv::FrameBuffer f{};
+    const std::size_t n = enc.heartbeat(mv::Heartbeat{}, f);
+    const auto d =
+        tf::decode(tf::Bytes(f.begin(), f.begin() + static_cast<std::ptrdiff_t>(n)), &key);
+    ASSERT_EQ(d.size(), 1U);
+    EXPECT_GT(d[0].timestamp, 100'500'002U);
+  }
+}
+
+// With persistence, a frame is taken only when the persisted high-water mark covers it, so that
+// no crash can let it be replayed; the mark is renewed ahead of need, at most once a second.
+TEST(MavlinkSigning, OnlyPersistedTimestampsAreAcceptedAndTheMarkIsRenewedAhead) {
+  const tf::Key key = test_key();
+  mv::Signer s;
+  mv::SigningOptions options;
+  options.persistent = true;
+  s.configure(key, 0, options);
+  s.set_time(100'000'000, 0);
+  s.advance(0);
+  const auto verify = [&](std::uint64_t ts) {
+    const tf::Bytes b = tf::command(mv::kCmdRelocalize, kNoParams, 255, 190, &key, ts);
+    return s.verify(b.data(), b.size());
+  };
+  // Nothing persisted yet: due at once; the snapshot covers clock + 60 s lead + 60 s reserve.
+  EXPECT_TRUE(s.persist_due(0));
+  EXPECT_EQ(verify(100'000'100), mv::SignatureCheck::kTooFarAhead);
+  mv::SigningState snap = s.snapshot(0);
+  EXPECT_EQ(snap.high_water, 100'000'100 + 6'000'000 + mv::kPersistReserve);  // the frame's need
+  EXPECT_FALSE(s.persist_due(500'000'000ULL));  // offered half a second ago
+  s.set_durable(snap.high_water);
+  EXPECT_EQ(verify(100'000'200), mv::SignatureCheck::kAccepted);
+  EXPECT_FALSE(s.persist_due(2'000'000'000ULL));  // 120 s of headroom
+  // Time passes: 31 s later less than 30 s of headroom is left, so it is due again.
+  s.advance(31'000'000'000ULL);
+  EXPECT_TRUE(s.persist_due(31'000'000'000ULL));
+  snap = s.snapshot(31'000'000'000ULL);
+  EXPECT_EQ(snap.high_water, s.now() + 6'000'000 + mv::kPersistReserve);
+  ASSERT_EQ(snap.stream_count, 1U);
+  EXPECT_EQ(snap.streams[0].timestamp, 100'000'200U);
+  // A clean stop leaves the highest timestamp used, not the reservation.
+  EXPECT_EQ(s.final_state().high_water, 100'000'200U);
+}
+
+TEST(MavlinkSigning, StateFileRoundTripAndDamageIsRefused) {
+  mv::SigningState st;
+  st.high_water = (1ULL << 48) - 1;
+  for (std::uint8_t i = 0; i < 32; ++i)
+    st.streams[st.stream_count++] = mv::SigningState::Stream{1000U + i, i, 255, 7};
+  char text[4096];
+  const std::size_t n = mv::format_signing_state(st, text, sizeof text);
+  ASSERT_GT(n, 0U);
+  mv::SigningState back;
+  EXPECT_EQ(mv::parse_signing_state(std::string_view(text, n), back), "");
+  EXPECT_EQ(back.high_water, st.high_water);
+  ASSERT_EQ(back.stream_count, 32U);
+  EXPECT_EQ(back.streams[31].timestamp, 1031U);
+  EXPECT_EQ(back.streams[31].system_id, 31);
+  EXPECT_EQ(back.streams[31].component_id, 255);
+  EXPECT_EQ(back.streams[31].link_id, 7);
+  EXPECT_EQ(mv::format_signing_state(st, text, 100), 0U);  // does not fit: nothing
+  const auto error_of = [](const std::string& t) {
+    mv::SigningState s;
+    return mv::parse_signing_state(t, s);
+  };
+  const std::string head = "harmoloc-signing-state 1\n";
+  EXPECT_EQ(error_of(head + "high_water 5\nstream 1 2 3 4\n\n"), "");
+  EXPECT_NE(error_of(""), "");
+  EXPECT_NE(error_of("harmoloc-signing-state 2\nhigh_water 5\n"), "");
+  EXPECT_NE(error_of(head), "");  // no high_water
+  EXPECT_NE(error_of(head + "high_water -5\n"), "");
+  EXPECT_NE(error_of(head + "high_water 281474976710656\n"), "");  // 2^48
+  EXPECT_NE(error_of(head + "high_water 5\nhigh_water 6\n"), "");
+  EXPECT_NE(error_of(head + "high_water 5\nstream 256 1 1 1\n"), "");
+  EXPECT_NE(error_of(head + "high_water 5\nstream 1 1 1 6\n"), "");  // above high_water
+  EXPECT_NE(error_of(head + "high_water 5\nstream 1 1 1\n"), "");
+  EXPECT_NE(error_of(head + "high_water 5\nclock 5\n"), "");
+  EXPECT_EQ(error_of(head + "high_water 5\nstream 1 1 x 1\n"),
+            "line 3: expected 'stream SYSTEM COMPONENT LINK TIMESTAMP'");
 }
 
 // ---- the receiver ---------------------------------------------------------------------------

@@ -353,7 +353,8 @@ TEST(ReportStats, ReadStatsNamesAMissingFile) {
     hs::read_stats("/nonexistent/stats.json");
     FAIL() << "no error";
   } catch (const hs::ReportError& e) {
-    EXPECT_STREQ(e.what(), "/nonexistent/stats.json: cannot open");
+    EXPECT_EQ(std::string(e.what()).rfind("/nonexistent/stats.json: cannot open", 0), 0U)
+        << e.what();
   }
 }
 

@@ -32,15 +32,18 @@ add_executable(firmware_test
   ${HARMOLOC_UNIT_DIR}/map_loader_test.cpp
   ${HARMOLOC_UNIT_DIR}/device_config_test.cpp)
 target_link_libraries(firmware_test PRIVATE harmoloc_firmware harmoloc_config harmoloc_algorithms
-  harmoloc::nettle GTest::gtest_main harmoloc_warnings)
+  harmoloc_drivers_common harmoloc::nettle GTest::gtest_main harmoloc_warnings)
 gtest_discover_tests(firmware_test DISCOVERY_TIMEOUT 60 PROPERTIES LABELS unit)
 
 # drivers/ without devices: quadrature decoding, sequence gaps, V4L2 format negotiation, the SPSC
 # ring, SocketCAN frame handling, the serial link's raw mode. Nothing here links libcamera, so it
 # runs under qemu-aarch64 too. The devices themselves are tested in the VM (tests/vm/).
-add_executable(drivers_test ${HARMOLOC_UNIT_DIR}/drivers_test.cpp)
+add_executable(drivers_test ${HARMOLOC_UNIT_DIR}/drivers_test.cpp
+  ${HARMOLOC_UNIT_DIR}/input_file_test.cpp ${HARMOLOC_UNIT_DIR}/record_file_test.cpp)
 target_link_libraries(drivers_test PRIVATE harmoloc_drivers_can harmoloc_drivers_v4l2
-  harmoloc_drivers_common harmoloc_algorithms GTest::gtest_main harmoloc_warnings)
+  harmoloc_drivers_common harmoloc_input_files harmoloc_algorithms GTest::gtest_main
+  harmoloc_warnings)
+target_compile_definitions(drivers_test PRIVATE HARMOLOC_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
 if(CMAKE_CROSSCOMPILING)
   target_compile_definitions(drivers_test PRIVATE HARMOLOC_TESTS_UNDER_QEMU_USER)
 endif()

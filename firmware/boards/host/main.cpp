@@ -14,14 +14,18 @@
 
 #include "harmoloc/drivers/monotonic_clock.hpp"
 #include "harmoloc/drivers/realtime_setup.hpp"
+#include "harmoloc/drivers/record_file.hpp"
 #include "harmoloc/drivers/serial_link.hpp"
+#include "harmoloc/drivers/stop_signals.hpp"
 #include "harmoloc/firmware/config.hpp"
 #include "harmoloc/firmware/cycle_pacer.hpp"
 #include "harmoloc/firmware/eigen_guard.hpp"
 #include "harmoloc/firmware/localization_cycle.hpp"
 #include "harmoloc/firmware/map_loader.hpp"
+#include "harmoloc/firmware/signing_startup.hpp"
 #include "harmoloc/firmware/stats_report.hpp"
 #include "harmoloc/sim_host/area_log.hpp"
+#include "harmoloc/sim_host/cli.hpp"
 #include "harmoloc/sim_host/encoder_csv.hpp"
 #include "harmoloc/sim_host/file_camera.hpp"
 #include "harmoloc/sim_host/gpio_log_encoders.hpp"
@@ -99,6 +103,42 @@ class RecordedTimeCamera final : public hal::Camera {
   std::uint64_t dropped_ = 0;
 };
 
+// The files the cycle appends to, checked after every cycle: a write that failed (a full disk,
+// /dev/full) is said once, when it happens, naming its file; the run goes on (the pose still
+// goes out on the link) and ends with exit status 1.
+class OutputWatch {
+ public:
+  explicit OutputWatch(bool progress) : progress_(progress) {}
+  void add(const sim_host::BufferedOutput& out) { outputs_[count_++] = Watched{&out, false}; }
+  void check() {
+    for (std::size_t i = 0; i < count_; ++i) report(outputs_[i]);
+  }
+  /// After the outputs were closed: reports what failed at the end; returns how many failed.
+  unsigned finish() {
+    unsigned failed = 0;
+    for (std::size_t i = 0; i < count_; ++i) {
+      report(outputs_[i]);
+      if (outputs_[i].out->error() != 0) ++failed;
+    }
+    return failed;
+  }
+
+ private:
+  struct Watched {
+    const sim_host::BufferedOutput* out;
+    bool reported;
+  };
+  void report(Watched& w) const {
+    if (w.reported || w.out->error() == 0) return;
+    w.reported = true;
+    std::fprintf(stderr, "%sharmoloc: %s: write failed (%s)\n", progress_ ? "\n" : "",
+                 w.out->path().c_str(), std::strerror(w.out->error()));
+  }
+  Watched outputs_[4]{};
+  std::size_t count_ = 0;
+  bool progress_;  // a progress line ("\r  cycle N/M") may be open on stderr
+};
+
 long count_open_fds() {
   std::error_code ec;
   long n = 0;
@@ -156,7 +196,7 @@ int main(int argc, char** argv) {
                  "encoder counters run on across passes")
       ->check(CLI::Range(1U, 1000000U));
   app.add_flag("--quiet", quiet, "no progress output");
-  CLI11_PARSE(app, argc, argv);
+  if (const auto status = harmoloc::cli::parse(app, argc, argv)) return *status;
 
   // ---- start-up: everything is read, checked and reserved here ----
   firmware::FirmwareConfig config;
@@ -257,6 +297,10 @@ int main(int argc, char** argv) {
   static firmware::LatencyHistogram wakeup_latency;
   // Timer pacing needs a clock to pace against: with --realtime only (a replay runs unpaced).
   const bool timer_paced = realtime && config.cycle.pacing == firmware::Pacing::kTimer;
+  // Camera-paced (and unpaced) replays see a hole in the recording as a live camera's cycle
+  // would: a no-frame cycle each period, so the health and the counters notice it. Timer pacing
+  // has those cycles from its own clock.
+  camera->set_fill_gaps(!timer_paced);
   static firmware::CyclePacer pacer(
       clock, config.cycle.pacing,
       static_cast<std::uint64_t>(std::llround(1e9 / config.cycle.rate_hz)));
@@ -271,11 +315,25 @@ int main(int argc, char** argv) {
   auto cycle = std::make_unique<firmware::LocalizationCycle>(config, g_map, cycle_camera, *encoders,
                                                              link, clock, meta.pixel_format);
   cycle->set_overrun_alarm(realtime);
-  // The signing clock starts at the wall time (MAVLink signing timestamps are wall-clock based).
-  cycle->set_signing_time(
+  // The signing clock starts at the wall time (MAVLink signing timestamps are wall-clock based),
+  // unless the board has no clock (link.signing_clock = "peer": the first signed frame sets it);
+  // the replay protection carries on from what the previous run persisted.
+  const auto wall_us =
       static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::microseconds>(
                                      std::chrono::system_clock::now().time_since_epoch())
-                                     .count()));
+                                     .count());
+  if (!config.link.signing_peer_clock) cycle->set_signing_time(wall_us);
+  static drivers::RecordFile signing_store;
+  if (config.link.has_signing_key) {
+    firmware::SigningStartup signing;
+    if (const std::string e = firmware::start_signing_state(
+            config.link, firmware::mavlink::signing_timestamp_from_unix_us(wall_us), signing);
+        !e.empty()) {
+      return fail(e);
+    }
+    signing_store.start(config.link.signing_state_file, signing.durable);
+    cycle->restore_signing_state(signing.restored, &signing_store, signing.durable);
+  }
   if (!quiet) {
     std::fprintf(stderr,
                  "harmoloc: %zu frames %ux%u, %zu encoder %s, map of %u samples on %u boards, "
@@ -297,6 +355,14 @@ int main(int argc, char** argv) {
   long unused_peak = 0;
   read_memory(run.rss_kb_start, unused_peak);
   run.open_fds_start = count_open_fds();
+  // From here a signal stops the run at the next cycle boundary, with every output written.
+  drivers::install_stop_signals();
+  OutputWatch watch(!quiet);
+  watch.add(g_trajectory.output());
+  watch.add(g_fixes.output());
+  watch.add(g_areas.output());
+  watch.add(recorder.output());
+  bool any_pose = false;
 
   // ---- the cycle; Eigen may not allocate from here on (it would stop the program) ----
   firmware::forbid_eigen_heap();
@@ -305,6 +371,10 @@ int main(int argc, char** argv) {
   std::size_t done = 0;
   recorded_time_camera.start(wall_start, data_start);
   for (;;) {
+    if (drivers::stop_signal() != 0) {
+      run.ended = drivers::signal_name(drivers::stop_signal());
+      break;
+    }
     if (timer_paced) {
       if (cycle->run_once(pacer.wait_for_cycle()) == firmware::CycleResult::kEnded) break;
     } else if (realtime && camera->next_timestamp_ns() >= data_start) {
@@ -316,12 +386,16 @@ int main(int argc, char** argv) {
     }
     if (!timer_paced && cycle->run_once() == firmware::CycleResult::kEnded) break;
     const firmware::PoseOutput& out = cycle->pose();
-    if (out.valid) g_trajectory.write(out.data_time_ns, out.pose);
+    if (out.valid) {
+      any_pose = true;
+      g_trajectory.write(out.data_time_ns, out.pose);
+    }
     const firmware::FixOutput& fix = cycle->last_fix();
     if (fix.present) g_areas.write(out.data_time_ns, fix.areas);
     if (fix.present && fix.fix.known_place) {
       g_fixes.write(out.data_time_ns, algorithms::Pose2{fix.fix.x_m, fix.fix.y_m, 0.0});
     }
+    watch.check();
     if (!quiet && ++done % 300 == 0) {
       std::fprintf(stderr, "\r  cycle %zu/%zu", done, camera->frame_count());
     }
@@ -329,10 +403,24 @@ int main(int argc, char** argv) {
   read_memory(run.rss_kb_end, run.peak_rss_kb);  // before the outputs are closed
   run.open_fds_end = count_open_fds();
   if (!quiet) std::fprintf(stderr, "\r  cycle %zu/%zu\n", done, camera->frame_count());
-  if (!g_trajectory.close() || !g_fixes.close()) return fail("writing the trajectory failed");
-  if (!g_areas.close()) return fail(areas_path + ": write failed");
-  if (!record_encoders_path.empty()) {
-    if (!recorder.close()) return fail(record_encoders_path + ": write failed");
+  if (!quiet && drivers::stop_signal() != 0)
+    std::fprintf(stderr, "harmoloc: stopped by %s\n", run.ended);
+  // Every output is flushed and closed whatever happened to the others, then the stats written.
+  if (config.link.has_signing_key) {
+    signing_store.stop();
+    if (const std::string e =
+            firmware::write_signing_state(config.link, cycle->final_signing_state());
+        !e.empty()) {
+      std::fprintf(stderr, "harmoloc: %s\n", e.c_str());
+      ++run.outputs_failed;
+    }
+  }
+  g_trajectory.close();
+  g_fixes.close();
+  g_areas.close();
+  const bool recorded = recorder.close();
+  run.outputs_failed += watch.finish();
+  if (!record_encoders_path.empty() && recorded) {
     if (!quiet) {
       std::fprintf(stderr,
                    "harmoloc: recorded %llu encoder samples to %s (metadata: [encoders] source = "
@@ -353,19 +441,21 @@ int main(int argc, char** argv) {
   run.link = link.counters();
   if (realtime) run.wakeup_latency = timer_paced ? &pacer.wakeup_latency() : &wakeup_latency;
   if (!stats_path.empty()) {
-    std::ofstream out(stats_path);
-    out << firmware::stats_json(*cycle, run);
-    if (!out) return fail(stats_path + ": write failed");
+    if (const std::string e = firmware::write_stats(stats_path, firmware::stats_json(*cycle, run));
+        !e.empty()) {
+      std::fprintf(stderr, "harmoloc: %s\n", e.c_str());
+      ++run.outputs_failed;
+    }
   }
   const auto& c = cycle->counters();
   const auto& h = cycle->stage_histogram(firmware::Stage::kCycle);
   std::printf(
-      "harmoloc: %llu cycles, %llu fixes (%llu off the map), health nominal %llu / odometry-only "
-      "%llu / "
-      "vision-only %llu / invalid %llu; cycle median %.0f us, p99 %.0f us, max %.0f us, %llu "
-      "overruns\n",
+      "harmoloc: %llu cycles, %llu fixes (%llu off the map), health not initialised %llu / "
+      "nominal %llu / odometry-only %llu / vision-only %llu / invalid %llu; cycle median %.0f us, "
+      "p99 %.0f us, max %.0f us, %llu overruns\n",
       static_cast<unsigned long long>(c.cycles), static_cast<unsigned long long>(c.fixes_used),
       static_cast<unsigned long long>(c.unknown_place),
+      static_cast<unsigned long long>(c.cycles_in_health[0]),
       static_cast<unsigned long long>(c.cycles_in_health[1]),
       static_cast<unsigned long long>(c.cycles_in_health[2]),
       static_cast<unsigned long long>(c.cycles_in_health[3]),
@@ -379,5 +469,21 @@ int main(int argc, char** argv) {
       cycle->uses_boards() ? "every board against the forward map" : "the harmonic fix",
       static_cast<unsigned long long>(c.no_consensus), static_cast<unsigned long long>(c.kidnaps),
       static_cast<unsigned long long>(c.kidnap_triggers), static_cast<unsigned long long>(c.lost));
-  return 0;
+  std::fflush(stdout);
+  if (run.outputs_failed > 0) {
+    std::fprintf(stderr, "harmoloc: %u output%s could not be written (see above)\n",
+                 run.outputs_failed, run.outputs_failed == 1 ? "" : "s");
+    return firmware::kExitOutputFailed;
+  }
+  if (!any_pose && !areas_path.empty() && map_path.empty()) return firmware::kExitOk;
+  if (!any_pose) {
+    std::fprintf(stderr,
+                 "harmoloc: no pose in %llu cycles: the camera never showed a place of the map "
+                 "(%llu frames, %llu fixes)\n",
+                 static_cast<unsigned long long>(c.cycles),
+                 static_cast<unsigned long long>(c.frames),
+                 static_cast<unsigned long long>(c.fixes_used));
+    return firmware::kExitNeverLocalized;
+  }
+  return firmware::kExitOk;
 }

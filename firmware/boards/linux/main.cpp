@@ -19,15 +19,19 @@
 
 #include "harmoloc/drivers/monotonic_clock.hpp"
 #include "harmoloc/drivers/realtime_setup.hpp"
+#include "harmoloc/drivers/record_file.hpp"
 #include "harmoloc/drivers/serial_link.hpp"
 #include "harmoloc/drivers/socketcan_encoders.hpp"
+#include "harmoloc/drivers/stop_signals.hpp"
 #include "harmoloc/drivers/v4l2_camera.hpp"
 #include "harmoloc/firmware/config.hpp"
 #include "harmoloc/firmware/cycle_pacer.hpp"
 #include "harmoloc/firmware/eigen_guard.hpp"
 #include "harmoloc/firmware/localization_cycle.hpp"
 #include "harmoloc/firmware/map_loader.hpp"
+#include "harmoloc/firmware/signing_startup.hpp"
 #include "harmoloc/firmware/stats_report.hpp"
+#include "harmoloc/sim_host/cli.hpp"
 #include "harmoloc/sim_host/encoder_csv.hpp"
 #ifdef HARMOLOC_WITH_GPIOD
 #include "harmoloc/drivers/gpio_quadrature_encoders.hpp"
@@ -42,11 +46,6 @@ using namespace harmoloc;
 
 // The map is large (fixed capacity); it lives in static storage.
 algorithms::MapFile g_map;
-volatile std::sig_atomic_t g_stop = 0;
-
-void on_signal(int) {
-  g_stop = 1;
-}
 
 int fail(const std::string& why) {
   std::fprintf(stderr, "harmoloc: %s\n", why.c_str());
@@ -91,8 +90,10 @@ int main(int argc, char** argv) {
       "harmoloc (Linux board): runs the firmware's fixed-rate localization cycle on the robot's\n"
       "devices: a V4L2 or libcamera camera, SocketCAN or GPIO quadrature wheel encoders, and a\n"
       "serial line for the MAVLink v2 pose stream (docs/drivers.md, docs/config-format.md).\n"
-      "Runs until SIGINT/SIGTERM, --duration or --cycles. Exit status 0 after a run, 2 with a\n"
-      "one-line reason on a bad config, map or a missing device.",
+      "Runs until SIGTERM/SIGINT/SIGHUP (stops at the next cycle, writes every output),\n"
+      "--duration or --cycles. Exit status 0 after a run, 1 if an output could not be written,\n"
+      "2 with a one-line reason on a bad config, map or a missing device, 3 if no pose was ever\n"
+      "produced.",
       "harmoloc"};
   std::string map_path, config_path, link_path, stats_path, trajectory_path, record_encoders_path;
   double duration_s = 0.0;
@@ -113,7 +114,7 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0.0, 1e9));
   app.add_option("--cycles", max_cycles, "stop after this many cycles (0: no limit)");
   app.add_flag("--quiet", quiet, "no progress output");
-  CLI11_PARSE(app, argc, argv);
+  if (const auto status = harmoloc::cli::parse(app, argc, argv)) return *status;
 
   // ---- start-up: everything is read, checked, opened and reserved here ----
   firmware::FirmwareConfig config;
@@ -241,10 +242,25 @@ int main(int argc, char** argv) {
   static firmware::CyclePacer pacer(
       clock, config.cycle.pacing,
       static_cast<std::uint64_t>(std::llround(1e9 / config.cycle.rate_hz)));
-  cycle->set_signing_time(
+  // The signing clock starts at the wall time (MAVLink signing timestamps are wall-clock based),
+  // unless the board has no clock (link.signing_clock = "peer": the first signed frame sets it);
+  // the replay protection carries on from what the previous run persisted.
+  const auto wall_us =
       static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::microseconds>(
                                      std::chrono::system_clock::now().time_since_epoch())
-                                     .count()));
+                                     .count());
+  if (!config.link.signing_peer_clock) cycle->set_signing_time(wall_us);
+  static drivers::RecordFile signing_store;
+  if (config.link.has_signing_key) {
+    firmware::SigningStartup signing;
+    if (const std::string e = firmware::start_signing_state(
+            config.link, firmware::mavlink::signing_timestamp_from_unix_us(wall_us), signing);
+        !e.empty()) {
+      return fail(e);
+    }
+    signing_store.start(config.link.signing_state_file, signing.durable);
+    cycle->restore_signing_state(signing.restored, &signing_store, signing.durable);
+  }
   if (!quiet) {
     std::fprintf(stderr, "harmoloc: camera %s\n", camera_text.c_str());
     std::fprintf(stderr, "harmoloc: encoders %s\n", encoders_text.c_str());
@@ -257,11 +273,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "harmoloc: %s\n", rt.summary.c_str());
   }
 
-  struct sigaction sa {};
-  sa.sa_handler = on_signal;
-  sigemptyset(&sa.sa_mask);
-  sigaction(SIGINT, &sa, nullptr);
-  sigaction(SIGTERM, &sa, nullptr);
+  drivers::install_stop_signals();
 
   firmware::RunCounters run;
   long unused_peak = 0;
@@ -275,25 +287,64 @@ int main(int argc, char** argv) {
   const auto end_ns =
       duration_s > 0.0 ? start_ns + static_cast<std::uint64_t>(duration_s * 1e9) : std::uint64_t{0};
   std::uint64_t done = 0;
-  while (g_stop == 0) {
+  bool any_pose = false;
+  int trajectory_error = 0;  // errno of the trajectory's first failed write
+  run.ended = "camera ended";
+  for (;;) {
+    if (drivers::stop_signal() != 0) {
+      run.ended = drivers::signal_name(drivers::stop_signal());
+      break;
+    }
     if (cycle->run_once(pacer.wait_for_cycle()) == firmware::CycleResult::kEnded) break;
     ++done;
     const firmware::PoseOutput& out = cycle->pose();
+    any_pose = any_pose || out.valid;
     if (trajectory != nullptr && out.valid) {
       const double yaw_half = 0.5 * out.pose.yaw_rad;
-      std::fprintf(trajectory, "%.9f %.6f %.6f 0 0 0 %.9f %.9f\n",
-                   static_cast<double>(out.data_time_ns) * 1e-9, out.pose.x_m, out.pose.y_m,
-                   std::sin(yaw_half), std::cos(yaw_half));
+      if (std::fprintf(trajectory, "%.9f %.6f %.6f 0 0 0 %.9f %.9f\n",
+                       static_cast<double>(out.data_time_ns) * 1e-9, out.pose.x_m, out.pose.y_m,
+                       std::sin(yaw_half), std::cos(yaw_half)) < 0 &&
+          trajectory_error == 0) {
+        // Said when it happens, naming the file; the pose still goes out on the link.
+        trajectory_error = errno != 0 ? errno : EIO;
+        std::fprintf(stderr, "harmoloc: %s: write failed (%s)\n", trajectory_path.c_str(),
+                     std::strerror(trajectory_error));
+      }
     }
-    if (max_cycles != 0 && done >= max_cycles) break;
-    if (end_ns != 0 && clock.now_ns() >= end_ns) break;
+    if (max_cycles != 0 && done >= max_cycles) {
+      run.ended = "cycle limit";
+      break;
+    }
+    if (end_ns != 0 && clock.now_ns() >= end_ns) {
+      run.ended = "duration";
+      break;
+    }
   }
   read_memory(run.rss_kb_end, run.peak_rss_kb);
   run.open_fds_end = count_open_fds();
-  if (trajectory != nullptr && std::fclose(trajectory) != 0)
-    return fail(trajectory_path + ": write failed");
-  if (!record_encoders_path.empty() && !recorder.close())
-    return fail(record_encoders_path + ": write failed");
+  if (!quiet && drivers::stop_signal() != 0)
+    std::fprintf(stderr, "harmoloc: stopped by %s\n", run.ended);
+  // Every output is flushed and closed whatever happened to the others, then the stats written.
+  if (config.link.has_signing_key) {
+    signing_store.stop();
+    if (const std::string e =
+            firmware::write_signing_state(config.link, cycle->final_signing_state());
+        !e.empty()) {
+      std::fprintf(stderr, "harmoloc: %s\n", e.c_str());
+      ++run.outputs_failed;
+    }
+  }
+  if (trajectory != nullptr && std::fclose(trajectory) != 0 && trajectory_error == 0) {
+    trajectory_error = errno != 0 ? errno : EIO;
+    std::fprintf(stderr, "harmoloc: %s: write failed (%s)\n", trajectory_path.c_str(),
+                 std::strerror(trajectory_error));
+  }
+  if (trajectory_error != 0) ++run.outputs_failed;
+  if (!record_encoders_path.empty() && !recorder.close()) {
+    std::fprintf(stderr, "harmoloc: %s: write failed (%s)\n", record_encoders_path.c_str(),
+                 std::strerror(recorder.output().error() != 0 ? recorder.output().error() : EIO));
+    ++run.outputs_failed;
+  }
 
   run.board = "linux";
   run.rate_hz = config.cycle.rate_hz;
@@ -304,9 +355,11 @@ int main(int argc, char** argv) {
   run.encoders = encoders->counters();
   run.link = link.counters();
   if (!stats_path.empty()) {
-    std::ofstream out(stats_path);
-    out << firmware::stats_json(*cycle, run);
-    if (!out) return fail(stats_path + ": write failed");
+    if (const std::string e = firmware::write_stats(stats_path, firmware::stats_json(*cycle, run));
+        !e.empty()) {
+      std::fprintf(stderr, "harmoloc: %s\n", e.c_str());
+      ++run.outputs_failed;
+    }
   }
   const auto& c = cycle->counters();
   const auto& h = cycle->stage_histogram(firmware::Stage::kCycle);
@@ -328,5 +381,20 @@ int main(int argc, char** argv) {
       static_cast<double>(h.quantile_ns(0.99)) / 1000.0, static_cast<double>(h.max_ns()) / 1000.0,
       static_cast<unsigned long long>(c.overruns),
       static_cast<unsigned long long>(pacer.skipped_ticks()));
-  return 0;
+  std::printf(
+      "harmoloc: health not initialised %llu / nominal %llu / odometry-only %llu / "
+      "vision-only %llu / invalid %llu cycles; ended: %s\n",
+      static_cast<unsigned long long>(c.cycles_in_health[0]),
+      static_cast<unsigned long long>(c.cycles_in_health[1]),
+      static_cast<unsigned long long>(c.cycles_in_health[2]),
+      static_cast<unsigned long long>(c.cycles_in_health[3]),
+      static_cast<unsigned long long>(c.cycles_in_health[4]), run.ended);
+  std::fflush(stdout);
+  if (run.outputs_failed > 0) return firmware::kExitOutputFailed;
+  if (!any_pose) {
+    std::fprintf(stderr, "harmoloc: no pose in %llu cycles\n",
+                 static_cast<unsigned long long>(c.cycles));
+    return firmware::kExitNeverLocalized;
+  }
+  return firmware::kExitOk;
 }

@@ -30,6 +30,18 @@ struct MapCalibration {
   float pass_spread_m = 0.0F;
 };
 
+/// The largest map file the format allows (every count at its capacity, version 3): the loader
+/// refuses a larger file before reading it.
+constexpr std::size_t kMaxMapFileBytes =
+    8U + 4U * 4U + kMaxBoards * 12U + 8U + HarmonicModel::kMaxFeatures + 7U * 4U +
+    HarmonicModel::kMaxSamples * (HarmonicModel::kMaxFeatures + 2U) * 4U + 8U + 16U +
+    kMaxBoards * 4U + 4U + ForwardMap::kMaxCells * (kMaxBoards + 2U) * 4U + 4U;
+
+/// How far from the map's origin a position in a map may be (metres): a training target beyond
+/// it is refused (a label in millimetres or at 1e30 must not become a map the firmware trusts).
+/// The same bound as the forward map's origin and the set-pose command's.
+constexpr float kMaxMapCoordinate_m = 1.0e4F;
+
 struct MapFile {
   std::uint32_t image_width_px = 0;
   std::uint32_t image_height_px = 0;
@@ -51,7 +63,8 @@ struct MapError {
 
 /// Parses and validates a map held in memory into @p map (which may be a static object: no
 /// allocation). Rejects bad magic, unknown version, truncation, trailing bytes, checksum
-/// mismatch, counts above capacity, non-finite or non-positive parameters.
+/// mismatch, counts above capacity, non-finite or non-positive parameters, and training targets
+/// that are not finite or farther than kMaxMapCoordinate_m from the origin.
 MapError decode_map(const std::uint8_t* data, std::size_t size, MapFile& map);
 
 }  // namespace harmoloc::algorithms

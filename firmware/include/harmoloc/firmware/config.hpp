@@ -46,6 +46,9 @@ struct FilterConfig {
   double resample_threshold = 0.5;    ///< resample when N_eff < this fraction of particles
   double init_position_sigma_m = 0.05;
   double vision_only_speed_mps = 0.3;  ///< how fast the robot may move when odometry is missing
+  /// How far beyond the mapped region (the box around the map's training positions and its
+  /// forward map) a pose may lie and still be published as more than invalid.
+  double map_margin_m = 1.0;
 };
 
 /// What the particles are weighed by.
@@ -93,6 +96,14 @@ struct LinkConfig {
   bool has_signing_key = false;
   std::array<std::uint8_t, 32> signing_key{};
   std::uint8_t link_id = 0;  ///< link id in the signatures of the frames sent
+  /// Where the signing state (the replay protection's high-water mark and streams) survives a
+  /// restart; required with a key. Resolved against the config file's folder.
+  std::string signing_state_file;
+  /// How far ahead of the local signing clock a signed frame may be dated.
+  double signing_max_ahead_s = 60.0;
+  /// A board without a real-time clock: the first signed frame accepted sets the signing clock
+  /// (link.signing_clock = "peer"); else the wall clock is trusted ("wall").
+  bool signing_peer_clock = false;
   /// Serial device of the Linux board (its --link overrides it; the host board ignores it).
   std::string device = "/dev/serial0";
 };

@@ -20,6 +20,7 @@
 #include "harmoloc/firmware/mavlink_v2.hpp"
 #include "harmoloc/hal/camera.hpp"
 #include "harmoloc/hal/clock.hpp"
+#include "harmoloc/hal/persistent_record.hpp"
 #include "harmoloc/hal/pose_link.hpp"
 #include "harmoloc/hal/wheel_encoders.hpp"
 
@@ -74,6 +75,8 @@ struct CycleCounters {
   std::uint64_t fixes_used = 0;
   std::uint64_t unknown_place = 0;
   std::uint64_t implausible_frames = 0;  ///< frames no place on the map can look like (unused)
+  /// Cycles whose pose lay outside the mapped region plus filter.map_margin_m (published invalid).
+  std::uint64_t off_map_cycles = 0;
   std::uint64_t encoder_samples = 0;
   /// Encoder gaps the cloud spent diffusing (vision only), closed by their first sample: the
   /// cloud is moved to where the gap's travel takes the pose of the last sample before it.
@@ -137,8 +140,17 @@ class LocalizationCycle {
   mavlink::InboundCounters inbound_counters() const { return receiver_.counters(); }
 
   /// Sets the link's signing clock to the wall time @p unix_time_us (start-up; a board without
-  /// a real-time clock leaves it, and the clock follows the peers' signed frames).
+  /// a real-time clock, link.signing_clock = "peer", leaves it: its first accepted signed frame
+  /// sets it).
   void set_signing_time(std::uint64_t unix_time_us);
+  /// Start-up, with a signing key: what the previous run persisted (nothing at or below its
+  /// high-water mark is accepted), and where the cycle persists the state from now on (ahead
+  /// of need, at most once a second; firmware/mavlink_signing.hpp). @p store may be nullptr.
+  void restore_signing_state(const mavlink::SigningState& state, hal::PersistentRecord* store,
+                             std::uint64_t durable_high_water);
+  /// The signing state to write at a clean stop.
+  mavlink::SigningState final_signing_state() const { return signer_.final_state(); }
+  const mavlink::Signer& signer() const { return signer_; }
 
   /// Live boards (real devices): the data clock is the monotonic clock the devices stamp their
   /// data with. A cycle without a frame takes the clock's time instead of the last frame's time
@@ -166,6 +178,10 @@ class LocalizationCycle {
   mavlink::MavResult request_message(const mavlink::CommandLong& command);
   void send(std::size_t size);
   Health assess_health() const;
+  // The health that is published: assess_health(), except that a pose outside the mapped region
+  // (plus filter.map_margin_m) is invalid, never nominal.
+  Health published_health() const;
+  bool off_map(const algorithms::Pose2& pose) const;
   // The measurement update with the per-board model; returns whether the frame counts as vision.
   bool update_with_boards(
       const algorithms::AreaVector& areas,
@@ -212,6 +228,8 @@ class LocalizationCycle {
   std::uint32_t overrun_streak_ = 0;  ///< overruns in a row (alarm off) or cycles within (on)
   mavlink::Encoder mavlink_;
   mavlink::Signer signer_;
+  hal::PersistentRecord* signing_store_ = nullptr;
+  std::array<char, hal::PersistentRecord::kMaxBytes> signing_record_{};
   mavlink::CommandReceiver receiver_;
   const bool use_boards_;
   mavlink::FrameBuffer frame_buffer_{};
@@ -240,6 +258,10 @@ class LocalizationCycle {
   std::uint64_t next_heartbeat_ns_ = 0;
   std::uint8_t reset_counter_ = 0;
   Health last_reported_health_ = Health::kNotInitialized;
+  bool last_reported_off_map_ = false;
+  /// The mapped region with its margin (map frame): where a published pose may be nominal.
+  double region_min_x_m_ = 0.0, region_max_x_m_ = 0.0;
+  double region_min_y_m_ = 0.0, region_max_y_m_ = 0.0;
   bool heartbeat_requested_ = false;  ///< a peer asked for one: sent this cycle, off schedule
   /// The re-seed of the filter the commands of this cycle ask for. Each replaces the whole
   /// cloud, so only the last is carried out: a burst of commands costs one re-seed.

@@ -73,6 +73,9 @@ struct InboundCounters {
   std::uint64_t rejected_unsigned = 0;  ///< a key is configured and the command was not signed
   std::uint64_t rejected_bad_signature = 0;
   std::uint64_t rejected_replay = 0;
+  /// Signed and valid, but dated too far ahead of the signing clock, or beyond the persisted
+  /// high-water mark yet (docs/wire-protocol.md, "Signing").
+  std::uint64_t rejected_future = 0;
   std::uint64_t rejected_source = 0;   ///< from a system or component not accepted
   std::uint64_t ignored_messages = 0;  ///< valid frames that are not a command for us
   std::uint64_t saturated_cycles = 0;  ///< cycles that stopped at a per-cycle limit

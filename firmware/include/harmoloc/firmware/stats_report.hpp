@@ -23,8 +23,23 @@ struct RunCounters {
   /// Process resources after start-up and at the end (negative: not measured).
   long rss_kb_start = -1, rss_kb_end = -1, peak_rss_kb = -1;
   long open_fds_start = -1, open_fds_end = -1;
+  /// How the run ended: "end of the recording", "SIGTERM", "cycle limit", ...
+  const char* ended = "end of the recording";
+  /// Outputs (trajectory, recordings) whose writes failed.
+  unsigned outputs_failed = 0;
 };
 
 std::string stats_json(const LocalizationCycle& cycle, const RunCounters& run);
+
+/// Writes @p json to @p path (created or truncated). Returns an empty string, or "PATH: write
+/// failed (reason)".
+std::string write_stats(const std::string& path, const std::string& json);
+
+/// Exit statuses of the board mains (docs/architecture.md): a completed run, one whose
+/// outputs failed to be written, bad input at start-up, and a run that never produced a pose.
+constexpr int kExitOk = 0;
+constexpr int kExitOutputFailed = 1;
+constexpr int kExitBadInput = 2;
+constexpr int kExitNeverLocalized = 3;
 
 }  // namespace harmoloc::firmware

@@ -42,6 +42,7 @@ class AreaLogWriter {
   void write(std::uint64_t t_ns, const algorithms::AreaVector& areas);
   /// Flushes and closes; false if any write failed.
   bool close() { return out_.close(); }
+  const BufferedOutput& output() const { return out_; }
 
  private:
   BufferedOutput out_;

@@ -24,11 +24,18 @@ class BufferedOutput {
   void append(const char* bytes, std::size_t size);
   /// Flushes and closes; false if any write failed.
   bool close();
+  /// The errno of the first write that failed (0: none so far). A write fails when stdio flushes
+  /// its buffer (every 64 KiB) or at close(): the caller can say so when it happens.
+  int error() const { return error_; }
+  /// The path given to open().
+  const std::string& path() const { return path_; }
 
  private:
   static constexpr std::size_t kBufferBytes = 1 << 16;
   std::FILE* file_ = nullptr;
   char* buffer_ = nullptr;
+  int error_ = 0;
+  std::string path_;
 };
 
 }  // namespace harmoloc::sim_host

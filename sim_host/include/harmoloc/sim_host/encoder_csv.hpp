@@ -70,6 +70,7 @@ class EncoderRecorder final : public hal::WheelEncoders {
   bool open(const std::string& path);
   /// Flushes and closes; false if any write failed. Safe to call twice.
   bool close();
+  const BufferedOutput& output() const { return out_; }
 
   hal::EncoderStatus read(std::uint64_t data_time_ns, hal::EncoderCounts& counts) override;
   hal::EncoderCounters counters() const override { return inner_.counters(); }

@@ -33,6 +33,14 @@ class FileCamera final : public hal::Camera {
     loops_ = loops == 0 ? 1 : loops;
     span_ns_ = span_ns;
   }
+  /// A hole in the recording (the next frame more than 1.5 frame periods after the last one)
+  /// comes out as a live camera's would in a camera-paced cycle: one kNoFrame per period of the
+  /// metadata's rate that has no frame, each an acquire() that found nothing by its deadline.
+  /// Off by default (a timer-paced replay has its own clock and needs no such ticks); with it,
+  /// next_timestamp_ns() gives the time of the next tick, frame or not.
+  void set_fill_gaps(bool fill) { fill_gaps_ = fill; }
+  /// Ticks without a frame handed out for holes in the recording.
+  std::uint64_t gap_ticks() const { return gap_ticks_; }
 
  private:
   std::vector<std::string> paths_;
@@ -44,6 +52,11 @@ class FileCamera final : public hal::Camera {
   std::uint32_t loops_ = 1;
   std::uint32_t loop_ = 0;
   std::uint64_t span_ns_ = 0;
+  std::uint64_t period_ns_ = 0;  // of the metadata's frame rate
+  bool fill_gaps_ = false;
+  bool have_last_ = false;
+  std::uint64_t last_ns_ = 0;  // time of the last acquire() that was not kEnded (frame or tick)
+  std::uint64_t gap_ticks_ = 0;
   hal::FrameView view_{};
   hal::CameraCounters counters_{};
 };

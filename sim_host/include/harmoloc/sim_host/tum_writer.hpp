@@ -19,6 +19,7 @@ class TumWriter {
   void write(std::uint64_t t_ns, const algorithms::Pose2& pose);
   /// Flushes and closes; false if any write failed.
   bool close() { return out_.close(); }
+  const BufferedOutput& output() const { return out_; }
 
  private:
   BufferedOutput out_;
