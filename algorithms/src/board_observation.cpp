@@ -43,8 +43,8 @@ double board_preference(const ForwardMap& map, const BoardFeatures& observed, do
   expected_features(map, locate(map, bx_m, by_m), eb.data());
   const std::size_t boards = std::min<std::size_t>({map.board_count, observed.count, kMaxBoards});
   const double c = params.outlier_floor;
-  std::array<double, kMaxBoards> term{}, rb{};
-  std::size_t modelled = 0, fitting = 0, exceeding = 0;
+  const double hidden = std::max(params.hidden_floor, c);
+  double sum = 0.0;
   for (std::size_t b = 0; b < boards; ++b) {
     if (!(map.sigma[b] > 0.0F)) continue;
     // The trained noise itself, not widened by sigma_scale: that widening is for weighing a
@@ -52,22 +52,13 @@ double board_preference(const ForwardMap& map, const BoardFeatures& observed, do
     // several frames before it counts.
     const double width = static_cast<double>(map.sigma[b]);
     const double ra = (static_cast<double>(observed.value[b]) - static_cast<double>(ea[b])) / width;
-    rb[b] = (static_cast<double>(observed.value[b]) - static_cast<double>(eb[b])) / width;
-    term[b] = std::log(std::exp(-0.5 * ra * ra) + c) - std::log(std::exp(-0.5 * rb[b] * rb[b]) + c);
-    ++modelled;
-    const double k2 = params.sigma_scale * params.sigma_scale;  // the consensus bound's units
-    if (rb[b] * rb[b] < params.consensus_chi2 * k2)
-      ++fitting;
-    else if (rb[b] > 0.0)
-      ++exceeding;
-  }
-  // The frame looks like place b with boards hidden (a person, a box): most boards fit b and
-  // the others only show less. Those cannot speak for place a.
-  const bool hidden_at_b = exceeding == 0 && 2 * fitting >= modelled;
-  double sum = 0.0;
-  for (std::size_t b = 0; b < boards; ++b) {
-    if (!(map.sigma[b] > 0.0F)) continue;
-    sum += hidden_at_b && rb[b] < 0.0 ? std::min(term[b], 0.0) : term[b];
+    const double rb = (static_cast<double>(observed.value[b]) - static_cast<double>(eb[b])) / width;
+    const double la = std::exp(-0.5 * ra * ra) + c;
+    double lb = std::exp(-0.5 * rb * rb) + c;
+    // A board that shows less than place b expects may be hidden there (a person, a box): that
+    // is likelier than an arbitrary outlier, so b loses less by it.
+    if (rb < 0.0) lb = std::max(lb, hidden);
+    sum += std::log(la) - std::log(lb);
   }
   return sum;
 }

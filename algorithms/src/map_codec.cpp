@@ -341,7 +341,7 @@ MapError decode_map(const std::uint8_t* data, std::size_t size, MapFile& map) {
   if (version >= 4) {
     std::uint32_t entries = 0;
     if (!r.u32(entries, "truncated: the calibration is missing")) return r.error;
-    if (entries > 64) return MapError{"too many calibration entries", r.pos()};
+    if (entries > kMaxCalibrationEntries) return MapError{"too many calibration entries", r.pos()};
     for (std::uint32_t i = 0; i < entries; ++i) {
       std::uint32_t id = 0;
       float value = 0.0F;

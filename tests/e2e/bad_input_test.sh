@@ -154,7 +154,7 @@ d = bytearray(open(sys.argv[1], 'rb').read())
 boards = struct.unpack_from('<I', d, 20)[0]
 off = 24 + 12 * boards
 n, f = struct.unpack_from('<II', d, off)
-off += 8 + f + 7 * 4
+off += 8 + f + 7 * 4 + 4 * f  # header, the feature boards, 7 parameters, the feature weights
 struct.pack_into('<f', d, off + 4 * f, 1e30)  # sample 0's x
 struct.pack_into('<I', d, len(d) - 4, zlib.crc32(bytes(d[:-4])))
 open(sys.argv[2], 'wb').write(d)

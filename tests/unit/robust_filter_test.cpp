@@ -379,6 +379,34 @@ TEST(ParticleFilterBoards, AHiddenBoardDoesNotDragTheRobustModel) {
   EXPECT_GT(std::fabs(run(false) - truth.x_m), 0.1);
 }
 
+// The kidnap test's likelihood ratio of two places (board_preference): the place the frame was
+// seen from wins clearly; a board hidden at the estimate does not make the estimate look wrong.
+TEST(BoardPreference, TheTruePlaceWinsAndAHiddenBoardIsNoKidnap) {
+  const auto map = make_forward_map();
+  const ha::BoardModelParams params;
+  // Seen from (1.8, 0.9), the estimate at (1.2, 0.6): every board disagrees there.
+  const double kidnapped =
+      ha::board_preference(*map, observe(1.8, 0.9), 1.8, 0.9, 1.2, 0.6, params);
+  EXPECT_GT(kidnapped, 3 * std::log(10.0));  // three boards, each ln 10 (less here) to ln(1 / c)
+  EXPECT_GT(kidnapped, ha::KidnapParams{}.preference_min);
+  // The reverse comparison is as clear the other way.
+  EXPECT_LT(ha::board_preference(*map, observe(1.8, 0.9), 1.2, 0.6, 1.8, 0.9, params), -4.6);
+  // At the estimate (1.2, 0.6) with board 1 hidden (area 0): a place where board 1 is small and
+  // the others fit worse does not win.
+  ha::BoardFeatures hidden = observe(1.2, 0.6);
+  hidden.value[1] = 0.0F;
+  for (const auto& [x, y] : {std::pair{1.9, 0.5}, std::pair{1.5, 0.55}, std::pair{1.25, 0.6}}) {
+    EXPECT_LT(ha::board_preference(*map, hidden, x, y, 1.2, 0.6, params),
+              ha::KidnapParams{}.preference_min)
+        << x << ", " << y;
+  }
+  // The same frame without the allowance for hidden boards costs the estimate ln(1 / c).
+  ha::BoardModelParams strict = params;
+  strict.hidden_floor = 0.0;
+  EXPECT_GT(ha::board_preference(*map, hidden, 1.25, 0.6, 1.2, 0.6, strict),
+            ha::board_preference(*map, hidden, 1.25, 0.6, 1.2, 0.6, params) + 2.0);
+}
+
 // ---- kidnap test -------------------------------------------------------------------------------
 
 namespace {

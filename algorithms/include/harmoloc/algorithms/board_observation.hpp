@@ -50,8 +50,11 @@ struct BoardModelParams {
   /// independent observation. The robust tests use k sigma; only the weight is tempered.
   double tempering = 40.0;
   double outlier_floor = 0.01;  ///< c: likelihood of "something else", relative to a perfect fit
-  double dcs_phi = 1.0;         ///< seed 002's Phi
-  double consensus_chi2 = 9.0;  ///< a board agrees with the estimate when its chi2 is below
+  /// The kidnap test's likelihood of a board that shows less than expected: it may be hidden (a
+  /// person, a box), which is likelier than an arbitrary outlier (board_preference).
+  double hidden_floor = 0.1;
+  double dcs_phi = 1.0;             ///< seed 002's Phi
+  double consensus_chi2 = 9.0;      ///< a board agrees with the estimate when its chi2 is below
   double consensus_fraction = 0.6;  ///< at least this fraction of the boards must agree
   double motion_index_rate = 0.05;  ///< weight of one frame in the motion index (forgetting)
   double motion_index_min = 0.02;   ///< bounds, so that a board can always come back
@@ -99,12 +102,12 @@ struct BoardAssessment {
 };
 
 /// How much better the boards fit place a than place b: the sum over the modelled boards of
-/// log(l(a) / l(b)), l = exp(-chi2 / 2) + c with chi2 in the trained sigma (the robust term with every
-/// board trusted, so that no board can contribute more than ln(1 / c)). Nats; positive when a
-/// fits better. When the frame looks like place b with boards hidden (most boards fit b within
-/// the consensus bound, the others show less than b expects, none more), the boards that show
-/// less contribute nothing in a's favour: an occlusion must not make the estimate look wrong.
-/// For the kidnap test: do the boards prefer the global fix (a) to the estimate (b)?
+/// log(l(a) / l(b)), l = exp(-chi2 / 2) + c with chi2 in the trained sigma (the robust term with
+/// every board trusted, so that no board can contribute more than ln(1 / c)). Nats; positive when a
+/// fits better. A board that shows less than place b expects may be hidden there: at b it costs
+/// at most ln(1 / hidden_floor) instead of ln(1 / c), so that one or two hidden boards cannot
+/// make the estimate look wrong. For the kidnap test: do the boards prefer the global fix (a)
+/// to the estimate (b)?
 double board_preference(const ForwardMap& map, const BoardFeatures& observed, double ax_m,
                         double ay_m, double bx_m, double by_m, const BoardModelParams& params);
 

@@ -30,12 +30,17 @@ struct MapCalibration {
   float pass_spread_m = 0.0F;
 };
 
-/// The largest map file the format allows (every count at its capacity, version 3): the loader
+/// Most calibration entries a map may hold (version 4).
+constexpr std::uint32_t kMaxCalibrationEntries = 64;
+
+/// The largest map file the format allows (every count at its capacity, version 4): the loader
 /// refuses a larger file before reading it.
 constexpr std::size_t kMaxMapFileBytes =
     8U + 4U * 4U + kMaxBoards * 12U + 8U + HarmonicModel::kMaxFeatures + 7U * 4U +
+    HarmonicModel::kMaxFeatures * 4U +
     HarmonicModel::kMaxSamples * (HarmonicModel::kMaxFeatures + 2U) * 4U + 8U + 16U +
-    kMaxBoards * 4U + 4U + ForwardMap::kMaxCells * (kMaxBoards + 2U) * 4U + 4U;
+    kMaxBoards * 4U + 4U + ForwardMap::kMaxCells * (kMaxBoards + 2U) * 4U + 4U +
+    kMaxCalibrationEntries * 8U + 4U;
 
 /// How far from the map's origin a position in a map may be (metres): a training target beyond
 /// it is refused (a label in millimetres or at 1e30 must not become a map the firmware trusts).
