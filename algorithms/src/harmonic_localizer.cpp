@@ -26,6 +26,77 @@ inline float squared_distance(const float* a, const float* b, std::size_t d, con
   return s;
 }
 
+// The local linear fix along one axis: minimise sum_j w_j (t_j - a - b . (O_j - O))^2 +
+// ridge * |b|^2 and return a. Fixed-size normal equations (at most 9 x 9), solved by Cholesky;
+// returns @p kernel_average when the system is not positive definite.
+double local_linear(const HarmonicModel& model,
+                    const std::array<float, HarmonicModel::kMaxFeatures>& features,
+                    const std::array<float, HarmonicModel::kMaxFeatures>& kernel_weight,
+                    const std::array<float, HarmonicModel::kMaxSamples>& d2, float d2_min,
+                    float sigma, const std::array<float, HarmonicModel::kMaxSamples>& target,
+                    double kernel_average, double weight_sum) {
+  constexpr std::size_t kMax = HarmonicModel::kMaxFeatures + 1;
+  std::array<std::size_t, HarmonicModel::kMaxFeatures> used{};
+  std::array<double, HarmonicModel::kMaxFeatures> scale{};
+  std::size_t m = 0;
+  for (std::size_t k = 0; k < model.feature_count; ++k)
+    if (kernel_weight[k] > 0.0F) {
+      scale[m] = std::sqrt(static_cast<double>(kernel_weight[k]));
+      used[m++] = k;
+    }
+  const std::size_t p = m + 1;
+  std::array<double, kMax * kMax> a{};
+  std::array<double, kMax> b{};
+  std::array<double, kMax> z{};
+  constexpr float kNegligible = 40.0F;
+  z[0] = 1.0;
+  for (std::size_t j = 0; j < model.sample_count; ++j) {
+    const float e = sigma * (d2[j] - d2_min);
+    if (e > kNegligible) continue;
+    const double w = std::exp(static_cast<double>(-e));
+    const float* s = model.sample(j);
+    for (std::size_t i = 0; i < m; ++i)
+      z[i + 1] =
+          scale[i] * (static_cast<double>(s[used[i]]) - static_cast<double>(features[used[i]]));
+    // Targets relative to the kernel average keep the sums well scaled.
+    const double t = static_cast<double>(target[j]) - kernel_average;
+    for (std::size_t r = 0; r < p; ++r) {
+      const double wz = w * z[r];
+      b[r] += wz * t;
+      for (std::size_t c = 0; c <= r; ++c) a[r * kMax + c] += wz * z[c];
+    }
+  }
+  const double ridge = static_cast<double>(model.local_linear_ridge) * weight_sum /
+                       (2.0 * static_cast<double>(sigma));
+  for (std::size_t r = 1; r < p; ++r) a[r * kMax + r] += ridge;
+  // Cholesky in place (lower triangle).
+  for (std::size_t c = 0; c < p; ++c) {
+    double diag = a[c * kMax + c];
+    for (std::size_t k = 0; k < c; ++k) diag -= a[c * kMax + k] * a[c * kMax + k];
+    if (!(diag > 1e-12 * weight_sum)) return kernel_average;
+    diag = std::sqrt(diag);
+    a[c * kMax + c] = diag;
+    for (std::size_t r = c + 1; r < p; ++r) {
+      double v = a[r * kMax + c];
+      for (std::size_t k = 0; k < c; ++k) v -= a[r * kMax + k] * a[c * kMax + k];
+      a[r * kMax + c] = v / diag;
+    }
+  }
+  std::array<double, kMax> y{};
+  for (std::size_t r = 0; r < p; ++r) {
+    double v = b[r];
+    for (std::size_t k = 0; k < r; ++k) v -= a[r * kMax + k] * y[k];
+    y[r] = v / a[r * kMax + r];
+  }
+  for (std::size_t r = p; r-- > 0;) {
+    double v = y[r];
+    for (std::size_t k = r + 1; k < p; ++k) v -= a[k * kMax + r] * y[k];
+    y[r] = v / a[r * kMax + r];
+  }
+  const double result = kernel_average + y[0];
+  return std::isfinite(result) ? result : kernel_average;
+}
+
 // Eq. 9 with the model's feature weights (times @p mask, 0 or 1 per feature, when given). The
 // known-place test compares the features the mask keeps, all of them with equal weight, against
 // the sample nearest in that plain distance.
@@ -90,6 +161,12 @@ HarmonicFix query(const HarmonicModel& model,
   // The nearest sample has weight 1, so both sums are >= 1.
   fix.x_m = sum_wx_fx / sum_wx;
   fix.y_m = sum_wy_fy / sum_wy;
+  if (model.local_linear_ridge > 0.0F) {
+    fix.x_m = local_linear(model, features, kernel_weight, d2, d2_min, sx, model.target_x_m,
+                           fix.x_m, sum_wx);
+    fix.y_m = local_linear(model, features, kernel_weight, d2, d2_min, sy, model.target_y_m,
+                           fix.y_m, sum_wy);
+  }
 
   bool any_board = false;
   double diff_sum = 0.0, sum = 0.0;

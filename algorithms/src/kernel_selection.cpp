@@ -84,6 +84,39 @@ double median_finite(const Eigen::MatrixXd& m) {
   return *mid > 0.0 ? *mid : 1.0;
 }
 
+// Eq. 9's local linear correction for one query along one axis, for every ridge at once: the
+// normal equations of sum_j w_j (t_j - a - b . z_j)^2 + ridge |b|^2 with z_j = O_j - O, their
+// intercept a, as the firmware computes it (harmonic_localizer.cpp: the same neglected weights,
+// targets relative to the kernel average, the ridge in units of the weight sum / (2 sigma)).
+void local_linear_predictions(const Eigen::MatrixXd& fs, const Eigen::RowVectorXd& fq,
+                              const Eigen::RowVectorXd& excess, double sigma,
+                              const Eigen::VectorXd& target, const std::vector<double>& ridges,
+                              double kernel_average, double weight_sum, std::vector<double>& out) {
+  const Eigen::Index m = fs.cols(), p = m + 1;
+  Eigen::MatrixXd a = Eigen::MatrixXd::Zero(p, p);
+  Eigen::VectorXd b = Eigen::VectorXd::Zero(p);
+  Eigen::VectorXd z(p);
+  z(0) = 1.0;
+  for (Eigen::Index j = 0; j < fs.rows(); ++j) {
+    const double e = sigma * excess(j);
+    if (!(e <= 40.0)) continue;  // also skips +inf (own pass)
+    const double w = std::exp(-e);
+    z.tail(m) = (fs.row(j) - fq).transpose();
+    a.selfadjointView<Eigen::Lower>().rankUpdate(z, w);
+    b += (w * (target(j) - kernel_average)) * z;
+  }
+  a.triangularView<Eigen::StrictlyUpper>() = a.transpose().triangularView<Eigen::StrictlyUpper>();
+  out.assign(ridges.size(), kernel_average);
+  for (std::size_t r = 0; r < ridges.size(); ++r) {
+    Eigen::MatrixXd ar = a;
+    ar.diagonal().tail(m).array() += ridges[r] * weight_sum / (2.0 * sigma);
+    const Eigen::LLT<Eigen::MatrixXd> llt(ar);
+    if (llt.info() != Eigen::Success) continue;
+    const double v = kernel_average + llt.solve(b)(0);
+    if (std::isfinite(v)) out[r] = v;
+  }
+}
+
 }  // namespace
 
 std::pair<KernelAxis, KernelAxis> cross_validate_kernel(const PlacedSamples& samples,
@@ -195,6 +228,8 @@ KernelSelection select_kernel_model(const PlacedSamples& samples, const PlacedSa
   const Eigen::MatrixXd fq = columns_of(queries.features, columns);
   const Eigen::MatrixXd fs = columns_of(samples.features, columns);
   const std::vector<char> usable = queries_with_other_pass(samples, queries, options.same_pass_m);
+  std::vector<std::vector<double>> linear_x, linear_y;  // per query, per ridge
+  std::vector<std::pair<double, double>> truth;
   for (Eigen::Index q = 0; q < d2.rows(); ++q) {
     Eigen::Index j = 0;
     const double lo = d2.row(q).minCoeff(&j);
@@ -215,6 +250,43 @@ KernelSelection select_kernel_model(const PlacedSamples& samples, const PlacedSa
     }
     out.error_x_m.push_back(px / sx - queries.xy(q, 0));
     out.error_y_m.push_back(py / sy - queries.xy(q, 1));
+    if (options.local_linear_ridges.empty()) continue;
+    const Eigen::RowVectorXd excess = d2.row(q).array() - lo;
+    std::vector<double> p;
+    local_linear_predictions(fs, fq.row(q), excess, out.x.sigma, samples.xy.col(0),
+                             options.local_linear_ridges, px / sx, sx, p);
+    linear_x.push_back(p);
+    local_linear_predictions(fs, fq.row(q), excess, out.y.sigma, samples.xy.col(1),
+                             options.local_linear_ridges, py / sy, sy, p);
+    linear_y.push_back(p);
+    truth.emplace_back(queries.xy(q, 0), queries.xy(q, 1));
+  }
+  const auto mse = [](const std::vector<double>& e) {
+    double s = 0.0;
+    for (double v : e) s += v * v;
+    return e.empty() ? 0.0 : s / static_cast<double>(e.size());
+  };
+  out.kernel_average_cv_mse_x = mse(out.error_x_m);
+  out.kernel_average_cv_mse_y = mse(out.error_y_m);
+  out.x.cv_mse = out.kernel_average_cv_mse_x;
+  out.y.cv_mse = out.kernel_average_cv_mse_y;
+  // The local linear correction, where it beats the kernel average clearly.
+  double best_score = (out.x.cv_mse + out.y.cv_mse) * (1.0 - options.min_improvement);
+  for (std::size_t r = 0; r < options.local_linear_ridges.size() && !truth.empty(); ++r) {
+    std::vector<double> ex, ey;
+    for (std::size_t i = 0; i < truth.size(); ++i) {
+      ex.push_back(linear_x[i][r] - truth[i].first);
+      ey.push_back(linear_y[i][r] - truth[i].second);
+    }
+    const double score = mse(ex) + mse(ey);
+    if (score < best_score) {
+      best_score = score;
+      out.local_linear_ridge = options.local_linear_ridges[r];
+      out.x.cv_mse = mse(ex);
+      out.y.cv_mse = mse(ey);
+      out.error_x_m = ex;
+      out.error_y_m = ey;
+    }
   }
   return out;
 }

@@ -13,6 +13,7 @@ namespace {
 constexpr std::uint32_t kCalibrationFixRmseX = 1;
 constexpr std::uint32_t kCalibrationFixRmseY = 2;
 constexpr std::uint32_t kCalibrationPassSpread = 3;
+constexpr std::uint32_t kCalibrationLocalLinearRidge = 4;
 
 constexpr std::uint8_t kMagic[8] = {'H', 'A', 'R', 'M', 'O', 'M', 'A', 'P'};
 
@@ -207,14 +208,23 @@ std::vector<std::uint8_t> encode_map(const MapFile& map) {
   }
   // Version 4: the calibration, as (id, value) entries.
   const MapCalibration& cal = map.calibration;
-  if (cal.present) {
-    w.u32(3);
-    w.u32(kCalibrationFixRmseX);
-    w.f32(cal.fix_rmse_x_m);
-    w.u32(kCalibrationFixRmseY);
-    w.f32(cal.fix_rmse_y_m);
-    w.u32(kCalibrationPassSpread);
-    w.f32(cal.pass_spread_m);
+  const bool local_linear = map.model.local_linear_ridge > 0.0F;
+  if (cal.present || local_linear) {
+    w.u32((cal.present ? 3U : 0U) + (local_linear ? 1U : 0U));
+    if (cal.present) {
+      w.u32(kCalibrationFixRmseX);
+      w.f32(cal.fix_rmse_x_m);
+      w.u32(kCalibrationFixRmseY);
+      w.f32(cal.fix_rmse_y_m);
+      w.u32(kCalibrationPassSpread);
+      w.f32(cal.pass_spread_m);
+    }
+    // The ridge of eq. 9's local linear correction, only when cross-validation chose it (a map
+    // without it reads as before, and a firmware that does not know it refuses the map).
+    if (local_linear) {
+      w.u32(kCalibrationLocalLinearRidge);
+      w.f32(map.model.local_linear_ridge);
+    }
   } else {
     w.u32(0);
   }
@@ -338,10 +348,14 @@ MapError decode_map(const std::uint8_t* data, std::size_t size, MapFile& map) {
     if (const MapError e = decode_forward(r, boards, map.forward)) return e;
   }
   map.calibration = MapCalibration{};
+  map.model.local_linear_ridge = 0.0F;
   if (version >= 4) {
     std::uint32_t entries = 0;
     if (!r.u32(entries, "truncated: the calibration is missing")) return r.error;
     if (entries > kMaxCalibrationEntries) return MapError{"too many calibration entries", r.pos()};
+    // Canonical only (what encode_map writes, so that a map reads back to the same bytes):
+    // the measured entries 1, 2, 3 all or none, then the ridge (4) when it is above 0.
+    std::uint32_t measured = 0, previous = 0;
     for (std::uint32_t i = 0; i < entries; ++i) {
       std::uint32_t id = 0;
       float value = 0.0F;
@@ -355,10 +369,19 @@ MapError decode_map(const std::uint8_t* data, std::size_t size, MapFile& map) {
         map.calibration.fix_rmse_y_m = value;
       else if (id == kCalibrationPassSpread)
         map.calibration.pass_spread_m = value;
+      else if (id == kCalibrationLocalLinearRidge)
+        map.model.local_linear_ridge = value;
       else
         return MapError{"unknown calibration entry (a newer trainer?)", r.pos()};
+      if (id <= previous) return MapError{"calibration entries out of order", r.pos()};
+      if (id == kCalibrationLocalLinearRidge && !(value > 0.0F))
+        return MapError{"local linear ridge 0 written (absent means none)", r.pos()};
+      measured += id != kCalibrationLocalLinearRidge ? 1U : 0U;
+      previous = id;
     }
-    map.calibration.present = entries > 0;
+    if (measured != 0 && measured != 3)
+      return MapError{"calibration incomplete (entries 1 to 3 are written together)", r.pos()};
+    map.calibration.present = measured > 0;
   }
   if (r.pos() != body) {
     return MapError{version >= 4   ? "trailing bytes after the calibration"

@@ -551,6 +551,7 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<StampedPose>
   algorithms::KernelSelectionOptions ko;
   ko.same_pass_m = opt.same_pass_m;
   ko.select_features = opt.select_boards && opt.boards.empty();
+  if (!opt.local_linear) ko.local_linear_ridges.clear();
   algorithms::KernelSelection sel = algorithms::select_kernel_model(samples, queries, ko);
 
   // The same with each board's feature in units of its noise (the forward map measures it
@@ -612,6 +613,9 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<StampedPose>
   for (int c : sel.columns) report.boards.push_back(candidates[static_cast<std::size_t>(c)]);
   report.x = AxisReport{sel.x.sigma, 0.0, std::sqrt(sel.x.cv_mse), 0};
   report.y = AxisReport{sel.y.sigma, 0.0, std::sqrt(sel.y.cv_mse), 0};
+  report.local_linear_ridge = sel.local_linear_ridge;
+  report.kernel_average_cv_rmse_x_m = std::sqrt(sel.kernel_average_cv_mse_x);
+  report.kernel_average_cv_rmse_y_m = std::sqrt(sel.kernel_average_cv_mse_y);
   pr.cv_rmse_placed_x_m = rms(sel.error_x_m);
   pr.cv_rmse_placed_y_m = rms(sel.error_y_m);
   pr.harmonic_from_placed = true;
@@ -652,6 +656,7 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<StampedPose>
   model.sigma_y = static_cast<float>(report.y.sigma);
   model.gamma_x = 0.0F;
   model.gamma_y = 0.0F;
+  model.local_linear_ridge = static_cast<float>(sel.local_linear_ridge);
   model.max_nearest_distance = static_cast<float>(report.known_place_bound);
   model.max_dissimilarity = static_cast<float>(report.dissimilarity_bound);
   for (std::size_t i = 0; i < sample_rows.size(); ++i) {

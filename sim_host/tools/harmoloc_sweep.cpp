@@ -318,6 +318,12 @@ int main(int argc, char** argv) {
   app.add_option("--scenes", scenes, "number of scenes (seeds first .. first + N - 1)")
       ->capture_default_str()
       ->check(CLI::Range(1, 100000));
+  std::vector<std::uint64_t> seed_list;
+  app.add_option("--seeds", seed_list,
+                 "these scene seeds instead of --first/--scenes (e.g. --seeds 5,7,11)")
+      ->delimiter(',')
+      ->excludes("--first")
+      ->excludes("--scenes");
   app.add_option("--jobs", jobs, "scenes evaluated in parallel")->capture_default_str();
   app.add_option("--out", out_dir, "folder for sweep.json and index.html")->capture_default_str();
   app.add_option("--parts", parts, "which runs: nominal,kidnap,dynamic,long")
@@ -338,6 +344,9 @@ int main(int argc, char** argv) {
   opt.dynamic = parts.find("dynamic") != std::string::npos;
   opt.long_run = parts.find("long") != std::string::npos;
   jobs = std::max(1U, jobs);
+  if (seed_list.empty())
+    for (int i = 0; i < scenes; ++i) seed_list.push_back(first + static_cast<std::uint64_t>(i));
+  scenes = static_cast<int>(seed_list.size());
 
   std::vector<SceneResult> results(static_cast<std::size_t>(scenes));
   std::atomic<std::size_t> next{0}, done{0};
@@ -351,7 +360,7 @@ int main(int argc, char** argv) {
     for (;;) {
       const std::size_t i = next++;
       if (i >= results.size()) return;
-      const std::uint64_t seed = first + i;
+      const std::uint64_t seed = seed_list[i];
       results[i] = sim_host::evaluate_random_scene(seed, opt, [&](const std::string& step) {
         say("harmoloc-sweep: seed " + std::to_string(seed) + ": " + step);
       });
@@ -382,7 +391,7 @@ int main(int argc, char** argv) {
 
   fs::create_directories(out_dir);
   nlohmann::json j;
-  j["first_seed"] = first;
+  j["seeds"] = seed_list;
   j["scenes"] = scenes;
   j["options"] = {{"kidnaps", opt.kidnaps}, {"long_minutes", opt.long_minutes}, {"parts", parts}};
   for (const SceneResult& r : results) j["results"].push_back(to_json(r));

@@ -183,6 +183,16 @@ int main(int argc, char** argv) {
         std::printf("kernel        %s\n",
                     r.noise_weighted ? "each board in units of its noise (CV prefers it)"
                                      : "board areas as they are (CV prefers it to noise units)");
+        if (r.local_linear_ridge > 0.0)
+          std::printf(
+              "fix           local linear, ridge %.2f (CV: x %.2f cm, y %.2f cm with the "
+              "plain kernel average)\n",
+              r.local_linear_ridge, 100.0 * r.kernel_average_cv_rmse_x_m,
+              100.0 * r.kernel_average_cv_rmse_y_m);
+        else
+          std::printf(
+              "fix           kernel average (a local linear correction does not improve "
+              "CV enough)\n");
       }
       std::printf("features      %s%s\n", board_list(r.boards, names).c_str(),
                   r.board_steps.size() > 1 || !opt.boards.empty() || all_boards ||

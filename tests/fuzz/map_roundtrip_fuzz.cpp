@@ -29,10 +29,17 @@ bool same_model(const MapFile& a, const MapFile& b) {
     return std::memcmp(p, q, n) == 0;
   };
   if (!same_bits(x.board_index.data(), y.board_index.data(), x.feature_count)) return false;
-  const float xs[] = {x.area_scale,           x.sigma_x,          x.sigma_y, x.gamma_x, x.gamma_y,
-                      x.max_nearest_distance, x.max_dissimilarity};
-  const float ys[] = {y.area_scale,           y.sigma_x,          y.sigma_y, y.gamma_x, y.gamma_y,
-                      y.max_nearest_distance, y.max_dissimilarity};
+  const float xs[] = {x.area_scale,        x.sigma_x,           x.sigma_y,
+                      x.gamma_x,           x.gamma_y,           x.max_nearest_distance,
+                      x.max_dissimilarity, x.local_linear_ridge};
+  const float ys[] = {y.area_scale,        y.sigma_x,           y.sigma_y,
+                      y.gamma_x,           y.gamma_y,           y.max_nearest_distance,
+                      y.max_dissimilarity, y.local_linear_ridge};
+  const MapCalibration& ca = a.calibration;
+  const MapCalibration& cb = b.calibration;
+  const float cas[] = {ca.fix_rmse_x_m, ca.fix_rmse_y_m, ca.pass_spread_m};
+  const float cbs[] = {cb.fix_rmse_x_m, cb.fix_rmse_y_m, cb.pass_spread_m};
+  if (ca.present != cb.present || !same_bits(cas, cbs, sizeof cas)) return false;
   if (!same_bits(xs, ys, sizeof xs)) return false;
   for (std::size_t i = 0; i < x.sample_count; ++i) {
     if (!same_bits(x.sample(i), y.sample(i), x.feature_count * sizeof(float))) return false;

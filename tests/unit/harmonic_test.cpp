@@ -271,6 +271,57 @@ TEST(HarmonicQuery, FloatOnlineMatchesDoubleOffline) {
   }
 }
 
+// A straight route from x = 0 to 1 m whose two boards grow and shrink linearly with x: the
+// kernel average at the route's end leans towards the interior (it averages only samples on one
+// side); the local linear correction does not, and inside the route both agree.
+TEST(HarmonicQuery, LocalLinearRemovesTheKernelAverageBiasAtARouteEnd) {
+  auto model = std::make_unique<ha::HarmonicModel>();
+  model->sample_count = 101;
+  model->feature_count = 2;
+  model->sigma_x = model->sigma_y = 2.0F;  // wide: about 0.5 feature units, 5 cm of route
+  model->max_nearest_distance = 1.0F;
+  model->max_dissimilarity = 1.0F;
+  const auto features_at = [](double x) {
+    std::array<float, ha::HarmonicModel::kMaxFeatures> f{};
+    f[0] = static_cast<float>(1.0 + 10.0 * x);
+    f[1] = static_cast<float>(12.0 - 8.0 * x);
+    return f;
+  };
+  for (std::size_t i = 0; i < 101; ++i) {
+    const double x = 0.01 * static_cast<double>(i);
+    const auto f = features_at(x);
+    model->sample(i)[0] = f[0];
+    model->sample(i)[1] = f[1];
+    model->target_x_m[i] = static_cast<float>(x);
+    model->target_y_m[i] = 0.5F;
+  }
+  const ha::HarmonicFix plain_end = ha::harmonic_query(*model, features_at(0.0));
+  const ha::HarmonicFix plain_mid = ha::harmonic_query(*model, features_at(0.503));
+  EXPECT_GT(plain_end.x_m, 0.02) << "the kernel average's pull towards the interior";
+  model->local_linear_ridge = 0.01F;
+  const ha::HarmonicFix linear_end = ha::harmonic_query(*model, features_at(0.0));
+  const ha::HarmonicFix linear_mid = ha::harmonic_query(*model, features_at(0.503));
+  EXPECT_NEAR(linear_end.x_m, 0.0, 0.003);
+  EXPECT_NEAR(linear_end.y_m, 0.5, 1e-5);
+  EXPECT_NEAR(linear_mid.x_m, 0.503, 0.003);
+  EXPECT_NEAR(plain_mid.x_m, linear_mid.x_m, 0.003);
+  // A strong ridge shrinks the correction back towards the kernel average.
+  model->local_linear_ridge = 100.0F;
+  const ha::HarmonicFix shrunk_end = ha::harmonic_query(*model, features_at(0.0));
+  EXPECT_GT(shrunk_end.x_m, 0.5 * plain_end.x_m);
+  // With a board masked (the robust fix), the correction uses the other one and stays finite.
+  model->local_linear_ridge = 0.01F;
+  ha::FeatureMask use{};
+  use[0] = true;
+  const ha::HarmonicFix masked_end = ha::harmonic_query(*model, features_at(0.0), use);
+  EXPECT_NEAR(masked_end.x_m, 0.0, 0.003);
+  // A degenerate neighbourhood (every sample the same features): the kernel average, finite.
+  for (std::size_t i = 0; i < 101; ++i) model->sample(i)[0] = model->sample(i)[1] = 3.0F;
+  const ha::HarmonicFix flat = ha::harmonic_query(*model, features_at(0.2));
+  EXPECT_TRUE(std::isfinite(flat.x_m));
+  EXPECT_NEAR(flat.x_m, 0.5, 1e-3);
+}
+
 TEST(HarmonicQuery, KnownPlaceFlag) {
   const Problem p = make_problem();
   auto model = std::make_unique<ha::HarmonicModel>();

@@ -249,6 +249,49 @@ TEST(MapCodec, CalibrationRoundTripAndChecks) {
   EXPECT_NE(decode_error(b).find("calibration"), std::string::npos) << decode_error(b);
 }
 
+// The local linear correction's ridge travels as calibration entry 4, written only when the
+// trainer chose it: a map without it is byte for byte what it was, and one with it alone (no
+// measured calibration) is still a map without calibration.
+TEST(MapCodec, LocalLinearRidgeRoundTrip) {
+  auto map = make_map();
+  const std::vector<std::uint8_t> plain = ha::encode_map(*map);
+  map->model.local_linear_ridge = 0.03F;
+  const std::vector<std::uint8_t> bytes = ha::encode_map(*map);
+  ASSERT_EQ(bytes.size(), plain.size() + 8);
+  auto out = std::make_unique<ha::MapFile>();
+  ASSERT_FALSE(ha::decode_map(bytes.data(), bytes.size(), *out));
+  EXPECT_EQ(out->model.local_linear_ridge, 0.03F);
+  EXPECT_FALSE(out->calibration.present);
+  EXPECT_EQ(ha::encode_map(*out), bytes);
+  map->calibration.present = true;
+  map->calibration.fix_rmse_x_m = 0.02F;
+  const std::vector<std::uint8_t> both = ha::encode_map(*map);
+  ASSERT_FALSE(ha::decode_map(both.data(), both.size(), *out));
+  EXPECT_EQ(out->model.local_linear_ridge, 0.03F);
+  EXPECT_TRUE(out->calibration.present);
+  EXPECT_EQ(out->calibration.fix_rmse_x_m, 0.02F);
+  // Only what encode_map writes is read: entries in order, 1 to 3 together, no ridge of 0.
+  const std::size_t count_at = both.size() - 4 - 4 - 4 * 8;
+  ASSERT_EQ(get_u32(both, count_at), 4U);
+  std::vector<std::uint8_t> b = both;
+  put_u32(b, count_at + 4, 2);  // ids 2, 2, 3, 4
+  fix_crc(b);
+  EXPECT_NE(decode_error(b).find("out of order"), std::string::npos) << decode_error(b);
+  b = both;
+  put_f32(b, count_at + 4 + 3 * 8 + 4, 0.0F);  // the ridge
+  fix_crc(b);
+  EXPECT_NE(decode_error(b).find("ridge 0"), std::string::npos) << decode_error(b);
+  b = both;
+  b.erase(b.begin() + static_cast<std::ptrdiff_t>(count_at + 4 + 2 * 8),
+          b.begin() + static_cast<std::ptrdiff_t>(count_at + 4 + 3 * 8));  // without entry 3
+  put_u32(b, count_at, 3);
+  fix_crc(b);
+  EXPECT_NE(decode_error(b).find("incomplete"), std::string::npos) << decode_error(b);
+  // Decoding a map without it into a model that had one leaves none.
+  ASSERT_FALSE(ha::decode_map(plain.data(), plain.size(), *out));
+  EXPECT_EQ(out->model.local_linear_ridge, 0.0F);
+}
+
 // Maps written before the forward map existed (version 2) still load, without it.
 TEST(MapCodec, ReadsVersionTwo) {
   const auto map = make_map();

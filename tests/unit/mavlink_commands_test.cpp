@@ -551,6 +551,11 @@ TEST(MapRegion, APoseOutsideTheMappedRegionIsNeverNominal) {
 // fresh command is taken at once; after a crash the last renewal (up to two minutes ahead) holds
 // until the clock passes it. Without the restore (the negative control) the replay is obeyed.
 TEST(SigningPersistence, ACapturedCommandIsNotTakenAgainAfterARestart) {
+#ifdef HARMOLOC_TESTS_UNDER_QEMU_USER
+  // The signing state is written by drivers::RecordFile's own thread, and qemu-user 7.2 never
+  // returns from a second thread's start: natively only (the arm suites hung here).
+  GTEST_SKIP() << "threads hang under qemu-user";
+#endif
   tf::Key key{};
   for (std::size_t i = 0; i < key.size(); ++i) key[i] = static_cast<std::uint8_t>(3 * i + 1);
   const std::uint64_t wall_us = mv::kSigningEpochUnixUs + 86'400'000'000ULL;  // 2015-01-02

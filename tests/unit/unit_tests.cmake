@@ -10,6 +10,7 @@ add_executable(algorithms_test
   ${HARMOLOC_UNIT_DIR}/harmonic_test.cpp
   ${HARMOLOC_UNIT_DIR}/harmonic_selection_test.cpp
   ${HARMOLOC_UNIT_DIR}/route_placement_test.cpp
+  ${HARMOLOC_UNIT_DIR}/kernel_selection_test.cpp
   ${HARMOLOC_UNIT_DIR}/odometry_test.cpp
   ${HARMOLOC_UNIT_DIR}/particle_filter_test.cpp
   ${HARMOLOC_UNIT_DIR}/robust_filter_test.cpp
@@ -33,6 +34,9 @@ add_executable(firmware_test
   ${HARMOLOC_UNIT_DIR}/device_config_test.cpp)
 target_link_libraries(firmware_test PRIVATE harmoloc_firmware harmoloc_config harmoloc_algorithms
   harmoloc_drivers_common harmoloc::nettle GTest::gtest_main harmoloc_warnings)
+if(CMAKE_CROSSCOMPILING)
+  target_compile_definitions(firmware_test PRIVATE HARMOLOC_TESTS_UNDER_QEMU_USER)
+endif()
 gtest_discover_tests(firmware_test DISCOVERY_TIMEOUT 60 PROPERTIES LABELS unit)
 
 # drivers/ without devices: quadrature decoding, sequence gaps, V4L2 format negotiation, the SPSC

@@ -39,6 +39,11 @@ struct HarmonicModel {
   /// from a far one equally well where areas are large or small. 1 disables the test.
   float max_dissimilarity = 1.0F;
 
+  /// Local linear correction of eq. 9 (0: off, plain eq. 9): the fix is the intercept of a
+  /// weighted least-squares plane through the kernel's neighbours, which removes the pull towards
+  /// the interior that a kernel average has at the ends of a route. The slopes are shrunk by a
+  /// ridge of this many times the kernel's own spread (1 / (2 sigma)) times the weight sum.
+  float local_linear_ridge = 0.0F;
   /// Row-major sample_count x feature_count.
   std::array<float, kMaxSamples * kMaxFeatures> features{};
   std::array<float, kMaxSamples> target_x_m{};

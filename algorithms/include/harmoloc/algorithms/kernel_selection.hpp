@@ -31,6 +31,10 @@ struct KernelSelectionOptions {
   bool select_features = true;
   /// Drop a board while that lowers the summed x + y CV error by more than this fraction.
   double min_improvement = 0.05;
+  /// Ridges tried for eq. 9's local linear correction (HarmonicModel::local_linear_ridge); the
+  /// one with the lowest x + y CV error is kept where it beats the plain kernel average by more
+  /// than min_improvement. Empty: the plain average.
+  std::vector<double> local_linear_ridges{0.003, 0.01, 0.03, 0.1, 0.3};
 };
 
 struct KernelAxis {
@@ -48,6 +52,10 @@ struct KernelSelection {
   std::vector<int> columns;  ///< chosen feature columns, ascending
   KernelAxis x, y;
   std::vector<KernelSelectionStep> steps;
+  /// The local linear correction's ridge cross-validation chose (0: the plain kernel average).
+  /// x and y's cv_mse and the per-query errors below are those of the fix with it.
+  double local_linear_ridge = 0.0;
+  double kernel_average_cv_mse_x = 0.0, kernel_average_cv_mse_y = 0.0;
   /// Per query (with the chosen columns): distance and Bray-Curtis dissimilarity to the nearest
   /// sample of another pass, and the prediction's error (metres; x, y).
   std::vector<double> nearest_distance, nearest_dissimilarity;

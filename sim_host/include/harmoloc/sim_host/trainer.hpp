@@ -47,6 +47,9 @@ struct TrainOptions {
   int max_placed_samples = 2048;
   /// Also try the kernel with each board in units of its noise (kept where CV prefers it).
   bool noise_weighted_kernel = true;
+  /// Also try eq. 9's local linear correction (kept, with the ridge CV prefers, where it beats
+  /// the plain kernel average by 5% or more).
+  bool local_linear = true;
   /// Frames held out in cross-validation (evenly spread).
   int max_cv_queries = 400;
   /// Cross-validation leaves out a held-out frame's own pass: the frames within this much
@@ -109,6 +112,10 @@ struct TrainReport {
   double segment_ms = 0, train_ms = 0;
   PlacementReport placement;
   bool noise_weighted = false;  ///< the kernel weighs each board by its noise (CV preferred it)
+  /// Ridge of eq. 9's local linear correction (0: the plain kernel average), and the CV RMS
+  /// error per axis the plain average had (metres), for the report.
+  double local_linear_ridge = 0.0;
+  double kernel_average_cv_rmse_x_m = 0.0, kernel_average_cv_rmse_y_m = 0.0;
   bool has_forward_map = false;
   ForwardMapReport forward;
   double forward_ms = 0;

@@ -1,0 +1,69 @@
+// algorithms::select_kernel_model: the cross-validated choice of eq. 9's kernel and of its local
+// linear correction, on a route driven forth and back twice whose boards change linearly along it.
+#include "harmoloc/algorithms/kernel_selection.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "harmoloc/algorithms/random.hpp"
+
+namespace harmoloc::algorithms {
+namespace {
+
+// A 2 m straight route driven 0 -> 2 -> 0 -> 2 -> 0, per_leg frames a leg; three boards
+// whose areas change smoothly with x (one of them decreasing), with noise.
+PlacedSamples straight_route(std::uint64_t seed, double noise, int per_leg) {
+  Pcg32 rng(seed);
+  PlacedSamples s;
+  s.features.resize(4 * per_leg, 3);
+  s.xy.resize(4 * per_leg, 2);
+  for (int i = 0; i < 4 * per_leg; ++i) {
+    const int leg = i / per_leg, k = i % per_leg;
+    const double along = 2.0 * (k + 0.37 * leg) / per_leg;  // each pass between the others
+    const double x = leg % 2 == 0 ? along : 2.0 - along;
+    s.xy(i, 0) = x;
+    s.xy(i, 1) = 0.3 + 0.002 * rng.normal();
+    s.features(i, 0) = 1.0 + 2.0 * x + noise * rng.normal();
+    s.features(i, 1) = 5.0 - 1.5 * x + noise * rng.normal();
+    s.features(i, 2) = 0.5 + 0.5 * x * x + noise * rng.normal();
+    s.travel_m.push_back(2.0 * i / per_leg);
+  }
+  return s;
+}
+
+// Frames 10 cm apart with little noise: a kernel average can only lean towards the nearest
+// frames of other passes, a local plane interpolates between them.
+TEST(KernelSelection, LocalLinearIsChosenWhereItCrossValidatesBetter) {
+  const PlacedSamples samples = straight_route(1, 0.005, 20);
+  KernelSelectionOptions options;
+  const KernelSelection with = select_kernel_model(samples, samples, options);
+  EXPECT_GT(with.local_linear_ridge, 0.0);
+  EXPECT_LT(with.x.cv_mse, with.kernel_average_cv_mse_x);
+  // The per-query errors are the chosen fix's: their mean square is the reported CV error.
+  double se = 0.0;
+  for (double e : with.error_x_m) se += e * e;
+  ASSERT_FALSE(with.error_x_m.empty());
+  EXPECT_NEAR(se / static_cast<double>(with.error_x_m.size()), with.x.cv_mse, 1e-12);
+
+  options.local_linear_ridges.clear();
+  const KernelSelection without = select_kernel_model(samples, samples, options);
+  EXPECT_EQ(without.local_linear_ridge, 0.0);
+  EXPECT_DOUBLE_EQ(without.x.cv_mse, without.kernel_average_cv_mse_x);
+  EXPECT_DOUBLE_EQ(without.kernel_average_cv_mse_x, with.kernel_average_cv_mse_x);
+}
+
+TEST(KernelSelection, LocalLinearIsLeftOutWhereItDoesNotHelp) {
+  // Features that do not follow the position at all: no plane through them predicts better
+  // than the average, and the plain kernel average is kept.
+  PlacedSamples samples = straight_route(2, 0.01, 100);
+  Pcg32 rng(9);
+  for (Eigen::Index i = 0; i < samples.features.rows(); ++i)
+    for (Eigen::Index k = 0; k < samples.features.cols(); ++k)
+      samples.features(i, k) = rng.uniform(0.0, 1.0);
+  const KernelSelection sel = select_kernel_model(samples, samples, KernelSelectionOptions{});
+  EXPECT_EQ(sel.local_linear_ridge, 0.0);
+}
+
+}  // namespace
+}  // namespace harmoloc::algorithms
