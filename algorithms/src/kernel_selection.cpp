@@ -99,7 +99,7 @@ void local_linear_predictions(const Eigen::MatrixXd& fs, const Eigen::RowVectorX
   z(0) = 1.0;
   for (Eigen::Index j = 0; j < fs.rows(); ++j) {
     const double e = sigma * excess(j);
-    if (!(e <= 40.0)) continue;  // also skips +inf (own pass)
+    if (!(e <= 16.0)) continue;  // as harmonic_localizer.cpp's cut; also skips +inf (own pass)
     const double w = std::exp(-e);
     z.tail(m) = (fs.row(j) - fq).transpose();
     a.selfadjointView<Eigen::Lower>().rankUpdate(z, w);

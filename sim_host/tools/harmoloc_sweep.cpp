@@ -349,6 +349,57 @@ int main(int argc, char** argv) {
   scenes = static_cast<int>(seed_list.size());
 
   std::vector<SceneResult> results(static_cast<std::size_t>(scenes));
+  std::vector<char> evaluated(results.size(), 0);
+  // sweep.json and index.html, written again after every scene (a long sweep that is stopped
+  // keeps what it measured) and at the end. Scenes not yet evaluated are left out.
+  SceneResult reference;
+  bool have_reference = false;
+  std::string command;
+  for (int a = 0; a < argc; ++a) command += (a ? " " : "") + std::string(argv[a]);
+  const auto write_outputs = [&](const std::vector<SceneResult>& all, bool final_write) {
+    std::vector<SceneResult> finished;
+    for (std::size_t i = 0; i < all.size(); ++i)
+      if (evaluated[i]) finished.push_back(all[i]);
+    fs::create_directories(out_dir);
+    nlohmann::json j;
+    j["seeds"] = seed_list;
+    j["scenes"] = scenes;
+    j["scenes_done"] = finished.size();
+    j["complete"] = final_write;
+    j["options"] = {{"kidnaps", opt.kidnaps}, {"long_minutes", opt.long_minutes}, {"parts", parts}};
+    j["results"] = nlohmann::json::array();
+    for (const SceneResult& r : finished) j["results"].push_back(to_json(r));
+    if (have_reference) j["default_scene"] = to_json(reference);
+    for (const Figure& f : figures()) {
+      const Distribution d = distribution(finished, f);
+      j["summary"][f.key] = {{"title", f.title},
+                             {"unit", f.unit},
+                             {"scenes", d.n},
+                             {"median", d.median},
+                             {"p90", d.p90},
+                             {"worst", d.worst},
+                             {"worst_seeds", d.worst_seeds}};
+      if (have_reference) j["summary"][f.key]["default_scene"] = f.value(reference);
+    }
+    std::size_t kidnaps = 0, recovered = 0, alarms = 0, failed = 0;
+    double minutes = 0.0;
+    for (const SceneResult& r : finished) {
+      kidnaps += r.kidnaps;
+      recovered += r.kidnaps_recovered_1s;
+      alarms += r.long_false_alarms;
+      minutes += r.long_minutes;
+      failed += r.error.empty() ? 0 : 1;
+    }
+    j["kidnaps_total"] = kidnaps;
+    j["kidnaps_recovered_1s_total"] = recovered;
+    j["false_alarms_total"] = alarms;
+    j["long_minutes_total"] = minutes;
+    j["failed_scenes"] = failed;
+    std::ofstream(fs::path(out_dir) / "sweep.json") << j.dump(1) << "\n";
+    write_html((fs::path(out_dir) / "index.html").string(), finished,
+               have_reference ? &reference : nullptr, command);
+  };
+
   std::atomic<std::size_t> next{0}, done{0};
   std::mutex io;
   const auto say = [&](const std::string& line) {
@@ -361,10 +412,10 @@ int main(int argc, char** argv) {
       const std::size_t i = next++;
       if (i >= results.size()) return;
       const std::uint64_t seed = seed_list[i];
-      results[i] = sim_host::evaluate_random_scene(seed, opt, [&](const std::string& step) {
-        say("harmoloc-sweep: seed " + std::to_string(seed) + ": " + step);
-      });
-      const SceneResult& r = results[i];
+      const SceneResult r =
+          sim_host::evaluate_random_scene(seed, opt, [&](const std::string& step) {
+            say("harmoloc-sweep: seed " + std::to_string(seed) + ": " + step);
+          });
       char line[256];
       std::snprintf(line, sizeof line,
                     "harmoloc-sweep: [%zu/%d] seed %llu done in %.0f s: fix MSE %s/%s cm^2, "
@@ -374,39 +425,25 @@ int main(int argc, char** argv) {
                     fmt(cm(r.fused_rmse_m)).c_str(), r.kidnaps_recovered_1s, r.kidnaps,
                     r.long_false_alarms, r.error.empty() ? "" : "; FAILED: ", r.error.c_str());
       say(line);
+      const std::lock_guard<std::mutex> lock(io);
+      results[i] = r;
+      evaluated[i] = 1;
+      write_outputs(results, false);
     }
   };
   std::vector<std::thread> threads;
   for (unsigned t = 0; t < jobs; ++t) threads.emplace_back(worker);
-  SceneResult reference;
-  bool have_reference = false;
   if (!no_default) {
     say("harmoloc-sweep: the default scene (desk-shuttle)");
-    reference = sim_host::evaluate_scene(sim_host::load_scenario("desk-shuttle"),
-                                         firmware::default_config().thresholds, 0, opt);
-    reference.summary = "default scene: " + reference.summary;
+    SceneResult r = sim_host::evaluate_scene(sim_host::load_scenario("desk-shuttle"),
+                                             firmware::default_config().thresholds, 0, opt);
+    r.summary = "default scene: " + r.summary;
+    const std::lock_guard<std::mutex> lock(io);
+    reference = r;
     have_reference = true;
   }
   for (std::thread& t : threads) t.join();
-
-  fs::create_directories(out_dir);
-  nlohmann::json j;
-  j["seeds"] = seed_list;
-  j["scenes"] = scenes;
-  j["options"] = {{"kidnaps", opt.kidnaps}, {"long_minutes", opt.long_minutes}, {"parts", parts}};
-  for (const SceneResult& r : results) j["results"].push_back(to_json(r));
-  if (have_reference) j["default_scene"] = to_json(reference);
-  for (const Figure& f : figures()) {
-    const Distribution d = distribution(results, f);
-    j["summary"][f.key] = {{"title", f.title},
-                           {"unit", f.unit},
-                           {"scenes", d.n},
-                           {"median", d.median},
-                           {"p90", d.p90},
-                           {"worst", d.worst},
-                           {"worst_seeds", d.worst_seeds}};
-    if (have_reference) j["summary"][f.key]["default_scene"] = f.value(reference);
-  }
+  write_outputs(results, true);
   std::size_t kidnaps = 0, recovered = 0, alarms = 0, failed = 0;
   double minutes = 0.0;
   for (const SceneResult& r : results) {
@@ -416,16 +453,6 @@ int main(int argc, char** argv) {
     minutes += r.long_minutes;
     failed += r.error.empty() ? 0 : 1;
   }
-  j["kidnaps_total"] = kidnaps;
-  j["kidnaps_recovered_1s_total"] = recovered;
-  j["false_alarms_total"] = alarms;
-  j["long_minutes_total"] = minutes;
-  j["failed_scenes"] = failed;
-  std::ofstream(fs::path(out_dir) / "sweep.json") << j.dump(1) << "\n";
-  std::string command;
-  for (int a = 0; a < argc; ++a) command += (a ? " " : "") + std::string(argv[a]);
-  write_html((fs::path(out_dir) / "index.html").string(), results,
-             have_reference ? &reference : nullptr, command);
 
   // The table on stdout.
   std::printf("%-48s %6s %8s %8s %8s  %-14s %8s\n", "figure", "scenes", "median", "p90", "worst",

@@ -196,6 +196,21 @@ void BM_HarmonicQuery(benchmark::State& state) {
   state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()) * state.range(0));
 }
 
+// The same with eq. 9's local linear correction (a map whose training chose it): the extra
+// normal equations over the neighbours the kernel reaches, against BM_HarmonicQuery.
+void BM_HarmonicQueryLocalLinear(benchmark::State& state) {
+  static algorithms::MapFile map;
+  bench::synthetic_map(static_cast<std::size_t>(state.range(0)), 320, 240, map);
+  map.model.local_linear_ridge = 0.01F;
+  std::array<float, algorithms::HarmonicModel::kMaxFeatures> features{0.5F, 1.0F, 0.2F,
+                                                                      1.5F, 0.3F, 0.8F};
+  for (auto _ : state) {
+    features[0] += 1e-6F;
+    benchmark::DoNotOptimize(algorithms::harmonic_query(map.model, features));
+  }
+  state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()) * state.range(0));
+}
+
 void BM_FilterStep(benchmark::State& state) {
   static algorithms::ParticleFilter filter;
   filter.configure(static_cast<std::size_t>(state.range(0)), 1, algorithms::MotionNoise{});
@@ -292,6 +307,11 @@ BENCHMARK(BM_SegmentRgb24)->Apply(resolutions)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_SegmentRgb24OpenCV)->Apply(resolutions)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_SegmentYuyvOpenCV)->Apply(resolutions)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_HarmonicQuery)->Arg(204)->Arg(1024)->Arg(4096)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_HarmonicQueryLocalLinear)
+    ->Arg(204)
+    ->Arg(1024)
+    ->Arg(4096)
+    ->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_FilterStep)->Arg(256)->Arg(1024)->Arg(4096)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_FilterStepBoards)->Arg(256)->Arg(1024)->Arg(4096)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_WholeCycle)->Apply(cycle_args)->Unit(benchmark::kMicrosecond);

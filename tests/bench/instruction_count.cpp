@@ -15,6 +15,7 @@
 //   seg_rgb RES, seg_yuyv RES  the HSV arithmetic per pixel (BoardClassifier)
 //   seg_rgb_opencv RES, seg_yuyv_opencv RES   the OpenCV reference
 //   harmonic N                 harmonic query over N samples, 6 boards
+//   harmonic_linear N          the same with the local linear correction (ridge 0.01)
 //   filter N                   particle filter step with N particles
 //   cycle RES, cycle_yuyv RES  the whole cycle, steady state: 6 boards, 1024 particles, 204 samples
 //   cycle_boards N, cycle_particles N, cycle_samples N   the whole cycle at 640x480 RGB24 with
@@ -187,8 +188,9 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "unknown kernel %s\n", kernel.c_str());
       return 2;
     }
-  } else if (kernel == "harmonic") {
+  } else if (kernel == "harmonic" || kernel == "harmonic_linear") {
     bench::synthetic_map(n, 320, 240, g_map);
+    if (kernel == "harmonic_linear") g_map.model.local_linear_ridge = 0.01F;
     const std::array<float, algorithms::HarmonicModel::kMaxFeatures> features{0.5F, 1.0F, 0.2F,
                                                                               1.5F, 0.3F, 0.8F};
     measure([&] { (void)algorithms::harmonic_query(g_map.model, features); });
