@@ -656,8 +656,8 @@ class MapBytes {
 };
 
 struct MapSpec {
-  std::uint32_t version = 3;
-  bool forward = false;  ///< a 2 x 2 forward map over the three boards (version 3)
+  std::uint32_t version = ha::kMapFormatVersion;
+  bool forward = false;  ///< a 2 x 2 forward map over the three boards (version 3 on)
   std::uint32_t samples = 5;
   std::uint8_t last_board_index = 2;
   std::uint8_t pad = 0;
@@ -695,6 +695,9 @@ void write_map(MapBytes& m, const MapSpec& s) {
   m.f32(0.02F);
   m.f32(2.0F);
   if (s.version >= 2) m.f32(0.05F);  // known-place dissimilarity bound, version 2 on
+  if (s.version >= 4) {
+    for (int k = 0; k < 3; ++k) m.f32(1.0F);  // feature weights, version 4 on
+  }
   for (std::uint32_t i = 0; i < s.samples; ++i) {
     m.f32(i == 0 ? s.first_feature : 0.25F * static_cast<float>(i));
     m.f32(1.5F);
@@ -725,6 +728,7 @@ void write_map(MapBytes& m, const MapSpec& s) {
     for (int c = 0; c < 4; ++c) m.f32(0.01F * static_cast<float>(c));
     for (int c = 0; c < 4; ++c) m.f32(1.5F);
   }
+  if (s.version >= 4) m.u32(0);  // no calibration entries
   if (s.trailing) m.u32(0);
   m.seal();
 }
@@ -787,7 +791,7 @@ void test_map_codec() {
   BM_CHECK(static_cast<bool>(ha::decode_map(nullptr, 0, g_map)));
 
   MapSpec s;
-  s.version = 4;
+  s.version = ha::kMapFormatVersion + 1;  // a version this firmware does not know
   BM_CHECK(rejected(s, "version"));
   // Version 2 (no forward map) is still read, without one.
   {
@@ -963,18 +967,28 @@ void test_robust() {
   bm::value_trig("robust_tracked_x", est.mean.x_m);
 
   // Seed 004's test and its confirmation on a fixed sequence: steady, a dip (an occlusion:
-  // no evidence), steady, then a kidnap (the boards disagree, the fix is 1.2 m away).
+  // no evidence), steady, then a kidnap (the boards disagree, the known fix is 1.2 m away, in
+  // the same place frame after frame, and the boards prefer its place by 10 nats). Once
+  // confirmed, the cycle re-seeds at the fix and resets the detector: from then on the estimate
+  // is where the fix is and the frames are steady again.
   ha::KidnapDetector d;
   const ha::KidnapParams kp;
   int kidnapped_at = -1;
   for (int i = 0; i < 40; ++i) {
+    const bool away = i >= 25 && kidnapped_at < 0;
     ha::KidnapInput in;
-    in.match = i == 10 ? 1e-4 : (i >= 25 ? 1e-9 : 1e-2);
-    in.consensus = i < 25;
+    in.match = i == 10 ? 1e-4 : (away ? 1e-9 : 1e-2);
+    in.consensus = !away;
     in.fix_known = true;
-    in.fix_distance_m = i >= 25 ? 1.2 : 0.01;
+    in.fix_distance_m = away ? 1.2 : 0.01;
+    in.fix_x_m = i >= 25 ? 3.2 : 2.0;
+    in.fix_y_m = 1.0;
+    in.preference = away ? 10.0 : 0.0;
     const ha::KidnapVerdict v = d.step(in, kp);
-    if (v == ha::KidnapVerdict::kKidnapped && kidnapped_at < 0) kidnapped_at = i;
+    if (v == ha::KidnapVerdict::kKidnapped && kidnapped_at < 0) {
+      kidnapped_at = i;
+      d.reset();
+    }
   }
   BM_CHECK_EQ(kidnapped_at, 27);
   BM_CHECK_EQ(d.counters().kidnaps, 1U);
