@@ -29,6 +29,10 @@ bool same_model(const MapFile& a, const MapFile& b) {
     return std::memcmp(p, q, n) == 0;
   };
   if (!same_bits(x.board_index.data(), y.board_index.data(), x.feature_count)) return false;
+  if (!same_bits(x.feature_weight.data(), y.feature_weight.data(),
+                 x.feature_count * sizeof(float))) {
+    return false;
+  }
   const float xs[] = {x.area_scale,        x.sigma_x,           x.sigma_y,
                       x.gamma_x,           x.gamma_y,           x.max_nearest_distance,
                       x.max_dissimilarity, x.local_linear_ridge};
@@ -82,17 +86,24 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   for (int i = 0; i < 4; ++i) input[size - 4 + i] = static_cast<std::uint8_t>(crc0 >> (8 * i));
 #endif
   const std::vector<std::uint8_t> encoded = encode_map(g_map);
-  if (input[8] == 1 || input[8] == 2) {
-    // An older map (regressions/map_roundtrip/version1.hmap, corpus tiny-trained-v2.hmap) is
-    // written back as the current version, without what it lacked: the same model, a version 1
-    // map's dissimilarity bound at 1, no forward map.
-    HARMOLOC_FUZZ_CHECK(input[8] == 2 || g_map.model.max_dissimilarity == 1.0F,
+  if (input[8] >= 1 && input[8] < kMapFormatVersion) {
+    // An older map (regressions/map_roundtrip/version1.hmap, corpus tiny-trained-v2.hmap,
+    // forward-v3.hmap) is written back as the current version, without what it lacked: the same
+    // model, a version 1 map's dissimilarity bound at 1, no forward map before version 3, every
+    // feature weight 1 and no calibration before version 4.
+    HARMOLOC_FUZZ_CHECK(input[8] != 1 || g_map.model.max_dissimilarity == 1.0F,
                         "a version 1 map decodes with a dissimilarity bound");
-    HARMOLOC_FUZZ_CHECK(!g_map.forward.present(),
+    HARMOLOC_FUZZ_CHECK(input[8] >= 3 || !g_map.forward.present(),
                         "a version 1 or 2 map decodes with a forward map");
+    bool unit_weights = true;
+    for (std::size_t k = 0; k < g_map.model.feature_count; ++k)
+      unit_weights = unit_weights && g_map.model.feature_weight[k] == 1.0F;
+    HARMOLOC_FUZZ_CHECK(
+        unit_weights && !g_map.calibration.present && g_map.model.local_linear_ridge == 0.0F,
+        "a map before version 4 decodes with weights or calibration");
     HARMOLOC_FUZZ_CHECK(!decode_map(encoded.data(), encoded.size(), g_again),
-                        "a re-encoded version 1 or 2 map does not decode");
-    HARMOLOC_FUZZ_CHECK(same_model(g_map, g_again), "decode(encode(version 1 or 2 map)) differs");
+                        "a re-encoded older map does not decode");
+    HARMOLOC_FUZZ_CHECK(same_model(g_map, g_again), "decode(encode(older map)) differs");
     return 0;
   }
   HARMOLOC_FUZZ_CHECK(encoded.size() == input.size(),
