@@ -87,6 +87,24 @@ std::vector<Figure> figures() {
   };
 }
 
+// What the scenes add up to.
+struct Totals {
+  std::size_t kidnaps = 0, recovered = 0, alarms = 0, failed = 0;
+  double minutes = 0.0;
+};
+
+Totals totals_of(const std::vector<SceneResult>& results) {
+  Totals t;
+  for (const SceneResult& r : results) {
+    t.kidnaps += r.kidnaps;
+    t.recovered += r.kidnaps_recovered_1s;
+    t.alarms += r.long_false_alarms;
+    t.minutes += r.long_minutes;
+    t.failed += r.error.empty() ? 0 : 1;
+  }
+  return t;
+}
+
 struct Distribution {
   std::size_t n = 0;
   double median = 0, p90 = 0, worst = 0;
@@ -381,20 +399,12 @@ int main(int argc, char** argv) {
                              {"worst_seeds", d.worst_seeds}};
       if (have_reference) j["summary"][f.key]["default_scene"] = f.value(reference);
     }
-    std::size_t kidnaps = 0, recovered = 0, alarms = 0, failed = 0;
-    double minutes = 0.0;
-    for (const SceneResult& r : finished) {
-      kidnaps += r.kidnaps;
-      recovered += r.kidnaps_recovered_1s;
-      alarms += r.long_false_alarms;
-      minutes += r.long_minutes;
-      failed += r.error.empty() ? 0 : 1;
-    }
-    j["kidnaps_total"] = kidnaps;
-    j["kidnaps_recovered_1s_total"] = recovered;
-    j["false_alarms_total"] = alarms;
-    j["long_minutes_total"] = minutes;
-    j["failed_scenes"] = failed;
+    const Totals t = totals_of(finished);
+    j["kidnaps_total"] = t.kidnaps;
+    j["kidnaps_recovered_1s_total"] = t.recovered;
+    j["false_alarms_total"] = t.alarms;
+    j["long_minutes_total"] = t.minutes;
+    j["failed_scenes"] = t.failed;
     std::ofstream(fs::path(out_dir) / "sweep.json") << j.dump(1) << "\n";
     write_html((fs::path(out_dir) / "index.html").string(), finished,
                have_reference ? &reference : nullptr, command);
@@ -444,15 +454,10 @@ int main(int argc, char** argv) {
   }
   for (std::thread& t : threads) t.join();
   write_outputs(results, true);
-  std::size_t kidnaps = 0, recovered = 0, alarms = 0, failed = 0;
-  double minutes = 0.0;
-  for (const SceneResult& r : results) {
-    kidnaps += r.kidnaps;
-    recovered += r.kidnaps_recovered_1s;
-    alarms += r.long_false_alarms;
-    minutes += r.long_minutes;
-    failed += r.error.empty() ? 0 : 1;
-  }
+  const Totals totals = totals_of(results);
+  const std::size_t kidnaps = totals.kidnaps, recovered = totals.recovered, alarms = totals.alarms,
+                    failed = totals.failed;
+  const double minutes = totals.minutes;
 
   // The table on stdout.
   std::printf("%-48s %6s %8s %8s %8s  %-14s %8s\n", "figure", "scenes", "median", "p90", "worst",

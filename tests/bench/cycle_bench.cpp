@@ -184,9 +184,13 @@ void BM_SegmentYuyvOpenCV(benchmark::State& state) {
                  });
 }
 
-void BM_HarmonicQuery(benchmark::State& state) {
+// Eq. 9 over a synthetic map of state.range(0) samples; @p ridge > 0: with the local linear
+// correction (a map whose training chose it), the extra normal equations over the neighbours
+// the kernel reaches.
+void harmonic_query_bench(benchmark::State& state, float ridge) {
   static algorithms::MapFile map;
   bench::synthetic_map(static_cast<std::size_t>(state.range(0)), 320, 240, map);
+  map.model.local_linear_ridge = ridge;
   std::array<float, algorithms::HarmonicModel::kMaxFeatures> features{0.5F, 1.0F, 0.2F,
                                                                       1.5F, 0.3F, 0.8F};
   for (auto _ : state) {
@@ -196,19 +200,12 @@ void BM_HarmonicQuery(benchmark::State& state) {
   state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()) * state.range(0));
 }
 
-// The same with eq. 9's local linear correction (a map whose training chose it): the extra
-// normal equations over the neighbours the kernel reaches, against BM_HarmonicQuery.
+void BM_HarmonicQuery(benchmark::State& state) {
+  harmonic_query_bench(state, 0.0F);
+}
+
 void BM_HarmonicQueryLocalLinear(benchmark::State& state) {
-  static algorithms::MapFile map;
-  bench::synthetic_map(static_cast<std::size_t>(state.range(0)), 320, 240, map);
-  map.model.local_linear_ridge = 0.01F;
-  std::array<float, algorithms::HarmonicModel::kMaxFeatures> features{0.5F, 1.0F, 0.2F,
-                                                                      1.5F, 0.3F, 0.8F};
-  for (auto _ : state) {
-    features[0] += 1e-6F;
-    benchmark::DoNotOptimize(algorithms::harmonic_query(map.model, features));
-  }
-  state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()) * state.range(0));
+  harmonic_query_bench(state, 0.01F);
 }
 
 void BM_FilterStep(benchmark::State& state) {
