@@ -26,11 +26,6 @@ inline float squared_distance(const float* a, const float* b, std::size_t d, con
   return s;
 }
 
-// Neighbours below exp(-16) (1e-7) of the nearest sample's weight are left out of the local
-// plane: they cannot tilt it measurably, and leaving them out keeps the normal equations to the
-// samples the kernel really reaches (kernel_selection.cpp cross-validates with the same cut).
-constexpr float kLocalLinearCutoff = 16.0F;
-
 // The local linear fix along one axis: minimise sum_j w_j (t_j - a - b . (O_j - O))^2 +
 // ridge * |b|^2 and return a. Fixed-size normal equations (at most 9 x 9), solved by Cholesky;
 // returns @p kernel_average when the system is not positive definite.
@@ -56,7 +51,7 @@ double local_linear(const HarmonicModel& model,
   z[0] = 1.0;
   for (std::size_t j = 0; j < model.sample_count; ++j) {
     const float e = sigma * (d2[j] - d2_min);
-    if (e > kLocalLinearCutoff) continue;
+    if (e > kLocalLinearCutoff) continue;  // harmonic_localizer.hpp
     const double w = std::exp(static_cast<double>(-e));
     const float* s = model.sample(j);
     for (std::size_t i = 0; i < m; ++i)

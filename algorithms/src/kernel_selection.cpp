@@ -5,6 +5,7 @@
 #include <limits>
 #include <stdexcept>
 
+#include "harmoloc/algorithms/harmonic_localizer.hpp"
 #include "harmoloc/algorithms/harmonic_training.hpp"
 
 namespace harmoloc::algorithms {
@@ -99,7 +100,8 @@ void local_linear_predictions(const Eigen::MatrixXd& fs, const Eigen::RowVectorX
   z(0) = 1.0;
   for (Eigen::Index j = 0; j < fs.rows(); ++j) {
     const double e = sigma * excess(j);
-    if (!(e <= 16.0)) continue;  // as harmonic_localizer.cpp's cut; also skips +inf (own pass)
+    // The firmware's cut (harmonic_localizer.hpp); also skips +inf (the query's own pass).
+    if (!(e <= static_cast<double>(kLocalLinearCutoff))) continue;
     const double w = std::exp(-e);
     z.tail(m) = (fs.row(j) - fq).transpose();
     a.selfadjointView<Eigen::Lower>().rankUpdate(z, w);

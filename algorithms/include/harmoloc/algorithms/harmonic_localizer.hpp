@@ -22,6 +22,13 @@ struct HarmonicFix {
   bool known_place = false;
 };
 
+/// Neighbours whose weight is below exp(-kLocalLinearCutoff) (1e-7) of the nearest sample's are
+/// left out of the local linear correction's plane: they cannot tilt it measurably, and leaving
+/// them out keeps its normal equations to the samples the kernel reaches. The trainer's
+/// cross-validation (kernel_selection.cpp) uses the same cut, so that it scores the fix the
+/// firmware computes.
+constexpr float kLocalLinearCutoff = 16.0F;
+
 /// Evaluates eq. 9 for one feature vector. The weights are computed relative to the nearest
 /// sample (exp(-sigma (d^2 - d_min^2))), which leaves eq. 9 unchanged but cannot underflow.
 HarmonicFix harmonic_query(const HarmonicModel& model,
