@@ -35,9 +35,10 @@ void LocalizationCycle::service_link() {
       const mavlink::SigningState state = signer_.snapshot(now_ns);
       const std::size_t n =
           mavlink::format_signing_state(state, signing_record_.data(), signing_record_.size());
-      if (n > 0)
-        signing_store_->offer(reinterpret_cast<const std::uint8_t*>(signing_record_.data()), n,
-                              state.high_water);
+      if (n > 0 &&
+          !signing_store_->offer(reinterpret_cast<const std::uint8_t*>(signing_record_.data()), n,
+                                 state.high_water))
+        signer_.snapshot_refused();
     }
   }
   receiver_.begin_cycle();

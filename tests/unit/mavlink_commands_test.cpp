@@ -618,3 +618,39 @@ TEST(SigningPersistence, ACapturedCommandIsNotTakenAgainAfterARestart) {
     EXPECT_EQ(fresh_acks, stop == Stop::kClean ? 1U : 0U);
   }
 }
+
+// The store's offer() never waits, so it may refuse a record (its writer held the lock for a
+// moment). The renewal is then offered again on the next cycle, not a second later, and once a
+// record is on storage the rate limit holds again. Single-threaded: runs under qemu-user too.
+TEST(SigningPersistence, ARefusedRecordIsOfferedAgainOnTheNextCycle) {
+  class RefusingStore final : public hh::PersistentRecord {
+   public:
+    bool offer(const std::uint8_t*, std::size_t, std::uint64_t tag) override {
+      ++offers;
+      if (offers <= refuse_first) return false;
+      durable = tag;
+      return true;
+    }
+    std::uint64_t durable_tag() const override { return durable; }
+    std::uint64_t failures() const override { return 0; }
+    int refuse_first = 1;
+    int offers = 0;
+    std::uint64_t durable = 0;
+  };
+  tf::Key key{};
+  key[0] = 9;
+  Rig rig(&key);
+  // Persistence is on when a state file is named; the cycle itself only talks to the store.
+  rig.config.link.signing_state_file = "signing.state";
+  rig.start();
+  RefusingStore store;
+  rig.cycle->restore_signing_state(mv::SigningState{}, &store, 0);
+  rig.run();
+  EXPECT_EQ(store.offers, 1) << "a renewal is due at once: nothing is on storage";
+  EXPECT_EQ(store.durable, 0U);
+  rig.run();
+  EXPECT_EQ(store.offers, 2) << "the refused record was not offered again on the next cycle";
+  EXPECT_GT(store.durable, 0U);
+  for (int i = 0; i < 10; ++i) rig.run();
+  EXPECT_EQ(store.offers, 2) << "offered again although the record is on storage";
+}

@@ -33,6 +33,17 @@ const std::uint8_t* bytes_of(const std::string& s) {
   return reinterpret_cast<const std::uint8_t*>(s.data());
 }
 
+// offer() only try-locks, so it is refused while the writer thread holds the mutex (even just to
+// go to sleep on its condition variable after start()): the cycle offers again next cycle, and so
+// does this, a bounded number of times.
+bool offer_until_taken(hd::RecordFile& f, const std::string& r, std::uint64_t tag) {
+  for (int i = 0; i < 5000; ++i) {
+    if (f.offer(bytes_of(r), r.size(), tag)) return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  return false;
+}
+
 }  // namespace
 
 TEST(RecordFile, WriteNowReplacesTheFileWhole) {
@@ -62,7 +73,7 @@ TEST(RecordFile, OffersAreWrittenByItsThreadAndTagged) {
   f.start(path, 7);
   EXPECT_EQ(f.durable_tag(), 7U);
   const std::string r2 = "record 8\n";
-  ASSERT_TRUE(f.offer(bytes_of(r2), r2.size(), 8));
+  ASSERT_TRUE(offer_until_taken(f, r2, 8));
   ASSERT_TRUE(wait_for_tag(f, 8));
   EXPECT_EQ(text_of(path), r2);
   EXPECT_FALSE(f.offer(bytes_of(r2), hd::RecordFile::kMaxBytes + 1, 9));  // too large
@@ -113,7 +124,7 @@ TEST(RecordFile, AFailedWriteIsCountedAndNotDurable) {
   hd::RecordFile f;
   f.start(dir.path("missing/state"), 3);
   const std::string r = "x\n";
-  ASSERT_TRUE(f.offer(bytes_of(r), r.size(), 4));
+  ASSERT_TRUE(offer_until_taken(f, r, 4));
   for (int i = 0; i < 500 && f.failures() == 0; ++i)
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   EXPECT_EQ(f.failures(), 1U);

@@ -127,6 +127,9 @@ class Signer {
   /// The state to persist now: high_water = the clock + the allowed lead + kPersistReserve (or
   /// what a waiting frame needs). Records the time of the offer (@p now_ns).
   SigningState snapshot(std::uint64_t now_ns);
+  /// The store refused the last snapshot (its writer held the lock for a moment): the renewal
+  /// is due again on the next cycle instead of kPersistMinIntervalNs later.
+  void snapshot_refused() { offered_ = false; }
   /// The state to persist at a clean stop: high_water = the highest timestamp sent or accepted,
   /// so that after a restart the peers' current frames are taken at once (after a crash the
   /// last renewal, up to two minutes ahead, is in force instead).
