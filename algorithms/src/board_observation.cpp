@@ -37,7 +37,8 @@ bool frame_implausible(const ForwardMap& map, const std::array<float, kMaxBoards
 }
 
 double board_preference(const ForwardMap& map, const BoardFeatures& observed, double ax_m,
-                        double ay_m, double bx_m, double by_m, const BoardModelParams& params) {
+                        double ay_m, double bx_m, double by_m, const BoardModelParams& params,
+                        std::uint32_t leave_out) {
   std::array<float, kMaxBoards> ea{}, eb{};
   expected_features(map, locate(map, ax_m, ay_m), ea.data());
   expected_features(map, locate(map, bx_m, by_m), eb.data());
@@ -46,7 +47,7 @@ double board_preference(const ForwardMap& map, const BoardFeatures& observed, do
   const double hidden = std::max(params.hidden_floor, c);
   double sum = 0.0;
   for (std::size_t b = 0; b < boards; ++b) {
-    if (!(map.sigma[b] > 0.0F)) continue;
+    if (!(map.sigma[b] > 0.0F) || ((leave_out >> b) & 1U) != 0U) continue;
     // The trained noise itself, not widened by sigma_scale: that widening is for weighing a
     // cloud frame after frame; here two places are compared, and the evidence must hold for
     // several frames before it counts.

@@ -34,10 +34,15 @@ KidnapVerdict KidnapDetector::step(const KidnapInput& in, const KidnapParams& p)
   }
 
   // With a fix: it is a known place far from the estimate, and the boards prefer it. Without:
-  // the boards contradict the estimate.
-  bool evidence =
-      in.fix_known && in.fix_distance_m >= p.fix_distance_m && in.preference >= p.preference_min;
-  const bool lost_evidence = !in.consensus && !in.fix_known && in.contradiction;
+  // the boards contradict the estimate and prefer the fix's place all the same. Contradiction
+  // alone is not enough: a board moved towards the camera, a lighting step or a stretch the
+  // forward map knows poorly (a route end) shows more area than expected while the estimate is
+  // right, and the fix, although not a known place, is then near the estimate or no better.
+  const bool far_and_preferred =
+      in.fix_distance_m >= p.fix_distance_m && in.preference >= p.preference_min;
+  bool evidence = in.fix_known && far_and_preferred;
+  const bool lost_evidence =
+      !in.consensus && !in.fix_known && in.contradiction && far_and_preferred;
   if (evidence) {
     // Consistent with the previous evidence (the same place, give or take the robot's motion)?
     // If not, this frame starts a new stretch.
@@ -80,10 +85,18 @@ KidnapVerdict KidnapDetector::step(const KidnapInput& in, const KidnapParams& p)
     reset();
     return KidnapVerdict::kKidnapped;
   }
+  // A cloud spread over the map disagrees with the boards until it has converged: after a
+  // re-seed over the map, only the long evidence (lost_frames in a row) calls it lost again, so
+  // that the cloud is not spread again every few frames.
+  if (lost_hold_ > 0) {
+    --lost_hold_;
+    confirmed_lost = false;
+  }
   if (confirmed_lost || lost_run_ >= p.lost_frames) {
     ++counters_.kidnaps;
     ++counters_.lost;
     reset();
+    lost_hold_ = p.lost_frames;
     return KidnapVerdict::kLost;
   }
   return triggered ? KidnapVerdict::kTriggered : KidnapVerdict::kNone;

@@ -121,9 +121,12 @@ algorithms::KidnapParams derived_kidnap_params(const algorithms::KidnapParams& c
                                 ? std::hypot(static_cast<double>(calibration.fix_rmse_x_m),
                                              static_cast<double>(calibration.fix_rmse_y_m))
                                 : -1.0;
-  // Far: well beyond what the fix's own error explains (6 sigma), at least 10 cm, at most 1 m.
+  // Far: well beyond what the fix's own error explains (6 sigma), at most 1 m, and at least
+  // 25 cm, a step the tracking follows by itself. The cross-validated error does not see a
+  // lighting drift, which biases the fix and the boards alike: on a three-board scene that bias
+  // (15 cm) passed a 10 cm floor, and a false kidnap moved a right estimate 14 cm away.
   if (p.fix_distance_m < 0.0)
-    p.fix_distance_m = fix_rmse_m > 0.0 ? std::clamp(6.0 * fix_rmse_m, 0.10, 1.0) : 0.25;
+    p.fix_distance_m = fix_rmse_m > 0.0 ? std::clamp(6.0 * fix_rmse_m, 0.25, 1.0) : 0.25;
   // Consistent: two fixes of the same place a frame apart differ by their error (4 sigma) plus
   // what the robot drives in a frame.
   if (p.consistency_m < 0.0)
@@ -480,12 +483,23 @@ bool LocalizationCycle::update_with_boards(
     in.fix_known = evidence_fix.known_place;
     in.fix_x_m = evidence_fix.x_m;
     in.fix_y_m = evidence_fix.y_m;
+    // Also for a fix that is not a known place: without a known fix, "lost" needs the boards to
+    // prefer the fix's place as well (algorithms/kidnap_detector.hpp).
+    const bool fix_finite = std::isfinite(evidence_fix.x_m) && std::isfinite(evidence_fix.y_m);
     in.fix_distance_m =
-        std::hypot(evidence_fix.x_m - estimate.x_m, evidence_fix.y_m - estimate.y_m);
-    if (in.fix_known && in.fix_distance_m >= kidnap_params_.fix_distance_m) {
+        fix_finite ? std::hypot(evidence_fix.x_m - estimate.x_m, evidence_fix.y_m - estimate.y_m)
+                   : 0.0;
+    if (fix_finite && in.fix_distance_m >= kidnap_params_.fix_distance_m) {
+      // Without the boards the filter has written off (moved, or hidden by someone walking
+      // away), unless it has written off most of them: then the estimate is the suspect.
+      std::uint32_t leave_out = 0;
+      if (2 * distrusted <= modelled) {
+        for (std::size_t b = 0; b < board_update_.boards; ++b)
+          if (board_update_.use[b] && reliability_.distrusted(b)) leave_out |= 1U << b;
+      }
       in.preference =
           algorithms::board_preference(map_.forward, observed, evidence_fix.x_m, evidence_fix.y_m,
-                                       estimate.x_m, estimate.y_m, params);
+                                       estimate.x_m, estimate.y_m, params, leave_out);
     }
     in.contradiction = assessment_.exceeding > 0;
     kidnap_verdict_ = kidnap_.step(in, kidnap_params_);

@@ -107,9 +107,12 @@ struct BoardAssessment {
 /// fits better. A board that shows less than place b expects may be hidden there: at b it costs
 /// at most ln(1 / hidden_floor) instead of ln(1 / c), so that one or two hidden boards cannot
 /// make the estimate look wrong. For the kidnap test: do the boards prefer the global fix (a)
-/// to the estimate (b)?
+/// to the estimate (b)? Boards whose bit is set in @p leave_out do not count (those the filter
+/// has found moved or hidden: a board a person is walking away from is still partly hidden, and
+/// with three boards its shortfall alone can favour a place a few centimetres off).
 double board_preference(const ForwardMap& map, const BoardFeatures& observed, double ax_m,
-                        double ay_m, double bx_m, double by_m, const BoardModelParams& params);
+                        double ay_m, double bx_m, double by_m, const BoardModelParams& params,
+                        std::uint32_t leave_out = 0);
 
 /// The per-board state that lives from frame to frame: each board's motion index.
 class BoardReliability {

@@ -9,11 +9,13 @@
 /// forward map, robust per board), and the fixes agree with each other from frame to frame. The
 /// fix leaves out the boards the filter distrusts, unless it distrusts most of them: that the
 /// boards all disagree at once says the estimate, not the boards, is wrong. The same evidence
-/// held for a few frames in a row without a trigger also counts. Without a
-/// usable fix (the robot put down off the trained route), the boards alone must show that the
-/// estimate is wrong: most disagree, and at least one shows more area than expected there,
-/// which no occlusion can do (a person in front of the camera only hides boards); the filter is
-/// then lost and re-seeded over the whole map.
+/// held for a few frames in a row without a trigger also counts. Without a fix at a known place
+/// (the robot put down off the trained route), the boards must show that the estimate is wrong:
+/// most disagree, at least one shows more area than expected there, which no occlusion can do
+/// (a person in front of the camera only hides boards), and they prefer the fix's place, known
+/// or not, clearly to the estimate's (a board moved towards the camera or a lighting step also
+/// shows more area, but leaves the estimate's place the better fit). The filter is then lost
+/// and re-seeded over the whole map, and given lost_frames to converge before the next time.
 
 #include <cstdint>
 
@@ -86,6 +88,7 @@ class KidnapDetector {
   int window_lost_evidence_ = 0;
   int evidence_run_ = 0;
   int lost_run_ = 0;
+  int lost_hold_ = 0;  // frames after a lost verdict without the short (window) path; not reset()
   // The current stretch of consistent evidence: its fixes' sum and count, the last fix.
   double sum_x_ = 0.0, sum_y_ = 0.0;
   int consistent_ = 0;
