@@ -33,14 +33,19 @@ firmware::FirmwareConfig config_for(const algorithms::ThresholdSet& thresholds,
   return c;
 }
 
-// First known-place fix, time until the error stays under @p bound for good (from the first
-// fix), and the errors after first fix + settle.
+// Issue 15's start-up target: under 5 cm within 2 s of the first fix; "under" means for at
+// least a second, not one lucky frame.
+constexpr double kSettledBound_m = 0.05, kStartupHold_s = 1.0;
+
+// First known-place fix; from it, the time until the error comes under @p bound and stays
+// there for @p hold_s (start-up), and the time until it stays under it for good; the errors
+// after first fix + settle.
 struct Settled {
-  double first_fix_s = -1.0, converge_s = -1.0;
+  double first_fix_s = -1.0, startup_s = -1.0, converge_s = -1.0;
   ErrorStats after;
 };
 
-Settled settle(const RunRecord& run, double settle_s, double bound_m) {
+Settled settle(const RunRecord& run, double settle_s, double bound_m, double hold_s) {
   Settled s;
   for (const FrameRecord& f : run.frames) {
     if (f.fix_known) {
@@ -50,10 +55,19 @@ Settled settle(const RunRecord& run, double settle_s, double bound_m) {
   }
   if (s.first_fix_s < 0.0) return s;
   double last_bad = s.first_fix_s;
+  double good_since = -1.0;  // start of the current stretch under the bound
   for (const FrameRecord& f : run.frames) {
     if (f.t_s < s.first_fix_s) continue;
-    if (!f.valid || f.position_error_m() >= bound_m) last_bad = f.t_s;
+    if (!f.valid || f.position_error_m() >= bound_m) {
+      last_bad = f.t_s;
+      good_since = -1.0;
+      continue;
+    }
+    if (good_since < 0.0) good_since = f.t_s;
+    if (s.startup_s < 0.0 && f.t_s - good_since >= hold_s) s.startup_s = good_since - s.first_fix_s;
   }
+  // A run that ends within hold_s of coming under the bound: it came under it.
+  if (s.startup_s < 0.0 && good_since >= 0.0) s.startup_s = good_since - s.first_fix_s;
   s.converge_s = last_bad - s.first_fix_s;
   s.after = error_stats(run, s.first_fix_s + settle_s, 1e300);
   return s;
@@ -125,8 +139,9 @@ SceneResult evaluate_scene(const Scenario& scene, const algorithms::ThresholdSet
         r.fix_known_mse_x_m2 = kx / static_cast<double>(known);
         r.fix_known_mse_y_m2 = ky / static_cast<double>(known);
       }
-      const Settled s = settle(run, opt.settle_s, 0.05);
+      const Settled s = settle(run, opt.settle_s, kSettledBound_m, kStartupHold_s);
       r.first_fix_s = s.first_fix_s;
+      r.startup_s = s.startup_s;
       r.converge_s = s.converge_s;
       if (s.after.frames > 0) {
         r.fused_rmse_m = s.after.rmse_m;
@@ -151,7 +166,7 @@ SceneResult evaluate_scene(const Scenario& scene, const algorithms::ThresholdSet
     if (opt.dynamic) {
       step("dynamic");
       const RunRecord run = replay_scenario(dynamic_variant(scene), kDynamicSeed, map, config);
-      const Settled s = settle(run, opt.settle_s, 0.05);
+      const Settled s = settle(run, opt.settle_s, kSettledBound_m, kStartupHold_s);
       if (s.after.frames > 0) {
         r.dynamic_max_m = s.after.max_m;
         r.dynamic_rmse_m = s.after.rmse_m;
@@ -163,7 +178,7 @@ SceneResult evaluate_scene(const Scenario& scene, const algorithms::ThresholdSet
       const RunRecord run = replay_scenario(l, kLongSeed, map, config);
       r.long_minutes = run.frames.empty() ? 0.0 : run.frames.back().t_s / 60.0;
       r.long_false_alarms = run.counters.kidnaps;
-      const Settled s = settle(run, opt.settle_s, 0.05);
+      const Settled s = settle(run, opt.settle_s, kSettledBound_m, kStartupHold_s);
       if (s.after.frames > 0) {
         r.long_max_m = s.after.max_m;
         r.long_rmse_m = s.after.rmse_m;

@@ -45,7 +45,8 @@ struct SceneResult {
   double fix_known_fraction = -1.0;                 ///< of those, flagged a known place
   double fix_known_mse_x_m2 = -1.0, fix_known_mse_y_m2 = -1.0;
   double first_fix_s = -1.0;   ///< run time of the first known-place fix
-  double converge_s = -1.0;    ///< from the first fix until the error stays under 5 cm
+  double startup_s = -1.0;     ///< from the first fix until under 5 cm (for at least 1 s)
+  double converge_s = -1.0;    ///< from the first fix until the error stays under 5 cm for good
   double fused_rmse_m = -1.0;  ///< after first fix + settle_s
   double fused_heading_rmse_deg = -1.0;
   double fused_max_m = -1.0;  ///< after first fix + settle_s
