@@ -26,75 +26,60 @@ inline float squared_distance(const float* a, const float* b, std::size_t d, con
   return s;
 }
 
-// The local linear fix along one axis: minimise sum_j w_j (t_j - a - b . (O_j - O))^2 +
-// ridge * |b|^2 and return a. Fixed-size normal equations (at most 9 x 9), solved by Cholesky;
-// returns @p kernel_average when the system is not positive definite.
-double local_linear(const HarmonicModel& model,
-                    const std::array<float, HarmonicModel::kMaxFeatures>& features,
-                    const std::array<float, HarmonicModel::kMaxFeatures>& kernel_weight,
-                    const std::array<float, HarmonicModel::kMaxSamples>& d2, float d2_min,
-                    float sigma, const std::array<float, HarmonicModel::kMaxSamples>& target,
-                    double kernel_average, double weight_sum) {
-  constexpr std::size_t kMax = HarmonicModel::kMaxFeatures + 1;
-  std::array<std::size_t, HarmonicModel::kMaxFeatures> used{};
-  std::array<double, HarmonicModel::kMaxFeatures> scale{};
-  std::size_t m = 0;
-  for (std::size_t k = 0; k < model.feature_count; ++k)
-    if (kernel_weight[k] > 0.0F) {
-      scale[m] = std::sqrt(static_cast<double>(kernel_weight[k]));
-      used[m++] = k;
-    }
-  const std::size_t p = m + 1;
-  std::array<double, kMax * kMax> a{};
-  std::array<double, kMax> b{};
-  std::array<double, kMax> z{};
-  z[0] = 1.0;
-  for (std::size_t j = 0; j < model.sample_count; ++j) {
-    const float e = sigma * (d2[j] - d2_min);
-    if (e > kLocalLinearCutoff) continue;  // harmonic_localizer.hpp
-    const double w = std::exp(static_cast<double>(-e));
-    const float* s = model.sample(j);
-    for (std::size_t i = 0; i < m; ++i)
-      z[i + 1] =
-          scale[i] * (static_cast<double>(s[used[i]]) - static_cast<double>(features[used[i]]));
-    // Targets relative to the kernel average keep the sums well scaled.
-    const double t = static_cast<double>(target[j]) - kernel_average;
-    for (std::size_t r = 0; r < p; ++r) {
+// The local linear fix along one axis: minimise sum_j w_j (t_j - a - b . z_j)^2 + ridge * |b|^2
+// over the neighbours, z_j the (weighted) feature differences O_j - O, and return a. The normal
+// equations (at most 9 x 9) are accumulated in the kernel's own loop, so each neighbour's weight
+// is computed once for the kernel average and the plane alike; solved by Cholesky, fixed size.
+class LocalPlane {
+ public:
+  static constexpr std::size_t kMax = HarmonicModel::kMaxFeatures + 1;
+
+  explicit LocalPlane(std::size_t p) : p_(p) {}
+
+  // One neighbour: weight @p w, z = (1, feature differences), target @p t.
+  void add(double w, const std::array<double, kMax>& z, double t) {
+    for (std::size_t r = 0; r < p_; ++r) {
       const double wz = w * z[r];
-      b[r] += wz * t;
-      for (std::size_t c = 0; c <= r; ++c) a[r * kMax + c] += wz * z[c];
+      b_[r] += wz * t;
+      for (std::size_t c = 0; c <= r; ++c) a_[r * kMax + c] += wz * z[c];
     }
   }
-  const double ridge = static_cast<double>(model.local_linear_ridge) * weight_sum /
-                       (2.0 * static_cast<double>(sigma));
-  for (std::size_t r = 1; r < p; ++r) a[r * kMax + r] += ridge;
-  // Cholesky in place (lower triangle).
-  for (std::size_t c = 0; c < p; ++c) {
-    double diag = a[c * kMax + c];
-    for (std::size_t k = 0; k < c; ++k) diag -= a[c * kMax + k] * a[c * kMax + k];
-    if (!(diag > 1e-12 * weight_sum)) return kernel_average;
-    diag = std::sqrt(diag);
-    a[c * kMax + c] = diag;
-    for (std::size_t r = c + 1; r < p; ++r) {
-      double v = a[r * kMax + c];
-      for (std::size_t k = 0; k < c; ++k) v -= a[r * kMax + k] * a[c * kMax + k];
-      a[r * kMax + c] = v / diag;
+
+  // The intercept with @p ridge on the slopes, or @p fallback when the system is not positive
+  // definite (relative to @p weight_sum) or the result is not finite.
+  double solve(double ridge, double weight_sum, double fallback) {
+    for (std::size_t r = 1; r < p_; ++r) a_[r * kMax + r] += ridge;
+    for (std::size_t c = 0; c < p_; ++c) {  // Cholesky in place (lower triangle)
+      double diag = a_[c * kMax + c];
+      for (std::size_t k = 0; k < c; ++k) diag -= a_[c * kMax + k] * a_[c * kMax + k];
+      if (!(diag > 1e-12 * weight_sum)) return fallback;
+      diag = std::sqrt(diag);
+      a_[c * kMax + c] = diag;
+      for (std::size_t r = c + 1; r < p_; ++r) {
+        double v = a_[r * kMax + c];
+        for (std::size_t k = 0; k < c; ++k) v -= a_[r * kMax + k] * a_[c * kMax + k];
+        a_[r * kMax + c] = v / diag;
+      }
     }
+    std::array<double, kMax> y{};
+    for (std::size_t r = 0; r < p_; ++r) {
+      double v = b_[r];
+      for (std::size_t k = 0; k < r; ++k) v -= a_[r * kMax + k] * y[k];
+      y[r] = v / a_[r * kMax + r];
+    }
+    for (std::size_t r = p_; r-- > 0;) {
+      double v = y[r];
+      for (std::size_t k = r + 1; k < p_; ++k) v -= a_[k * kMax + r] * y[k];
+      y[r] = v / a_[r * kMax + r];
+    }
+    return std::isfinite(y[0]) ? y[0] : fallback;
   }
-  std::array<double, kMax> y{};
-  for (std::size_t r = 0; r < p; ++r) {
-    double v = b[r];
-    for (std::size_t k = 0; k < r; ++k) v -= a[r * kMax + k] * y[k];
-    y[r] = v / a[r * kMax + r];
-  }
-  for (std::size_t r = p; r-- > 0;) {
-    double v = y[r];
-    for (std::size_t k = r + 1; k < p; ++k) v -= a[k * kMax + r] * y[k];
-    y[r] = v / a[r * kMax + r];
-  }
-  const double result = kernel_average + y[0];
-  return std::isfinite(result) ? result : kernel_average;
-}
+
+ private:
+  std::size_t p_;
+  std::array<double, kMax * kMax> a_{};
+  std::array<double, kMax> b_{};
+};
 
 // Eq. 9 with the model's feature weights (times @p mask, 0 or 1 per feature, when given). The
 // known-place test compares the features the mask keeps, all of them with equal weight, against
@@ -143,6 +128,22 @@ HarmonicFix query(const HarmonicModel& model,
   double sum_wx = 0.0, sum_wy = 0.0, sum_wx_fx = 0.0, sum_wy_fy = 0.0;
   const float sx = model.sigma_x * kernel_scale;
   const float sy = model.sigma_y * kernel_scale;
+  // The local linear correction's plane: over the features the kernel uses, each difference
+  // scaled by the square root of its kernel weight.
+  const bool linear = model.local_linear_ridge > 0.0F;
+  std::array<std::size_t, HarmonicModel::kMaxFeatures> used{};
+  std::array<double, HarmonicModel::kMaxFeatures> scale{};
+  std::size_t m = 0;
+  if (linear) {
+    for (std::size_t k = 0; k < d; ++k)
+      if (kernel_weight[k] > 0.0F) {
+        scale[m] = std::sqrt(static_cast<double>(kernel_weight[k]));
+        used[m++] = k;
+      }
+  }
+  LocalPlane plane_x(m + 1), plane_y(m + 1);
+  std::array<double, LocalPlane::kMax> z{};
+  z[0] = 1.0;
   // A weight below exp(-40) (4e-18 of the nearest sample's) cannot move the sums even with 4096
   // samples; skipping its exp saves most of the query with the narrow kernels training picks.
   constexpr float kNegligible = 40.0F;
@@ -152,19 +153,28 @@ HarmonicFix query(const HarmonicModel& model,
     if (ex > kNegligible && ey > kNegligible) continue;
     const double wx = ex > kNegligible ? 0.0 : std::exp(static_cast<double>(-ex));
     const double wy = ey > kNegligible ? 0.0 : std::exp(static_cast<double>(-ey));
+    const auto tx = static_cast<double>(model.target_x_m[j]);
+    const auto ty = static_cast<double>(model.target_y_m[j]);
     sum_wx += wx;
     sum_wy += wy;
-    sum_wx_fx += wx * static_cast<double>(model.target_x_m[j]);
-    sum_wy_fy += wy * static_cast<double>(model.target_y_m[j]);
+    sum_wx_fx += wx * tx;
+    sum_wy_fy += wy * ty;
+    const bool near_x = ex <= kLocalLinearCutoff, near_y = ey <= kLocalLinearCutoff;
+    if (!linear || !(near_x || near_y)) continue;  // harmonic_localizer.hpp
+    const float* s = model.sample(j);
+    for (std::size_t i = 0; i < m; ++i)
+      z[i + 1] =
+          scale[i] * (static_cast<double>(s[used[i]]) - static_cast<double>(features[used[i]]));
+    if (near_x) plane_x.add(wx, z, tx);
+    if (near_y) plane_y.add(wy, z, ty);
   }
   // The nearest sample has weight 1, so both sums are >= 1.
   fix.x_m = sum_wx_fx / sum_wx;
   fix.y_m = sum_wy_fy / sum_wy;
-  if (model.local_linear_ridge > 0.0F) {
-    fix.x_m = local_linear(model, features, kernel_weight, d2, d2_min, sx, model.target_x_m,
-                           fix.x_m, sum_wx);
-    fix.y_m = local_linear(model, features, kernel_weight, d2, d2_min, sy, model.target_y_m,
-                           fix.y_m, sum_wy);
+  if (linear) {
+    const auto ridge = static_cast<double>(model.local_linear_ridge);
+    fix.x_m = plane_x.solve(ridge * sum_wx / (2.0 * static_cast<double>(sx)), sum_wx, fix.x_m);
+    fix.y_m = plane_y.solve(ridge * sum_wy / (2.0 * static_cast<double>(sy)), sum_wy, fix.y_m);
   }
 
   bool any_board = false;
