@@ -451,10 +451,13 @@ bool LocalizationCycle::update_with_boards(
     use[k] = !reliability_.distrusted(b) && !outlier;
   }
   std::size_t modelled = 0, distrusted = 0;
+  std::uint32_t distrusted_mask = 0;  // bit b: board b written off
   for (std::size_t b = 0; b < board_update_.boards; ++b) {
     if (!board_update_.use[b]) continue;
     ++modelled;
-    distrusted += reliability_.distrusted(b) ? 1U : 0U;
+    if (!reliability_.distrusted(b)) continue;
+    ++distrusted;
+    distrusted_mask |= 1U << b;
   }
   counters_.distrusted_boards += distrusted;
   robust_fix_ = algorithms::harmonic_query(map_.model, features, use);
@@ -492,11 +495,7 @@ bool LocalizationCycle::update_with_boards(
     if (fix_finite && in.fix_distance_m >= kidnap_params_.fix_distance_m) {
       // Without the boards the filter has written off (moved, or hidden by someone walking
       // away), unless it has written off most of them: then the estimate is the suspect.
-      std::uint32_t leave_out = 0;
-      if (2 * distrusted <= modelled) {
-        for (std::size_t b = 0; b < board_update_.boards; ++b)
-          if (board_update_.use[b] && reliability_.distrusted(b)) leave_out |= 1U << b;
-      }
+      const std::uint32_t leave_out = 2 * distrusted <= modelled ? distrusted_mask : 0U;
       in.preference =
           algorithms::board_preference(map_.forward, observed, evidence_fix.x_m, evidence_fix.y_m,
                                        estimate.x_m, estimate.y_m, params, leave_out);

@@ -458,9 +458,6 @@ int main(int argc, char** argv) {
   for (std::thread& t : threads) t.join();
   write_outputs(results, true);
   const Totals totals = totals_of(results);
-  const std::size_t kidnaps = totals.kidnaps, recovered = totals.recovered, alarms = totals.alarms,
-                    failed = totals.failed;
-  const double minutes = totals.minutes;
 
   // The table on stdout.
   std::printf("%-48s %6s %8s %8s %8s  %-14s %8s\n", "figure", "scenes", "median", "p90", "worst",
@@ -477,9 +474,11 @@ int main(int argc, char** argv) {
   std::printf(
       "kidnaps back under 10 cm within 1 s: %zu of %zu (%.1f%%); false alarms: %zu in %.1f "
       "minutes; failed scenes: %zu\n",
-      recovered, kidnaps,
-      kidnaps > 0 ? 100.0 * static_cast<double>(recovered) / static_cast<double>(kidnaps) : 0.0,
-      alarms, minutes, failed);
+      totals.recovered, totals.kidnaps,
+      totals.kidnaps > 0
+          ? 100.0 * static_cast<double>(totals.recovered) / static_cast<double>(totals.kidnaps)
+          : 0.0,
+      totals.alarms, totals.minutes, totals.failed);
   std::printf("wrote %s/sweep.json and %s/index.html\n", out_dir.c_str(), out_dir.c_str());
-  return failed > 0 ? 1 : 0;
+  return totals.failed > 0 ? 1 : 0;
 }
