@@ -1,6 +1,7 @@
 // The firmware's TOML configuration: defaults, a full file read back, and one clear line for
 // each kind of bad input.
 #include "harmoloc/firmware/config.hpp"
+#include "harmoloc/firmware/localization_cycle.hpp"
 
 #include <gtest/gtest.h>
 #include <sys/stat.h>
@@ -408,4 +409,28 @@ TEST(Config, ObservationAndKidnapValuesAreChecked) {
     const std::string why = ht::error_of([&] { hf::load_config(path); });
     ht::expect_one_line(why, path + ": ", want);
   }
+}
+
+// kidnap.fix_distance_m = "auto": six times the fix's RMS error the trainer measured, at most
+// 1 m and at least 25 cm (a lighting drift biases the fix beyond what cross-validation sees);
+// 25 cm for maps without a calibration. A number in the config is taken as it is.
+TEST(Config, AutoKidnapDistanceFollowsTheMapCalibrationWithin25cmAnd1m) {
+  const harmoloc::algorithms::KidnapParams automatic = hf::default_config().kidnap.detector;
+  ASSERT_LT(automatic.fix_distance_m, 0.0) << "the default is auto";
+  harmoloc::algorithms::MapCalibration c;
+  c.present = true;
+  const auto distance = [&](float rmse_x_m, float rmse_y_m) {
+    c.fix_rmse_x_m = rmse_x_m;
+    c.fix_rmse_y_m = rmse_y_m;
+    return hf::derived_kidnap_params(automatic, c).fix_distance_m;
+  };
+  EXPECT_DOUBLE_EQ(distance(0.01F, 0.0F), 0.25);    // 6 cm: the floor
+  EXPECT_NEAR(distance(0.03F, 0.04F), 0.30, 1e-6);  // 6 x 5 cm
+  EXPECT_DOUBLE_EQ(distance(0.3F, 0.0F), 1.0);      // the ceiling
+  EXPECT_DOUBLE_EQ(
+      hf::derived_kidnap_params(automatic, harmoloc::algorithms::MapCalibration{}).fix_distance_m,
+      0.25);
+  harmoloc::algorithms::KidnapParams fixed = automatic;
+  fixed.fix_distance_m = 0.12;
+  EXPECT_DOUBLE_EQ(hf::derived_kidnap_params(fixed, c).fix_distance_m, 0.12);
 }
