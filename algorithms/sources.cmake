@@ -24,4 +24,5 @@ set(HARMOLOC_TRAINING_SOURCES
   src/harmonic_training.cpp
   src/harmonic_selection.cpp
   src/route_placement.cpp
+  src/odometry_calibration.cpp
   src/kernel_selection.cpp)

@@ -14,6 +14,10 @@ constexpr std::uint32_t kCalibrationFixRmseX = 1;
 constexpr std::uint32_t kCalibrationFixRmseY = 2;
 constexpr std::uint32_t kCalibrationPassSpread = 3;
 constexpr std::uint32_t kCalibrationLocalLinearRidge = 4;
+constexpr std::uint32_t kCalibrationLeftWheelScale = 5;
+constexpr std::uint32_t kCalibrationRightWheelScale = 6;
+constexpr std::uint32_t kCalibrationTrackScale = 7;
+constexpr float kMinOdometryScale = 0.5F, kMaxOdometryScale = 2.0F;
 
 constexpr std::uint8_t kMagic[8] = {'H', 'A', 'R', 'M', 'O', 'M', 'A', 'P'};
 
@@ -209,8 +213,8 @@ std::vector<std::uint8_t> encode_map(const MapFile& map) {
   // Version 4: the calibration, as (id, value) entries.
   const MapCalibration& cal = map.calibration;
   const bool local_linear = map.model.local_linear_ridge > 0.0F;
-  if (cal.present || local_linear) {
-    w.u32((cal.present ? 3U : 0U) + (local_linear ? 1U : 0U));
+  if (cal.present || local_linear || cal.odometry_present) {
+    w.u32((cal.present ? 3U : 0U) + (local_linear ? 1U : 0U) + (cal.odometry_present ? 3U : 0U));
     if (cal.present) {
       w.u32(kCalibrationFixRmseX);
       w.f32(cal.fix_rmse_x_m);
@@ -224,6 +228,14 @@ std::vector<std::uint8_t> encode_map(const MapFile& map) {
     if (local_linear) {
       w.u32(kCalibrationLocalLinearRidge);
       w.f32(map.model.local_linear_ridge);
+    }
+    if (cal.odometry_present) {
+      w.u32(kCalibrationLeftWheelScale);
+      w.f32(cal.left_wheel_scale);
+      w.u32(kCalibrationRightWheelScale);
+      w.f32(cal.right_wheel_scale);
+      w.u32(kCalibrationTrackScale);
+      w.f32(cal.track_scale);
     }
   } else {
     w.u32(0);
@@ -354,8 +366,9 @@ MapError decode_map(const std::uint8_t* data, std::size_t size, MapFile& map) {
     if (!r.u32(entries, "truncated: the calibration is missing")) return r.error;
     if (entries > kMaxCalibrationEntries) return MapError{"too many calibration entries", r.pos()};
     // Canonical only (what encode_map writes, so that a map reads back to the same bytes):
-    // the measured entries 1, 2, 3 all or none, then the ridge (4) when it is above 0.
-    std::uint32_t measured = 0, previous = 0;
+    // the measured entries 1, 2, 3 all or none, then the ridge (4) when it is above 0, then the
+    // odometry's scales 5, 6, 7 all or none.
+    std::uint32_t measured = 0, previous = 0, odometry_entries = 0;
     for (std::uint32_t i = 0; i < entries; ++i) {
       std::uint32_t id = 0;
       float value = 0.0F;
@@ -371,17 +384,31 @@ MapError decode_map(const std::uint8_t* data, std::size_t size, MapFile& map) {
         map.calibration.pass_spread_m = value;
       else if (id == kCalibrationLocalLinearRidge)
         map.model.local_linear_ridge = value;
+      else if (id == kCalibrationLeftWheelScale)
+        map.calibration.left_wheel_scale = value;
+      else if (id == kCalibrationRightWheelScale)
+        map.calibration.right_wheel_scale = value;
+      else if (id == kCalibrationTrackScale)
+        map.calibration.track_scale = value;
       else
         return MapError{"unknown calibration entry (a newer trainer?)", r.pos()};
       if (id <= previous) return MapError{"calibration entries out of order", r.pos()};
       if (id == kCalibrationLocalLinearRidge && !(value > 0.0F))
         return MapError{"local linear ridge 0 written (absent means none)", r.pos()};
-      measured += id != kCalibrationLocalLinearRidge ? 1U : 0U;
+      const bool odometry = id >= kCalibrationLeftWheelScale;
+      if (odometry && !(value >= kMinOdometryScale && value <= kMaxOdometryScale))
+        return MapError{"odometry scale out of range (0.5..2)", r.pos()};
+      measured += id < kCalibrationLocalLinearRidge ? 1U : 0U;
+      odometry_entries += odometry ? 1U : 0U;
       previous = id;
     }
     if (measured != 0 && measured != 3)
       return MapError{"calibration incomplete (entries 1 to 3 are written together)", r.pos()};
+    if (odometry_entries != 0 && odometry_entries != 3)
+      return MapError{"odometry calibration incomplete (entries 5 to 7 are written together)",
+                      r.pos()};
     map.calibration.present = measured > 0;
+    map.calibration.odometry_present = odometry_entries > 0;
   }
   if (r.pos() != body) {
     return MapError{version >= 4   ? "trailing bytes after the calibration"

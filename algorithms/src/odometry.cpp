@@ -14,12 +14,28 @@ std::int64_t wrapped_delta(std::uint32_t previous, std::uint32_t current, std::u
   return d >= half ? d - static_cast<std::int64_t>(modulus) : d;
 }
 
+DiffDriveGeometry calibrated(const DiffDriveGeometry& geometry, const OdometryScale& scale) {
+  DiffDriveGeometry g = geometry;
+  g.left_scale *= scale.left;
+  g.right_scale *= scale.right;
+  g.track_m *= scale.track;
+  return g;
+}
+
+double left_metres_per_tick(const DiffDriveGeometry& geometry) {
+  return 2.0 * kPi * geometry.wheel_radius_m / geometry.ticks_per_rev *
+         static_cast<double>(geometry.left_direction) * geometry.left_scale;
+}
+
+double right_metres_per_tick(const DiffDriveGeometry& geometry) {
+  return 2.0 * kPi * geometry.wheel_radius_m / geometry.ticks_per_rev *
+         static_cast<double>(geometry.right_direction) * geometry.right_scale;
+}
+
 OdometryDelta odometry_from_ticks(const DiffDriveGeometry& geometry, std::int64_t left_ticks,
                                   std::int64_t right_ticks) {
-  const double metres_per_tick = 2.0 * kPi * geometry.wheel_radius_m / geometry.ticks_per_rev;
-  const double left_m = static_cast<double>(left_ticks * geometry.left_direction) * metres_per_tick;
-  const double right_m =
-      static_cast<double>(right_ticks * geometry.right_direction) * metres_per_tick;
+  const double left_m = static_cast<double>(left_ticks) * left_metres_per_tick(geometry);
+  const double right_m = static_cast<double>(right_ticks) * right_metres_per_tick(geometry);
   return OdometryDelta{0.5 * (left_m + right_m), (right_m - left_m) / geometry.track_m};
 }
 

@@ -111,15 +111,16 @@ PlacementResult place_by_odometry(const std::vector<double>& query_t_s,
   for (std::size_t l = 0; l < labels.size(); ++l) label_node[l] = node_of(labels[l].t_s);
 
   // Odometry between consecutive nodes: the arc's displacement in the first node's frame.
-  const double m_per_tick = 2.0 * kPi * geometry.wheel_radius_m / geometry.ticks_per_rev;
+  const double left_m_per_tick = left_metres_per_tick(geometry);
+  const double right_m_per_tick = right_metres_per_tick(geometry);
   struct Step {
     double u, v, w, distance;
   };
   std::vector<Step> steps(n > 0 ? n - 1 : 0);
   std::vector<double> travel(n, 0.0);
   for (std::size_t k = 0; k + 1 < n; ++k) {
-    const double lm = (nodes[k + 1].left - nodes[k].left) * geometry.left_direction * m_per_tick;
-    const double rm = (nodes[k + 1].right - nodes[k].right) * geometry.right_direction * m_per_tick;
+    const double lm = (nodes[k + 1].left - nodes[k].left) * left_m_per_tick;
+    const double rm = (nodes[k + 1].right - nodes[k].right) * right_m_per_tick;
     const OdometryDelta d{0.5 * (lm + rm), (rm - lm) / geometry.track_m};
     const Pose2 rel = apply_arc(Pose2{}, d);
     steps[k] = Step{rel.x_m, rel.y_m, d.yaw_rad, d.distance_m};

@@ -425,7 +425,8 @@ FirmwareConfig load_config(const std::string& path) {
   if (const toml::table* t = check.section(root, "odometry")) {
     c.has_odometry_section = true;
     check.only(*t, "odometry.",
-               {"wheel_radius_m", "track_m", "ticks_per_rev", "left_direction", "right_direction"});
+               {"wheel_radius_m", "track_m", "ticks_per_rev", "left_direction", "right_direction",
+                "map_calibration"});
     auto& g = c.geometry;
     g.wheel_radius_m =
         check.number(*t, "wheel_radius_m", "odometry.", g.wheel_radius_m, 0.001, 10.0);
@@ -437,6 +438,8 @@ FirmwareConfig load_config(const std::string& path) {
         check.integer(*t, "right_direction", "odometry.", g.right_direction, -1, 1));
     if (g.left_direction == 0 || g.right_direction == 0)
       check.fail(t, "odometry.*_direction must be 1 or -1");
+    c.use_map_odometry_calibration =
+        flag(check, *t, "map_calibration", "odometry.", c.use_map_odometry_calibration);
   }
 
   if (const toml::table* t = check.section(root, "can")) {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 
 #include "harmoloc/algorithms/odometry.hpp"
@@ -33,6 +34,30 @@ const char* health_name(Health health) {
   return "unknown";
 }
 
+algorithms::DiffDriveGeometry effective_geometry(const FirmwareConfig& config,
+                                                 const algorithms::MapCalibration& calibration) {
+  if (!config.use_map_odometry_calibration || !calibration.odometry_present) return config.geometry;
+  return algorithms::calibrated(
+      config.geometry, algorithms::OdometryScale{static_cast<double>(calibration.left_wheel_scale),
+                                                 static_cast<double>(calibration.right_wheel_scale),
+                                                 static_cast<double>(calibration.track_scale)});
+}
+
+std::string odometry_summary(const FirmwareConfig& config,
+                             const algorithms::MapCalibration& calibration) {
+  if (!calibration.odometry_present) return {};
+  char line[200];
+  std::snprintf(line, sizeof line,
+                "odometry %s the map's calibration: left wheel x %.4f, right x %.4f, track x %.4f",
+                config.use_map_odometry_calibration ? "with"
+                                                    : "without (odometry.map_calibration "
+                                                      "= false)",
+                static_cast<double>(calibration.left_wheel_scale),
+                static_cast<double>(calibration.right_wheel_scale),
+                static_cast<double>(calibration.track_scale));
+  return line;
+}
+
 LocalizationCycle::LocalizationCycle(const FirmwareConfig& config, const algorithms::MapFile& map,
                                      hal::Camera& camera, hal::WheelEncoders& encoders,
                                      hal::PoseLink& link, const hal::Clock& clock,
@@ -51,6 +76,7 @@ LocalizationCycle::LocalizationCycle(const FirmwareConfig& config, const algorit
       budget_ns_(static_cast<std::uint64_t>(std::llround(config.cycle.budget_ms * 1e6))) {
   filter_.configure(config.filter.particles, config.filter.seed, config.filter.noise);
   kidnap_params_ = derived_kidnap_params(config.kidnap.detector, map.calibration);
+  geometry_ = effective_geometry(config, map.calibration);
   board_params_ = config.observation.boards;
   // The fix's own error per axis on the training run (0 without a calibration).
   const double fix_rmse = map.calibration.present
@@ -299,7 +325,7 @@ CycleResult LocalizationCycle::run(std::uint64_t acquire_deadline_ns, bool have_
                                                             counts.left_ticks, counts.counter_bits);
           const std::int64_t dr = algorithms::wrapped_delta(
               last_counts_.right_ticks, counts.right_ticks, counts.counter_bits);
-          gap_travel_ = algorithms::odometry_from_ticks(config_.geometry, dl, dr);
+          gap_travel_ = algorithms::odometry_from_ticks(geometry_, dl, dr);
           bridge_now = true;
         }
         ++counters_.encoder_gaps_bridged;
@@ -309,7 +335,7 @@ CycleResult LocalizationCycle::run(std::uint64_t acquire_deadline_ns, bool have_
                                                           counts.left_ticks, counts.counter_bits);
         const std::int64_t dr = algorithms::wrapped_delta(last_counts_.right_ticks,
                                                           counts.right_ticks, counts.counter_bits);
-        delta = algorithms::odometry_from_ticks(config_.geometry, dl, dr);
+        delta = algorithms::odometry_from_ticks(geometry_, dl, dr);
         delta_dt_s = static_cast<double>(counts.timestamp_ns - last_counts_.timestamp_ns) * 1e-9;
         have_delta = true;
       }
@@ -335,7 +361,7 @@ CycleResult LocalizationCycle::run(std::uint64_t acquire_deadline_ns, bool have_
         // Motion unknown: let the cloud spread as fast as the robot could move.
         const double step_m = config_.filter.vision_only_speed_mps / config_.cycle.rate_hz;
         filter_.predict(algorithms::OdometryDelta{0.0, 0.0});
-        filter_.diffuse(step_m, 0.5 * step_m / (0.5 * config_.geometry.track_m));
+        filter_.diffuse(step_m, 0.5 * step_m / (0.5 * geometry_.track_m));
         if (gap_ == EncoderGap::kNone && have_anchor_) gap_ = EncoderGap::kDiffused;
       }
     }

@@ -357,8 +357,26 @@ algorithms::PlacementResult place_frames(const AreaSeries& run,
   std::vector<double> query;
   query.reserve(run.timestamp_ns.size());
   for (std::uint64_t t : run.timestamp_ns) query.push_back(rel(t));
-  algorithms::PlacementResult placed =
-      algorithms::place_by_odometry(query, odometry, run.odometry.geometry, placement_labels);
+  // The odometry measured against the labels first: the placement, and the firmware with the
+  // map, use the wheels as they are, not as configured.
+  report.odometry =
+      algorithms::calibrate_odometry(odometry, run.odometry.geometry, placement_labels);
+  const algorithms::OdometryScale& scale = report.odometry.scale;
+  constexpr double kMaxScaleError = 0.2;
+  for (const double v : {scale.left, scale.right, scale.track}) {
+    if (std::fabs(v - 1.0) > kMaxScaleError) {
+      char msg[320];
+      std::snprintf(msg, sizeof msg,
+                    "the labels and the wheel odometry disagree: they need the left wheel x %.3f, "
+                    "the right x %.3f and the track x %.3f of the configured geometry (more than "
+                    "%.0f%% off): check wheel_radius_m, track_m, ticks_per_rev and the wheel "
+                    "directions, and that the labels are in metres on the robot's clock",
+                    scale.left, scale.right, scale.track, 100.0 * kMaxScaleError);
+      throw std::runtime_error(msg);
+    }
+  }
+  algorithms::PlacementResult placed = algorithms::place_by_odometry(
+      query, odometry, algorithms::calibrated(run.odometry.geometry, scale), placement_labels);
 
   // Labels that the odometry between their neighbours does not support.
   std::vector<double> residuals;
@@ -671,6 +689,13 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<StampedPose>
   map.calibration.present = true;
   map.calibration.fix_rmse_x_m = static_cast<float>(pr.cv_rmse_placed_x_m);
   map.calibration.fix_rmse_y_m = static_cast<float>(pr.cv_rmse_placed_y_m);
+  if (report.placement.odometry.used) {
+    const algorithms::OdometryScale& s = report.placement.odometry.scale;
+    map.calibration.odometry_present = true;
+    map.calibration.left_wheel_scale = static_cast<float>(s.left);
+    map.calibration.right_wheel_scale = static_cast<float>(s.right);
+    map.calibration.track_scale = static_cast<float>(s.track);
+  }
 
   if (have_forward) {
     map.forward = *forward;

@@ -153,6 +153,17 @@ int main(int argc, char** argv) {
             pl.frames, r.labelled, pl.travel_m, 100.0 * pl.label_spacing_m,
             1000.0 * pl.median_label_residual_m, 1000.0 * pl.worst_label_residual_m,
             pl.worst_label + 1);
+        if (pl.odometry.used) {
+          const auto& c = pl.odometry;
+          std::printf(
+              "odometry      calibrated on %d stretches of the run: left wheel x %.4f, right x "
+              "%.4f, track x %.4f;\n"
+              "              labels fit their stretch to %.1f mm (%.1f mm as configured)\n",
+              c.stretches, c.scale.left, c.scale.right, c.scale.track, 1000.0 * c.misfit_after_m,
+              1000.0 * c.misfit_before_m);
+        } else {
+          std::printf("odometry      not calibrated (too few labels over the run)\n");
+        }
         std::printf("samples       %zu placed frames (every frame a sample, evenly spread)\n",
                     r.unlabelled);
       } else {

@@ -434,3 +434,31 @@ TEST(Config, AutoKidnapDistanceFollowsTheMapCalibrationWithin25cmAnd1m) {
   fixed.fix_distance_m = 0.12;
   EXPECT_DOUBLE_EQ(hf::derived_kidnap_params(fixed, c).fix_distance_m, 0.12);
 }
+
+// The map's odometry calibration scales the configured wheels and track, unless the config
+// turns it off; a map without one leaves the configured geometry as it is.
+TEST(Config, OdometryRunsOnTheMapsCalibrationUnlessTurnedOff) {
+  ht::TempDir dir;
+  hf::FirmwareConfig c = hf::load_config(dir.write(
+      "odometry.toml", "[odometry]\nwheel_radius_m = 0.05\ntrack_m = 0.3\nticks_per_rev = 1000\n"));
+  EXPECT_TRUE(c.use_map_odometry_calibration) << "on by default";
+  harmoloc::algorithms::MapCalibration cal;
+  EXPECT_EQ(hf::effective_geometry(c, cal).track_m, 0.3);
+  EXPECT_EQ(hf::odometry_summary(c, cal), "");
+  cal.odometry_present = true;
+  cal.left_wheel_scale = 0.99F;
+  cal.right_wheel_scale = 1.01F;
+  cal.track_scale = 1.1F;
+  const harmoloc::algorithms::DiffDriveGeometry g = hf::effective_geometry(c, cal);
+  EXPECT_NEAR(g.track_m, 0.33, 1e-6);
+  const harmoloc::algorithms::OdometryDelta d =
+      harmoloc::algorithms::odometry_from_ticks(g, 1000, 1000);
+  EXPECT_NEAR(d.distance_m, 2.0 * 3.14159265358979 * 0.05, 1e-6);
+  EXPECT_NEAR(d.yaw_rad, 0.02 * 2.0 * 3.14159265358979 * 0.05 / 0.33, 1e-6);
+  EXPECT_NE(hf::odometry_summary(c, cal).find("with the map's calibration"), std::string::npos);
+  c = hf::load_config(dir.write("off.toml", "[odometry]\nmap_calibration = false\n"));
+  EXPECT_FALSE(c.use_map_odometry_calibration);
+  EXPECT_EQ(hf::effective_geometry(c, cal).track_m, c.geometry.track_m);
+  EXPECT_EQ(hf::effective_geometry(c, cal).left_scale, 1.0);
+  EXPECT_NE(hf::odometry_summary(c, cal).find("map_calibration = false"), std::string::npos);
+}

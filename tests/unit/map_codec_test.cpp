@@ -292,6 +292,46 @@ TEST(MapCodec, LocalLinearRidgeRoundTrip) {
   EXPECT_EQ(out->model.local_linear_ridge, 0.0F);
 }
 
+// The odometry's calibration travels as entries 5 to 7, written only when the trainer measured
+// it: all three or none, each scale in [0.5, 2].
+TEST(MapCodec, OdometryCalibrationRoundTripAndChecks) {
+  auto map = make_map();
+  const std::vector<std::uint8_t> plain = ha::encode_map(*map);
+  map->calibration.odometry_present = true;
+  map->calibration.left_wheel_scale = 0.994F;
+  map->calibration.right_wheel_scale = 1.004F;
+  map->calibration.track_scale = 1.03F;
+  const std::vector<std::uint8_t> bytes = ha::encode_map(*map);
+  ASSERT_EQ(bytes.size(), plain.size() + 24);
+  auto out = std::make_unique<ha::MapFile>();
+  ASSERT_FALSE(ha::decode_map(bytes.data(), bytes.size(), *out));
+  EXPECT_TRUE(out->calibration.odometry_present);
+  EXPECT_FALSE(out->calibration.present);
+  EXPECT_EQ(out->calibration.left_wheel_scale, 0.994F);
+  EXPECT_EQ(out->calibration.right_wheel_scale, 1.004F);
+  EXPECT_EQ(out->calibration.track_scale, 1.03F);
+  EXPECT_EQ(ha::encode_map(*out), bytes);
+  const std::size_t count_at = bytes.size() - 4 - 4 - 3 * 8;
+  ASSERT_EQ(get_u32(bytes, count_at), 3U);
+  for (float v : {0.3F, 2.5F}) {
+    std::vector<std::uint8_t> b = bytes;
+    put_f32(b, count_at + 4 + 8 + 4, v);  // the right wheel
+    fix_crc(b);
+    EXPECT_NE(decode_error(b).find("odometry scale"), std::string::npos) << decode_error(b);
+  }
+  std::vector<std::uint8_t> b = bytes;
+  b.erase(b.begin() + static_cast<std::ptrdiff_t>(count_at + 4 + 2 * 8),
+          b.begin() + static_cast<std::ptrdiff_t>(count_at + 4 + 3 * 8));  // without the track
+  put_u32(b, count_at, 2);
+  fix_crc(b);
+  EXPECT_NE(decode_error(b).find("odometry calibration incomplete"), std::string::npos)
+      << decode_error(b);
+  // Decoding a map without it leaves none.
+  ASSERT_FALSE(ha::decode_map(plain.data(), plain.size(), *out));
+  EXPECT_FALSE(out->calibration.odometry_present);
+  EXPECT_EQ(out->calibration.track_scale, 1.0F);
+}
+
 // Maps written before the forward map existed (version 2) still load, without it.
 TEST(MapCodec, ReadsVersionTwo) {
   const auto map = make_map();

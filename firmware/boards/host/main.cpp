@@ -344,6 +344,9 @@ int main(int argc, char** argv) {
                  !realtime     ? ""
                  : timer_paced ? ", real-time pacing (timer)"
                                : ", real-time pacing (camera)");
+    if (const std::string odometry = firmware::odometry_summary(config, g_map.calibration);
+        !odometry.empty())
+      std::fprintf(stderr, "harmoloc: %s\n", odometry.c_str());
     if (link.can_receive()) {
       std::fprintf(stderr, "harmoloc: link commands %s\n",
                    config.link.has_signing_key ? "signed only (MAVLink 2 signing key loaded)"

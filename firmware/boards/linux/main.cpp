@@ -270,6 +270,9 @@ int main(int argc, char** argv) {
                  "harmoloc: map of %u samples on %u boards, %zu particles, %.0f Hz, %s-paced\n",
                  g_map.model.sample_count, g_map.model.feature_count, config.filter.particles,
                  config.cycle.rate_hz, firmware::pacing_name(config.cycle.pacing));
+    if (const std::string odometry = firmware::odometry_summary(config, g_map.calibration);
+        !odometry.empty())
+      std::fprintf(stderr, "harmoloc: %s\n", odometry.c_str());
     std::fprintf(stderr, "harmoloc: %s\n", rt.summary.c_str());
   }
 

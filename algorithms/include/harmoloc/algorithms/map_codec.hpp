@@ -28,6 +28,12 @@ struct MapCalibration {
   /// Median distance from a training frame to the nearest frame of another pass (metres): how
   /// far apart two runs over one place lie (wander, placement).
   float pass_spread_m = 0.0F;
+  /// The wheel odometry measured against the labels (odometry_calibration.hpp): multipliers on
+  /// the configured geometry, each in [0.5, 2]. Absent (false, all 1) in maps before it.
+  bool odometry_present = false;
+  float left_wheel_scale = 1.0F;
+  float right_wheel_scale = 1.0F;
+  float track_scale = 1.0F;
 };
 
 /// Most calibration entries a map may hold (version 4).

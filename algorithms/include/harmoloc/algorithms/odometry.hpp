@@ -21,7 +21,26 @@ struct DiffDriveGeometry {
   double ticks_per_rev = 4096.0;  ///< counter increments per wheel turn (after any 4x decoding)
   int left_direction = 1;         ///< +1, or -1 when that wheel counts down going forward
   int right_direction = 1;
+  /// Each wheel's travel per tick as a multiple of the nominal 2 pi r / ticks_per_rev: the
+  /// trainer's odometry calibration (two wheels are never exactly alike), 1 without one.
+  double left_scale = 1.0;
+  double right_scale = 1.0;
 };
+
+/// Multipliers on a configured geometry (odometry_calibration.hpp measures them): each wheel's
+/// travel per tick and the track.
+struct OdometryScale {
+  double left = 1.0;
+  double right = 1.0;
+  double track = 1.0;
+};
+
+/// @p geometry with @p scale applied (wheel scales multiply, the track is scaled).
+DiffDriveGeometry calibrated(const DiffDriveGeometry& geometry, const OdometryScale& scale);
+
+/// Metres each wheel travels per tick, direction and calibration included.
+double left_metres_per_tick(const DiffDriveGeometry& geometry);
+double right_metres_per_tick(const DiffDriveGeometry& geometry);
 
 /// Motion over one step in the robot frame: distance along the mean heading and yaw change.
 struct OdometryDelta {

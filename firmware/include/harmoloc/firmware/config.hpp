@@ -152,6 +152,9 @@ struct FirmwareConfig {
   algorithms::ThresholdSet thresholds;
   BoardNames board_names;
   algorithms::DiffDriveGeometry geometry;
+  /// Apply the odometry calibration a map carries (odometry.map_calibration): the wheels as the
+  /// training run measured them, on top of the configured geometry.
+  bool use_map_odometry_calibration = true;
   algorithms::EncoderFrameLayout can_layout;
   std::string can_interface = "can0";
   FilterConfig filter;

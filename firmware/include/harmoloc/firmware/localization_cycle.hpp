@@ -8,6 +8,7 @@
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <string>
 
 #include "harmoloc/algorithms/harmonic_localizer.hpp"
 #include "harmoloc/algorithms/map_codec.hpp"
@@ -100,6 +101,16 @@ enum class CycleResult : std::uint8_t { kRan, kEnded };
 /// the harmonic fix's own error on the training run.
 algorithms::KidnapParams derived_kidnap_params(const algorithms::KidnapParams& configured,
                                                const algorithms::MapCalibration& calibration);
+
+/// The geometry the odometry runs on: the configured one with the map's odometry calibration
+/// applied (unless the config turns it off, or the map has none).
+algorithms::DiffDriveGeometry effective_geometry(const FirmwareConfig& config,
+                                                 const algorithms::MapCalibration& calibration);
+
+/// One start-up line on the odometry calibration applied (or turned off); empty when the map
+/// has none. Start-up only (allocates).
+std::string odometry_summary(const FirmwareConfig& config,
+                             const algorithms::MapCalibration& calibration);
 
 class LocalizationCycle {
  public:
@@ -212,6 +223,7 @@ class LocalizationCycle {
   algorithms::KidnapDetector kidnap_;
   /// The kidnap test's parameters with the scene-dependent ones derived from the map.
   algorithms::KidnapParams kidnap_params_;
+  algorithms::DiffDriveGeometry geometry_;  // effective_geometry()
   /// The boards' model with the scene-dependent parts taken from the map's calibration.
   algorithms::BoardModelParams board_params_;
   /// Width of the harmonic fix's term in the per-board update (0: none; maps before version 4).

@@ -11,6 +11,7 @@
 
 #include "harmoloc/algorithms/harmonic_selection.hpp"
 #include "harmoloc/algorithms/map_codec.hpp"
+#include "harmoloc/algorithms/odometry_calibration.hpp"
 #include "harmoloc/algorithms/segmentation.hpp"
 #include "harmoloc/sim_host/forward_map_training.hpp"
 #include "harmoloc/sim_host/training_odometry.hpp"
@@ -92,7 +93,10 @@ struct PlacementReport {
   double label_spacing_m = 0.0;   ///< median travel between consecutive labels
   double median_label_residual_m = 0.0;  ///< leave-one-out, see algorithms::PlacementResult
   double worst_label_residual_m = 0.0;
-  int worst_label = -1;               ///< 0-based index into the labels
+  int worst_label = -1;  ///< 0-based index into the labels
+  /// The odometry measured against the labels (algorithms/odometry_calibration.hpp): the scales
+  /// the placement used and the map carries, the stretches' misfit before and after.
+  algorithms::OdometryCalibration odometry;
   bool harmonic_from_placed = false;  ///< the harmonic map uses every placed frame
   double cv_rmse_placed_x_m = 0, cv_rmse_placed_y_m = 0;  ///< on the labelled frames
   double cv_rmse_labels_x_m = 0, cv_rmse_labels_y_m = 0;  ///< the labels-only model, same test
