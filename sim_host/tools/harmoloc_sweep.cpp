@@ -352,6 +352,13 @@ int main(int argc, char** argv) {
   app.add_option("--kidnaps", opt.kidnaps, "kidnaps per scene")->capture_default_str();
   app.add_option("--long-minutes", opt.long_minutes, "length of the long nominal run")
       ->capture_default_str();
+  std::string config_path;
+  app.add_option("--config", config_path,
+                 "the firmware's config for every run (as `harmoloc --config`; the colour "
+                 "windows come from each scene)");
+  app.add_option("--trace", opt.trace_dir,
+                 "also write every run frame by frame (truth, estimate, fix, verdicts) as CSV "
+                 "into this folder: seed-N-nominal.csv, -kidnap, -dynamic, -long");
   app.add_flag("--quick", quick, "a short sweep: 5 kidnaps, a 1-minute long run");
   app.add_flag("--no-default-scene", no_default, "leave out the project's own default scene");
   app.add_flag("--quiet", quiet, "no progress on stderr");
@@ -365,6 +372,23 @@ int main(int argc, char** argv) {
   opt.dynamic = parts.find("dynamic") != std::string::npos;
   opt.long_run = parts.find("long") != std::string::npos;
   jobs = std::max(1U, jobs);
+  if (!config_path.empty()) {
+    try {
+      opt.config = firmware::load_config(config_path);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "harmoloc-sweep: %s\n", e.what());
+      return 2;
+    }
+  }
+  if (!opt.trace_dir.empty()) {
+    std::error_code ec;
+    fs::create_directories(opt.trace_dir, ec);
+    if (ec || !fs::is_directory(opt.trace_dir)) {
+      std::fprintf(stderr, "harmoloc-sweep: --trace %s: cannot create the folder\n",
+                   opt.trace_dir.c_str());
+      return 2;
+    }
+  }
   if (seed_list.empty())
     for (int i = 0; i < scenes; ++i) seed_list.push_back(first + static_cast<std::uint64_t>(i));
   scenes = static_cast<int>(seed_list.size());

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 
 #include "harmoloc/algorithms/geometry.hpp"
@@ -141,6 +142,28 @@ RunRecord replay_scenario(const Scenario& scenario, std::uint64_t seed,
   record.counters = cycle->counters();
   record.uses_boards = cycle->uses_boards();
   return record;
+}
+
+void write_trace(const RunRecord& run, const std::string& path) {
+  std::FILE* f = std::fopen(path.c_str(), "w");
+  if (f == nullptr) throw std::runtime_error(path + ": cannot write the trace");
+  for (const KidnapEvent& k : run.kidnaps) {
+    std::fprintf(f, "# kidnap at %.3f s: %.4f %.4f %.4f -> %.4f %.4f %.4f\n", k.t_s, k.from.x_m,
+                 k.from.y_m, k.from.yaw_rad, k.to.x_m, k.to.y_m, k.to.yaw_rad);
+  }
+  std::fprintf(f,
+               "t_s,truth_x_m,truth_y_m,truth_yaw_rad,x_m,y_m,yaw_rad,error_m,valid,health,"
+               "fix_present,fix_known,fix_x_m,fix_y_m,verdict,distrusted,consensus\n");
+  for (const FrameRecord& r : run.frames) {
+    std::fprintf(f, "%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%d,%s,%d,%d,%.4f,%.4f,%d,%u,%d\n",
+                 r.t_s, r.truth.x_m, r.truth.y_m, r.truth.yaw_rad, r.estimate.x_m, r.estimate.y_m,
+                 r.estimate.yaw_rad, r.position_error_m(), r.valid ? 1 : 0,
+                 firmware::health_name(r.health), r.fix_present ? 1 : 0, r.fix_known ? 1 : 0,
+                 r.fix.x_m, r.fix.y_m, static_cast<int>(r.verdict),
+                 static_cast<unsigned>(r.distrusted), r.consensus ? 1 : 0);
+  }
+  const bool failed = std::ferror(f) != 0;
+  if (std::fclose(f) != 0 || failed) throw std::runtime_error(path + ": cannot write the trace");
 }
 
 ErrorStats error_stats(const RunRecord& run, double from_s, double to_s) {

@@ -68,6 +68,11 @@ RunRecord replay_scenario(const Scenario& scenario, std::uint64_t seed,
                           const algorithms::MapFile& map, const firmware::FirmwareConfig& config,
                           const Progress& progress = nullptr);
 
+/// Writes @p run frame by frame as CSV (truth, estimate, fix, health, the kidnap test's verdict,
+/// the distrusted boards), its kidnaps as `#` lines first: for looking at one scene's run
+/// (harmoloc-sweep --trace). Throws std::runtime_error naming @p path when it cannot be written.
+void write_trace(const RunRecord& run, const std::string& path);
+
 /// Errors over the frames whose time is in [@p from_s, @p to_s) and that have a pose.
 struct ErrorStats {
   std::size_t frames = 0;

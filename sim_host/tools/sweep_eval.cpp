@@ -27,7 +27,7 @@ std::string describe(const Scenario& s) {
 
 firmware::FirmwareConfig config_for(const algorithms::ThresholdSet& thresholds,
                                     const SweepOptions& options) {
-  firmware::FirmwareConfig c = firmware::default_config();
+  firmware::FirmwareConfig c = options.config;
   c.thresholds = thresholds;
   c.filter.seed = options.filter_seed;
   return c;
@@ -84,6 +84,11 @@ std::string board_names(const TrainReport& r, const Scenario& scene) {
   return out;
 }
 
+void trace(const SweepOptions& opt, std::uint64_t seed, const char* part, const RunRecord& run) {
+  if (opt.trace_dir.empty()) return;
+  write_trace(run, opt.trace_dir + "/seed-" + std::to_string(seed) + "-" + part + ".csv");
+}
+
 }  // namespace
 
 SceneResult evaluate_scene(const Scenario& scene, const algorithms::ThresholdSet& thresholds,
@@ -116,6 +121,7 @@ SceneResult evaluate_scene(const Scenario& scene, const algorithms::ThresholdSet
       step("test run");
       const RunRecord run =
           replay_scenario(with_other_lighting(scene, kTestSeed), kTestSeed, map, config);
+      trace(opt, seed, "nominal", run);
       double sx = 0, sy = 0, kx = 0, ky = 0;
       std::size_t n = 0, known = 0;
       for (const FrameRecord& f : run.frames) {
@@ -153,6 +159,7 @@ SceneResult evaluate_scene(const Scenario& scene, const algorithms::ThresholdSet
       step("kidnaps");
       const Scenario k = kidnap_variant(scene, opt.kidnaps);
       const RunRecord run = replay_scenario(k, kKidnapSeed, map, config);
+      trace(opt, seed, "kidnap", run);
       const KidnapSummary ks = kidnap_summary(run, 0.10, 0.5, 1.0);
       r.kidnaps = ks.outcomes.size();
       r.kidnaps_detected = ks.detected;
@@ -166,6 +173,7 @@ SceneResult evaluate_scene(const Scenario& scene, const algorithms::ThresholdSet
     if (opt.dynamic) {
       step("dynamic");
       const RunRecord run = replay_scenario(dynamic_variant(scene), kDynamicSeed, map, config);
+      trace(opt, seed, "dynamic", run);
       const Settled s = settle(run, opt.settle_s, kSettledBound_m, kStartupHold_s);
       if (s.after.frames > 0) {
         r.dynamic_max_m = s.after.max_m;
@@ -176,6 +184,7 @@ SceneResult evaluate_scene(const Scenario& scene, const algorithms::ThresholdSet
       step("long run");
       const Scenario l = long_variant(scene, opt.long_minutes);
       const RunRecord run = replay_scenario(l, kLongSeed, map, config);
+      trace(opt, seed, "long", run);
       r.long_minutes = run.frames.empty() ? 0.0 : run.frames.back().t_s / 60.0;
       r.long_false_alarms = run.counters.kidnaps;
       const Settled s = settle(run, opt.settle_s, kSettledBound_m, kStartupHold_s);

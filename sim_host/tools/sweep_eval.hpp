@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "harmoloc/algorithms/segmentation.hpp"
+#include "harmoloc/firmware/config.hpp"
 #include "harmoloc/sim_host/scenario.hpp"
 
 namespace harmoloc::sim_host {
@@ -26,6 +27,11 @@ struct SweepOptions {
   std::uint64_t filter_seed = 1;
   /// Errors count from this long after the first fix (the start-up target: under 5 cm within it).
   double settle_s = 2.0;
+  /// The firmware's configuration the runs use (each scene's colour windows replace its
+  /// thresholds, filter_seed its filter seed, the scene's robot its geometry).
+  firmware::FirmwareConfig config = firmware::default_config();
+  /// When set, each run's frames are written there as CSV (`seed-N-PART.csv`, write_trace).
+  std::string trace_dir;
 };
 
 /// What one scene scored. Distances in metres, MSE in m^2; -1 where not measured.
