@@ -16,7 +16,7 @@ BoardFeatures board_features(float area_scale, const AreaVector& areas) {
 std::array<float, kMaxBoards> board_maxima(const ForwardMap& map) {
   std::array<float, kMaxBoards> m{};
   const std::size_t boards = std::min<std::size_t>(map.board_count, kMaxBoards);
-  for (std::size_t c = 0; c < map.cell_count(); ++c) {
+  for (std::size_t c = 0; c < map.stored_cells(); ++c) {
     const float* e = map.expected.data() + c * kMaxBoards;
     for (std::size_t b = 0; b < boards; ++b) m[b] = std::max(m[b], e[b]);
   }

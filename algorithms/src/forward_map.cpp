@@ -33,6 +33,38 @@ void axis(double position_m, float origin_m, float cell_m, std::uint32_t cells,
 
 }  // namespace
 
+bool lay_out_grid(ForwardMap& map, std::uint32_t columns, std::uint32_t rows,
+                  const std::uint8_t* stored) {
+  map.columns = map.rows = map.tile_columns = map.tile_rows = map.tile_count = 0;
+  if (columns == 0 || rows == 0 || columns > ForwardMap::kMaxDimension ||
+      rows > ForwardMap::kMaxDimension)
+    return false;
+  const std::uint32_t tc = tiles_along(columns), tr = tiles_along(rows);
+  const std::size_t positions = static_cast<std::size_t>(tc) * tr;
+  if (positions > ForwardMap::kMaxTileGrid) return false;
+  std::size_t count = 0;
+  for (std::size_t t = 0; t < positions; ++t) count += stored == nullptr || stored[t] != 0 ? 1 : 0;
+  if (count == 0 || count > ForwardMap::kMaxTiles) return false;
+  std::uint16_t slot = 0;
+  for (std::size_t t = 0; t < positions; ++t)
+    map.tile_slot[t] = stored == nullptr || stored[t] != 0 ? slot++ : ForwardMap::kNoTile;
+  map.columns = columns;
+  map.rows = rows;
+  map.tile_columns = tc;
+  map.tile_rows = tr;
+  map.tile_count = static_cast<std::uint32_t>(count);
+  // Only what the layout uses is cleared (the arrays are large; the decoder lays out a grid on
+  // every map it reads): the stored cells and the void cell.
+  const std::size_t cells = map.stored_cells();
+  std::fill_n(map.expected.begin(), cells * kMaxBoards, 0.0F);
+  std::fill_n(map.route_distance_m.begin(), cells, 0.0F);
+  std::fill_n(map.heading_rad.begin(), cells, 0.0F);
+  std::fill_n(map.expected.begin() + ForwardMap::kVoidCell * kMaxBoards, kMaxBoards, 0.0F);
+  map.route_distance_m[ForwardMap::kVoidCell] = ForwardMap::kVoidRouteDistance_m;
+  map.heading_rad[ForwardMap::kVoidCell] = 0.0F;
+  return true;
+}
+
 GridPoint locate(const ForwardMap& map, double x_m, double y_m) {
   std::uint32_t c = 0, r = 0;
   float fx = 0.0F, fy = 0.0F;
@@ -42,10 +74,10 @@ GridPoint locate(const ForwardMap& map, double x_m, double y_m) {
   const std::uint32_t c1 = map.columns > 1U ? c + 1U : c;
   const std::uint32_t r1 = map.rows > 1U ? r + 1U : r;
   GridPoint p;
-  p.index[0] = r * map.columns + c;
-  p.index[1] = r * map.columns + c1;
-  p.index[2] = r1 * map.columns + c;
-  p.index[3] = r1 * map.columns + c1;
+  p.index[0] = static_cast<std::uint32_t>(map.index(c, r));
+  p.index[1] = static_cast<std::uint32_t>(map.index(c1, r));
+  p.index[2] = static_cast<std::uint32_t>(map.index(c, r1));
+  p.index[3] = static_cast<std::uint32_t>(map.index(c1, r1));
   p.weight[0] = (1.0F - fx) * (1.0F - fy);
   p.weight[1] = fx * (1.0F - fy);
   p.weight[2] = (1.0F - fx) * fy;

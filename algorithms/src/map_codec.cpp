@@ -80,76 +80,141 @@ bool finite_positive(float v) {
   return std::isfinite(v) && v > 0.0F;
 }
 
-// The forward map section (version 3).
-MapError decode_forward(Reader& r, std::uint32_t boards, ForwardMap& f) {
-  if (!r.u32(f.columns, "forward map size") || !r.u32(f.rows, "forward map size")) {
-    f.columns = f.rows = 0;
-    return MapError{"truncated: no room for the forward map's size", r.pos()};
-  }
-  if (f.columns == 0 && f.rows == 0) return MapError{};
-  if (f.columns == 0 || f.rows == 0 || f.columns > ForwardMap::kMaxDimension ||
-      f.rows > ForwardMap::kMaxDimension || f.cell_count() > ForwardMap::kMaxCells) {
-    f.columns = f.rows = 0;
-    return MapError{"forward map grid out of range (at most 256 x 256 and 4096 cells)", r.pos()};
-  }
-  std::uint32_t board_count = 0;
-  if (!r.f32(f.origin_x_m, "forward map origin") || !r.f32(f.origin_y_m, "forward map origin") ||
-      !r.f32(f.cell_m, "forward map cell size") || !r.u32(board_count, "forward map boards")) {
-    f.columns = f.rows = 0;
-    return MapError{"truncated: the forward map's header is cut short", r.pos()};
-  }
-  const auto fail = [&f](const char* what, std::size_t at) {
-    f.columns = f.rows = 0;
-    return MapError{what, at};
-  };
-  if (!(std::fabs(f.origin_x_m) <= 1.0e4F) || !(std::fabs(f.origin_y_m) <= 1.0e4F) ||
-      !(f.cell_m >= 1.0e-3F && f.cell_m <= 10.0F)) {
-    return fail("forward map origin or cell size out of range", r.pos());
-  }
-  if (board_count != boards)
-    return fail("forward map board count differs from the thresholds'", r.pos());
-  f.board_count = board_count;
-  bool any = false;
-  for (std::size_t b = 0; b < board_count; ++b) {
-    if (!r.f32(f.sigma[b], "forward map sigma"))
-      return fail("truncated: the forward map's sigmas are cut short", r.pos());
-    if (!(f.sigma[b] >= 0.0F && f.sigma[b] <= 1.0e3F))
-      return fail("forward map sigma not finite and in 0..1000", r.pos());
-    any = any || f.sigma[b] > 0.0F;
-  }
-  if (!any) return fail("forward map models no board (every sigma is 0)", r.pos());
-  std::uint8_t flag = 0, pad[3] = {0, 0, 0};
-  if (!r.u8(flag, "forward map flags") || !r.u8(pad[0], "forward map flags") ||
-      !r.u8(pad[1], "forward map flags") || !r.u8(pad[2], "forward map flags")) {
-    return fail("truncated: the forward map's flags are cut short", r.pos());
-  }
-  if (flag > 1U || pad[0] != 0 || pad[1] != 0 || pad[2] != 0)
-    return fail("forward map flags: unknown bits set", r.pos());
-  f.has_heading = flag == 1U;
-  const std::size_t cells = f.cell_count();
-  const std::size_t values = cells * (board_count + 1U + (f.has_heading ? 1U : 0U));
+bool finite_in(float v, float lo, float hi) {
+  return v >= lo && v <= hi;  // false for NaN
+}
+
+// The values of one stored cell: every board's expected feature, then (in a second pass) the
+// route distance and the heading. Versions 3 and 4 store them for the cells row by row, version
+// 5 for the stored tiles' cells in storage order; both read through @p cell_at.
+template <typename CellAt>
+MapError decode_cells(Reader& r, ForwardMap& f, std::size_t cells, CellAt cell_at) {
+  const std::size_t boards = f.board_count;
+  const std::size_t values = cells * (boards + 1U + (f.has_heading ? 1U : 0U));
   if (!r.need(values * 4U, "forward map"))
-    return fail("truncated: the forward map is shorter than its size says", r.pos());
+    return MapError{"truncated: the forward map is shorter than its size says", r.pos()};
   for (std::size_t c = 0; c < cells; ++c) {
-    float* e = f.expected.data() + c * kMaxBoards;
-    for (std::size_t b = 0; b < board_count; ++b) {
+    float* e = f.expected.data() + cell_at(c) * kMaxBoards;
+    for (std::size_t b = 0; b < boards; ++b) {
       r.f32(e[b], "forward map");
-      if (!(e[b] >= 0.0F && e[b] <= 1.0e6F))
-        return fail("forward map expected feature not finite and >= 0", r.pos());
+      if (!finite_in(e[b], 0.0F, 1.0e6F))
+        return MapError{"forward map expected feature not finite and >= 0", r.pos()};
     }
-    for (std::size_t b = board_count; b < kMaxBoards; ++b) e[b] = 0.0F;
   }
   for (std::size_t c = 0; c < cells; ++c) {
-    r.f32(f.route_distance_m[c], "forward map");
-    if (!(f.route_distance_m[c] >= 0.0F && f.route_distance_m[c] <= 1.0e4F))
-      return fail("forward map route distance not finite and >= 0", r.pos());
+    float& d = f.route_distance_m[cell_at(c)];
+    r.f32(d, "forward map");
+    if (!finite_in(d, 0.0F, 1.0e4F))
+      return MapError{"forward map route distance not finite and >= 0", r.pos()};
   }
   if (f.has_heading) {
     for (std::size_t c = 0; c < cells; ++c) {
-      r.f32(f.heading_rad[c], "forward map");
-      if (!(std::fabs(f.heading_rad[c]) <= 4.0F))
-        return fail("forward map heading not within -pi..pi", r.pos());
+      float& h = f.heading_rad[cell_at(c)];
+      r.f32(h, "forward map");
+      if (!finite_in(h, -4.0F, 4.0F)) return MapError{"forward map heading not within -pi..pi", r.pos()};
     }
+  }
+  return MapError{};
+}
+
+// The forward map section (version 3; tiled from version 5).
+MapError decode_forward(Reader& r, std::uint32_t version, std::uint32_t boards, ForwardMap& f) {
+  std::uint32_t columns = 0, rows = 0;
+  f.columns = f.rows = 0;
+  if (!r.u32(columns, "forward map size") || !r.u32(rows, "forward map size"))
+    return MapError{"truncated: no room for the forward map's size", r.pos()};
+  if (columns == 0 && rows == 0) return MapError{};
+  // Versions 3 and 4 store every cell of a grid of at most 4096; version 5 the tiles near the
+  // training run of a grid of at most this build's tile grid.
+  const bool tiled = version >= 5;
+  if (tiled ? (columns == 0 || rows == 0 || columns > ForwardMap::kMaxDimension ||
+               rows > ForwardMap::kMaxDimension ||
+               static_cast<std::size_t>(tiles_along(columns)) * tiles_along(rows) >
+                   ForwardMap::kMaxTileGrid)
+            : (columns == 0 || rows == 0 || columns > 256 || rows > 256 ||
+               static_cast<std::size_t>(columns) * rows > 4096)) {
+    return MapError{tiled ? "forward map grid out of range (its tile grid exceeds this firmware's)"
+                          : "forward map grid out of range (at most 256 x 256 and 4096 cells)",
+                    r.pos()};
+  }
+  std::uint32_t board_count = 0;
+  float origin_x = 0.0F, origin_y = 0.0F, cell = 0.0F;
+  if (!r.f32(origin_x, "forward map origin") || !r.f32(origin_y, "forward map origin") ||
+      !r.f32(cell, "forward map cell size") || !r.u32(board_count, "forward map boards")) {
+    return MapError{"truncated: the forward map's header is cut short", r.pos()};
+  }
+  if (!(std::fabs(origin_x) <= 1.0e4F) || !(std::fabs(origin_y) <= 1.0e4F) ||
+      !finite_in(cell, 1.0e-3F, 10.0F)) {
+    return MapError{"forward map origin or cell size out of range", r.pos()};
+  }
+  if (board_count != boards)
+    return MapError{"forward map board count differs from the thresholds'", r.pos()};
+  std::array<float, kMaxBoards> sigma{};
+  bool any = false;
+  for (std::size_t b = 0; b < board_count; ++b) {
+    if (!r.f32(sigma[b], "forward map sigma"))
+      return MapError{"truncated: the forward map's sigmas are cut short", r.pos()};
+    if (!finite_in(sigma[b], 0.0F, 1.0e3F))
+      return MapError{"forward map sigma not finite and in 0..1000", r.pos()};
+    any = any || sigma[b] > 0.0F;
+  }
+  if (!any) return MapError{"forward map models no board (every sigma is 0)", r.pos()};
+  std::uint8_t flag = 0, pad[3] = {0, 0, 0};
+  if (!r.u8(flag, "forward map flags") || !r.u8(pad[0], "forward map flags") ||
+      !r.u8(pad[1], "forward map flags") || !r.u8(pad[2], "forward map flags")) {
+    return MapError{"truncated: the forward map's flags are cut short", r.pos()};
+  }
+  if (flag > 1U || pad[0] != 0 || pad[1] != 0 || pad[2] != 0)
+    return MapError{"forward map flags: unknown bits set", r.pos()};
+
+  // The layout: every tile (versions 3 and 4), or the stored tiles' bitmap (version 5).
+  const std::size_t positions = static_cast<std::size_t>(tiles_along(columns)) * tiles_along(rows);
+  std::array<std::uint8_t, ForwardMap::kMaxTileGrid> stored{};
+  if (tiled) {
+    std::uint32_t tile_count = 0;
+    if (!r.u32(tile_count, "forward map tile count"))
+      return MapError{"truncated: the forward map's tile count is missing", r.pos()};
+    if (tile_count == 0 || tile_count > ForwardMap::kMaxTiles)
+      return MapError{"forward map tile count out of range (more than this firmware holds)",
+                      r.pos()};
+    const std::size_t mask_bytes = (positions + 7U) / 8U;
+    if (!r.need(mask_bytes, "forward map tiles"))
+      return MapError{"truncated: the forward map's tile bitmap is cut short", r.pos()};
+    std::size_t count = 0;
+    for (std::size_t i = 0; i < mask_bytes; ++i) {
+      std::uint8_t bits = 0;
+      r.u8(bits, "forward map tiles");
+      for (std::size_t k = 0; k < 8; ++k) {
+        const bool set = ((bits >> k) & 1U) != 0U;
+        if (!set) continue;
+        if (8U * i + k >= positions)
+          return MapError{"forward map tile bitmap: bits set beyond the tile grid", r.pos()};
+        stored[8U * i + k] = 1;
+        ++count;
+      }
+    }
+    if (count != tile_count)
+      return MapError{"forward map tile bitmap does not hold the tile count", r.pos()};
+  } else {
+    stored.fill(1);
+  }
+  if (!lay_out_grid(f, columns, rows, stored.data()))
+    return MapError{"forward map needs more tiles than this firmware holds", r.pos()};
+  f.origin_x_m = origin_x;
+  f.origin_y_m = origin_y;
+  f.cell_m = cell;
+  f.board_count = board_count;
+  f.sigma = sigma;
+  f.has_heading = flag == 1U;
+  const MapError e =
+      tiled ? decode_cells(r, f, f.stored_cells(), [](std::size_t c) { return c; })
+            : decode_cells(r, f, static_cast<std::size_t>(columns) * rows, [&f](std::size_t c) {
+                return f.index(static_cast<std::uint32_t>(c % f.columns),
+                               static_cast<std::uint32_t>(c / f.columns));
+              });
+  if (e) {
+    f.columns = f.rows = 0;
+    return e;
   }
   return MapError{};
 }
@@ -202,12 +267,24 @@ std::vector<std::uint8_t> encode_map(const MapFile& map) {
     w.u8(0);
     w.u8(0);
     w.u8(0);
-    for (std::size_t c = 0; c < f.cell_count(); ++c) {
+    // Version 5: the stored tiles as a bitmap over the tile grid (row-major, LSB first), then
+    // their cells in storage order.
+    w.u32(f.tile_count);
+    const std::size_t positions = static_cast<std::size_t>(f.tile_columns) * f.tile_rows;
+    for (std::size_t i = 0; i < (positions + 7U) / 8U; ++i) {
+      std::uint8_t bits = 0;
+      for (std::size_t k = 0; k < 8 && 8U * i + k < positions; ++k) {
+        if (f.tile_slot[8U * i + k] != ForwardMap::kNoTile) bits |= static_cast<std::uint8_t>(1U << k);
+      }
+      w.u8(bits);
+    }
+    const std::size_t cells = f.stored_cells();
+    for (std::size_t c = 0; c < cells; ++c) {
       for (std::size_t b = 0; b < f.board_count; ++b) w.f32(f.expected[c * kMaxBoards + b]);
     }
-    for (std::size_t c = 0; c < f.cell_count(); ++c) w.f32(f.route_distance_m[c]);
+    for (std::size_t c = 0; c < cells; ++c) w.f32(f.route_distance_m[c]);
     if (f.has_heading) {
-      for (std::size_t c = 0; c < f.cell_count(); ++c) w.f32(f.heading_rad[c]);
+      for (std::size_t c = 0; c < cells; ++c) w.f32(f.heading_rad[c]);
     }
   }
   // Version 4: the calibration, as (id, value) entries.
@@ -260,7 +337,7 @@ MapError decode_map(const std::uint8_t* data, std::size_t size, MapFile& map) {
   std::uint32_t version = 0;
   if (!r.u32(version, "version")) return r.error;
   if (version < 1 || version > kMapFormatVersion)
-    return MapError{"unsupported map format version (this firmware reads versions 1 to 4)", 8};
+    return MapError{"unsupported map format version (this firmware reads versions 1 to 5)", 8};
   if (crc32(data, body) != stored) return MapError{"checksum mismatch: the map is corrupt", body};
 
   std::uint32_t boards = 0;
@@ -357,7 +434,7 @@ MapError decode_map(const std::uint8_t* data, std::size_t size, MapFile& map) {
   }
   map.forward.columns = map.forward.rows = 0;
   if (version >= 3) {
-    if (const MapError e = decode_forward(r, boards, map.forward)) return e;
+    if (const MapError e = decode_forward(r, version, boards, map.forward)) return e;
   }
   map.calibration = MapCalibration{};
   map.model.local_linear_ridge = 0.0F;

@@ -83,6 +83,14 @@ int main(int argc, char** argv) {
   app.add_option("--folds", folds, "cross-validation folds")
       ->capture_default_str()
       ->check(CLI::Range(2, 64));
+  std::size_t forward_tiles = algorithms::ForwardMap::kMaxTiles;
+  app.add_option("--forward-tiles", forward_tiles,
+                 "most tiles of 8x8 cells the forward map may store (the cells coarsen to fit);\n"
+                 "the firmware holds " +
+                     std::to_string(algorithms::ForwardMap::kMaxTiles) +
+                     ", the bare-metal kernels 64 (docs/baremetal.md)")
+      ->capture_default_str()
+      ->check(CLI::Range(std::size_t{1}, algorithms::ForwardMap::kMaxTiles));
   app.add_flag("--quiet", quiet, "print only the result line");
   if (const auto status = harmoloc::cli::parse(app, argc, argv)) return *status;
 
@@ -106,6 +114,7 @@ int main(int argc, char** argv) {
     opt.folds = folds;
     opt.select_boards = !all_boards;
     opt.known_place_margin = margin;
+    opt.forward.max_tiles = forward_tiles;
     opt.method =
         method == "paper" ? sim_host::TrainMethod::kPaper : sim_host::TrainMethod::kNeighbourGraph;
     if (!boards_text.empty()) {
@@ -243,20 +252,24 @@ int main(int argc, char** argv) {
                         names.names[b].c_str(), fw.sigma[b]);
           sig += fw.sigma[b] > 0.0 ? item : "";
         }
+        const algorithms::ForwardMap& grid = map.forward;
+        std::printf(
+            "forward map   cells of %.1f cm over %ux%u, %u tiles of %ux%u stored near the run "
+            "(%zu cells, of at most %zu tiles)\n",
+            100.0 * static_cast<double>(grid.cell_m), grid.columns, grid.rows, grid.tile_count,
+            algorithms::ForwardMap::kTileSide, algorithms::ForwardMap::kTileSide, grid.stored_cells(),
+            algorithms::ForwardMap::kMaxTiles);
         if (fw.by_odometry > 0) {
           std::printf(
-              "forward map   %ux%u cells of %.1f cm from %zu frames placed by odometry, kernel "
-              "%.1f cm, heading from the placement\n",
-              map.forward.columns, map.forward.rows,
-              100.0 * static_cast<double>(map.forward.cell_m), fw.by_odometry,
-              100.0 * fw.bandwidth_m);
+              "              from %zu frames placed by odometry, kernel %.1f cm, heading from the "
+              "placement\n",
+              fw.by_odometry, 100.0 * fw.bandwidth_m);
         } else {
           std::printf(
-              "forward map   %ux%u cells of %.1f cm from %zu frames (%zu placed by labels, %zu "
-              "by the map), kernel %.1f cm, heading %s\n",
-              map.forward.columns, map.forward.rows,
-              100.0 * static_cast<double>(map.forward.cell_m), fw.interpolated + fw.from_harmonic,
-              fw.interpolated, fw.from_harmonic, 100.0 * fw.bandwidth_m,
+              "              from %zu frames (%zu placed by labels, %zu by the map), kernel %.1f "
+              "cm, heading %s\n",
+              fw.interpolated + fw.from_harmonic, fw.interpolated, fw.from_harmonic,
+              100.0 * fw.bandwidth_m,
               fw.has_heading ? "from the labels" : "unknown (labels have none)");
         }
         std::printf("board noise   %s (%% of frame, against other passes)\n", sig.c_str());

@@ -722,11 +722,29 @@ void write_map(MapBytes& m, const MapSpec& s) {
     m.u8(0);
     m.u8(0);
     m.u8(0);
-    for (int c = 0; c < 4; ++c) {
-      for (int b = 0; b < 3; ++b) m.f32(0.5F * static_cast<float>(c + b));
+    // Cell k of the grid, row by row, is cell (k % 2, k / 2). Version 5 stores the grid's one
+    // tile: its 64 cells, those beyond the grid 0.
+    const bool tiled = s.version >= 5;
+    const int cells = tiled ? static_cast<int>(ha::ForwardMap::kTileCells) : 4;
+    const auto grid_cell = [tiled](int i) {
+      if (!tiled) return i;
+      const int c = i % static_cast<int>(ha::ForwardMap::kTileSide);
+      const int r = i / static_cast<int>(ha::ForwardMap::kTileSide);
+      return c < 2 && r < 2 ? r * 2 + c : -1;
+    };
+    if (tiled) {
+      m.u32(1);  // one tile
+      m.u8(1);   // the bitmap: tile 0
     }
-    for (int c = 0; c < 4; ++c) m.f32(0.01F * static_cast<float>(c));
-    for (int c = 0; c < 4; ++c) m.f32(1.5F);
+    for (int i = 0; i < cells; ++i) {
+      const int k = grid_cell(i);
+      for (int b = 0; b < 3; ++b) m.f32(k < 0 ? 0.0F : 0.5F * static_cast<float>(k + b));
+    }
+    for (int i = 0; i < cells; ++i) {
+      const int k = grid_cell(i);
+      m.f32(k < 0 ? 0.0F : 0.01F * static_cast<float>(k));
+    }
+    for (int i = 0; i < cells; ++i) m.f32(grid_cell(i) < 0 ? 0.0F : 1.5F);
   }
   if (s.version >= 4) m.u32(0);  // no calibration entries
   if (s.trailing) m.u32(0);
@@ -803,26 +821,29 @@ void test_map_codec() {
     BM_CHECK(!g_map.forward.present());
     BM_CHECK(g_map.model.max_dissimilarity == 0.05F);
   }
-  // A forward map.
-  {
+  // A forward map, tiled (version 5) and as a whole grid (version 4): the same cells.
+  for (const std::uint32_t version : {ha::kMapFormatVersion, 4U}) {
     static MapBytes fw;
     fw = MapBytes{};
     MapSpec f;
     f.forward = true;
+    f.version = version;
     write_map(fw, f);
     err = ha::decode_map(fw.data(), fw.size(), g_map);
     BM_CHECK(!err);
     const ha::ForwardMap& fm = g_map.forward;
     BM_CHECK(fm.present());
-    BM_CHECK_EQ(fm.cell_count(), 4U);
+    BM_CHECK_EQ(fm.stored_cells(), ha::ForwardMap::kTileCells);
     BM_CHECK(fm.has_heading);
     BM_CHECK(fm.sigma[1] == 0.0F);
     BM_CHECK(fm.cell(1, 1)[2] == 2.5F);
-    BM_CHECK(fm.route_distance_m[3] == 0.03F);
-    bm::value_u("forward_size", fw.size());
+    BM_CHECK(fm.route_distance_m[fm.index(1, 1)] == 0.03F);
+    if (version == ha::kMapFormatVersion) bm::value_u("forward_size", fw.size());
 #if !defined(HARMOLOC_BAREMETAL_TARGET)
-    const std::vector<std::uint8_t> again = ha::encode_map(g_map);
-    BM_CHECK(again.size() == fw.size() && std::memcmp(again.data(), fw.data(), fw.size()) == 0);
+    if (version == ha::kMapFormatVersion) {
+      const std::vector<std::uint8_t> again = ha::encode_map(g_map);
+      BM_CHECK(again.size() == fw.size() && std::memcmp(again.data(), fw.data(), fw.size()) == 0);
+    }
 #endif
     // Cut inside the forward map and re-sealed: rejected.
     fw.truncate(fw.size() - 4 - 8);
@@ -884,8 +905,7 @@ float forward_field(std::size_t b, double x, double y) {
 
 void test_robust() {
   ha::ForwardMap& f = g_forward;
-  f.columns = 41;
-  f.rows = 21;
+  BM_CHECK(ha::lay_out_grid(f, 41, 21));
   f.origin_x_m = 1.0F;
   f.origin_y_m = 0.5F;
   f.cell_m = 0.025F;
@@ -896,8 +916,8 @@ void test_robust() {
     for (std::uint32_t c = 0; c < f.columns; ++c) {
       const double x = 1.0 + 0.025 * c, y = 0.5 + 0.025 * r;
       for (std::size_t b = 0; b < 4; ++b) f.cell(c, r)[b] = forward_field(b, x, y);
-      f.route_distance_m[r * f.columns + c] = static_cast<float>(y > 0.75 ? y - 0.75 : 0.75 - y);
-      f.heading_rad[r * f.columns + c] = 1.5F;
+      f.route_distance_m[f.index(c, r)] = static_cast<float>(y > 0.75 ? y - 0.75 : 0.75 - y);
+      f.heading_rad[f.index(c, r)] = 1.5F;
     }
   }
   // Lookup: exact on a linear field (boards 0 and 1), the border beyond the grid.

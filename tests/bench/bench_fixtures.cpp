@@ -83,8 +83,7 @@ void synthetic_map(std::size_t samples, std::uint32_t width_px, std::uint32_t he
   }
   // A forward map over the same region (2 cm cells, as the trainer makes them), smooth fields.
   auto& f = map.forward;
-  f.columns = 46;
-  f.rows = 88;
+  algorithms::lay_out_grid(f, 46, 88);
   f.origin_x_m = 1.65F;
   f.origin_y_m = 0.1F;
   f.cell_m = 0.02F;
@@ -98,8 +97,8 @@ void synthetic_map(std::size_t samples, std::uint32_t width_px, std::uint32_t he
       float* e = f.cell(c, r);
       for (std::size_t b = 0; b < f.board_count; ++b)
         e[b] = 1.5F + std::sin(1.3F * x * static_cast<float>(b + 1)) * std::cos(0.7F * y);
-      f.route_distance_m[r * f.columns + c] = std::fabs(x - 2.1F);
-      f.heading_rad[r * f.columns + c] = 1.57F;
+      f.route_distance_m[f.index(c, r)] = std::fabs(x - 2.1F);
+      f.heading_rad[f.index(c, r)] = 1.57F;
     }
   }
 }

@@ -84,6 +84,47 @@ def encode_map_v3(width, height, thresholds, board_index, params, samples, forwa
     return bytes(out)
 
 
+def encode_map_v5(width, height, thresholds, board_index, params, weights, samples, forward,
+                  calibration=()):
+    """Version 5: feature weights after the params, the forward map's stored tiles (a bitmap
+    over the tile grid, then their cells), the calibration entries. forward is (columns, rows,
+    origin_x, origin_y, cell, sigmas, with_heading, stored tile positions, cell value function
+    (tile, cell) -> (expected list, route, heading))."""
+    out = bytearray(b"HARMOMAP")
+    out += struct.pack("<IIII", 5, width, height, len(thresholds))
+    for h0, h1, s, v0, v1 in thresholds:
+        out += struct.pack("<ffBBBB", h0, h1, s, v0, v1, 0)
+    out += struct.pack("<II", len(samples), len(board_index))
+    out += bytes(board_index)
+    out += struct.pack("<7f", *params)
+    out += struct.pack("<%df" % len(weights), *weights)
+    for features, x, y in samples:
+        out += struct.pack("<%df" % len(features), *features)
+        out += struct.pack("<ff", x, y)
+    cols, rows, ox, oy, cell, sigmas, with_heading, tiles, value = forward
+    out += struct.pack("<IIfffI", cols, rows, ox, oy, cell, len(sigmas))
+    out += struct.pack("<%df" % len(sigmas), *sigmas)
+    out += bytes([1 if with_heading else 0, 0, 0, 0])
+    positions = ((cols + 7) // 8) * ((rows + 7) // 8)
+    bitmap = bytearray((positions + 7) // 8)
+    for t in tiles:
+        bitmap[t // 8] |= 1 << (t % 8)
+    out += struct.pack("<I", len(tiles)) + bytes(bitmap)
+    cells = [value(t, c) for t in sorted(tiles) for c in range(64)]
+    for expected, _, _ in cells:
+        out += struct.pack("<%df" % len(expected), *expected)
+    for _, route, _ in cells:
+        out += struct.pack("<f", route)
+    if with_heading:
+        for _, _, heading in cells:
+            out += struct.pack("<f", heading)
+    out += struct.pack("<I", len(calibration))
+    for entry, v in calibration:
+        out += struct.pack("<If", entry, v)
+    out += struct.pack("<I", zlib.crc32(bytes(out)) & 0xFFFFFFFF)
+    return bytes(out)
+
+
 def map_seeds(e2e):
     red = (340.0, 15.0, 110, 60, 255)
     green = (100.0, 145.0, 110, 60, 255)
@@ -108,6 +149,13 @@ def map_seeds(e2e):
              [[0.0, 1.5], [0.5, 1.2], [1.0, 1.0], [2.25, 0.5]], [0.0, 0.02, 0.03, 0.0])),
         "no-forward-v3.hmap": encode_map_v3(
             2, 2, [red], [0], [1.0, 1.0, 1.0, 0.0, 0.0, 1.0, 0.5], [([0.0], 0.0, 0.0)], None),
+        # A 20 x 10 grid (3 x 2 tiles) of which two tiles are stored, with a calibration.
+        "forward-v5-sparse.hmap": encode_map_v5(
+            160, 120, [red, green], [0, 1], [100.0 / 19200, 0.5, 0.7, 0.01, 0.02, 3.0, 0.1],
+            [1.0, 0.5], [([0.0, 1.5], 2.1, 0.7), ([2.25, 0.5], 2.0, 1.3)],
+            (20, 10, 2.0, 0.7, 0.05, [0.1, 0.2], True, [1, 3],
+             lambda t, c: ([0.01 * c, 1.5 - 0.01 * t], 0.001 * c, 1.5)),
+            [(1, 0.02), (2, 0.03), (3, 0.01)]),
     }
     tiny = os.path.join(e2e, "tiny.hmap")
     if os.path.exists(tiny):

@@ -15,7 +15,7 @@ using namespace harmoloc::algorithms;
 
 namespace {
 
-MapFile g_map;  // ~164 KiB each: static
+MapFile g_map;  // ~1.8 MiB each: static
 MapFile g_again;
 
 bool same_model(const MapFile& a, const MapFile& b) {
@@ -55,14 +55,17 @@ bool same_model(const MapFile& a, const MapFile& b) {
   if (f.present() != g.present()) return false;
   if (!f.present()) return true;
   if (f.columns != g.columns || f.rows != g.rows || f.board_count != g.board_count ||
-      f.has_heading != g.has_heading) {
+      f.has_heading != g.has_heading || f.tile_count != g.tile_count) {
     return false;
   }
+  const std::size_t positions = static_cast<std::size_t>(f.tile_columns) * f.tile_rows;
+  if (!same_bits(f.tile_slot.data(), g.tile_slot.data(), positions * sizeof(std::uint16_t)))
+    return false;
   const float fs[] = {f.origin_x_m, f.origin_y_m, f.cell_m};
   const float gs[] = {g.origin_x_m, g.origin_y_m, g.cell_m};
   if (!same_bits(fs, gs, sizeof fs) || !same_bits(f.sigma.data(), g.sigma.data(), sizeof f.sigma))
     return false;
-  const std::size_t cells = f.cell_count();
+  const std::size_t cells = f.stored_cells();
   return same_bits(f.expected.data(), g.expected.data(), cells * kMaxBoards * sizeof(float)) &&
          same_bits(f.route_distance_m.data(), g.route_distance_m.data(), cells * sizeof(float)) &&
          (!f.has_heading ||
@@ -90,7 +93,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     // An older map (regressions/map_roundtrip/version1.hmap, corpus tiny-trained-v2.hmap,
     // forward-v3.hmap) is written back as the current version, without what it lacked: the same
     // model, a version 1 map's dissimilarity bound at 1, no forward map before version 3, every
-    // feature weight 1 and no calibration before version 4.
+    // feature weight 1 and no calibration before version 4, a forward map of versions 3 and 4
+    // with every tile of its grid stored.
     HARMOLOC_FUZZ_CHECK(input[8] != 1 || g_map.model.max_dissimilarity == 1.0F,
                         "a version 1 map decodes with a dissimilarity bound");
     HARMOLOC_FUZZ_CHECK(input[8] >= 3 || !g_map.forward.present(),
@@ -98,9 +102,12 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     bool unit_weights = true;
     for (std::size_t k = 0; k < g_map.model.feature_count; ++k)
       unit_weights = unit_weights && g_map.model.feature_weight[k] == 1.0F;
-    HARMOLOC_FUZZ_CHECK(
-        unit_weights && !g_map.calibration.present && g_map.model.local_linear_ridge == 0.0F,
-        "a map before version 4 decodes with weights or calibration");
+    HARMOLOC_FUZZ_CHECK(input[8] >= 4 || (unit_weights && !g_map.calibration.present &&
+                                          g_map.model.local_linear_ridge == 0.0F),
+                        "a map before version 4 decodes with weights or calibration");
+    const ForwardMap& f = g_map.forward;
+    HARMOLOC_FUZZ_CHECK(!f.present() || f.tile_count == f.tile_columns * f.tile_rows,
+                        "a version 3 or 4 forward map decodes without every tile");
     HARMOLOC_FUZZ_CHECK(!decode_map(encoded.data(), encoded.size(), g_again),
                         "a re-encoded older map does not decode");
     HARMOLOC_FUZZ_CHECK(same_model(g_map, g_again), "decode(encode(older map)) differs");

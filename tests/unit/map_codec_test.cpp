@@ -160,7 +160,7 @@ TEST(MapCodec, BadMagic) {
 
 TEST(MapCodec, UnsupportedVersion) {
   std::vector<std::uint8_t> b = ha::encode_map(*make_map());
-  put_u32(b, kOffVersion, 5);
+  put_u32(b, kOffVersion, ha::kMapFormatVersion + 1);
   EXPECT_NE(decode_error(b).find("version"), std::string::npos) << decode_error(b);
   fix_crc(b);
   EXPECT_NE(decode_error(b).find("version"), std::string::npos) << decode_error(b);
@@ -546,9 +546,15 @@ TEST(MapCodec, LargestMapFitsTheSizeCap) {
     for (std::size_t k = 0; k < m.feature_count; ++k) m.sample(i)[k] = 1.0F;
     m.target_x_m[i] = m.target_y_m[i] = 0.0F;
   }
+  // The widest tile grid this build holds, as many of its tiles stored as it holds.
   ha::ForwardMap& f = map->forward;
-  f.columns = 64;
-  f.rows = 64;
+  std::vector<std::uint8_t> stored(ha::ForwardMap::kMaxTileGrid, 0);
+  for (std::size_t t = 0; t < ha::ForwardMap::kMaxTiles; ++t) stored[t * 7 % stored.size()] = 1;
+  const auto side = static_cast<std::uint32_t>(std::sqrt(ha::ForwardMap::kMaxTileGrid));
+  ASSERT_EQ(static_cast<std::size_t>(side) * side, ha::ForwardMap::kMaxTileGrid);
+  ASSERT_TRUE(ha::lay_out_grid(f, side * ha::ForwardMap::kTileSide,
+                               side * ha::ForwardMap::kTileSide, stored.data()));
+  ASSERT_EQ(f.tile_count, ha::ForwardMap::kMaxTiles);
   f.cell_m = 0.05F;
   f.board_count = ha::kMaxBoards;
   f.sigma.fill(0.1F);
@@ -561,44 +567,52 @@ TEST(MapCodec, LargestMapFitsTheSizeCap) {
 
 namespace {
 
-// A 3 x 2 grid over 6 boards, the fourth not modelled, with headings.
+// A 3 x 2 grid over 6 boards, the fourth not modelled, with headings: one tile, of which these
+// six cells are in the grid.
 std::unique_ptr<ha::MapFile> make_map_with_forward() {
   auto map = make_map();
   ha::ForwardMap& f = map->forward;
-  f.columns = 3;
-  f.rows = 2;
+  EXPECT_TRUE(ha::lay_out_grid(f, 3, 2));
   f.origin_x_m = 1.5F;
   f.origin_y_m = 0.25F;
   f.cell_m = 0.05F;
   f.board_count = kBoards;
   f.sigma = {0.1F, 0.2F, 0.05F, 0.0F, 0.3F, 0.01F, 0.0F, 0.0F};
   f.has_heading = true;
-  for (std::size_t c = 0; c < f.cell_count(); ++c) {
-    for (std::size_t b = 0; b < kBoards; ++b)
-      f.expected[c * ha::kMaxBoards + b] = b == 3 ? 0.0F : 0.5F * static_cast<float>(c + b);
-    f.route_distance_m[c] = 0.01F * static_cast<float>(c);
-    f.heading_rad[c] = 1.5F - 0.1F * static_cast<float>(c);
+  for (std::uint32_t r = 0; r < 2; ++r) {
+    for (std::uint32_t c = 0; c < 3; ++c) {
+      const std::size_t k = r * 3 + c, at = f.index(c, r);
+      for (std::size_t b = 0; b < kBoards; ++b)
+        f.expected[at * ha::kMaxBoards + b] = b == 3 ? 0.0F : 0.5F * static_cast<float>(k + b);
+      f.route_distance_m[at] = 0.01F * static_cast<float>(k);
+      f.heading_rad[at] = 1.5F - 0.1F * static_cast<float>(k);
+    }
   }
   return map;
 }
 
-// Offsets inside the forward section.
+// Offsets inside the forward section (version 5: one tile of 64 cells stored).
+constexpr std::size_t kTileCells = ha::ForwardMap::kTileCells;
 constexpr std::size_t kOffGridSize = kOffForward;
 constexpr std::size_t kOffCell = kOffForward + 16;
 constexpr std::size_t kOffForwardBoards = kOffForward + 20;
 constexpr std::size_t kOffSigma = kOffForward + 24;
 constexpr std::size_t kOffFlags = kOffSigma + 4 * kBoards;
-constexpr std::size_t kOffExpected = kOffFlags + 4;
-constexpr std::size_t kOffRoute = kOffExpected + 6 * kBoards * 4;
-constexpr std::size_t kOffHeading = kOffRoute + 6 * 4;
+constexpr std::size_t kOffTileCount = kOffFlags + 4;
+constexpr std::size_t kOffTileBitmap = kOffTileCount + 4;
+constexpr std::size_t kOffExpected = kOffTileBitmap + 1;
+constexpr std::size_t kOffRoute = kOffExpected + kTileCells * kBoards * 4;
+constexpr std::size_t kOffHeading = kOffRoute + kTileCells * 4;
 
 }  // namespace
 
 TEST(MapCodec, ForwardMapRoundTripAndLayout) {
   const auto map = make_map_with_forward();
   const std::vector<std::uint8_t> bytes = ha::encode_map(*map);
-  ASSERT_EQ(bytes.size(), kOffHeading + 6 * 4 + 4 + 4);
+  ASSERT_EQ(bytes.size(), kOffHeading + kTileCells * 4 + 4 + 4);
   EXPECT_EQ(get_u32(bytes, kOffGridSize), 3U);
+  EXPECT_EQ(get_u32(bytes, kOffTileCount), 1U);
+  EXPECT_EQ(bytes[kOffTileBitmap], 1U);
   EXPECT_EQ(get_u32(bytes, kOffGridSize + 4), 2U);
   EXPECT_EQ(get_u32(bytes, kOffForwardBoards), kBoards);
   EXPECT_EQ(bytes[kOffFlags], 1U);
@@ -620,9 +634,87 @@ TEST(MapCodec, ForwardMapRoundTripAndLayout) {
   EXPECT_EQ(b.heading_rad, a.heading_rad);
   EXPECT_EQ(ha::encode_map(*out), bytes);
 
-  // Without headings the section is one grid shorter.
+  for (std::uint32_t r = 0; r < 2; ++r) {
+    for (std::uint32_t c = 0; c < 3; ++c) EXPECT_EQ(b.cell(c, r)[1], a.cell(c, r)[1]);
+  }
+
+  // Without headings the section is one value a stored cell shorter.
   map->forward.has_heading = false;
-  EXPECT_EQ(ha::encode_map(*map).size(), bytes.size() - 6 * 4);
+  EXPECT_EQ(ha::encode_map(*map).size(), bytes.size() - kTileCells * 4);
+}
+
+// Only the tiles near the training run are stored: a lookup in one that is not reads the void
+// cell, far from the route, which the route term rules out.
+TEST(MapCodec, SparseTilesRoundTripAndTheVoid) {
+  auto map = make_map_with_forward();
+  ha::ForwardMap& f = map->forward;
+  const std::uint8_t stored[] = {1, 0, 0, 0, 0, 1};  // 3 x 2 tiles: the first and the last
+  ASSERT_TRUE(ha::lay_out_grid(f, 24, 16, stored));
+  EXPECT_EQ(f.tile_count, 2U);
+  EXPECT_EQ(f.stored_cells(), 2 * kTileCells);
+  f.cell(0, 0)[0] = 1.0F;
+  f.cell(23, 15)[0] = 2.0F;
+  f.route_distance_m[f.index(23, 15)] = 0.02F;
+  EXPECT_EQ(f.index(23, 15), 2 * kTileCells - 1);
+  EXPECT_FALSE(f.stored(8, 0));
+  const std::vector<std::uint8_t> bytes = ha::encode_map(*map);
+  EXPECT_EQ(get_u32(bytes, kOffTileCount), 2U);
+  EXPECT_EQ(bytes[kOffTileBitmap], 0x21U);
+  auto out = std::make_unique<ha::MapFile>();
+  ASSERT_FALSE(ha::decode_map(bytes.data(), bytes.size(), *out));
+  const ha::ForwardMap& g = out->forward;
+  EXPECT_EQ(g.cell(0, 0)[0], 1.0F);
+  EXPECT_EQ(g.cell(23, 15)[0], 2.0F);
+  EXPECT_EQ(ha::encode_map(*out), bytes);
+  // A place in a tile that is not stored: no board expected, far from the route.
+  const ha::GridPoint p = ha::locate(g, 1.5 + 0.05 * 12, 0.25 + 0.05 * 3);
+  std::array<float, ha::kMaxBoards> e{};
+  ha::expected_features(g, p, e.data());
+  EXPECT_EQ(e[0], 0.0F);
+  EXPECT_GE(ha::route_distance(g, p), ha::ForwardMap::kVoidRouteDistance_m);
+  // Half-way between a stored cell and one that is not: as far as the void's weight says.
+  const ha::GridPoint q = ha::locate(g, 1.5 + 0.05 * 7.5, 0.25);
+  EXPECT_NEAR(ha::route_distance(g, q), 0.5F * ha::ForwardMap::kVoidRouteDistance_m, 1.0F);
+}
+
+// A version 4 map stores its forward map as a whole grid, row by row: it reads as a grid whose
+// every tile is stored, with the same value at every cell, and is written back as version 5.
+TEST(MapCodec, ReadsVersionFourForwardMapAsTiles) {
+  const auto map = make_map_with_forward();
+  const std::vector<std::uint8_t> v5 = ha::encode_map(*map);
+  // The version 4 bytes: the header up to the flags, the six cells' values row by row.
+  std::vector<std::uint8_t> v4(v5.begin(), v5.begin() + static_cast<std::ptrdiff_t>(kOffTileCount));
+  const auto f32 = [&v4](float v) {
+    v4.resize(v4.size() + 4);
+    put_f32(v4, v4.size() - 4, v);
+  };
+  const ha::ForwardMap& f = map->forward;
+  for (std::uint32_t r = 0; r < 2; ++r)
+    for (std::uint32_t c = 0; c < 3; ++c)
+      for (std::size_t b = 0; b < kBoards; ++b) f32(f.cell(c, r)[b]);
+  for (std::uint32_t r = 0; r < 2; ++r)
+    for (std::uint32_t c = 0; c < 3; ++c) f32(f.route_distance_m[f.index(c, r)]);
+  for (std::uint32_t r = 0; r < 2; ++r)
+    for (std::uint32_t c = 0; c < 3; ++c) f32(f.heading_rad[f.index(c, r)]);
+  v4.insert(v4.end(), v5.end() - 8, v5.end());  // the calibration count (0) and the CRC
+  put_u32(v4, kOffVersion, 4);
+  fix_crc(v4);
+  auto out = std::make_unique<ha::MapFile>();
+  const ha::MapError e = ha::decode_map(v4.data(), v4.size(), *out);
+  ASSERT_FALSE(e) << e.what;
+  const ha::ForwardMap& g = out->forward;
+  EXPECT_EQ(g.tile_count, 1U);
+  for (std::uint32_t r = 0; r < 2; ++r) {
+    for (std::uint32_t c = 0; c < 3; ++c) {
+      for (std::size_t b = 0; b < kBoards; ++b) EXPECT_EQ(g.cell(c, r)[b], f.cell(c, r)[b]);
+      EXPECT_EQ(g.heading_rad[g.index(c, r)], f.heading_rad[f.index(c, r)]);
+    }
+  }
+  EXPECT_EQ(ha::encode_map(*out), v5);
+  // Version 4 grids stay within their old bounds.
+  put_u32(v4, kOffGridSize, 257);
+  fix_crc(v4);
+  EXPECT_NE(decode_error(v4).find("at most 256"), std::string::npos) << decode_error(v4);
 }
 
 TEST(MapCodec, ForwardMapCorruptionWithValidChecksum) {
@@ -635,11 +727,28 @@ TEST(MapCodec, ForwardMapCorruptionWithValidChecksum) {
     EXPECT_NE(why.find(expect), std::string::npos) << what << ": " << why;
   };
   reject(
-      "too many cells", [](auto& b) { put_u32(b, kOffGridSize, 4097); }, "grid");
+      "too many columns", [](auto& b) { put_u32(b, kOffGridSize, 8193); }, "grid");
+  reject(
+      "tile grid too large",
+      [](auto& b) {
+        put_u32(b, kOffGridSize, 8 * 129);
+        put_u32(b, kOffGridSize + 4, 8 * 129);
+      },
+      "tile grid");
   reject(
       "one side zero", [](auto& b) { put_u32(b, kOffGridSize + 4, 0); }, "grid");
   reject(
-      "257 columns", [](auto& b) { put_u32(b, kOffGridSize, 257); }, "grid");
+      "no tile", [](auto& b) { put_u32(b, kOffTileCount, 0); }, "tile count");
+  reject(
+      "more tiles than held",
+      [](auto& b) {
+        put_u32(b, kOffTileCount, static_cast<std::uint32_t>(ha::ForwardMap::kMaxTiles + 1));
+      },
+      "tile count");
+  reject(
+      "a tile beyond the grid", [](auto& b) { b[kOffTileBitmap] = 3; }, "beyond the tile grid");
+  reject(
+      "bitmap and count differ", [](auto& b) { put_u32(b, kOffTileCount, 2); }, "tile count");
   reject(
       "cell size 0", [](auto& b) { put_f32(b, kOffCell, 0.0F); }, "cell size");
   reject(
@@ -676,7 +785,13 @@ TEST(MapCodec, ForwardMapCorruptionWithValidChecksum) {
   reject(
       "heading 5 rad", [](auto& b) { put_f32(b, kOffHeading, 5.0F); }, "heading");
   reject(
-      "cells beyond the data", [](auto& b) { put_u32(b, kOffGridSize, 4); }, "truncated");
+      "cells beyond the data",
+      [](auto& b) {
+        put_u32(b, kOffGridSize, 9);  // two tiles
+        put_u32(b, kOffTileCount, 2);
+        b[kOffTileBitmap] = 3;
+      },
+      "truncated");
   // A rejected map leaves no half-read forward map behind.
   std::vector<std::uint8_t> b = good;
   put_f32(b, kOffHeading, 5.0F);

@@ -39,8 +39,7 @@ double field(std::size_t board, double x, double y) {
 
 std::unique_ptr<ha::ForwardMap> make_forward_map() {
   auto f = std::make_unique<ha::ForwardMap>();
-  f->columns = 21;
-  f->rows = 11;
+  EXPECT_TRUE(ha::lay_out_grid(*f, 21, 11));
   f->origin_x_m = 1.0F;
   f->origin_y_m = 0.5F;
   f->cell_m = 0.05F;
@@ -53,8 +52,8 @@ std::unique_ptr<ha::ForwardMap> make_forward_map() {
       float* e = f->cell(c, r);
       for (std::size_t b = 0; b < kBoards; ++b) e[b] = static_cast<float>(field(b, x, y));
       // The training run went along y = 0.75.
-      f->route_distance_m[r * f->columns + c] = static_cast<float>(std::fabs(y - 0.75));
-      f->heading_rad[r * f->columns + c] = static_cast<float>(0.1 * c);
+      f->route_distance_m[f->index(c, r)] = static_cast<float>(std::fabs(y - 0.75));
+      f->heading_rad[f->index(c, r)] = static_cast<float>(0.1 * c);
     }
   }
   return f;
@@ -98,7 +97,7 @@ TEST(ForwardMap, OutsideTheGridTakesTheBorderAndCountsTheDistance) {
   EXPECT_NEAR(q.outside_m, 0.5F, 1e-5F);
   // Not a number lands somewhere on the grid, far away.
   const ha::GridPoint n = ha::locate(*map, std::numeric_limits<double>::quiet_NaN(), 0.7);
-  for (std::uint32_t i : n.index) EXPECT_LT(i, map->cell_count());
+  for (std::uint32_t i : n.index) EXPECT_LT(i, map->stored_cells());
   EXPECT_GE(n.outside_m, 1e5F);
 }
 

@@ -74,6 +74,7 @@ add_executable(sim_host_test
   ${HARMOLOC_UNIT_DIR}/area_log_test.cpp
   ${HARMOLOC_UNIT_DIR}/dataset_test.cpp
   ${HARMOLOC_UNIT_DIR}/fakes_test.cpp
+  ${HARMOLOC_UNIT_DIR}/forward_map_training_test.cpp
   ${HARMOLOC_UNIT_DIR}/random_scene_test.cpp
   ${HARMOLOC_UNIT_DIR}/simulator_test.cpp)
 target_link_libraries(sim_host_test PRIVATE harmoloc_sim_dataset harmoloc_sim_fakes harmoloc_simulator

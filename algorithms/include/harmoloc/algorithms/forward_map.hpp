@@ -1,6 +1,7 @@
 #pragma once
 /// @file The forward map: from a position on the floor to the area each board should show there
-/// (the inverse direction of the harmonic localizer), on a regular grid over the trained region.
+/// (the inverse direction of the harmonic localizer), on a regular grid over the trained region
+/// of which only the tiles near the training run are stored.
 /// The particle filter weighs every particle by how well each board's measured area fits what
 /// the map expects at the particle's position, board by board, so that one occluded or moved
 /// board can be recognised and ignored (board_observation.hpp). Learned by the trainer from the
@@ -14,9 +15,34 @@
 
 namespace harmoloc::algorithms {
 
+#ifndef HARMOLOC_FORWARD_MAP_MAX_TILES
+/// Tiles a forward map may store (a board's build may set fewer: the bare-metal kernels do).
+#define HARMOLOC_FORWARD_MAP_MAX_TILES 640
+#endif
+#ifndef HARMOLOC_FORWARD_MAP_MAX_TILE_GRID
+/// Tile positions the grid may span (stored or not): 128 x 128 tiles of 16 cm at 2 cm cells.
+#define HARMOLOC_FORWARD_MAP_MAX_TILE_GRID 16384
+#endif
+
+/// A regular grid of cells over the trained region, stored in square tiles of kTileSide cells:
+/// only the tiles near the training run are kept (a route is a thin band through a room; a dense
+/// grid over its bounding box spent most of its cells on floor the robot never crossed and had
+/// to coarsen them to 12 cm on a 10 m route). A position in a tile that is not stored lies
+/// farther from the training run than the trainer's margin: its cells read as the void cell, far
+/// from the route, so the route term rules such a particle out.
 struct ForwardMap {
-  static constexpr std::size_t kMaxCells = 4096;
-  static constexpr std::size_t kMaxDimension = 256;  ///< columns and rows each
+  static constexpr std::uint32_t kTileSide = 8;
+  static constexpr std::size_t kTileCells = kTileSide * kTileSide;
+  static constexpr std::size_t kMaxTiles = HARMOLOC_FORWARD_MAP_MAX_TILES;
+  static constexpr std::size_t kMaxCells = kMaxTiles * kTileCells;  ///< stored cells
+  static constexpr std::size_t kMaxTileGrid = HARMOLOC_FORWARD_MAP_MAX_TILE_GRID;
+  static constexpr std::size_t kMaxDimension = 8192;  ///< columns and rows each
+  static constexpr std::uint16_t kNoTile = 0xFFFF;
+  /// Storage index of the void cell: what a cell of a tile that is not stored reads as.
+  static constexpr std::size_t kVoidCell = kMaxCells;
+  /// The void cell's distance to the training run (metres).
+  static constexpr float kVoidRouteDistance_m = 1.0e3F;
+  static_assert(kMaxTiles < kNoTile, "tile slots are 16-bit");
 
   /// Grid: cell (c, r) is centred on (origin_x_m + c cell_m, origin_y_m + r cell_m). Values
   /// between centres are bilinear; positions beyond the grid take the border value.
@@ -32,27 +58,56 @@ struct ForwardMap {
   /// Whether heading_rad holds the training run's heading (labels with orientation).
   bool has_heading = false;
 
-  /// Expected feature of every board at each cell centre: [cell][board], kMaxBoards a cell.
-  std::array<float, kMaxCells * kMaxBoards> expected{};
+  /// The tile grid: tile (tc, tr) holds cells tc kTileSide.. and tr kTileSide..; its slot in
+  /// the storage below, or kNoTile. Slots are numbered in row-major order of the stored tiles.
+  std::uint32_t tile_columns = 0;
+  std::uint32_t tile_rows = 0;
+  std::uint32_t tile_count = 0;  ///< stored tiles
+  std::array<std::uint16_t, kMaxTileGrid> tile_slot{};
+
+  /// Per stored cell (storage index: slot x kTileCells + row-in-tile x kTileSide + column-in-tile)
+  /// and one more, the void cell. The expected feature of every board at the cell's centre,
+  /// kMaxBoards a cell.
+  std::array<float, (kMaxCells + 1) * kMaxBoards> expected{};
   /// Distance from the cell centre to the nearest position of the training run (metres): how
   /// far the map's knowledge is from this place.
-  std::array<float, kMaxCells> route_distance_m{};
+  std::array<float, kMaxCells + 1> route_distance_m{};
   /// The training run's heading near the cell (yaw, radians), where has_heading.
-  std::array<float, kMaxCells> heading_rad{};
+  std::array<float, kMaxCells + 1> heading_rad{};
 
   bool present() const { return columns > 0 && rows > 0; }
-  std::size_t cell_count() const { return static_cast<std::size_t>(columns) * rows; }
-  float* cell(std::size_t c, std::size_t r) {
-    return expected.data() + (r * columns + c) * kMaxBoards;
+  /// Stored cells (whole tiles, including the cells of border tiles beyond the grid).
+  std::size_t stored_cells() const { return static_cast<std::size_t>(tile_count) * kTileCells; }
+  /// Storage index of cell (c, r) (within the grid), kVoidCell when its tile is not stored.
+  std::size_t index(std::uint32_t c, std::uint32_t r) const {
+    const std::uint16_t slot = tile_slot[(r / kTileSide) * tile_columns + c / kTileSide];
+    if (slot == kNoTile) return kVoidCell;
+    return static_cast<std::size_t>(slot) * kTileCells + (r % kTileSide) * kTileSide +
+           c % kTileSide;
   }
-  const float* cell(std::size_t c, std::size_t r) const {
-    return expected.data() + (r * columns + c) * kMaxBoards;
+  bool stored(std::uint32_t c, std::uint32_t r) const { return index(c, r) != kVoidCell; }
+  /// The expected features of cell (c, r); the void cell's when its tile is not stored.
+  float* cell(std::uint32_t c, std::uint32_t r) { return expected.data() + index(c, r) * kMaxBoards; }
+  const float* cell(std::uint32_t c, std::uint32_t r) const {
+    return expected.data() + index(c, r) * kMaxBoards;
   }
 };
 
+/// Tiles a grid of @p columns x @p rows cells needs along each axis.
+constexpr std::uint32_t tiles_along(std::uint32_t cells) {
+  return (cells + ForwardMap::kTileSide - 1U) / ForwardMap::kTileSide;
+}
+
+/// Lays out @p map's grid: @p columns x @p rows cells, the tiles @p stored marks (row-major over
+/// the tile grid, non-zero: stored; nullptr: every tile). Every value is cleared and the void
+/// cell set. Returns false, leaving the map without a grid, when the layout exceeds the map's
+/// capacity (dimensions, tile grid, tiles) or stores no tile.
+bool lay_out_grid(ForwardMap& map, std::uint32_t columns, std::uint32_t rows,
+                  const std::uint8_t* stored = nullptr);
+
 /// Where a position falls on the grid: the four surrounding cells and their bilinear weights.
 struct GridPoint {
-  std::uint32_t index[4];  ///< cell indices (row-major) of the corners
+  std::uint32_t index[4];  ///< storage indices of the corners (ForwardMap::index)
   float weight[4];         ///< bilinear weights, summing to 1
   float outside_m;         ///< how far the position lies beyond the grid's border cells (0 inside)
 };

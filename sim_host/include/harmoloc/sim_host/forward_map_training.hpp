@@ -18,8 +18,12 @@ namespace harmoloc::sim_host {
 
 struct ForwardMapOptions {
   double max_label_gap_s = 1.0;  ///< interpolate between labels at most this far apart in time
-  double margin_m = 0.25;        ///< grid beyond the training positions
-  double min_cell_m = 0.02;      ///< finest cell; coarser when the region needs more cells
+  /// The grid stores the tiles within this distance of a training position.
+  double margin_m = 0.25;
+  double min_cell_m = 0.02;  ///< finest cell; coarser when the stored tiles exceed max_tiles
+  /// Most tiles the map may store (0: the firmware's capacity, ForwardMap::kMaxTiles); less for
+  /// a board whose build holds fewer (the bare-metal kernels: 64).
+  std::size_t max_tiles = 0;
   std::vector<double> bandwidths_m{0.01, 0.015, 0.02, 0.03, 0.05};  ///< candidates
   double exclude_same_pass_s = 1.0;  ///< validation leaves out frames this close in time
   /// With frames placed by odometry: validation leaves out frames this close in travel instead
@@ -33,6 +37,7 @@ struct ForwardMapReport {
   std::size_t from_harmonic = 0;  ///< positioned by the harmonic map (known place)
   std::size_t by_odometry = 0;    ///< placed by odometry between the labels
   double bandwidth_m = 0.0;
+  std::size_t cells = 0;         ///< stored cells (the stored tiles' cells)
   std::vector<double> sigma;     ///< per board (feature units), 0 = not modelled
   double validation_rmse = 0.0;  ///< over all modelled boards, feature units
   /// Median distance from a frame to the nearest frame of another pass (metres).

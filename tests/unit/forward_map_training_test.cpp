@@ -1,0 +1,89 @@
+// The forward map the trainer fits (sim_host/forward_map_training.hpp): stored in tiles near the
+// training run, so that a long route through a big room keeps fine cells.
+#include "harmoloc/sim_host/forward_map_training.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+#include <vector>
+
+namespace ha = harmoloc::algorithms;
+namespace hs = harmoloc::sim_host;
+
+namespace {
+
+// A run along a diagonal of @p length_m from (0.5, 0.5), forth and back (two passes), a frame
+// every 5 mm; two boards whose areas change smoothly along the way.
+struct PlacedRun {
+  std::vector<std::vector<float>> features;
+  std::vector<hs::PlacedFrame> placed;
+};
+
+PlacedRun diagonal_run(double length_m) {
+  PlacedRun run;
+  const double step = 0.005, heading = std::atan2(0.6, 0.8);
+  const auto n = static_cast<std::size_t>(length_m / step);
+  double travel = 0.0;
+  for (std::size_t pass = 0; pass < 2; ++pass) {
+    for (std::size_t i = 0; i <= n; ++i) {
+      const double s = (pass == 0 ? static_cast<double>(i) : static_cast<double>(n - i)) * step;
+      const double x = 0.5 + 0.8 * s, y = 0.5 + 0.6 * s;
+      run.features.push_back({static_cast<float>(1.0 + 0.1 * s),
+                              static_cast<float>(2.0 + std::sin(2.0 * s))});
+      hs::PlacedFrame f;
+      f.index = run.features.size() - 1;
+      f.t_s = static_cast<double>(f.index) / 30.0;
+      f.travel_m = travel;
+      f.pose = ha::Pose2{x, y, heading};
+      run.placed.push_back(f);
+      travel += step;
+    }
+  }
+  return run;
+}
+
+}  // namespace
+
+TEST(ForwardMapTraining, ALongRouteKeepsFineCellsInTilesAlongIt) {
+  const PlacedRun run = diagonal_run(12.0);  // a 9.6 x 7.2 m box: 2 cm cells would be 240,000 dense
+  auto map = std::make_unique<ha::ForwardMap>();
+  const hs::ForwardMapReport r =
+      hs::train_forward_map_placed(run.features, run.placed, 2, hs::ForwardMapOptions{}, *map);
+  EXPECT_LE(map->cell_m, 0.021F) << "cells of " << map->cell_m << " m";
+  EXPECT_LE(map->tile_count, ha::ForwardMap::kMaxTiles);
+  EXPECT_EQ(r.cells, map->stored_cells());
+  EXPECT_LT(map->stored_cells(), map->columns * map->rows / 5) << "tiles only along the route";
+  // Every place within the margin of the route reads stored cells, with what the run saw there.
+  for (const double s : {0.0, 3.33, 7.77, 12.0}) {
+    for (const double off : {-0.2, 0.0, 0.2}) {
+      const double x = 0.5 + 0.8 * s - 0.6 * off, y = 0.5 + 0.6 * s + 0.8 * off;
+      const ha::GridPoint p = ha::locate(*map, x, y);
+      for (std::uint32_t i : p.index) EXPECT_NE(i, ha::ForwardMap::kVoidCell) << s << " " << off;
+      EXPECT_NEAR(ha::route_distance(*map, p), std::fabs(off), 0.02) << s << " " << off;
+      if (off == 0.0 && s > 0.0 && s < 12.0) {  // the ends see the kernel from one side
+        std::array<float, ha::kMaxBoards> e{};
+        ha::expected_features(*map, p, e.data());
+        EXPECT_NEAR(e[0], 1.0 + 0.1 * s, 3e-3) << s;
+        EXPECT_NEAR(e[1], 2.0 + std::sin(2.0 * s), 3e-3) << s;
+        EXPECT_NEAR(ha::route_heading(*map, x, y), std::atan2(0.6, 0.8), 1e-6);
+      }
+    }
+  }
+  // Far from the route, in the box: no tile, the route term's distance.
+  const ha::GridPoint far = ha::locate(*map, 0.5 + 9.6, 0.5);
+  EXPECT_GE(ha::route_distance(*map, far), ha::ForwardMap::kVoidRouteDistance_m);
+}
+
+TEST(ForwardMapTraining, FewerTilesCoarsenTheCells) {
+  const PlacedRun run = diagonal_run(6.0);
+  auto fine = std::make_unique<ha::ForwardMap>();
+  auto coarse = std::make_unique<ha::ForwardMap>();
+  hs::train_forward_map_placed(run.features, run.placed, 2, hs::ForwardMapOptions{}, *fine);
+  hs::ForwardMapOptions few;
+  few.max_tiles = 64;  // the bare-metal kernels' capacity
+  hs::train_forward_map_placed(run.features, run.placed, 2, few, *coarse);
+  EXPECT_LE(coarse->tile_count, 64U);
+  EXPECT_GT(fine->tile_count, 64U);
+  EXPECT_GT(coarse->cell_m, 1.5F * fine->cell_m);
+}
