@@ -12,6 +12,7 @@ set(HARMOLOC_ALGORITHMS_SOURCES
   src/odometry.cpp
   src/board_observation.cpp
   src/forward_map.cpp
+  src/fix_board_check.cpp
   src/kidnap_detector.cpp
   src/particle_filter.cpp
   src/segmentation.cpp

@@ -111,7 +111,8 @@ MapError decode_cells(Reader& r, ForwardMap& f, std::size_t cells, CellAt cell_a
     for (std::size_t c = 0; c < cells; ++c) {
       float& h = f.heading_rad[cell_at(c)];
       r.f32(h, "forward map");
-      if (!finite_in(h, -4.0F, 4.0F)) return MapError{"forward map heading not within -pi..pi", r.pos()};
+      if (!finite_in(h, -4.0F, 4.0F))
+        return MapError{"forward map heading not within -pi..pi", r.pos()};
     }
   }
   return MapError{};
@@ -274,7 +275,8 @@ std::vector<std::uint8_t> encode_map(const MapFile& map) {
     for (std::size_t i = 0; i < (positions + 7U) / 8U; ++i) {
       std::uint8_t bits = 0;
       for (std::size_t k = 0; k < 8 && 8U * i + k < positions; ++k) {
-        if (f.tile_slot[8U * i + k] != ForwardMap::kNoTile) bits |= static_cast<std::uint8_t>(1U << k);
+        if (f.tile_slot[8U * i + k] != ForwardMap::kNoTile)
+          bits |= static_cast<std::uint8_t>(1U << k);
       }
       w.u8(bits);
     }

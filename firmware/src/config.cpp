@@ -156,7 +156,7 @@ void read_observation(const Checker& check, const toml::table& root, Observation
   if (t == nullptr) return;
   const std::string w = "observation.";
   check.only(*t, w,
-             {"model", "fix_term", "robust", "sigma_scale", "tempering", "outlier_floor", "dcs_phi",
+             {"model", "fix_term", "fix_board_check", "robust", "sigma_scale", "tempering", "outlier_floor", "dcs_phi",
               "consensus_chi2", "consensus_fraction", "motion_index_rate", "motion_index_min",
               "motion_index_max", "route_free_m", "route_sigma_m", "implausible_ratio"});
   const std::string model = check.text(*t, "model", w, "boards");
@@ -167,6 +167,7 @@ void read_observation(const Checker& check, const toml::table& root, Observation
   else
     check.fail(t->get("model"), "observation.model must be \"boards\" or \"fix\"");
   o.fix_term = flag(check, *t, "fix_term", w, o.fix_term);
+  o.fix_board_check = flag(check, *t, "fix_board_check", w, o.fix_board_check);
   auto& b = o.boards;
   b.robust = flag(check, *t, "robust", w, b.robust);
   b.sigma_scale = check.number(*t, "sigma_scale", w, b.sigma_scale, 0.1, 100.0);

@@ -84,6 +84,10 @@ LocalizationCycle::LocalizationCycle(const FirmwareConfig& config, const algorit
                                            static_cast<double>(map.calibration.fix_rmse_y_m)) /
                                     std::sqrt(2.0)
                               : 0.0;
+  if (config.observation.fix_board_check && map.calibration.present)
+    fix_check_params_ = algorithms::fix_check_params(
+        static_cast<double>(map.calibration.fix_rmse_x_m),
+        static_cast<double>(map.calibration.fix_rmse_y_m));
   if (config.observation.fix_term && fix_rmse > 0.0)
     fix_term_sigma_m_ = std::max(fix_rmse, 0.005) * std::sqrt(board_params_.tempering);
   // Where a re-seed puts the particles: around a fix, as far as the fix's own error reaches
@@ -486,7 +490,9 @@ bool LocalizationCycle::update_with_boards(
     distrusted_mask |= 1U << b;
   }
   counters_.distrusted_boards += distrusted;
-  robust_fix_ = algorithms::harmonic_query(map_.model, features, use);
+  robust_fix_ =
+      fix_check_.fix(map_.model, features, use, estimate.x_m, estimate.y_m, fix_check_params_);
+  counters_.fix_board_suspicions = fix_check_.suspicions();
 
   const double match = filter_.update_boards(board_update_);
   // The fix (without the distrusted boards) as a second view of the same frame: where the
@@ -557,6 +563,7 @@ void LocalizationCycle::reseed_around(double x_m, double y_m) {
   kidnap_.reset();
   // What the boards' motion indices learnt was learnt against the old, wrong estimate.
   reliability_.reset(board_params_);
+  fix_check_.reset();
   ++reset_counter_;
 }
 
@@ -574,6 +581,7 @@ void LocalizationCycle::reseed_globally() {
   if (gap_ == EncoderGap::kDiffused) gap_ = EncoderGap::kReseeded;
   kidnap_.reset();
   reliability_.reset(board_params_);
+  fix_check_.reset();
   ++reset_counter_;
 }
 

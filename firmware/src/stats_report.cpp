@@ -79,6 +79,7 @@ std::string stats_json(const LocalizationCycle& cycle, const RunCounters& run) {
     << "  \"filter\": {\"observation\": \"" << (cycle.uses_boards() ? "boards" : "fix")
     << "\", \"resamples\": " << c.resamples << ", \"no_consensus\": " << c.no_consensus
     << ", \"distrusted_board_frames\": " << c.distrusted_boards
+    << ", \"fix_board_suspicions\": " << c.fix_board_suspicions
     << ", \"kidnap_triggers\": " << c.kidnap_triggers << ", \"kidnaps\": " << c.kidnaps
     << ", \"lost\": " << c.lost << "}";
   const mavlink::InboundCounters in = cycle.inbound_counters();

@@ -88,7 +88,8 @@ class FrameIndex {
   /// Calls @p f for every frame within @p radius_m of (x, y) (and perhaps a few beyond).
   template <typename F>
   void within(double x, double y, double radius_m, F f) const {
-    const long c0 = std::max(0L, column(x - radius_m)), c1 = std::min(columns_ - 1, column(x + radius_m));
+    const long c0 = std::max(0L, column(x - radius_m)),
+               c1 = std::min(columns_ - 1, column(x + radius_m));
     const long r0 = std::max(0L, row(y - radius_m)), r1 = std::min(rows_ - 1, row(y + radius_m));
     for (long r = r0; r <= r1; ++r) {
       for (long c = c0; c <= c1; ++c) {

@@ -257,8 +257,8 @@ int main(int argc, char** argv) {
             "forward map   cells of %.1f cm over %ux%u, %u tiles of %ux%u stored near the run "
             "(%zu cells, of at most %zu tiles)\n",
             100.0 * static_cast<double>(grid.cell_m), grid.columns, grid.rows, grid.tile_count,
-            algorithms::ForwardMap::kTileSide, algorithms::ForwardMap::kTileSide, grid.stored_cells(),
-            algorithms::ForwardMap::kMaxTiles);
+            algorithms::ForwardMap::kTileSide, algorithms::ForwardMap::kTileSide,
+            grid.stored_cells(), algorithms::ForwardMap::kMaxTiles);
         if (fw.by_odometry > 0) {
           std::printf(
               "              from %zu frames placed by odometry, kernel %.1f cm, heading from the "

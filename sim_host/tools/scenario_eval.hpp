@@ -6,6 +6,7 @@
 /// the numbers of the scenario table. A host tool's library: it composes the firmware's cycle
 /// with the simulator, as a board's main does.
 
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -53,6 +54,11 @@ struct FrameRecord {
   algorithms::KidnapVerdict verdict = algorithms::KidnapVerdict::kNone;
   std::uint8_t distrusted = 0;  ///< bit b: board b's motion index is below one half
   bool consensus = true;        ///< most boards agreed with the estimate
+  std::size_t boards = 0;       ///< boards of the map
+  /// Per board: its residual at the estimate (chi2 in the widened sigma) and motion index.
+  std::array<float, algorithms::kMaxBoards> chi2{};
+  std::array<float, algorithms::kMaxBoards> static_probability{};
+  algorithms::Pose2 robust_fix;  ///< the fix without the distrusted boards (x, y)
   double position_error_m() const;
 };
 

@@ -325,6 +325,7 @@ TEST(Config, ObservationAndKidnapSections) {
   const std::string path = dir.write("filter.toml", R"([observation]
 model = "fix"
 robust = false
+fix_board_check = false
 sigma_scale = 2.5
 tempering = 12
 outlier_floor = 0.001
@@ -353,6 +354,7 @@ yaw_sigma_deg = 30
 )");
   const hf::FirmwareConfig c = hf::load_config(path);
   EXPECT_EQ(c.observation.model, hf::ObservationModel::kFix);
+  EXPECT_FALSE(c.observation.fix_board_check);
   const auto& b = c.observation.boards;
   EXPECT_FALSE(b.robust);
   EXPECT_DOUBLE_EQ(b.sigma_scale, 2.5);
@@ -384,6 +386,7 @@ yaw_sigma_deg = 30
   const hf::FirmwareConfig d = hf::default_config();
   EXPECT_EQ(d.observation.model, hf::ObservationModel::kBoards);
   EXPECT_TRUE(d.observation.boards.robust);
+  EXPECT_TRUE(d.observation.fix_board_check);
   EXPECT_TRUE(d.kidnap.enabled);
   EXPECT_TRUE(d.kidnap.detector.confirm);
   EXPECT_EQ(d.kidnap.reseed, hf::ReseedStrategy::kAroundFix);

@@ -29,8 +29,8 @@ PlacedRun diagonal_run(double length_m) {
     for (std::size_t i = 0; i <= n; ++i) {
       const double s = (pass == 0 ? static_cast<double>(i) : static_cast<double>(n - i)) * step;
       const double x = 0.5 + 0.8 * s, y = 0.5 + 0.6 * s;
-      run.features.push_back({static_cast<float>(1.0 + 0.1 * s),
-                              static_cast<float>(2.0 + std::sin(2.0 * s))});
+      run.features.push_back(
+          {static_cast<float>(1.0 + 0.1 * s), static_cast<float>(2.0 + std::sin(2.0 * s))});
       hs::PlacedFrame f;
       f.index = run.features.size() - 1;
       f.t_s = static_cast<double>(f.index) / 30.0;

@@ -8,6 +8,7 @@ set(HARMOLOC_UNIT_DIR ${CMAKE_CURRENT_SOURCE_DIR}/unit)
 add_executable(algorithms_test
   ${HARMOLOC_UNIT_DIR}/segmentation_test.cpp
   ${HARMOLOC_UNIT_DIR}/harmonic_test.cpp
+  ${HARMOLOC_UNIT_DIR}/fix_board_check_test.cpp
   ${HARMOLOC_UNIT_DIR}/harmonic_selection_test.cpp
   ${HARMOLOC_UNIT_DIR}/route_placement_test.cpp
   ${HARMOLOC_UNIT_DIR}/odometry_calibration_test.cpp

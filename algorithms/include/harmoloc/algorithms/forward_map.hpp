@@ -87,7 +87,9 @@ struct ForwardMap {
   }
   bool stored(std::uint32_t c, std::uint32_t r) const { return index(c, r) != kVoidCell; }
   /// The expected features of cell (c, r); the void cell's when its tile is not stored.
-  float* cell(std::uint32_t c, std::uint32_t r) { return expected.data() + index(c, r) * kMaxBoards; }
+  float* cell(std::uint32_t c, std::uint32_t r) {
+    return expected.data() + index(c, r) * kMaxBoards;
+  }
   const float* cell(std::uint32_t c, std::uint32_t r) const {
     return expected.data() + index(c, r) * kMaxBoards;
   }

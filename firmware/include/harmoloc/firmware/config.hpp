@@ -62,6 +62,9 @@ struct ObservationConfig {
   /// With the per-board model, also weigh the particles by the harmonic fix (a version 4 map's
   /// calibration gives its width).
   bool fix_term = true;
+  /// Check the fix's boards one a frame by leaving each out (algorithms/fix_board_check.hpp);
+  /// needs a version 4 map's calibration.
+  bool fix_board_check = true;
   algorithms::BoardModelParams boards;
 };
 

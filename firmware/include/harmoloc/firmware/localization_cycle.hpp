@@ -10,6 +10,7 @@
 #include <memory>
 #include <string>
 
+#include "harmoloc/algorithms/fix_board_check.hpp"
 #include "harmoloc/algorithms/harmonic_localizer.hpp"
 #include "harmoloc/algorithms/map_codec.hpp"
 #include "harmoloc/algorithms/particle_filter.hpp"
@@ -87,6 +88,8 @@ struct CycleCounters {
   std::uint64_t resamples = 0;
   std::uint64_t no_consensus = 0;       ///< frames whose boards mostly disagreed with the estimate
   std::uint64_t distrusted_boards = 0;  ///< sum over frames of boards below motion index 1/2
+  /// Times the fix's board check found a board dragging the fix (algorithms/fix_board_check.hpp).
+  std::uint64_t fix_board_suspicions = 0;
   std::uint64_t kidnap_triggers = 0;    ///< frames where seed 004's change rate exceeded 0.5
   std::uint64_t kidnaps = 0;            ///< confirmed kidnaps (the filter was re-seeded)
   std::uint64_t lost = 0;               ///< of those, re-seeded over the whole map (no fix)
@@ -139,6 +142,8 @@ class LocalizationCycle {
   const algorithms::BoardAssessment& board_assessment() const { return assessment_; }
   /// The global fix the kidnap test compares with (computed without distrusted boards).
   const algorithms::HarmonicFix& robust_fix() const { return robust_fix_; }
+  /// The check of the fix's boards (which it holds suspect).
+  const algorithms::FixBoardCheck& fix_check() const { return fix_check_; }
   /// Seed 004's P of the last frame and what the detector made of it.
   double kidnap_probability() const { return kidnap_.probability(); }
   algorithms::KidnapVerdict kidnap_verdict() const { return kidnap_verdict_; }
@@ -220,6 +225,8 @@ class LocalizationCycle {
   algorithms::BoardUpdate board_update_{};
   algorithms::BoardAssessment assessment_{};
   algorithms::HarmonicFix robust_fix_{};
+  algorithms::FixBoardCheck fix_check_;
+  algorithms::FixCheckParams fix_check_params_;  ///< from the map's calibration (or none)
   algorithms::KidnapDetector kidnap_;
   /// The kidnap test's parameters with the scene-dependent ones derived from the map.
   algorithms::KidnapParams kidnap_params_;
