@@ -636,7 +636,10 @@ void test_particle_filter() {
 // A map file written by hand after docs/map-format.md, into a fixed buffer.
 class MapBytes {
  public:
-  void u8(std::uint8_t v) { bytes_[size_++] = v; }
+  void u8(std::uint8_t v) {
+    if (size_ < sizeof bytes_) bytes_[size_] = v;
+    ++size_;  // past the end: the size check below fails instead of memory being overwritten
+  }
   void u32(std::uint32_t v) {
     for (int i = 0; i < 4; ++i) u8(static_cast<std::uint8_t>(v >> (8 * i)));
   }
@@ -645,13 +648,14 @@ class MapBytes {
     std::memcpy(&u, &v, 4);
     u32(u);
   }
-  void seal() { u32(ha::crc32(bytes_, size_)); }
+  void seal() { u32(fits() ? ha::crc32(bytes_, size_) : 0U); }
   std::uint8_t* data() { return bytes_; }
   std::size_t size() const { return size_; }
+  bool fits() const { return size_ <= sizeof bytes_; }
   void truncate(std::size_t n) { size_ = n; }
 
  private:
-  std::uint8_t bytes_[512] = {};
+  std::uint8_t bytes_[2048] = {};
   std::size_t size_ = 0;
 };
 
@@ -822,13 +826,14 @@ void test_map_codec() {
     BM_CHECK(g_map.model.max_dissimilarity == 0.05F);
   }
   // A forward map, tiled (version 5) and as a whole grid (version 4): the same cells.
-  for (const std::uint32_t version : {ha::kMapFormatVersion, 4U}) {
+  for (const std::uint32_t version : {std::uint32_t{ha::kMapFormatVersion}, std::uint32_t{4}}) {
     static MapBytes fw;
     fw = MapBytes{};
     MapSpec f;
     f.forward = true;
     f.version = version;
     write_map(fw, f);
+    BM_CHECK(fw.fits());
     err = ha::decode_map(fw.data(), fw.size(), g_map);
     BM_CHECK(!err);
     const ha::ForwardMap& fm = g_map.forward;
