@@ -64,6 +64,31 @@ double board_preference(const ForwardMap& map, const BoardFeatures& observed, do
   return sum;
 }
 
+PlacePreference board_preference_near(const ForwardMap& map, const BoardFeatures& observed,
+                                      double ax_m, double ay_m, double radius_m, double bx_m,
+                                      double by_m, double min_distance_m,
+                                      const BoardModelParams& params, std::uint32_t leave_out) {
+  PlacePreference best{board_preference(map, observed, ax_m, ay_m, bx_m, by_m, params, leave_out),
+                       ax_m, ay_m};
+  if (!(radius_m > 0.0) || !map.present()) return best;
+  // A grid of at most 25 x 25 places over the disc, none finer than the map's cells.
+  const double step = std::max(static_cast<double>(map.cell_m), radius_m / 12.0);
+  const int reach = static_cast<int>(std::floor(radius_m / step));
+  const double on_route_m = params.route_free_m + 2.0 * params.route_sigma_m;
+  for (int j = -reach; j <= reach; ++j) {
+    for (int i = -reach; i <= reach; ++i) {
+      const double dx = i * step, dy = j * step;
+      if (dx * dx + dy * dy > radius_m * radius_m || (i == 0 && j == 0)) continue;
+      const double x = ax_m + dx, y = ay_m + dy;
+      if (std::hypot(x - bx_m, y - by_m) < min_distance_m) continue;
+      if (route_distance(map, locate(map, x, y)) > on_route_m) continue;
+      const double nats = board_preference(map, observed, x, y, bx_m, by_m, params, leave_out);
+      if (nats > best.nats) best = PlacePreference{nats, x, y};
+    }
+  }
+  return best;
+}
+
 void BoardReliability::reset(const BoardModelParams& params) {
   static_probability_.fill(params.motion_index_max);
 }

@@ -528,11 +528,20 @@ bool LocalizationCycle::update_with_boards(
       // Without the boards the filter has written off (moved, or hidden by someone walking
       // away), unless it has written off most of them: then the estimate is the suspect.
       const std::uint32_t leave_out = 2 * distrusted <= modelled ? distrusted_mask : 0U;
-      in.preference =
-          algorithms::board_preference(map_.forward, observed, evidence_fix.x_m, evidence_fix.y_m,
-                                       estimate.x_m, estimate.y_m, params, leave_out);
+      // The boards' best place near the fix (as far from it as the kidnap distance, and as
+      // far from the estimate), not the fix's own place alone: where few boards are in view the
+      // fix can be off by more than its training error while the boards tell the place apart.
+      // That place is the evidence: its consistency is checked and the cloud re-seeded there.
+      const double reach = kidnap_params_.fix_distance_m;
+      const algorithms::PlacePreference best = algorithms::board_preference_near(
+          map_.forward, observed, evidence_fix.x_m, evidence_fix.y_m, reach, estimate.x_m,
+          estimate.y_m, reach, params, leave_out);
+      in.preference = best.nats;
+      in.fix_x_m = best.x_m;
+      in.fix_y_m = best.y_m;
     }
     in.contradiction = assessment_.exceeding > 0;
+    kidnap_input_ = in;
     kidnap_verdict_ = kidnap_.step(in, kidnap_params_);
     const algorithms::KidnapCounters& k = kidnap_.counters();
     counters_.kidnap_triggers = k.triggers;

@@ -139,6 +139,7 @@ RunRecord replay_scenario(const Scenario& scenario, std::uint64_t seed,
       f.static_probability[b] = static_cast<float>(cycle->board_static_probability(b));
     }
     f.robust_fix = algorithms::Pose2{cycle->robust_fix().x_m, cycle->robust_fix().y_m, 0.0};
+    f.preference = cycle->kidnap_input().preference;
     record.frames.push_back(f);
     ++k;
     if (progress && (k % 300 == 0 || k == run.frame_count())) progress(k, run.frame_count());
@@ -158,19 +159,19 @@ void write_trace(const RunRecord& run, const std::string& path) {
   std::fprintf(f,
                "t_s,truth_x_m,truth_y_m,truth_yaw_rad,x_m,y_m,yaw_rad,error_m,valid,health,"
                "fix_present,fix_known,fix_x_m,fix_y_m,verdict,distrusted,consensus,robust_fix_x_m,"
-               "robust_fix_y_m");
+               "robust_fix_y_m,preference");
   const std::size_t boards = run.frames.empty() ? 0 : run.frames.front().boards;
   for (std::size_t b = 0; b < boards; ++b) std::fprintf(f, ",chi2_%zu", b + 1);
   for (std::size_t b = 0; b < boards; ++b) std::fprintf(f, ",static_%zu", b + 1);
   std::fprintf(f, "\n");
   for (const FrameRecord& r : run.frames) {
     std::fprintf(
-        f, "%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%d,%s,%d,%d,%.4f,%.4f,%d,%u,%d,%.4f,%.4f",
+        f, "%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%d,%s,%d,%d,%.4f,%.4f,%d,%u,%d,%.4f,%.4f,%.3f",
         r.t_s, r.truth.x_m, r.truth.y_m, r.truth.yaw_rad, r.estimate.x_m, r.estimate.y_m,
         r.estimate.yaw_rad, r.position_error_m(), r.valid ? 1 : 0, firmware::health_name(r.health),
         r.fix_present ? 1 : 0, r.fix_known ? 1 : 0, r.fix.x_m, r.fix.y_m,
         static_cast<int>(r.verdict), static_cast<unsigned>(r.distrusted), r.consensus ? 1 : 0,
-        r.robust_fix.x_m, r.robust_fix.y_m);
+        r.robust_fix.x_m, r.robust_fix.y_m, r.preference);
     for (std::size_t b = 0; b < boards; ++b)
       std::fprintf(f, ",%.3g", static_cast<double>(r.chi2[b]));
     for (std::size_t b = 0; b < boards; ++b)

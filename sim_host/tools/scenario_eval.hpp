@@ -59,6 +59,7 @@ struct FrameRecord {
   std::array<float, algorithms::kMaxBoards> chi2{};
   std::array<float, algorithms::kMaxBoards> static_probability{};
   algorithms::Pose2 robust_fix;  ///< the fix without the distrusted boards (x, y)
+  double preference = 0.0;       ///< the kidnap test's: the boards' preference for the fix's place
   double position_error_m() const;
 };
 

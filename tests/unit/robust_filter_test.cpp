@@ -421,6 +421,38 @@ TEST(BoardPreference, ABoardLeftOutDoesNotCount) {
   EXPECT_EQ(ha::board_preference(*map, moved, 1.8, 0.9, 1.2, 0.6, params, 0xFFU), 0.0);
 }
 
+// Where few boards are in view the fix can be off by more than its error while the boards tell
+// the place apart: the kidnap test takes their best place near the fix, on the trained route and
+// far from the estimate.
+TEST(BoardPreference, NearAFixThatIsOffTheBoardsFindTheirPlace) {
+  const auto map = make_forward_map();
+  const ha::BoardModelParams params;
+  const ha::BoardFeatures seen = observe(1.75, 0.75);  // carried to 1.75; the fix says 1.6
+  const double at_fix = ha::board_preference(*map, seen, 1.6, 0.75, 1.1, 0.75, params);
+  EXPECT_LT(at_fix, ha::KidnapParams{}.preference_min);
+  const ha::PlacePreference near =
+      ha::board_preference_near(*map, seen, 1.6, 0.75, 0.25, 1.1, 0.75, 0.25, params);
+  EXPECT_GT(near.nats, ha::KidnapParams{}.preference_min);
+  EXPECT_NEAR(near.x_m, 1.75, 0.03);
+  EXPECT_NEAR(near.y_m, 0.75, 0.09) << "on the route";
+  // Never nearer the estimate than asked (the fix's own place aside), never beyond the reach.
+  const ha::PlacePreference far =
+      ha::board_preference_near(*map, seen, 1.6, 0.75, 0.25, 1.1, 0.75, 0.72, params);
+  EXPECT_TRUE((far.x_m == 1.6 && far.y_m == 0.75) ||
+              std::hypot(far.x_m - 1.1, far.y_m - 0.75) >= 0.72 - 1e-9)
+      << far.x_m << ", " << far.y_m;
+  EXPECT_LT(far.nats, near.nats);
+  const ha::PlacePreference short_reach =
+      ha::board_preference_near(*map, seen, 1.6, 0.75, 0.08, 1.1, 0.75, 0.25, params);
+  EXPECT_LE(std::hypot(short_reach.x_m - 1.6, short_reach.y_m - 0.75), 0.08 + 1e-9);
+  EXPECT_LT(short_reach.nats, near.nats);
+  // No reach: the fix's own place.
+  const ha::PlacePreference own =
+      ha::board_preference_near(*map, seen, 1.6, 0.75, 0.0, 1.1, 0.75, 0.25, params);
+  EXPECT_EQ(own.nats, at_fix);
+  EXPECT_EQ(own.x_m, 1.6);
+}
+
 // ---- kidnap test -------------------------------------------------------------------------------
 
 namespace {

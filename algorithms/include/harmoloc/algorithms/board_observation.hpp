@@ -114,6 +114,24 @@ double board_preference(const ForwardMap& map, const BoardFeatures& observed, do
                         double ay_m, double bx_m, double by_m, const BoardModelParams& params,
                         std::uint32_t leave_out = 0);
 
+/// The place near a fix that the boards prefer most to place b, and by how much (nats).
+struct PlacePreference {
+  double nats = 0.0;
+  double x_m = 0.0, y_m = 0.0;
+};
+
+/// board_preference of the best place within @p radius_m of (@p ax_m, @p ay_m) (on a grid of at
+/// most 25 x 25 places, only those on the trained route: within route_free_m + 2 route_sigma_m
+/// of it, and at least @p min_distance_m from place b), the fix's own place included whatever
+/// its route distance. For the kidnap test: a fix can be off by more than its training error
+/// where few boards are in view (three boards at 320 x 240: 18 cm at a place the boards told
+/// apart), and the boards then fit the fix's own place no better than the estimate's although
+/// they fit the robot's place well.
+PlacePreference board_preference_near(const ForwardMap& map, const BoardFeatures& observed,
+                                      double ax_m, double ay_m, double radius_m, double bx_m,
+                                      double by_m, double min_distance_m,
+                                      const BoardModelParams& params, std::uint32_t leave_out = 0);
+
 /// The per-board state that lives from frame to frame: each board's motion index.
 class BoardReliability {
  public:

@@ -147,6 +147,8 @@ class LocalizationCycle {
   /// Seed 004's P of the last frame and what the detector made of it.
   double kidnap_probability() const { return kidnap_.probability(); }
   algorithms::KidnapVerdict kidnap_verdict() const { return kidnap_verdict_; }
+  /// What the kidnap test saw this cycle (for tools that look at one run closely).
+  const algorithms::KidnapInput& kidnap_input() const { return kidnap_input_; }
   const FixOutput& last_fix() const { return fix_; }
   const CycleCounters& counters() const { return counters_; }
   const LatencyHistogram& stage_histogram(Stage stage) const {
@@ -239,6 +241,7 @@ class LocalizationCycle {
   double init_sigma_m_ = 0.05;
   double reseed_sigma_m_ = 0.04;
   algorithms::KidnapVerdict kidnap_verdict_ = algorithms::KidnapVerdict::kNone;
+  algorithms::KidnapInput kidnap_input_{};
   const char* pending_text_ = nullptr;  ///< a STATUSTEXT this cycle's publish sends
   /// The overrun alarm's STATUSTEXT, raised or cleared at the end of the previous cycle.
   const char* pending_overrun_text_ = nullptr;
