@@ -18,7 +18,7 @@ void KidnapDetector::reset() {
 }
 
 KidnapVerdict KidnapDetector::step(const KidnapInput& in, const KidnapParams& p) {
-  // Seed 004: P = min(|d_t - d_t-1| / d_t-1, 1).
+  // Yang et al. 2021: P = min(|d_t - d_t-1| / d_t-1, 1).
   probability_ = 0.0;
   if (previous_match_ > 0.0 && std::isfinite(in.match))
     probability_ = std::min(std::fabs(in.match - previous_match_) / previous_match_, 1.0);

@@ -156,9 +156,10 @@ void read_observation(const Checker& check, const toml::table& root, Observation
   if (t == nullptr) return;
   const std::string w = "observation.";
   check.only(*t, w,
-             {"model", "fix_term", "fix_board_check", "robust", "sigma_scale", "tempering", "outlier_floor", "dcs_phi",
-              "consensus_chi2", "consensus_fraction", "motion_index_rate", "motion_index_min",
-              "motion_index_max", "route_free_m", "route_sigma_m", "implausible_ratio"});
+             {"model", "fix_term", "fix_board_check", "robust", "sigma_scale", "tempering",
+              "outlier_floor", "dcs_phi", "consensus_chi2", "consensus_fraction",
+              "motion_index_rate", "motion_index_min", "motion_index_max", "route_free_m",
+              "route_sigma_m", "implausible_ratio"});
   const std::string model = check.text(*t, "model", w, "boards");
   if (model == "boards")
     o.model = ObservationModel::kBoards;
@@ -189,7 +190,7 @@ void read_observation(const Checker& check, const toml::table& root, Observation
                "observation.implausible_ratio must be 0 (off) or >= 1");
 }
 
-// [kidnap]: seed 004's test, its confirmation and the re-seed (docs/filter.md).
+// [kidnap]: Yang et al.'s test, its confirmation and the re-seed (docs/filter.md).
 void read_kidnap(const Checker& check, const toml::table& root, KidnapConfig& k) {
   const toml::table* t = check.section(root, "kidnap");
   if (t == nullptr) return;

@@ -20,7 +20,7 @@ constexpr double kSearchRadius = 10.0;
 LensModel::LensModel(double k1, double k2, double k3, double p1, double p2)
     : k1_(k1), k2_(k2), k3_(k3), p1_(p1), p2_(p2) {
   if (k2_ == 0.0 && k3_ == 0.0) {
-    // Seed 000's model in closed form (the simulator's arithmetic before the polynomial model).
+    // Wu & Qin's model in closed form (the simulator's arithmetic before the polynomial model).
     if (k1_ < 0.0) {
       r_max_ = 1.0 / std::sqrt(-3.0 * k1_);
       rd_max_ = r_max_ * (1.0 + k1_ * r_max_ * r_max_);
@@ -61,7 +61,7 @@ void LensModel::distort(double x, double y, double& xd, double& yd) const {
 
 // Solves r (1 + k1 r^2 + k2 r^4 + k3 r^6) = rd on [0, r_max) by Newton's method (bisection when
 // it does not settle). With k2 = k3 = 0 the arithmetic is exactly the simulator's before the
-// polynomial model, so seed 000's scenes trace the same rays.
+// polynomial model, so Wu & Qin's scenes trace the same rays.
 bool LensModel::undistort_radius(double rd, double& r_out) const {
   if (rd == 0.0) {
     r_out = 0.0;

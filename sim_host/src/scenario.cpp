@@ -27,13 +27,13 @@ constexpr double kOccluderMaxSaturation = 80.0;
 constexpr double kOccluderMaxValue = 40.0;
 constexpr double kOccluderMinHueDistance_deg = 30.0;
 
-// Seed 000's setting: six single-colour boards of different sizes on a desk, the robot on a
+// Wu & Qin's setting: six single-colour boards of different sizes on a desk, the robot on a
 // 420 x 240 cm floor in front of it, 10 cm/s, 30 Hz, a camera with strong radial distortion.
 Scenario desk_shuttle() {
   Scenario s;
   s.name = "desk-shuttle";
   s.description =
-      "seed 000's desk: 6 boards, 320x240 distorted camera, S-shaped route driven forth and back";
+      "Wu & Qin's desk: 6 boards, 320x240 distorted camera, S-shaped route driven forth and back";
   const double face = -90.0 * kDeg;  // boards look at the robot (towards -y)
   s.boards = {
       {"red", {220, 30, 30}, 1.55, 2.55, 0.95, 0.30, 0.40, face + 15.0 * kDeg},
@@ -58,17 +58,17 @@ Scenario desk_route(const char* name, const char* description,
 }
 
 Scenario desk_left() {
-  return desk_route("desk-left", "seed 000's desk, a diagonal route from the front left",
+  return desk_route("desk-left", "Wu & Qin's desk, a diagonal route from the front left",
                     {{1.40, 0.40}, {1.55, 0.80}, {1.80, 1.20}, {1.95, 1.55}});
 }
 
 Scenario desk_right() {
-  return desk_route("desk-right", "seed 000's desk, a diagonal route from the front right",
+  return desk_route("desk-right", "Wu & Qin's desk, a diagonal route from the front right",
                     {{2.90, 0.40}, {2.75, 0.80}, {2.50, 1.20}, {2.30, 1.55}});
 }
 
 Scenario desk_slalom() {
-  return desk_route("desk-slalom", "seed 000's desk, a slalom across the middle",
+  return desk_route("desk-slalom", "Wu & Qin's desk, a slalom across the middle",
                     {{2.10, 0.40}, {2.25, 0.80}, {1.95, 1.20}, {2.10, 1.60}});
 }
 

@@ -111,7 +111,7 @@ AreaSeries read_area_series(const std::string& areas_path,
   return run;
 }
 
-// Seed 000's setting: the labelled frames (timestamps equal to a label's) and an evenly spread
+// Wu & Qin's setting: the labelled frames (timestamps equal to a label's) and an evenly spread
 // subset of the others, unlabelled; the neighbour graph (or the paper's complete graph).
 void train_from_labels(const AreaSeries& run, const std::vector<StampedPose>& labels,
                        const TrainOptions& opt, algorithms::MapFile& map, TrainReport& report) {

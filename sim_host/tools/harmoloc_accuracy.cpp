@@ -1,6 +1,6 @@
 // harmoloc-accuracy: the harmonic localizer's accuracy report (docs/training.md). Simulates a
 // training and a test run of each route, trains a map on the training run, and scores the
-// localizer alone on the test run, next to seed 000's figures; also the known-place test on
+// localizer alone on the test run, next to Wu & Qin's figures; also the known-place test on
 // off-route frames, lighting changes, and the error against the number of labelled and
 // unlabelled samples.
 #include <algorithm>
@@ -120,8 +120,9 @@ int main(int argc, char** argv) {
   CLI::App app{
       "harmoloc-accuracy: the harmonic localizer's accuracy report (docs/training.md).\n"
       "For each route: simulates a training run and a separate test run (cached in --work),\n"
-      "trains a map on the training run (64 labelled + 140 unlabelled frames, as seed 000) and\n"
-      "scores the localizer alone on every test frame: MSE per axis next to seed 000's figures,\n"
+      "trains a map on the training run (64 labelled + 140 unlabelled frames, as Wu & Qin 2010) "
+      "and\n"
+      "scores the localizer alone on every test frame: MSE per axis next to Wu & Qin's figures,\n"
       "the known-place test on on-route and off-route frames, +-30% lighting, and the error "
       "against\n"
       "the number of labelled and unlabelled samples. Writes accuracy.md, accuracy.json and SVG\n"
@@ -141,7 +142,7 @@ int main(int argc, char** argv) {
   app.add_option("--test-seed", test_seed, "seed of the test runs")->capture_default_str();
   app.add_flag("--no-curves", no_curves, "skip the labelled/unlabelled sample curves");
   app.add_flag("--no-lighting", no_lighting, "skip the +-30% lighting runs");
-  app.add_flag("--no-paper", no_paper, "skip training with seed 000's formulation for comparison");
+  app.add_flag("--no-paper", no_paper, "skip training with Wu & Qin's formulation for comparison");
   app.add_option("--fail-above", max_mse,
                  "exit 1 if any route's MSE on either axis exceeds this (cm^2); 0: never");
   app.add_flag("--quiet", quiet, "only the tables");
@@ -247,7 +248,7 @@ int main(int argc, char** argv) {
     }
 
     std::ostringstream md;
-    md << "| route | test frames | MSE x (cm^2) | MSE y (cm^2) | seed 000 method, MSE x / y | "
+    md << "| route | test frames | MSE x (cm^2) | MSE y (cm^2) | Wu & Qin 2010 method, MSE x / y | "
           "features chosen | training (ms) |\n|---|---|---|---|---|---|---|\n";
     for (const auto& d : data) {
       std::string boards;
@@ -261,7 +262,8 @@ int main(int argc, char** argv) {
                             fmt("%.1f", d.paper_score.mse_y_cm2))
          << " | " << boards << " | " << fmt("%.1f", d.ours.report.train_ms) << " |\n";
     }
-    md << "| seed 000 (paper, 4 paths, 500 test frames each) | 2000 | <= 25 | < 20 | | boards 1, "
+    md << "| Wu & Qin 2010 (paper, 4 paths, 500 test frames each) | 2000 | <= 25 | < 20 | | boards "
+          "1, "
           "2, "
           "5 by hand | 280 |\n";
     md << "\nKnown-place test (frames flagged as off the trained route):\n\n| map of route | "

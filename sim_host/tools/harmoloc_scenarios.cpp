@@ -37,7 +37,7 @@ const char* variant_name(Variant v) {
     case Variant::kRobust:
       return "robust per-board (default)";
     case Variant::kNonRobust:
-      return "per-board, not robust (seed 001)";
+      return "per-board, not robust (Guo & Li 2013)";
     case Variant::kFix:
       return "Gaussian around the harmonic fix";
     case Variant::kUniformReseed:
@@ -260,7 +260,8 @@ int main(int argc, char** argv) {
       js << "]";
       json.push_back(js.str());
       md << "| target | <= 3 cm, better than the localizer alone | <= 2 deg | | | |\n"
-            "| seed 000 (localizer alone) | | | | MSE <= 25 / < 20 cm^2 per axis (5 / 4.5 cm) | "
+            "| Wu & Qin 2010 (localizer alone) | | | | MSE <= 25 / < 20 cm^2 per axis (5 / 4.5 cm) "
+            "| "
             "|\n\n";
     }
 
@@ -312,7 +313,8 @@ int main(int argc, char** argv) {
               "moved_board.svg", after_move);
     }
     if (wanted("occlusion") || wanted("moved")) {
-      md << "Target: <= 10 cm throughout. Seed 002 (moving landmarks, motion index + DCS) is the "
+      md << "Target: <= 10 cm throughout. Cheng et al. (moving landmarks, motion index + DCS) is "
+            "the "
             "anchor; it reports trajectories, not a bound.\n\n";
     }
 
@@ -366,8 +368,9 @@ int main(int argc, char** argv) {
       }
       js << "}";
       json.push_back(js.str());
-      md << "| seed 004 (CNN pose + particle filter, real robot) | | 87 % recovered | | 10.12 s |\n"
-            "| seed 004's AMCL baseline | | 44 % recovered | | 30.8 s |\n"
+      md << "| Yang et al. 2021 (CNN pose + particle filter, real robot) | | 87 % recovered | | "
+            "10.12 s |\n"
+            "| Yang et al.'s AMCL baseline | | 44 % recovered | | 30.8 s |\n"
             "| target | | >= 99 % | | |\n\n";
       if (!misses.str().empty())
         md << "Kidnaps not back under 10 cm within 1 s:\n\n" << misses.str() << "\n";
@@ -382,7 +385,7 @@ int main(int argc, char** argv) {
       md << "### False kidnap alarms (" << fmt("%.1f", sim_minutes)
          << " simulated minutes of nominal driving)\n\n| test | alarms |\n|---|---|\n"
          << "| confirmed kidnaps (ours) | " << j.result.counters.kidnaps << " |\n"
-         << "| seed 004's test alone (P > 0.5) | " << j.result.counters.kidnap_triggers << " |\n"
+         << "| Yang et al.'s test alone (P > 0.5) | " << j.result.counters.kidnap_triggers << " |\n"
          << "| target | 0 |\n\nPosition RMSE over the run " << fmt("%.2f cm", 100 * e.rmse_m)
          << ", max " << fmt("%.1f cm", 100 * e.max_m) << ".\n";
       js << "\"false_alarms\": {\"minutes\": " << sim_minutes

@@ -54,7 +54,7 @@ int main(int argc, char** argv) {
                  "write where the odometry placed every frame (TUM), to check the placement");
   bool no_odometry = false;
   app.add_flag("--no-odometry", no_odometry,
-               "do not place the frames by the wheel odometry between the labels: seed 000's\n"
+               "do not place the frames by the wheel odometry between the labels: Wu & Qin's\n"
                "labelled + unlabelled samples only (the forward map then interpolates labels)");
   app.add_option("--out", out, "map file to write")->required();
   app.add_option("--config", config_path,
@@ -70,7 +70,7 @@ int main(int argc, char** argv) {
   app.add_flag("--all-boards", all_boards, "use every board that changes; no selection");
   app.add_option(
          "--method", method,
-         "neighbour: k-nearest-neighbour graph (default); paper: seed 000's complete graph\n"
+         "neighbour: k-nearest-neighbour graph (default); paper: Wu & Qin's complete graph\n"
          "with the normalised Laplacian, for comparison")
       ->check(CLI::IsMember({"neighbour", "paper"}))
       ->capture_default_str();

@@ -991,7 +991,7 @@ void test_robust() {
   BM_CHECK_NEAR(est.mean.x_m, at.x_m, 0.03);
   bm::value_trig("robust_tracked_x", est.mean.x_m);
 
-  // Seed 004's test and its confirmation on a fixed sequence: steady, a dip (an occlusion:
+  // Yang et al.'s test and its confirmation on a fixed sequence: steady, a dip (an occlusion:
   // no evidence), steady, then a kidnap (the boards disagree, the known fix is 1.2 m away, in
   // the same place frame after frame, and the boards prefer its place by 10 nats). Once
   // confirmed, the cycle re-seeds at the fix and resets the detector: from then on the estimate

@@ -345,7 +345,7 @@ def main():
          model + query_stack + cls + code),
         ("particle filter (4096) + its deepest stack + code",
          pf + max(info.get(k, 0) for k in info if k.startswith("stack.pf_")) + code),
-        ("forward map (4096 cells x 8 boards) + particle filter (4096) + stack + code",
+        ("forward map (its tile capacity, 8 boards) + particle filter (4096) + stack + code",
          forward + pf + max(info.get(k, 0) for k in info if k.startswith("stack.pf_")) + code),
         ("map + forward map + particle filter + classifier + query stack + code",
          model + forward + pf + cls + query_stack + code),

@@ -99,7 +99,7 @@ void train(benchmark::State& state, std::size_t frames, std::size_t labelled, in
   const Run run = make_run(frames, labelled);
   hs::TrainOptions opt;
   opt.thresholds.count = 6;
-  opt.use_odometry = false;  // seed 000's labelled + unlabelled samples
+  opt.use_odometry = false;  // Wu & Qin's labelled + unlabelled samples
   opt.unlabelled = unlabelled;
   opt.select_boards = select;
   auto map = std::make_unique<ha::MapFile>();

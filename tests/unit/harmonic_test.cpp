@@ -1,6 +1,6 @@
-// The harmonic localizer (seed 000): the offline semi-supervised solve against a dense solve built
-// here from the definitions, eq. 9 against a direct evaluation, the fixed-capacity float online
-// query against the double offline twin, the known-place test, and the parameter search.
+// The harmonic localizer (Wu & Qin 2010): the offline semi-supervised solve against a dense solve
+// built here from the definitions, eq. 9 against a direct evaluation, the fixed-capacity float
+// online query against the double offline twin, the known-place test, and the parameter search.
 #include "harmoloc/algorithms/harmonic_localizer.hpp"
 #include "harmoloc/algorithms/harmonic_model.hpp"
 #include "harmoloc/algorithms/harmonic_training.hpp"

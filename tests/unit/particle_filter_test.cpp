@@ -1,4 +1,4 @@
-// Fixed-capacity particle filter (seed 001): determinism, the motion noise model, the fix
+// Fixed-capacity particle filter (Guo & Li 2013): determinism, the motion noise model, the fix
 // update, low-variance resampling, the estimate (weighted mean, circular yaw mean, covariance)
 // and convergence on a known trajectory from a uniform heading.
 #include "harmoloc/algorithms/particle_filter.hpp"

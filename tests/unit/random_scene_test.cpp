@@ -111,7 +111,7 @@ TEST(Lens, InverseMatchesTheForwardModel) {
       EXPECT_GT(outside, 0U);  // a strong barrel lens has an image circle
     }
   }
-  // Seed 000's lens: the monotonic region ends where 1 + 3 k r^2 = 0.
+  // Wu & Qin's lens: the monotonic region ends where 1 + 3 k r^2 = 0.
   const hs::LensModel seed000(-0.15, 0, 0, 0, 0);
   EXPECT_DOUBLE_EQ(seed000.max_radius(), 1.0 / std::sqrt(0.45));
   double x = 0, y = 0;

@@ -1,6 +1,6 @@
 // The robust filter's parts: the forward map's grid lookup, the per-board observation model
-// (seed 001's product of Gaussians, seed 002's motion index and dynamic covariance scaling, the
-// consensus gate), the particle weights it gives, the kidnap test (seed 004 and its
+// (Guo & Li's product of Gaussians, Cheng et al.'s motion index and dynamic covariance scaling, the
+// consensus gate), the particle weights it gives, the kidnap test (Yang et al. 2021 and its
 // confirmation) and the masked harmonic fix.
 #include <gtest/gtest.h>
 
@@ -172,7 +172,7 @@ TEST(BoardObservation, AgreeingBoardsKeepFullWeight) {
   EXPECT_DOUBLE_EQ(u.inv_tempering, 1.0 / params.tempering);
 }
 
-// Seed 002: an occluded board is scaled down at once (DCS) and, frame after frame, its motion
+// Cheng et al.: an occluded board is scaled down at once (DCS) and, frame after frame, its motion
 // index falls; when it is back, the index recovers.
 TEST(BoardObservation, AnOccludedBoardIsScaledDownThenDistrustedThenTrustedAgain) {
   const auto map = make_forward_map();
@@ -349,7 +349,7 @@ TEST(ParticleFilterBoards, ParticlesFarFromTheRouteAreUnlikely) {
 }
 
 // The demonstration of the whole model in one frame: with one board hidden, the robust model
-// keeps the particles at the true place; seed 001's plain product moves them to where the hidden
+// keeps the particles at the true place; Guo & Li's plain product moves them to where the hidden
 // board's zero fits better.
 TEST(ParticleFilterBoards, AHiddenBoardDoesNotDragTheRobustModel) {
   const auto map = make_forward_map();
@@ -498,7 +498,7 @@ TEST(KidnapDetector, Seed004ChangeRate) {
   // After a kidnap the previous frame is forgotten.
   EXPECT_EQ(d.step(nominal(1.0), p), ha::KidnapVerdict::kNone);
   EXPECT_EQ(d.probability(), 0.0);
-  // A rise counts as a change too (seed 004 takes the absolute value).
+  // A rise counts as a change too (Yang et al. 2021 takes the absolute value).
   EXPECT_EQ(d.step(nominal(2.0), p), ha::KidnapVerdict::kKidnapped);
 }
 
@@ -568,7 +568,7 @@ TEST(KidnapDetector, LongEvidenceWithoutATriggerIsADivergence) {
   int frame = 0;
   ha::KidnapVerdict v = ha::KidnapVerdict::kNone;
   while (v != ha::KidnapVerdict::kKidnapped && frame < 100) {
-    v = d.step(kidnapped(1.0), p);  // the match does not change: seed 004 never fires
+    v = d.step(kidnapped(1.0), p);  // the match does not change: Yang et al. 2021 never fires
     ++frame;
   }
   EXPECT_EQ(v, ha::KidnapVerdict::kKidnapped);
@@ -626,7 +626,7 @@ TEST(KidnapDetector, ContradictionWithoutAPreferredFarFixIsNotLost) {
     ha::KidnapDetector d;
     for (int i = 0; i < 10 * p.lost_frames; ++i) {
       ha::KidnapInput frame = in;
-      frame.match = i % 2 == 0 ? 1.0 : 1e-3;  // seed 004 fires every other frame
+      frame.match = i % 2 == 0 ? 1.0 : 1e-3;  // Yang et al. 2021 fires every other frame
       ASSERT_NE(d.step(frame, p), ha::KidnapVerdict::kLost) << "frame " << i;
     }
     EXPECT_GT(d.counters().triggers, 0U);

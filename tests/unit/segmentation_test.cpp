@@ -1,6 +1,6 @@
-// Threshold area segmentation (seed 000): BoardClassifier's 8-bit HSV (OpenCV's units: H 0..179
-// in 2-degree steps, S and V 0..255), the mapping of degree windows onto those steps (with the
-// wrap through 0 for reds), and pixel counts on synthetic RGB24 and YUYV frames with known
+// Threshold area segmentation (Wu & Qin 2010): BoardClassifier's 8-bit HSV (OpenCV's units: H
+// 0..179 in 2-degree steps, S and V 0..255), the mapping of degree windows onto those steps (with
+// the wrap through 0 for reds), and pixel counts on synthetic RGB24 and YUYV frames with known
 // contents. Bit-exactness against OpenCV itself is proven in segmentation_opencv_test.cpp.
 #include "harmoloc/algorithms/segmentation.hpp"
 

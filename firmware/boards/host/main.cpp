@@ -470,7 +470,7 @@ int main(int argc, char** argv) {
       static_cast<unsigned long long>(c.overruns));
   std::printf(
       "harmoloc: filter weighs %s; %llu frames without board consensus, %llu kidnaps confirmed "
-      "(seed 004 test fired %llu times), %llu lost\n",
+      "(Yang et al. 2021 test fired %llu times), %llu lost\n",
       cycle->uses_boards() ? "every board against the forward map" : "the harmonic fix",
       static_cast<unsigned long long>(c.no_consensus), static_cast<unsigned long long>(c.kidnaps),
       static_cast<unsigned long long>(c.kidnap_triggers), static_cast<unsigned long long>(c.lost));

@@ -1,14 +1,14 @@
 #pragma once
-/// @file The robust observation model: one likelihood term per board (seed 001 multiplies one
+/// @file The robust observation model: one likelihood term per board (Guo & Li 2013 multiplies one
 /// Gaussian per landmark), each a mixture of "the board is where the map says" and "something
-/// else" (occluded, moved, lit differently) in the spirit of seed 002:
+/// else" (occluded, moved, lit differently) in the spirit of Cheng et al.:
 ///
 ///   l_b(x, y) = w_b exp(-s_b^2 r_b^2 / 2) + (1 - w_b) c,   r_b = (o_b - mu_b(x, y)) / (k sigma_b)
 ///
 /// mu_b and sigma_b come from the forward map, k inflates sigma because successive frames share
 /// most of their error, c is the floor of the "something else" component. w_b is the board's
 /// motion index (probability that it is static and visible), estimated from its recent
-/// residuals (an EM step with forgetting); s_b is seed 002's dynamic covariance scaling,
+/// residuals (an EM step with forgetting); s_b is Cheng et al.'s dynamic covariance scaling,
 /// s = min(1, 2 Phi / (Phi + chi2)), evaluated at the filter's estimate, but only while most
 /// boards agree with that estimate (a consensus): when most disagree, the pose is wrong, not the
 /// boards, and every board keeps its full weight so that the filter (or the kidnap test) can
@@ -53,7 +53,7 @@ struct BoardModelParams {
   /// The kidnap test's likelihood of a board that shows less than expected: it may be hidden (a
   /// person, a box), which is likelier than an arbitrary outlier (board_preference).
   double hidden_floor = 0.1;
-  double dcs_phi = 1.0;             ///< seed 002's Phi
+  double dcs_phi = 1.0;             ///< Cheng et al.'s Phi
   double consensus_chi2 = 9.0;      ///< a board agrees with the estimate when its chi2 is below
   double consensus_fraction = 0.6;  ///< at least this fraction of the boards must agree
   double motion_index_rate = 0.05;  ///< weight of one frame in the motion index (forgetting)
@@ -61,7 +61,7 @@ struct BoardModelParams {
   double motion_index_max = 0.98;
   double route_free_m = 0.03;   ///< distance from the training run that costs nothing
   double route_sigma_m = 0.03;  ///< beyond it, a Gaussian fall-off of this width
-  bool robust = true;           ///< false: seed 001's plain product of Gaussians (w = 1, s = 1)
+  bool robust = true;           ///< false: Guo & Li's plain product of Gaussians (w = 1, s = 1)
   /// How far from the estimate a board's area may be explained when the boards are assessed
   /// (consensus, motion index, scaling): the spread between passes of the training run over
   /// one place, from the map's calibration (0: at the estimate only). Where a board's area
@@ -92,7 +92,7 @@ struct BoardUpdate {
 /// How the boards relate to the filter's estimate this frame.
 struct BoardAssessment {
   std::array<float, kMaxBoards> chi2{};     ///< (o_b - mu_b(estimate))^2 / (k sigma_b)^2
-  std::array<float, kMaxBoards> scaling{};  ///< seed 002's s_b (1 without consensus)
+  std::array<float, kMaxBoards> scaling{};  ///< Cheng et al.'s s_b (1 without consensus)
   std::size_t modelled = 0;                 ///< boards the map models
   std::size_t agreeing = 0;                 ///< of those, with chi2 below the consensus bound
   /// Of the disagreeing boards, those showing more area than expected: something an occlusion

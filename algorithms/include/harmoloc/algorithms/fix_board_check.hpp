@@ -1,5 +1,5 @@
 #pragma once
-/// @file Which boards the harmonic fix may use while the filter tracks: seed 002's question (is
+/// @file Which boards the harmonic fix may use while the filter tracks: Cheng et al.'s question (is
 /// this landmark static?) asked of the fix. A board moved along its wall changes its area the way
 /// a few centimetres of travel would; where the other boards' areas hardly change along the
 /// route, its own residual at the estimate stays small, so its motion index never falls, and the

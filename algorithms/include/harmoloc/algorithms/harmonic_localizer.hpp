@@ -1,5 +1,5 @@
 #pragma once
-/// @file Online harmonic localizer (seed 000, eq. 9): f_new = sum_j W'_j f_j / sum_j W'_j with
+/// @file Online harmonic localizer (Wu & Qin 2010, eq. 9): f_new = sum_j W'_j f_j / sum_j W'_j with
 /// W'_j = exp(-sigma ||O_new - O_j||^2) over all training samples. O(n d), no allocation.
 
 #include <array>

@@ -1,6 +1,7 @@
 #pragma once
-/// @file The precomputed harmonic map (seed 000): training area vectors and the coordinates the
-/// offline solve gave each of them. Fixed capacity, so the firmware can hold it in static memory.
+/// @file The precomputed harmonic map (Wu & Qin 2010): training area vectors and the coordinates
+/// the offline solve gave each of them. Fixed capacity, so the firmware can hold it in static
+/// memory.
 
 #include <array>
 #include <cstddef>

@@ -2,7 +2,7 @@
 /// @file Training the harmonic map on a neighbourhood graph, and choosing its parameters and its
 /// feature boards by cross-validation (docs/training.md).
 ///
-/// Why not seed 000's complete graph with the normalised Laplacian: its null space is D^1/2 1,
+/// Why not Wu & Qin's complete graph with the normalised Laplacian: its null space is D^1/2 1,
 /// not the constants, so the unlabelled samples' coordinates are pulled towards a degree-weighted
 /// scale (measured: 12 cm RMSE on unlabelled samples of the desk-shuttle run). A route is a thin
 /// manifold in area space; a k-nearest-neighbour graph follows it, and the combinatorial

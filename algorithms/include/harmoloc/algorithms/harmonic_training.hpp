@@ -1,5 +1,5 @@
 #pragma once
-/// @file Offline half of the harmonic localizer (seed 000, eq. 7-8): semi-supervised least
+/// @file Offline half of the harmonic localizer (Wu & Qin 2010, eq. 7-8): semi-supervised least
 /// squares on the complete graph of training area vectors, and the choice of its parameters.
 /// Host/start-up code: allocates freely, never runs in the cycle.
 

@@ -1,9 +1,9 @@
 #pragma once
-/// @file Kidnap test (seed 004) made reliable. Seed 004 watches d_t, the sum of the particles'
-/// unnormalised weights (how well the frame matches the cloud), and calls the robot kidnapped
-/// when its change rate P = min(|d_t - d_t-1| / d_t-1, 1) exceeds 0.5. On its own that fires on
-/// every occluded board and on ordinary frame-to-frame noise, so here a trigger only opens a
-/// short window in which the kidnap must be confirmed by evidence that does not come from the
+/// @file Kidnap test (Yang et al. 2021) made reliable. Yang et al. 2021 watches d_t, the sum of the
+/// particles' unnormalised weights (how well the frame matches the cloud), and calls the robot
+/// kidnapped when its change rate P = min(|d_t - d_t-1| / d_t-1, 1) exceeds 0.5. On its own that
+/// fires on every occluded board and on ordinary frame-to-frame noise, so here a trigger only opens
+/// a short window in which the kidnap must be confirmed by evidence that does not come from the
 /// cloud: the harmonic localizer's global fix is a known place far from the estimate, the
 /// boards fit the fix's place clearly better than the estimate's (a likelihood ratio over the
 /// forward map, robust per board), and the fixes agree with each other from frame to frame. The
@@ -22,8 +22,8 @@
 namespace harmoloc::algorithms {
 
 struct KidnapParams {
-  double change_threshold = 0.5;  ///< seed 004: trigger when P = min(dw, 1) exceeds this
-  bool confirm = true;            ///< false: seed 004's test alone (a trigger is a kidnap)
+  double change_threshold = 0.5;  ///< Yang et al. 2021: trigger when P = min(dw, 1) exceeds this
+  bool confirm = true;            ///< false: Yang et al.'s test alone (a trigger is a kidnap)
   int window_frames = 6;          ///< frames after a trigger in which to confirm it
   int evidence_frames = 3;        ///< frames of evidence needed within the window
   double fix_distance_m = 0.25;   ///< evidence: the global fix is at least this far away
@@ -51,13 +51,13 @@ struct KidnapInput {
 
 enum class KidnapVerdict : std::uint8_t {
   kNone = 0,
-  kTriggered = 1,  ///< seed 004's test fired this frame; not (yet) confirmed
+  kTriggered = 1,  ///< Yang et al.'s test fired this frame; not (yet) confirmed
   kKidnapped = 2,  ///< confirmed: re-seed around the global fix
   kLost = 3,       ///< the boards contradict the estimate and no fix is usable: re-seed widely
 };
 
 struct KidnapCounters {
-  std::uint64_t triggers = 0;     ///< frames where seed 004's P exceeded the threshold
+  std::uint64_t triggers = 0;     ///< frames where Yang et al.'s P exceeded the threshold
   std::uint64_t kidnaps = 0;      ///< confirmed (or, without confirmation, every trigger)
   std::uint64_t divergences = 0;  ///< of those, confirmed by long evidence without a trigger
   std::uint64_t lost = 0;
@@ -72,7 +72,7 @@ class KidnapDetector {
   /// One frame with a measurement update.
   KidnapVerdict step(const KidnapInput& input, const KidnapParams& params);
 
-  /// Seed 004's P of the last frame.
+  /// Yang et al.'s P of the last frame.
   double probability() const { return probability_; }
   /// Where the evidence of the last confirmed kidnap put the robot: the mean of its consistent
   /// fixes.

@@ -1,5 +1,5 @@
 #pragma once
-/// @file Differential-drive odometry from wheel encoder counters (seed 001's motion model).
+/// @file Differential-drive odometry from wheel encoder counters (Guo & Li's motion model).
 /// Sign convention: ticks count up when a wheel drives the robot forward (after the per-wheel
 /// direction in the geometry); yaw is counter-clockwise, so a right wheel that turns more than
 /// the left turns the robot left (positive yaw).

@@ -1,5 +1,5 @@
 #pragma once
-/// @file Fixed-capacity particle filter over (x, y, yaw) (seed 001): differential-drive motion
+/// @file Fixed-capacity particle filter over (x, y, yaw) (Guo & Li 2013): differential-drive motion
 /// model with AMCL-style noise; the measurement is either every board's area against the
 /// forward map (robust per-board likelihood, board_observation.hpp) or, for maps without a
 /// forward model, the harmonic localizer's position fix; low-variance resampling. Static

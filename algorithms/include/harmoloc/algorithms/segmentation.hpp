@@ -1,5 +1,5 @@
 #pragma once
-/// @file Threshold area segmentation of coloured landmark boards (seed 000): each board is a
+/// @file Threshold area segmentation of coloured landmark boards (Wu & Qin 2010): each board is a
 /// range of hue with minimum saturation and a value window; its "area" is the number of pixels
 /// of the raw, distorted frame inside that range. Do not undistort: the distortion is what makes
 /// area depend on lateral position.

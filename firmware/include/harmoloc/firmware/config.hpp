@@ -70,7 +70,8 @@ struct ObservationConfig {
 
 /// Where the particles go when the filter is re-seeded (a kidnap, the relocalize command).
 enum class ReseedStrategy : std::uint8_t {
-  kAroundFix,  ///< around the harmonic localizer's global fix (seed 004 with our global guess)
+  kAroundFix,  ///< around the harmonic localizer's global fix (Yang et al. 2021 with our global
+               ///< guess)
   kUniform,    ///< uniformly over the mapped region, any heading (AMCL-style; the baseline)
 };
 

@@ -90,9 +90,9 @@ struct CycleCounters {
   std::uint64_t distrusted_boards = 0;  ///< sum over frames of boards below motion index 1/2
   /// Times the fix's board check found a board dragging the fix (algorithms/fix_board_check.hpp).
   std::uint64_t fix_board_suspicions = 0;
-  std::uint64_t kidnap_triggers = 0;    ///< frames where seed 004's change rate exceeded 0.5
-  std::uint64_t kidnaps = 0;            ///< confirmed kidnaps (the filter was re-seeded)
-  std::uint64_t lost = 0;               ///< of those, re-seeded over the whole map (no fix)
+  std::uint64_t kidnap_triggers = 0;  ///< frames where Yang et al.'s change rate exceeded 0.5
+  std::uint64_t kidnaps = 0;          ///< confirmed kidnaps (the filter was re-seeded)
+  std::uint64_t lost = 0;             ///< of those, re-seeded over the whole map (no fix)
   std::uint64_t link_dropped = 0;
   std::array<std::uint64_t, 5> cycles_in_health{};
 };
@@ -144,7 +144,7 @@ class LocalizationCycle {
   const algorithms::HarmonicFix& robust_fix() const { return robust_fix_; }
   /// The check of the fix's boards (which it holds suspect).
   const algorithms::FixBoardCheck& fix_check() const { return fix_check_; }
-  /// Seed 004's P of the last frame and what the detector made of it.
+  /// Yang et al.'s P of the last frame and what the detector made of it.
   double kidnap_probability() const { return kidnap_.probability(); }
   algorithms::KidnapVerdict kidnap_verdict() const { return kidnap_verdict_; }
   /// What the kidnap test saw this cycle (for tools that look at one run closely).

@@ -44,7 +44,7 @@ struct CameraSpec {
   /// OpenCV's lens model in normalised coordinates (x, y), r^2 = x^2 + y^2:
   ///   x_d = x (1 + k1 r^2 + k2 r^4 + k3 r^6) + 2 p1 x y + p2 (r^2 + 2 x^2)
   ///   y_d = y (1 + k1 r^2 + k2 r^4 + k3 r^6) + p1 (r^2 + 2 y^2) + 2 p2 x y
-  /// Seed 000's x_d = x_u + k x_u r_u^2 is k1 = k with the others 0 (scenario files: radial_k).
+  /// Wu & Qin's x_d = x_u + k x_u r_u^2 is k1 = k with the others 0 (scenario files: radial_k).
   double k1 = -0.15;
   double k2 = 0.0;
   double k3 = 0.0;

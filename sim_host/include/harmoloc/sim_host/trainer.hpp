@@ -1,5 +1,5 @@
 #pragma once
-/// @file The map trainer (seed 000, offline half): measures the board areas of a recorded run
+/// @file The map trainer (Wu & Qin 2010, offline half): measures the board areas of a recorded run
 /// (or reads them from an area log), takes the frames whose timestamps carry a label as labelled
 /// and an evenly spread subset of the rest as unlabelled, chooses the feature boards, the graph
 /// and the kernel widths by cross-validation, solves eq. 8 and writes the map
@@ -22,7 +22,7 @@ namespace harmoloc::sim_host {
 /// How eq. 8 is posed.
 enum class TrainMethod {
   kNeighbourGraph,  ///< k-nearest-neighbour graph, combinatorial Laplacian (the default)
-  kPaper,           ///< seed 000 as written: complete graph, normalised Laplacian
+  kPaper,           ///< Wu & Qin 2010 as written: complete graph, normalised Laplacian
 };
 
 struct TrainOptions {
@@ -58,7 +58,7 @@ struct TrainOptions {
   double same_pass_m = 0.10;
   algorithms::ThresholdSet thresholds;
   int unlabelled = -1;            ///< how many unlabelled frames; -1: ratio x labelled
-  double unlabelled_ratio = 2.2;  ///< seed 000's best: 64 labelled + 140 unlabelled
+  double unlabelled_ratio = 2.2;  ///< Wu & Qin's best: 64 labelled + 140 unlabelled
   int max_labelled = -1;          ///< use at most this many labels (evenly spread); -1: all
   std::vector<int> boards;        ///< 0-based board indices used as features; empty: choose
   bool select_boards = true;      ///< with boards empty: drop boards that do not help (CV)
