@@ -11,7 +11,7 @@ find_package(Threads REQUIRED)
 
 # OpenCV core and imgproc only. Debian's libopencv-dev (the only package with OpenCVConfig.cmake)
 # drags in every module and its arm64 flavour conflicts with amd64, so find the two libraries
-# directly (see ../shared/notes/cross-build.md).
+# directly (docs/cross-build.md).
 find_path(HARMOLOC_OPENCV_INCLUDE_DIR opencv2/core.hpp PATH_SUFFIXES opencv4)
 find_library(HARMOLOC_OPENCV_CORE_LIB opencv_core)
 find_library(HARMOLOC_OPENCV_IMGPROC_LIB opencv_imgproc)

@@ -1,5 +1,5 @@
 # Cross build for 64-bit ARM Linux boards (Cortex-A53/A72 class: Raspberry Pi 4/5 and similar),
-# with Debian's cross compiler and multiarch -dev packages. See docs/ and ../shared/notes/cross-build.md.
+# with Debian's cross compiler and multiarch -dev packages. See docs/cross-build.md.
 set(CMAKE_SYSTEM_NAME Linux)
 set(CMAKE_SYSTEM_PROCESSOR aarch64)
 set(CMAKE_C_COMPILER aarch64-linux-gnu-gcc)

@@ -86,7 +86,7 @@ for bin in "$work"/root/usr/bin/*; do
   done
   if "$triplet-objdump" -p "$bin" | grep -q 'NEEDED *libcamera'; then
     # Debian's libcamera starts lttng-ust, which hangs under qemu-user before main()
-    # (../shared/notes/cross-build.md): not run; its options are read from its strings below.
+    # (docs/cross-build.md): not run; its options are read from its strings below.
     echo "     note: $b links libcamera, which hangs under qemu-user: --help not run here"
     [ "$b" = harmoloc ] && strings "$bin" | grep -x -- '--[a-z-]*' > "$work/harmoloc-options"
     continue
