@@ -55,16 +55,23 @@ def encode_map(width, height, thresholds, board_index, params, samples, pad=0):
     return bytes(out)
 
 
-def encode_map_v3(width, height, thresholds, board_index, params, samples, forward):
-    """Version 3: params gains the dissimilarity bound (7 floats); forward is None or
-    (columns, rows, origin_x, origin_y, cell, sigmas, heading or None, expected rows, route)."""
+def map_header(version, width, height, thresholds, board_index, params, samples):
+    """The start every map version from 3 on shares: magic, frame size, thresholds, the sample
+    and feature counts, the board index and the 7 model parameters."""
     out = bytearray(b"HARMOMAP")
-    out += struct.pack("<IIII", 3, width, height, len(thresholds))
+    out += struct.pack("<IIII", version, width, height, len(thresholds))
     for h0, h1, s, v0, v1 in thresholds:
         out += struct.pack("<ffBBBB", h0, h1, s, v0, v1, 0)
     out += struct.pack("<II", len(samples), len(board_index))
     out += bytes(board_index)
     out += struct.pack("<7f", *params)
+    return out
+
+
+def encode_map_v3(width, height, thresholds, board_index, params, samples, forward):
+    """Version 3: params gains the dissimilarity bound (7 floats); forward is None or
+    (columns, rows, origin_x, origin_y, cell, sigmas, heading or None, expected rows, route)."""
+    out = map_header(3, width, height, thresholds, board_index, params, samples)
     for features, x, y in samples:
         out += struct.pack("<%df" % len(features), *features)
         out += struct.pack("<ff", x, y)
@@ -90,13 +97,7 @@ def encode_map_v5(width, height, thresholds, board_index, params, weights, sampl
     over the tile grid, then their cells), the calibration entries. forward is (columns, rows,
     origin_x, origin_y, cell, sigmas, with_heading, stored tile positions, cell value function
     (tile, cell) -> (expected list, route, heading))."""
-    out = bytearray(b"HARMOMAP")
-    out += struct.pack("<IIII", 5, width, height, len(thresholds))
-    for h0, h1, s, v0, v1 in thresholds:
-        out += struct.pack("<ffBBBB", h0, h1, s, v0, v1, 0)
-    out += struct.pack("<II", len(samples), len(board_index))
-    out += bytes(board_index)
-    out += struct.pack("<7f", *params)
+    out = map_header(5, width, height, thresholds, board_index, params, samples)
     out += struct.pack("<%df" % len(weights), *weights)
     for features, x, y in samples:
         out += struct.pack("<%df" % len(features), *features)
