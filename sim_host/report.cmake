@@ -1,12 +1,12 @@
 # The run report: evaluation numbers, SVG plots and an HTML page from a replay run's outputs.
 # Included from sim_host/CMakeLists.txt (CMAKE_CURRENT_SOURCE_DIR is sim_host/ there).
-# Needs: harmoloc_sim_dataset (tum.hpp/tum.cpp), harmoloc_warnings, nlohmann_json, CLI11.
+# Needs: harmoloc_dataset (tum.hpp/tum.cpp), harmoloc_warnings, nlohmann_json, CLI11.
 add_library(harmoloc_report STATIC ${CMAKE_CURRENT_SOURCE_DIR}/src/report.cpp
   ${CMAKE_CURRENT_SOURCE_DIR}/src/line_chart.cpp)
 add_library(harmoloc::report ALIAS harmoloc_report)
 target_include_directories(harmoloc_report PUBLIC ${CMAKE_CURRENT_SOURCE_DIR}/include)
 target_link_libraries(harmoloc_report
-  PUBLIC harmoloc_sim_dataset nlohmann_json::nlohmann_json
+  PUBLIC harmoloc_dataset nlohmann_json::nlohmann_json
   PRIVATE harmoloc_warnings)
 
 add_executable(harmoloc-report ${CMAKE_CURRENT_SOURCE_DIR}/tools/harmoloc_report.cpp)

@@ -85,9 +85,9 @@ LocalizationCycle::LocalizationCycle(const FirmwareConfig& config, const algorit
                                     std::sqrt(2.0)
                               : 0.0;
   if (config.observation.fix_board_check && map.calibration.present)
-    fix_check_params_ = algorithms::fix_check_params(
-        static_cast<double>(map.calibration.fix_rmse_x_m),
-        static_cast<double>(map.calibration.fix_rmse_y_m));
+    fix_check_params_ =
+        algorithms::fix_check_params(static_cast<double>(map.calibration.fix_rmse_x_m),
+                                     static_cast<double>(map.calibration.fix_rmse_y_m));
   if (config.observation.fix_term && fix_rmse > 0.0)
     fix_term_sigma_m_ = std::max(fix_rmse, 0.005) * std::sqrt(board_params_.tempering);
   // Where a re-seed puts the particles: around a fix, as far as the fix's own error reaches
@@ -218,40 +218,76 @@ CycleResult LocalizationCycle::run_once(std::uint64_t acquire_deadline_ns) {
 
 CycleResult LocalizationCycle::run(std::uint64_t acquire_deadline_ns, bool have_deadline) {
   const std::uint64_t cycle_start = clock_.now_ns();
-  auto& h = histograms_;
-  const auto at = [&h](Stage s) -> LatencyHistogram& { return h[static_cast<std::size_t>(s)]; };
-
-  // acquire
-  hal::FrameView frame{};
-  hal::CameraStatus status;
+  FrameIn in;
   {
-    StageTimer t(clock_, at(Stage::kAcquire));
-    status = camera_.acquire(frame, have_deadline ? acquire_deadline_ns : cycle_start + period_ns_);
+    StageTimer t(clock_, histogram(Stage::kAcquire));
+    in.status =
+        camera_.acquire(in.frame, have_deadline ? acquire_deadline_ns : cycle_start + period_ns_);
   }
-  if (status == hal::CameraStatus::kEnded) return CycleResult::kEnded;
+  if (in.status == hal::CameraStatus::kEnded) return CycleResult::kEnded;
   // On a live board acquire() is where the cycle waits for the camera (its pacing): the compute
   // budget starts when it returns. A replay's acquire does not wait and counts in full.
   const std::uint64_t compute_start = live_clock_ ? clock_.now_ns() : cycle_start;
   ++counters_.cycles;
+  take_frame(in, cycle_start);
+
+  algorithms::AreaVector areas;
+  {
+    StageTimer t(clock_, histogram(Stage::kSegment));
+    segment(in, areas);
+  }
+  if (in.have_frame) camera_.release();
+  Features features{};
+  {
+    StageTimer t(clock_, histogram(Stage::kLocalize));
+    localize(in.usable, areas, features);
+  }
+  EncoderIn encoders;
+  {
+    StageTimer t(clock_, histogram(Stage::kEncoders));
+    encoders = read_encoders();
+  }
+  {
+    StageTimer t(clock_, histogram(Stage::kPredict));
+    predict(encoders);
+  }
+  {
+    StageTimer t(clock_, histogram(Stage::kUpdate));
+    update(areas, features, encoders.fresh_sample);
+  }
+  {
+    StageTimer t(clock_, histogram(Stage::kPublish));
+    service_link();
+    publish();
+  }
+
+  const std::uint64_t elapsed = clock_.now_ns() - compute_start;
+  histogram(Stage::kCycle).record(elapsed);
+  if (elapsed > budget_ns_) ++counters_.overruns;
+  account_overrun(elapsed > budget_ns_);
+  return CycleResult::kRan;
+}
+
+void LocalizationCycle::take_frame(FrameIn& in, std::uint64_t cycle_start) {
   // A frame stamped no later than the last one used (a repeated or reordered timestamp) is no
   // new view of the scene: released unused and counted; the cycle goes on as without a frame.
-  const bool stale = status == hal::CameraStatus::kFrame && have_frame_time_ &&
-                     frame.timestamp_ns <= last_frame_ns_;
+  const bool stale = in.status == hal::CameraStatus::kFrame && have_frame_time_ &&
+                     in.frame.timestamp_ns <= last_frame_ns_;
   if (stale) {
     camera_.release();
     ++counters_.stale_frames;
   }
-  const bool have_frame = status == hal::CameraStatus::kFrame && !stale;
-  if (have_frame) {
+  in.have_frame = in.status == hal::CameraStatus::kFrame && !stale;
+  if (in.have_frame) {
     // The data clock never goes back: a frame stamped before it (late) is used at its time.
     data_time_ns_ =
-        have_data_time_ ? std::max(frame.timestamp_ns, data_time_ns_) : frame.timestamp_ns;
+        have_data_time_ ? std::max(in.frame.timestamp_ns, data_time_ns_) : in.frame.timestamp_ns;
     have_data_time_ = true;
-    last_frame_ns_ = frame.timestamp_ns;
+    last_frame_ns_ = in.frame.timestamp_ns;
     have_frame_time_ = true;
     ++counters_.frames;
   } else {
-    if (status == hal::CameraStatus::kCorrupt)
+    if (in.status == hal::CameraStatus::kCorrupt)
       ++counters_.corrupt_frames;
     else if (!stale)
       ++counters_.no_frame;
@@ -262,184 +298,156 @@ CycleResult LocalizationCycle::run(std::uint64_t acquire_deadline_ns, bool have_
       data_time_ns_ += period_ns_;
     }
   }
-  const bool usable = have_frame && frame.width_px == map_.image_width_px &&
-                      frame.height_px == map_.image_height_px;
-  if (have_frame && !usable) ++counters_.frame_size_mismatch;
+  in.usable = in.have_frame && in.frame.width_px == map_.image_width_px &&
+              in.frame.height_px == map_.image_height_px;
+  if (in.have_frame && !in.usable) ++counters_.frame_size_mismatch;
+}
 
-  // segment
-  algorithms::AreaVector areas;
-  {
-    StageTimer t(clock_, at(Stage::kSegment));
-    if (usable) {
-      // A frame of the format the table was not built for (the camera changed format) is
-      // segmented exactly without it: by the HSV arithmetic, or decoding YUYV to RGB per pixel.
-      const hal::FrameView& f = frame;
-      if (f.format == hal::PixelFormat::kRgb24) {
-        if (colour_table_.ready()) {
-          algorithms::segment_rgb24(f.data, f.width_px, f.height_px, f.stride_bytes, colour_table_,
-                                    areas);
-        } else {
-          algorithms::segment_rgb24(f.data, f.width_px, f.height_px, f.stride_bytes, classifier_,
-                                    areas);
-        }
-      } else if (yuyv_table_.ready()) {
-        algorithms::segment_yuyv(f.data, f.width_px, f.height_px, f.stride_bytes, yuyv_table_,
-                                 areas);
+void LocalizationCycle::segment(const FrameIn& in, algorithms::AreaVector& areas) {
+  if (in.usable) {
+    // A frame of the format the table was not built for (the camera changed format) is
+    // segmented exactly without it: by the HSV arithmetic, or decoding YUYV to RGB per pixel.
+    const hal::FrameView& f = in.frame;
+    if (f.format == hal::PixelFormat::kRgb24) {
+      if (colour_table_.ready()) {
+        algorithms::segment_rgb24(f.data, f.width_px, f.height_px, f.stride_bytes, colour_table_,
+                                  areas);
       } else {
-        algorithms::segment_yuyv(f.data, f.width_px, f.height_px, f.stride_bytes, colour_table_,
-                                 areas);
+        algorithms::segment_rgb24(f.data, f.width_px, f.height_px, f.stride_bytes, classifier_,
+                                  areas);
       }
+    } else if (yuyv_table_.ready()) {
+      algorithms::segment_yuyv(f.data, f.width_px, f.height_px, f.stride_bytes, yuyv_table_, areas);
+    } else {
+      algorithms::segment_yuyv(f.data, f.width_px, f.height_px, f.stride_bytes, colour_table_,
+                               areas);
     }
   }
-  if (have_frame) camera_.release();
+}
 
-  // localize
+void LocalizationCycle::localize(bool usable, const algorithms::AreaVector& areas,
+                                 Features& features) {
   fix_.present = false;
-  std::array<float, algorithms::HarmonicModel::kMaxFeatures> features{};
-  {
-    StageTimer t(clock_, at(Stage::kLocalize));
-    if (usable) {
-      algorithms::areas_to_features(map_.model, areas, features);
-      fix_.fix = algorithms::harmonic_query(map_.model, features);
-      fix_.areas = areas;
-      fix_.present = true;
-    }
+  if (usable) {
+    algorithms::areas_to_features(map_.model, areas, features);
+    fix_.fix = algorithms::harmonic_query(map_.model, features);
+    fix_.areas = areas;
+    fix_.present = true;
   }
+}
 
-  // encoders
-  bool have_delta = false;
-  bool bridge_now = false;    // the first sample after a diffused gap: move the cloud (predict)
-  bool fresh_sample = false;  // an encoder sample came in this cycle
-  algorithms::OdometryDelta delta{};
-  double delta_dt_s = 0.0;
-  {
-    StageTimer t(clock_, at(Stage::kEncoders));
-    hal::EncoderCounts counts{};
-    if (encoders_.read(data_time_ns_, counts) == hal::EncoderStatus::kFresh) {
-      ++counters_.encoder_samples;
-      if (have_encoder_ && gap_ != EncoderGap::kNone) {
-        // The first sample after a gap the cloud spent diffusing (vision only). Its counts are
-        // absolute, so they hold the travel over the whole gap: the cloud, which has meanwhile
-        // spread and followed the fixes, is moved so that its centre is where that travel
-        // takes the pose of the last sample (predict), keeping its spread. Applying the
-        // travel on top of what the cloud did would count the motion the fixes saw twice.
-        // If the filter was re-seeded in the gap, the counts only become the new reference.
-        if (gap_ == EncoderGap::kDiffused) {
-          const std::int64_t dl = algorithms::wrapped_delta(last_counts_.left_ticks,
-                                                            counts.left_ticks, counts.counter_bits);
-          const std::int64_t dr = algorithms::wrapped_delta(
-              last_counts_.right_ticks, counts.right_ticks, counts.counter_bits);
-          gap_travel_ = algorithms::odometry_from_ticks(geometry_, dl, dr);
-          bridge_now = true;
-        }
-        ++counters_.encoder_gaps_bridged;
-        gap_ = EncoderGap::kNone;
-      } else if (have_encoder_) {
+LocalizationCycle::EncoderIn LocalizationCycle::read_encoders() {
+  EncoderIn e;
+  hal::EncoderCounts counts{};
+  if (encoders_.read(data_time_ns_, counts) == hal::EncoderStatus::kFresh) {
+    ++counters_.encoder_samples;
+    if (have_encoder_ && gap_ != EncoderGap::kNone) {
+      // The first sample after a gap the cloud spent diffusing (vision only). Its counts are
+      // absolute, so they hold the travel over the whole gap: the cloud, which has meanwhile
+      // spread and followed the fixes, is moved so that its centre is where that travel
+      // takes the pose of the last sample (predict), keeping its spread. Applying the
+      // travel on top of what the cloud did would count the motion the fixes saw twice.
+      // If the filter was re-seeded in the gap, the counts only become the new reference.
+      if (gap_ == EncoderGap::kDiffused) {
         const std::int64_t dl = algorithms::wrapped_delta(last_counts_.left_ticks,
                                                           counts.left_ticks, counts.counter_bits);
         const std::int64_t dr = algorithms::wrapped_delta(last_counts_.right_ticks,
                                                           counts.right_ticks, counts.counter_bits);
-        delta = algorithms::odometry_from_ticks(geometry_, dl, dr);
-        delta_dt_s = static_cast<double>(counts.timestamp_ns - last_counts_.timestamp_ns) * 1e-9;
-        have_delta = true;
+        gap_travel_ = algorithms::odometry_from_ticks(geometry_, dl, dr);
+        e.bridge_now = true;
       }
-      last_counts_ = counts;
-      last_encoder_ns_ = counts.timestamp_ns;
-      have_encoder_ = true;
-      fresh_sample = true;
+      ++counters_.encoder_gaps_bridged;
+      gap_ = EncoderGap::kNone;
+    } else if (have_encoder_) {
+      const std::int64_t dl = algorithms::wrapped_delta(last_counts_.left_ticks, counts.left_ticks,
+                                                        counts.counter_bits);
+      const std::int64_t dr = algorithms::wrapped_delta(last_counts_.right_ticks,
+                                                        counts.right_ticks, counts.counter_bits);
+      e.delta = algorithms::odometry_from_ticks(geometry_, dl, dr);
+      e.dt_s = static_cast<double>(counts.timestamp_ns - last_counts_.timestamp_ns) * 1e-9;
+      e.have_delta = true;
+    }
+    last_counts_ = counts;
+    last_encoder_ns_ = counts.timestamp_ns;
+    have_encoder_ = true;
+    e.fresh_sample = true;
+  }
+  return e;
+}
+
+void LocalizationCycle::predict(const EncoderIn& e) {
+  if (filter_.initialized()) {
+    if (e.bridge_now) {
+      const algorithms::Pose2 target = algorithms::apply_arc(gap_anchor_, gap_travel_);
+      const algorithms::Pose2 mean = filter_.estimate().mean;
+      filter_.shift(target.x_m - mean.x_m, target.y_m - mean.y_m,
+                    algorithms::wrap_angle_rad(target.yaw_rad - mean.yaw_rad));
+    } else if (e.have_delta) {
+      filter_.predict(e.delta);
+    } else if (assess_health() == Health::kVisionOnly) {
+      // Motion unknown: let the cloud spread as fast as the robot could move.
+      const double step_m = config_.filter.vision_only_speed_mps / config_.cycle.rate_hz;
+      filter_.predict(algorithms::OdometryDelta{0.0, 0.0});
+      filter_.diffuse(step_m, 0.5 * step_m / (0.5 * geometry_.track_m));
+      if (gap_ == EncoderGap::kNone && have_anchor_) gap_ = EncoderGap::kDiffused;
     }
   }
-
-  // predict
-  {
-    StageTimer t(clock_, at(Stage::kPredict));
-    if (filter_.initialized()) {
-      if (bridge_now) {
-        const algorithms::Pose2 target = algorithms::apply_arc(gap_anchor_, gap_travel_);
-        const algorithms::Pose2 mean = filter_.estimate().mean;
-        filter_.shift(target.x_m - mean.x_m, target.y_m - mean.y_m,
-                      algorithms::wrap_angle_rad(target.yaw_rad - mean.yaw_rad));
-      } else if (have_delta) {
-        filter_.predict(delta);
-      } else if (assess_health() == Health::kVisionOnly) {
-        // Motion unknown: let the cloud spread as fast as the robot could move.
-        const double step_m = config_.filter.vision_only_speed_mps / config_.cycle.rate_hz;
-        filter_.predict(algorithms::OdometryDelta{0.0, 0.0});
-        filter_.diffuse(step_m, 0.5 * step_m / (0.5 * geometry_.track_m));
-        if (gap_ == EncoderGap::kNone && have_anchor_) gap_ = EncoderGap::kDiffused;
-      }
-    }
-    if (have_delta && delta_dt_s > 0.0) {
-      pose_.speed_mps = delta.distance_m / delta_dt_s;
-      pose_.yaw_rate_rps = delta.yaw_rad / delta_dt_s;
-    }
+  if (e.have_delta && e.dt_s > 0.0) {
+    pose_.speed_mps = e.delta.distance_m / e.dt_s;
+    pose_.yaw_rate_rps = e.delta.yaw_rad / e.dt_s;
   }
+}
 
-  // update
-  {
-    StageTimer t(clock_, at(Stage::kUpdate));
-    kidnap_verdict_ = algorithms::KidnapVerdict::kNone;
-    // A frame no place on the map can look like (noise, a blinded sensor) is not a view.
-    const bool implausible =
-        fix_.present && use_boards_ &&
-        algorithms::frame_implausible(map_.forward, board_maxima_,
-                                      algorithms::board_features(map_.model.area_scale, areas),
-                                      config_.observation.boards.implausible_ratio);
-    if (implausible) ++counters_.implausible_frames;
-    if (fix_.present && !implausible) {
+void LocalizationCycle::update(const algorithms::AreaVector& areas, const Features& features,
+                               bool fresh_sample) {
+  kidnap_verdict_ = algorithms::KidnapVerdict::kNone;
+  // A frame no place on the map can look like (noise, a blinded sensor) is not a view.
+  const bool implausible =
+      fix_.present && use_boards_ &&
+      algorithms::frame_implausible(map_.forward, board_maxima_,
+                                    algorithms::board_features(map_.model.area_scale, areas),
+                                    config_.observation.boards.implausible_ratio);
+  if (implausible) ++counters_.implausible_frames;
+  if (fix_.present && !implausible) {
+    if (fix_.fix.known_place) {
+      ++counters_.fixes_used;
+      last_known_fix_ = fix_.fix;
+    } else {
+      ++counters_.unknown_place;
+    }
+    bool vision = false;
+    if (!filter_.initialized()) {
       if (fix_.fix.known_place) {
-        ++counters_.fixes_used;
-        last_known_fix_ = fix_.fix;
-      } else {
-        ++counters_.unknown_place;
-      }
-      bool vision = false;
-      if (!filter_.initialized()) {
-        if (fix_.fix.known_place) {
-          reseed_around(fix_.fix.x_m, fix_.fix.y_m);
-          vision = true;
-        }
-      } else if (use_boards_) {
-        vision = update_with_boards(areas, features);
-      } else if (fix_.fix.known_place) {
-        filter_.update_position(fix_.fix.x_m, fix_.fix.y_m, config_.filter.fix_sigma_m,
-                                config_.filter.outlier_probability);
-        if (filter_.resample_if_needed(config_.filter.resample_threshold)) ++counters_.resamples;
+        reseed_around(fix_.fix.x_m, fix_.fix.y_m);
         vision = true;
       }
-      if (vision) {
-        last_fix_ns_ = data_time_ns_;
-        ever_fix_ = true;
-      }
+    } else if (use_boards_) {
+      vision = update_with_boards(areas, features);
+    } else if (fix_.fix.known_place) {
+      filter_.update_position(fix_.fix.x_m, fix_.fix.y_m, config_.filter.fix_sigma_m,
+                              config_.filter.outlier_probability);
+      if (filter_.resample_if_needed(config_.filter.resample_threshold)) ++counters_.resamples;
+      vision = true;
     }
-    if (filter_.initialized()) {
-      const algorithms::PoseEstimate e = filter_.estimate();
-      pose_.pose = e.mean;
-      pose_.covariance = e.covariance;
-      pose_.valid = true;
-      // Where the robot was at the latest encoder sample: a gap's travel starts there.
-      if (fresh_sample) {
-        gap_anchor_ = e.mean;
-        have_anchor_ = true;
-      }
+    if (vision) {
+      last_fix_ns_ = data_time_ns_;
+      ever_fix_ = true;
     }
-    pose_.data_time_ns = data_time_ns_;
-    pose_.health = published_health();
-    ++counters_.cycles_in_health[static_cast<std::size_t>(pose_.health)];
   }
-
-  // publish
-  {
-    StageTimer t(clock_, at(Stage::kPublish));
-    service_link();
-    publish();
+  if (filter_.initialized()) {
+    const algorithms::PoseEstimate e = filter_.estimate();
+    pose_.pose = e.mean;
+    pose_.covariance = e.covariance;
+    pose_.valid = true;
+    // Where the robot was at the latest encoder sample: a gap's travel starts there.
+    if (fresh_sample) {
+      gap_anchor_ = e.mean;
+      have_anchor_ = true;
+    }
   }
-
-  const std::uint64_t elapsed = clock_.now_ns() - compute_start;
-  at(Stage::kCycle).record(elapsed);
-  if (elapsed > budget_ns_) ++counters_.overruns;
-  account_overrun(elapsed > budget_ns_);
-  return CycleResult::kRan;
+  pose_.data_time_ns = data_time_ns_;
+  pose_.health = published_health();
+  ++counters_.cycles_in_health[static_cast<std::size_t>(pose_.health)];
 }
 
 void LocalizationCycle::account_overrun(bool overrun) {
@@ -605,24 +613,7 @@ void LocalizationCycle::publish() {
   if (heartbeat_due || heartbeat_requested_) {
     heartbeat_requested_ = false;
     mavlink::Heartbeat hb;
-    switch (health) {
-      case Health::kNotInitialized:
-        hb.system_status = mavlink::kMavStateStandby;
-        break;
-      case Health::kNominal:
-        hb.system_status = mavlink::kMavStateActive;
-        break;
-      case Health::kOdometryOnly:
-      case Health::kVisionOnly:
-        hb.system_status = mavlink::kMavStateCritical;
-        break;
-      case Health::kInvalid:
-        hb.system_status = mavlink::kMavStateEmergency;
-        break;
-    }
-    // Overrunning: the pose comes late or not every cycle. At least CRITICAL while it lasts.
-    if (overrun_alarm_ && (health == Health::kNominal || health == Health::kNotInitialized))
-      hb.system_status = mavlink::kMavStateCritical;
+    hb.system_status = heartbeat_status(health, overrun_alarm_);
     send(mavlink_.heartbeat(hb, frame_buffer_));
   }
   if (heartbeat_due) {  // a requested one leaves the schedule alone
@@ -634,17 +625,8 @@ void LocalizationCycle::publish() {
   const bool off = pose_.valid && health == Health::kInvalid && off_map(pose_.pose);
   if (off) ++counters_.off_map_cycles;
   if (health != last_reported_health_ || off != last_reported_off_map_) {
-    static constexpr const char* kText[] = {
-        "harmoloc: waiting for a first fix", "harmoloc: pose nominal",
-        "harmoloc: odometry only (no camera fix)", "harmoloc: vision only (no encoder data)",
-        "harmoloc: pose invalid (no camera, no encoders)"};
-    const std::uint8_t severity = health == Health::kNominal   ? mavlink::kSeverityInfo
-                                  : health == Health::kInvalid ? mavlink::kSeverityCritical
-                                                               : mavlink::kSeverityWarning;
-    send(mavlink_.statustext(severity,
-                             off ? "harmoloc: pose invalid (outside the mapped region)"
-                                 : kText[static_cast<std::size_t>(health)],
-                             frame_buffer_));
+    const HealthText t = health_text(health, off);
+    send(mavlink_.statustext(t.severity, t.text, frame_buffer_));
     last_reported_health_ = health;
     last_reported_off_map_ = off;
   }
@@ -659,37 +641,8 @@ void LocalizationCycle::publish() {
   }
   if (!pose_.valid) return;
 
-  // Map frame (x, y on the floor, z up, yaw counter-clockwise) -> MAV_FRAME_LOCAL_FRD
-  // (z down): y and yaw change sign. Body velocity in MAV_FRAME_BODY_FRD.
-  mavlink::Odometry m;
-  m.time_usec = data_time_ns_ / 1000U;
-  m.x = static_cast<float>(pose_.pose.x_m);
-  m.y = static_cast<float>(-pose_.pose.y_m);
-  m.z = 0.0F;
-  const double half_yaw = -0.5 * pose_.pose.yaw_rad;
-  m.q = {static_cast<float>(std::cos(half_yaw)), 0.0F, 0.0F,
-         static_cast<float>(std::sin(half_yaw))};
-  m.vx = static_cast<float>(pose_.speed_mps);
-  m.yawspeed = static_cast<float>(-pose_.yaw_rate_rps);
-  const auto& c = pose_.covariance;
-  m.pose_covariance.fill(0.0F);
-  m.pose_covariance[0] = static_cast<float>(c(0, 0));   // x x
-  m.pose_covariance[1] = static_cast<float>(-c(0, 1));  // x y
-  m.pose_covariance[5] = static_cast<float>(-c(0, 2));  // x yaw
-  m.pose_covariance[6] = static_cast<float>(c(1, 1));   // y y
-  m.pose_covariance[10] = static_cast<float>(c(1, 2));  // y yaw (both signs flip)
-  m.pose_covariance[20] = static_cast<float>(c(2, 2));  // yaw yaw
-  m.velocity_covariance.fill(0.0F);
-  m.velocity_covariance[0] = std::numeric_limits<float>::quiet_NaN();  // not estimated
-  m.reset_counter = reset_counter_;
-  if (health == Health::kInvalid) {
-    m.quality = -1;
-  } else {
-    const double sigma_m = std::sqrt(std::max(0.0, 0.5 * (c(0, 0) + c(1, 1))));
-    m.quality =
-        static_cast<std::int8_t>(std::lround(std::clamp(100.0 - 1000.0 * sigma_m, 0.0, 100.0)));
-  }
-  send(mavlink_.odometry(m, frame_buffer_));
+  // Map frame -> MAV_FRAME_LOCAL_FRD (pose_messages.hpp).
+  send(mavlink_.odometry(odometry_message(pose_, data_time_ns_, reset_counter_), frame_buffer_));
 }
 
 }  // namespace harmoloc::firmware

@@ -53,6 +53,16 @@ void LocalizationCycle::service_link() {
     receiver_.count_result(ack.result);
     send(mavlink_.command_ack(ack, frame_buffer_));
   }
+  // TIMESYNC: our time on the clock ODOMETRY's time_usec is on (the data clock: the monotonic
+  // clock on a live board, the recording's time in a replay), so that the peer can map one to
+  // its own clock.
+  mavlink::TimesyncRequest request;
+  if (receiver_.take_timesync(request)) {
+    const std::uint64_t ours_ns = live_clock_ ? now_ns : data_time_ns_;
+    send(mavlink_.timesync(mavlink::Timesync{static_cast<std::int64_t>(ours_ns), request.ts1,
+                                             request.system_id, request.component_id},
+                           frame_buffer_));
+  }
   if (reseed_.kind == Reseed::Kind::kNone) return;
   if (reseed_.kind == Reseed::Kind::kAround) {
     filter_.initialize(reseed_.centre, reseed_.position_sigma_m, reseed_.yaw_sigma_rad,

@@ -28,6 +28,21 @@ CommandLong decode_command_long(const RxFrame& frame) {
   return c;
 }
 
+Timesync decode_timesync(const RxFrame& frame) {
+  const std::uint8_t* p = frame.payload.data();
+  const auto i64 = [p](std::size_t at) {
+    std::uint64_t u = 0;
+    for (std::size_t i = 0; i < 8; ++i) u |= static_cast<std::uint64_t>(p[at + i]) << (8U * i);
+    return static_cast<std::int64_t>(u);
+  };
+  Timesync t;
+  t.tc1 = i64(0);
+  t.ts1 = i64(8);
+  t.target_system = p[16];
+  t.target_component = p[17];
+  return t;
+}
+
 MavResult read_set_pose(const CommandLong& command, double default_position_sigma_m,
                         SetPoseRequest& out) {
   const double x = command.param[0];
@@ -114,6 +129,10 @@ bool CommandReceiver::next_command(hal::PoseLink& link, CommandLong& out) {
 }
 
 bool CommandReceiver::admit(const RxFrame& frame, CommandLong& out) {
+  if (frame.msg_id == kMsgTimesync) {
+    note_timesync(frame);
+    return false;
+  }
   if (frame.msg_id != kMsgCommandLong) {
     ++counters_.ignored_messages;
     return false;
@@ -129,24 +148,49 @@ bool CommandReceiver::admit(const RxFrame& frame, CommandLong& out) {
     ++counters_.rejected_source;
     return false;
   }
-  if (signer_ != nullptr && signer_->enabled()) {
-    switch (signer_->verify(frame.bytes, frame.size)) {
-      case SignatureCheck::kAccepted:
-        break;
-      case SignatureCheck::kUnsigned:
-        ++counters_.rejected_unsigned;
-        return false;
-      case SignatureCheck::kBadSignature:
-        ++counters_.rejected_bad_signature;
-        return false;
-      case SignatureCheck::kReplay:
-        ++counters_.rejected_replay;
-        return false;
-      case SignatureCheck::kTooFarAhead:
-        ++counters_.rejected_future;
-        return false;
-    }
+  return signature_ok(frame);
+}
+
+void CommandReceiver::note_timesync(const RxFrame& frame) {
+  const Timesync t = decode_timesync(frame);
+  // tc1 != 0: an answer to someone's request, not a request. Target 0 (or a sender without the
+  // extension fields) addresses every system or component.
+  if (t.tc1 != 0 || (t.target_system != 0 && t.target_system != system_id_) ||
+      (t.target_component != 0 && t.target_component != component_id_)) {
+    ++counters_.ignored_messages;
+    return;
   }
+  if (!signature_ok(frame)) return;
+  timesync_ = TimesyncRequest{t.ts1, frame.system_id, frame.component_id};
+  timesync_pending_ = true;
+  ++counters_.timesync_requests;
+}
+
+bool CommandReceiver::signature_ok(const RxFrame& frame) {
+  if (signer_ == nullptr || !signer_->enabled()) return true;
+  switch (signer_->verify(frame.bytes, frame.size)) {
+    case SignatureCheck::kAccepted:
+      return true;
+    case SignatureCheck::kUnsigned:
+      ++counters_.rejected_unsigned;
+      return false;
+    case SignatureCheck::kBadSignature:
+      ++counters_.rejected_bad_signature;
+      return false;
+    case SignatureCheck::kReplay:
+      ++counters_.rejected_replay;
+      return false;
+    case SignatureCheck::kTooFarAhead:
+      ++counters_.rejected_future;
+      return false;
+  }
+  return false;
+}
+
+bool CommandReceiver::take_timesync(TimesyncRequest& out) {
+  if (!timesync_pending_) return false;
+  out = timesync_;
+  timesync_pending_ = false;
   return true;
 }
 

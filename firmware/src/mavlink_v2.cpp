@@ -120,6 +120,15 @@ std::size_t Encoder::command_ack(const CommandAck& m, FrameBuffer& out) {
   return finish(kMsgCommandAck, kCrcExtraCommandAck, p.size(), out);
 }
 
+std::size_t Encoder::timesync(const Timesync& m, FrameBuffer& out) {
+  Payload p(out.data() + kHeaderBytes);
+  p.u64(static_cast<std::uint64_t>(m.tc1));
+  p.u64(static_cast<std::uint64_t>(m.ts1));
+  p.u8(m.target_system);  // extensions
+  p.u8(m.target_component);
+  return finish(kMsgTimesync, kCrcExtraTimesync, p.size(), out);
+}
+
 std::size_t Encoder::statustext(std::uint8_t severity, const char* text, FrameBuffer& out) {
   Payload p(out.data() + kHeaderBytes);
   p.u8(severity);

@@ -94,6 +94,7 @@ std::string stats_json(const LocalizationCycle& cycle, const RunCounters& run) {
     << ", \"rejected_future\": " << in.rejected_future
     << ", \"rejected_source\": " << in.rejected_source
     << ", \"ignored_messages\": " << in.ignored_messages
+    << ", \"timesync_requests\": " << in.timesync_requests
     << ", \"saturated_cycles\": " << in.saturated_cycles << "}";
   if (run.wakeup_latency != nullptr && run.wakeup_latency->count() > 0) {
     const LatencyHistogram& w = *run.wakeup_latency;

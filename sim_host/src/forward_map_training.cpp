@@ -164,7 +164,7 @@ ForwardMapReport fit_grid(std::vector<Positioned>& frames, std::size_t board_cou
 
 ForwardMapReport train_forward_map(const std::vector<std::vector<float>>& features,
                                    const std::vector<std::uint64_t>& timestamps_ns,
-                                   const std::vector<StampedPose>& labels,
+                                   const std::vector<dataset::StampedPose>& labels,
                                    const algorithms::HarmonicModel& model, std::size_t board_count,
                                    const ForwardMapOptions& opt, algorithms::ForwardMap& out) {
   ForwardMapReport report;
@@ -172,7 +172,8 @@ ForwardMapReport train_forward_map(const std::vector<std::vector<float>>& featur
     throw std::runtime_error("forward map: board count out of range");
   // Do the labels carry a heading? (A label source without orientation writes yaw 0.)
   bool labels_have_yaw = false;
-  for (const StampedPose& l : labels) labels_have_yaw = labels_have_yaw || l.pose.yaw_rad != 0.0;
+  for (const dataset::StampedPose& l : labels)
+    labels_have_yaw = labels_have_yaw || l.pose.yaw_rad != 0.0;
 
   std::vector<Positioned> frames;
   for (std::size_t i = 0; i < features.size(); ++i) {
@@ -183,8 +184,9 @@ ForwardMapReport train_forward_map(const std::vector<std::vector<float>>& featur
     ++report.frames;
     const double t = static_cast<double>(timestamps_ns[i]) * 1e-9;
     // The labels around this frame, if close enough in time to interpolate between.
-    const auto next = std::lower_bound(labels.begin(), labels.end(), t,
-                                       [](const StampedPose& l, double v) { return l.t_s < v; });
+    const auto next =
+        std::lower_bound(labels.begin(), labels.end(), t,
+                         [](const dataset::StampedPose& l, double v) { return l.t_s < v; });
     Positioned p{0.0, 0.0, 0.0, t, false, &f, -1.0};
     bool placed = false;
     if (next != labels.end() && std::fabs(next->t_s - t) < 1e-6) {
@@ -193,8 +195,8 @@ ForwardMapReport train_forward_map(const std::vector<std::vector<float>>& featur
       p.yaw_rad = next->pose.yaw_rad;
       placed = true;
     } else if (next != labels.end() && next != labels.begin()) {
-      const StampedPose& a = *(next - 1);
-      const StampedPose& b = *next;
+      const dataset::StampedPose& a = *(next - 1);
+      const dataset::StampedPose& b = *next;
       if (b.t_s - a.t_s <= opt.max_label_gap_s) {
         const double u = (t - a.t_s) / (b.t_s - a.t_s);
         p.x_m = a.pose.x_m + u * (b.pose.x_m - a.pose.x_m);

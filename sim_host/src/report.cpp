@@ -480,8 +480,8 @@ double percentile(std::vector<double> values, double p) {
   return values[lo] + frac * (values[hi] - values[lo]);
 }
 
-TrajectoryErrors evaluate(const std::vector<StampedPose>& truth,
-                          const std::vector<StampedPose>& estimate,
+TrajectoryErrors evaluate(const std::vector<dataset::StampedPose>& truth,
+                          const std::vector<dataset::StampedPose>& estimate,
                           const EvaluateOptions& options) {
   TrajectoryErrors out;
   out.skip_initial_s = options.skip_initial_s;
@@ -492,9 +492,9 @@ TrajectoryErrors evaluate(const std::vector<StampedPose>& truth,
   const double from_s = truth.front().t_s + options.skip_initial_s;
   double sum_x2 = 0.0, sum_y2 = 0.0, sum_h2 = 0.0, sum_p = 0.0;
   std::vector<double> positions;
-  for (const StampedPose& e : estimate) {
+  for (const dataset::StampedPose& e : estimate) {
     algorithms::Pose2 reference;
-    if (!interpolate(truth, e.t_s, reference)) {
+    if (!dataset::interpolate(truth, e.t_s, reference)) {
       ++out.outside_truth;
       continue;
     }
@@ -674,9 +674,9 @@ RunStats read_stats(const std::string& path) {
 // Building the report
 // ---------------------------------------------------------------------------------------------
 
-Report build_report(ReportInputs inputs, std::vector<StampedPose> truth,
-                    std::vector<StampedPose> estimate, std::vector<StampedPose> fixes,
-                    std::optional<RunStats> stats) {
+Report build_report(ReportInputs inputs, std::vector<dataset::StampedPose> truth,
+                    std::vector<dataset::StampedPose> estimate,
+                    std::vector<dataset::StampedPose> fixes, std::optional<RunStats> stats) {
   const std::string truth_name = inputs.truth_path.empty() ? "truth" : inputs.truth_path;
   const std::string estimate_name =
       inputs.estimate_path.empty() ? "estimate" : inputs.estimate_path;
@@ -692,7 +692,8 @@ Report build_report(ReportInputs inputs, std::vector<StampedPose> truth,
   const bool with_fixes = !inputs.fixes_path.empty() || !fixes.empty();
   if (with_fixes && fixes.empty()) throw ReportError(fixes_name + ": no poses");
 
-  const auto span_error = [&](const std::string& name, const std::vector<StampedPose>& poses) {
+  const auto span_error = [&](const std::string& name,
+                              const std::vector<dataset::StampedPose>& poses) {
     return ReportError(
         format("%s: no pose lies within the ground truth's time span (truth "
                "%.3f..%.3f s, %s %.3f..%.3f s)",
@@ -737,10 +738,10 @@ Report load_report(const ReportInputs& inputs) {
       throw ReportError(*path + ": is a directory, expected a file");
     }
   }
-  std::vector<StampedPose> truth = read_tum(inputs.truth_path);
-  std::vector<StampedPose> estimate = read_tum(inputs.estimate_path);
-  std::vector<StampedPose> fixes;
-  if (!inputs.fixes_path.empty()) fixes = read_tum(inputs.fixes_path);
+  std::vector<dataset::StampedPose> truth = dataset::read_tum(inputs.truth_path);
+  std::vector<dataset::StampedPose> estimate = dataset::read_tum(inputs.estimate_path);
+  std::vector<dataset::StampedPose> fixes;
+  if (!inputs.fixes_path.empty()) fixes = dataset::read_tum(inputs.fixes_path);
   std::optional<RunStats> stats;
   if (!inputs.stats_path.empty()) stats = read_stats(inputs.stats_path);
   return build_report(inputs, std::move(truth), std::move(estimate), std::move(fixes),
@@ -944,7 +945,7 @@ std::string trajectory_svg(const Report& report) {
   // The view: the truth's box, grown to take in the estimate and fixes unless they run far
   // away (then they are clipped and counted, so that one wild fix does not shrink the route).
   Box truth_box;
-  for (const StampedPose& p : report.truth) truth_box.add(p.pose.x_m, p.pose.y_m);
+  for (const dataset::StampedPose& p : report.truth) truth_box.add(p.pose.x_m, p.pose.y_m);
   const double extent = std::max({truth_box.width(), truth_box.height(), 0.2});
   Box limit = truth_box;
   const double grow = 0.5 * extent + 0.5;
@@ -954,8 +955,8 @@ std::string trajectory_svg(const Report& report) {
   limit.y1 += grow;
   Box view = truth_box;
   std::size_t outside = 0;
-  const auto take = [&](const std::vector<StampedPose>& poses) {
-    for (const StampedPose& p : poses) {
+  const auto take = [&](const std::vector<dataset::StampedPose>& poses) {
+    for (const dataset::StampedPose& p : poses) {
       if (limit.contains(p.pose.x_m, p.pose.y_m)) {
         view.add(p.pose.x_m, p.pose.y_m);
       } else {
@@ -1031,21 +1032,22 @@ std::string trajectory_svg(const Report& report) {
   svg.raw("<g clip-path=\"url(#trajectory-plot)\">\n");
   if (!report.fixes.empty()) {
     svg.raw(format("<g class=\"fixes\" fill=\"%s\" fill-opacity=\"0.55\">\n", kFixColour));
-    for (const StampedPose& p : report.fixes) {
+    for (const dataset::StampedPose& p : report.fixes) {
       svg.raw(format("<circle cx=\"%s\" cy=\"%s\" r=\"1.8\"/>\n", num(sx(p.pose.x_m)).c_str(),
                      num(sy(p.pose.y_m)).c_str()));
     }
     svg.raw("</g>\n");
   }
   std::vector<std::pair<double, double>> points;
-  for (const StampedPose& p : report.truth) points.emplace_back(sx(p.pose.x_m), sy(p.pose.y_m));
+  for (const dataset::StampedPose& p : report.truth)
+    points.emplace_back(sx(p.pose.x_m), sy(p.pose.y_m));
   svg.polyline(points, kTruthColour, 2.4, "truth", " stroke-opacity=\"0.85\"");
   points.clear();
-  for (const StampedPose& p : report.estimate) {
+  for (const dataset::StampedPose& p : report.estimate) {
     points.emplace_back(sx(p.pose.x_m), sy(p.pose.y_m));
   }
   svg.polyline(points, kEstimateColour, 1.5, "estimate");
-  const StampedPose& start = report.truth.front();
+  const dataset::StampedPose& start = report.truth.front();
   svg.circle(sx(start.pose.x_m), sy(start.pose.y_m), 6.0, "none",
              " stroke=\"#2ca02c\" stroke-width=\"2.5\"");
   svg.raw("</g>\n");

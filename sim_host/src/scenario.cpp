@@ -9,9 +9,9 @@
 
 #include <toml++/toml.h>
 
+#include "harmoloc/dataset/toml_text.hpp"
 #include "harmoloc/drivers/input_file.hpp"
 #include "harmoloc/sim_host/route.hpp"
-#include "toml_text.hpp"
 
 namespace harmoloc::sim_host {
 
@@ -706,8 +706,8 @@ std::string scenario_to_toml(const Scenario& s) {
   std::ostringstream o;
   const CameraSpec& c = s.camera;
   o << "# Scenario as simulated (format: docs/scenarios.md)\n"
-    << "name = " << toml_string(s.name) << "\n"
-    << "description = " << toml_string(s.description) << "\n"
+    << "name = " << dataset::toml_string(s.name) << "\n"
+    << "description = " << dataset::toml_string(s.description) << "\n"
     << "labelled_frames = " << s.labelled_frames << "\n"
     << "labels_with_heading = " << (s.labels_with_heading ? "true" : "false") << "\n"
     << "start_time_s = " << n(s.start_time_s) << "\n";
@@ -751,22 +751,22 @@ std::string scenario_to_toml(const Scenario& s) {
     << "\ntrack_m = " << n(s.robot.track_m) << "\nticks_per_rev = " << n(s.robot.ticks_per_rev)
     << "\n";
   for (const BoardSpec& b : s.boards) {
-    o << "\n[[boards]]\nname = " << toml_string(b.name) << "\ncolour = " << rgb_text(b.colour)
-      << "\ncentre = [" << n(b.centre_x_m) << ", " << n(b.centre_y_m) << ", " << n(b.centre_z_m)
-      << "]\nsize = [" << n(b.width_m) << ", " << n(b.height_m)
-      << "]\nfacing_deg = " << deg_text(b.facing_yaw_rad)
+    o << "\n[[boards]]\nname = " << dataset::toml_string(b.name)
+      << "\ncolour = " << rgb_text(b.colour) << "\ncentre = [" << n(b.centre_x_m) << ", "
+      << n(b.centre_y_m) << ", " << n(b.centre_z_m) << "]\nsize = [" << n(b.width_m) << ", "
+      << n(b.height_m) << "]\nfacing_deg = " << deg_text(b.facing_yaw_rad)
       << "\nshape = " << (b.shape == BoardShape::kEllipse ? "\"ellipse\"" : "\"rectangle\"")
       << "\ntilt_deg = " << deg_text(b.tilt_rad) << "\nstand = " << (b.stand ? "true" : "false")
       << "\n";
   }
   // Events only when there are any.
   for (const OccluderSpec& oc : s.occluders) {
-    o << "\n[[occluders]]\nname = " << toml_string(oc.name) << "\ncolour = " << rgb_text(oc.colour)
-      << "\nradius_m = " << n(oc.radius_m) << "\nheight_m = " << n(oc.height_m)
-      << "\npath = " << list_text(oc.path) << "\n";
+    o << "\n[[occluders]]\nname = " << dataset::toml_string(oc.name)
+      << "\ncolour = " << rgb_text(oc.colour) << "\nradius_m = " << n(oc.radius_m)
+      << "\nheight_m = " << n(oc.height_m) << "\npath = " << list_text(oc.path) << "\n";
   }
   for (const BoardMoveSpec& m : s.board_moves) {
-    o << "\n[[board_moves]]\nboard = " << toml_string(m.board) << "\nat_s = " << n(m.at_s)
+    o << "\n[[board_moves]]\nboard = " << dataset::toml_string(m.board) << "\nat_s = " << n(m.at_s)
       << "\noffset_m = " << array_text(m.offset_m) << "\nturn_deg = " << n(m.turn_deg) << "\n";
   }
   if (s.kidnaps.count > 0) {

@@ -91,7 +91,7 @@ ScenarioRun::ScenarioRun(const Scenario& scenario, std::uint64_t seed)
       std::min<std::size_t>(static_cast<std::size_t>(scenario_.labelled_frames), frames);
   for (std::size_t i = 0; i < n; ++i) {
     const std::size_t k = n > 1 ? (i * (frames - 1) + (n - 1) / 2) / (n - 1) : 0;
-    StampedPose p{static_cast<double>(stamps_ns_[k]) * 1e-9, truth_[k]};
+    dataset::StampedPose p{static_cast<double>(stamps_ns_[k]) * 1e-9, truth_[k]};
     p.pose.x_m += 0.003 * label_rng.normal();
     p.pose.y_m += 0.003 * label_rng.normal();
     if (!scenario_.labels_with_heading) p.pose.yaw_rad = 0.0;  // a position-only reference

@@ -6,11 +6,11 @@
 #include <fstream>
 #include <stdexcept>
 
-#include "harmoloc/sim_host/candump_log.hpp"
-#include "harmoloc/sim_host/frame_index.hpp"
-#include "harmoloc/sim_host/metadata.hpp"
+#include "harmoloc/dataset/candump_log.hpp"
+#include "harmoloc/dataset/frame_index.hpp"
+#include "harmoloc/dataset/metadata.hpp"
+#include "harmoloc/dataset/tum.hpp"
 #include "harmoloc/sim_host/scenario_run.hpp"
-#include "harmoloc/sim_host/tum.hpp"
 
 namespace harmoloc::sim_host {
 
@@ -27,8 +27,8 @@ SimulationSummary simulate_dataset(const Scenario& scenario, std::uint64_t seed,
 
   // Frames and ground truth.
   const std::size_t frame_count = run.frame_count();
-  std::vector<FrameEntry> index;
-  std::vector<StampedPose> truth;
+  std::vector<dataset::FrameEntry> index;
+  std::vector<dataset::StampedPose> truth;
   index.reserve(frame_count);
   truth.reserve(frame_count);
   std::vector<std::uint8_t> rgb;
@@ -36,15 +36,15 @@ SimulationSummary simulate_dataset(const Scenario& scenario, std::uint64_t seed,
   for (std::size_t k = 0; k < frame_count; ++k) {
     run.render(k, rgb);
     std::snprintf(name, sizeof name, "frames/%06zu.ppm", k);
-    write_ppm((fs::path(out_dir) / name).string(), s.camera.width_px, s.camera.height_px,
-              rgb.data());
+    dataset::write_ppm((fs::path(out_dir) / name).string(), s.camera.width_px, s.camera.height_px,
+                       rgb.data());
     const std::uint64_t stamp = run.frame_timestamp_ns(k);
-    index.push_back(FrameEntry{stamp, name});
-    truth.push_back(StampedPose{static_cast<double>(stamp) * 1e-9, run.truth(k)});
+    index.push_back(dataset::FrameEntry{stamp, name});
+    truth.push_back(dataset::StampedPose{static_cast<double>(stamp) * 1e-9, run.truth(k)});
     if (progress && (k % 50 == 0 || k + 1 == frame_count)) progress(k + 1, frame_count);
   }
-  write_frame_index((fs::path(out_dir) / "frames.csv").string(), index);
-  write_tum((fs::path(out_dir) / "groundtruth.tum").string(), truth);
+  dataset::write_frame_index((fs::path(out_dir) / "frames.csv").string(), index);
+  dataset::write_tum((fs::path(out_dir) / "groundtruth.tum").string(), truth);
   summary.frames = frame_count;
 
   // Wheel encoders on the CAN bus, as `candump -l` logs them.
@@ -52,13 +52,13 @@ SimulationSummary simulate_dataset(const Scenario& scenario, std::uint64_t seed,
     std::ofstream log(fs::path(out_dir) / "encoders.log");
     if (!log) throw std::runtime_error(out_dir + "/encoders.log: cannot write");
     for (const algorithms::CanFrame& frame : run.encoder_frames())
-      log << format_candump_line(frame, "can0") << '\n';
+      log << dataset::format_candump_line(frame, "can0") << '\n';
     if (!log) throw std::runtime_error(out_dir + "/encoders.log: write failed");
     summary.encoder_frames = run.counter_frame_count();
   }
 
   // Labels: a few poses from an external reference (an overhead camera, a few mm of error).
-  write_tum((fs::path(out_dir) / "labels.tum").string(), run.labels());
+  dataset::write_tum((fs::path(out_dir) / "labels.tum").string(), run.labels());
   summary.labels = run.labels().size();
 
   // Kidnaps, when there are any: where the robot was lifted and where it was put down.
@@ -82,7 +82,7 @@ SimulationSummary simulate_dataset(const Scenario& scenario, std::uint64_t seed,
     fs::remove(kidnaps_path, ec);  // not a stale one from an earlier run into the same folder
   }
 
-  DatasetMetadata meta;
+  dataset::DatasetMetadata meta;
   meta.name = s.name;
   meta.seed = seed;
   meta.image_width_px = s.camera.width_px;
@@ -92,7 +92,7 @@ SimulationSummary simulate_dataset(const Scenario& scenario, std::uint64_t seed,
   meta.geometry = s.robot;
   meta.encoder_layout = s.can_layout;
   meta.ground_truth = "groundtruth.tum";
-  write_metadata(out_dir, meta);
+  dataset::write_metadata(out_dir, meta);
   std::ofstream(fs::path(out_dir) / "scenario.toml") << scenario_to_toml(s);
   return summary;
 }

@@ -11,9 +11,9 @@
 #include "harmoloc/algorithms/harmonic_training.hpp"
 #include "harmoloc/algorithms/kernel_selection.hpp"
 #include "harmoloc/algorithms/route_placement.hpp"
-#include "harmoloc/sim_host/area_log.hpp"
-#include "harmoloc/sim_host/file_camera.hpp"
-#include "harmoloc/sim_host/metadata.hpp"
+#include "harmoloc/dataset/area_log.hpp"
+#include "harmoloc/dataset/metadata.hpp"
+#include "harmoloc/host/file_camera.hpp"
 
 namespace harmoloc::sim_host {
 
@@ -59,8 +59,8 @@ double quantile(std::vector<double> v, double q) {
 
 AreaSeries segment_dataset(const std::string& dataset_dir,
                            const algorithms::ThresholdSet& thresholds) {
-  const DatasetMetadata meta = read_metadata(dataset_dir);
-  FileCamera camera(dataset_dir, meta);
+  const dataset::DatasetMetadata meta = dataset::read_metadata(dataset_dir);
+  host::FileCamera camera(dataset_dir, meta);
   std::vector<std::uint8_t> table_storage(algorithms::ColourTable::kEntries);
   algorithms::ColourTable table;
   table.build(algorithms::BoardClassifier(thresholds), table_storage.data());
@@ -93,12 +93,12 @@ AreaSeries segment_dataset(const std::string& dataset_dir,
 
 AreaSeries read_area_series(const std::string& areas_path,
                             const algorithms::ThresholdSet& thresholds) {
-  const AreaLog log = read_area_log(areas_path);
+  const dataset::AreaLog log = dataset::read_area_log(areas_path);
   if (log.board_names.size() != thresholds.count) {
     throw std::runtime_error(areas_path + ": has " + std::to_string(log.board_names.size()) +
                              " boards but the config has " + std::to_string(thresholds.count));
   }
-  if (log.thresholds_crc32 != thresholds_fingerprint(thresholds)) {
+  if (log.thresholds_crc32 != dataset::thresholds_fingerprint(thresholds)) {
     throw std::runtime_error(areas_path +
                              ": was recorded with other colour thresholds than the config "
                              "(thresholds_crc32 differs); train with the config the robot used");
@@ -113,7 +113,7 @@ AreaSeries read_area_series(const std::string& areas_path,
 
 // Wu & Qin's setting: the labelled frames (timestamps equal to a label's) and an evenly spread
 // subset of the others, unlabelled; the neighbour graph (or the paper's complete graph).
-void train_from_labels(const AreaSeries& run, const std::vector<StampedPose>& labels,
+void train_from_labels(const AreaSeries& run, const std::vector<dataset::StampedPose>& labels,
                        const TrainOptions& opt, algorithms::MapFile& map, TrainReport& report) {
   report.segment_ms = run.segment_ms;
   report.frames = run.areas.size();
@@ -320,7 +320,7 @@ namespace {
 // Every frame placed by the odometry between the labels. Throws, naming the label, when a label
 // lies far from where the odometry between its neighbours puts it.
 algorithms::PlacementResult place_frames(const AreaSeries& run,
-                                         const std::vector<StampedPose>& labels,
+                                         const std::vector<dataset::StampedPose>& labels,
                                          const TrainOptions& opt, PlacementReport& report) {
   const std::uint64_t t0 = run.timestamp_ns.front();
   const auto rel = [t0](std::uint64_t t) {
@@ -329,12 +329,13 @@ algorithms::PlacementResult place_frames(const AreaSeries& run,
   const std::vector<algorithms::OdometrySample> odometry = run.odometry.relative_to(t0);
   const double odo_begin = odometry.front().t_s, odo_end = odometry.back().t_s;
   bool labels_have_yaw = false;
-  for (const StampedPose& l : labels) labels_have_yaw = labels_have_yaw || l.pose.yaw_rad != 0.0;
+  for (const dataset::StampedPose& l : labels)
+    labels_have_yaw = labels_have_yaw || l.pose.yaw_rad != 0.0;
   std::vector<algorithms::PlacementLabel> placement_labels;
   const double t0_s =
       static_cast<double>(t0 / 1000000000ULL) + static_cast<double>(t0 % 1000000000ULL) * 1e-9;
   for (std::size_t l = 0; l < labels.size(); ++l) {
-    const StampedPose& s = labels[l];
+    const dataset::StampedPose& s = labels[l];
     const double t = s.t_s - t0_s;
     char where[96];
     std::snprintf(where, sizeof where, "label %zu of %zu (t = %.3f s)", l + 1, labels.size(),
@@ -393,7 +394,7 @@ algorithms::PlacementResult place_frames(const AreaSeries& run,
     }
     if (report.worst_label_residual_m > opt.label_outlier_m &&
         report.worst_label_residual_m > opt.label_outlier_ratio * report.median_label_residual_m) {
-      const StampedPose& bad = labels[static_cast<std::size_t>(report.worst_label)];
+      const dataset::StampedPose& bad = labels[static_cast<std::size_t>(report.worst_label)];
       char msg[320];
       std::snprintf(msg, sizeof msg,
                     "label %d of %zu (t = %.3f s, x %.3f, y %.3f) is %.1f cm from where the "
@@ -427,10 +428,10 @@ double rms(const std::vector<double>& v) {
 
 }  // namespace
 
-static void check_labels(const std::vector<StampedPose>& labels) {
+static void check_labels(const std::vector<dataset::StampedPose>& labels) {
   char msg[320];
   for (std::size_t l = 0; l < labels.size(); ++l) {
-    const StampedPose& s = labels[l];
+    const dataset::StampedPose& s = labels[l];
     if (!std::isfinite(s.t_s) || !std::isfinite(s.pose.x_m) || !std::isfinite(s.pose.y_m) ||
         std::fabs(s.pose.x_m) > 1e4 || std::fabs(s.pose.y_m) > 1e4) {
       std::snprintf(msg, sizeof msg,
@@ -465,7 +466,7 @@ static void check_labels(const std::vector<StampedPose>& labels) {
   }
 }
 
-TrainReport train_on_areas(const AreaSeries& run, const std::vector<StampedPose>& labels,
+TrainReport train_on_areas(const AreaSeries& run, const std::vector<dataset::StampedPose>& labels,
                            const TrainOptions& opt, algorithms::MapFile& map) {
   check_labels(labels);
   TrainReport report;
@@ -707,10 +708,10 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<StampedPose>
   return report;
 }
 
-void check_trained_map(const TrainReport& report, const std::vector<StampedPose>& labels,
+void check_trained_map(const TrainReport& report, const std::vector<dataset::StampedPose>& labels,
                        const algorithms::MapFile& map, const TrainOptions& opt) {
   double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
-  for (const StampedPose& l : labels) {
+  for (const dataset::StampedPose& l : labels) {
     x0 = std::min(x0, l.pose.x_m);
     y0 = std::min(y0, l.pose.y_m);
     x1 = std::max(x1, l.pose.x_m);
@@ -752,7 +753,7 @@ TrainReport train_map(const TrainOptions& opt, algorithms::MapFile& map) {
                                           : read_area_series(opt.areas_path, opt.thresholds);
   if (!opt.areas_path.empty() && !opt.encoders_path.empty())
     run.odometry = read_odometry_file(opt.encoders_path, opt.can_layout, opt.geometry);
-  const std::vector<StampedPose> labels = read_tum(opt.labels_path);
+  const std::vector<dataset::StampedPose> labels = dataset::read_tum(opt.labels_path);
   if (labels.empty()) throw std::runtime_error(opt.labels_path + ": no labels");
   TrainReport report = train_on_areas(run, labels, opt, map);
   check_trained_map(report, labels, map, opt);

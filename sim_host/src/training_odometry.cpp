@@ -4,7 +4,7 @@
 #include <fstream>
 #include <stdexcept>
 
-#include "harmoloc/sim_host/candump_log.hpp"
+#include "harmoloc/dataset/candump_log.hpp"
 
 namespace harmoloc::sim_host {
 
@@ -58,23 +58,24 @@ OdometryTrack odometry_from_can(const std::vector<algorithms::CanFrame>& frames,
   return track;
 }
 
-OdometryTrack odometry_from_gpio(const std::vector<EncoderSample>& samples,
+OdometryTrack odometry_from_gpio(const std::vector<dataset::EncoderSample>& samples,
                                  std::uint8_t counter_bits,
                                  const algorithms::DiffDriveGeometry& geometry) {
   OdometryTrack track;
   track.geometry = geometry;
   std::uint32_t last_left = 0, last_right = 0;
-  for (const EncoderSample& s : samples)
+  for (const dataset::EncoderSample& s : samples)
     append(track, s.timestamp_ns, s.left_ticks, s.right_ticks, counter_bits, last_left, last_right);
   return track;
 }
 
-OdometryTrack read_dataset_odometry(const std::string& dataset_dir, const DatasetMetadata& meta) {
+OdometryTrack read_dataset_odometry(const std::string& dataset_dir,
+                                    const dataset::DatasetMetadata& meta) {
   const std::string path = (fs::path(dataset_dir) / meta.encoder_log).string();
-  if (meta.encoder_source == EncoderSource::kGpio)
-    return odometry_from_gpio(read_encoder_csv(path, meta.encoder_layout.counter_bits),
+  if (meta.encoder_source == dataset::EncoderSource::kGpio)
+    return odometry_from_gpio(dataset::read_encoder_csv(path, meta.encoder_layout.counter_bits),
                               meta.encoder_layout.counter_bits, meta.geometry);
-  return odometry_from_can(read_candump_log(path), meta.encoder_layout, meta.geometry);
+  return odometry_from_can(dataset::read_candump_log(path), meta.encoder_layout, meta.geometry);
 }
 
 OdometryTrack read_odometry_file(const std::string& path,
@@ -85,10 +86,10 @@ OdometryTrack read_odometry_file(const std::string& path,
   std::string first;
   std::getline(in, first);
   if (!first.empty() && first.back() == '\r') first.pop_back();
-  if (first == kEncoderCsvHeader)
-    return odometry_from_gpio(read_encoder_csv(path, layout.counter_bits), layout.counter_bits,
-                              geometry);
-  return odometry_from_can(read_candump_log(path), layout, geometry);
+  if (first == dataset::kEncoderCsvHeader)
+    return odometry_from_gpio(dataset::read_encoder_csv(path, layout.counter_bits),
+                              layout.counter_bits, geometry);
+  return odometry_from_can(dataset::read_candump_log(path), layout, geometry);
 }
 
 }  // namespace harmoloc::sim_host

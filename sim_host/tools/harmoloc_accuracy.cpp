@@ -16,13 +16,13 @@
 #include <CLI/CLI.hpp>
 
 #include "harmoloc/algorithms/harmonic_localizer.hpp"
+#include "harmoloc/dataset/tum.hpp"
+#include "harmoloc/firmware/cli.hpp"
 #include "harmoloc/firmware/config.hpp"
-#include "harmoloc/sim_host/cli.hpp"
 #include "harmoloc/sim_host/line_chart.hpp"
 #include "harmoloc/sim_host/scenario.hpp"
 #include "harmoloc/sim_host/simulate.hpp"
 #include "harmoloc/sim_host/trainer.hpp"
-#include "harmoloc/sim_host/tum.hpp"
 
 namespace fs = std::filesystem;
 using namespace harmoloc;
@@ -33,8 +33,8 @@ constexpr double kOffRouteM = 0.25;  // farther than this from the training run:
 
 struct Run {
   sim_host::AreaSeries areas;
-  std::vector<sim_host::StampedPose> truth;  // one per frame
-  std::vector<sim_host::StampedPose> labels;
+  std::vector<dataset::StampedPose> truth;  // one per frame
+  std::vector<dataset::StampedPose> labels;
 };
 
 // Simulates (once; later calls reuse the folder) and segments a run.
@@ -50,7 +50,7 @@ Run load_run(const sim_host::Scenario& scenario, std::uint64_t seed, const fs::p
   }
   Run run;
   run.areas = sim_host::segment_dataset(dir.string(), thresholds);
-  const auto truth = sim_host::read_tum((dir / "groundtruth.tum").string());
+  const auto truth = dataset::read_tum((dir / "groundtruth.tum").string());
   // Ground truth has one pose per frame, at the frame's timestamp.
   std::size_t t = 0;
   for (std::uint64_t ns : run.areas.timestamp_ns) {
@@ -59,7 +59,7 @@ Run load_run(const sim_host::Scenario& scenario, std::uint64_t seed, const fs::p
       ++t;
     run.truth.push_back(truth[t]);
   }
-  run.labels = sim_host::read_tum((dir / "labels.tum").string());
+  run.labels = dataset::read_tum((dir / "labels.tum").string());
   return run;
 }
 

@@ -6,7 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "harmoloc/drivers/input_file.hpp"
-#include "harmoloc/sim_host/cli.hpp"
+#include "harmoloc/firmware/cli.hpp"
 #include "harmoloc/sim_host/report.hpp"
 
 int main(int argc, char** argv) {

@@ -11,7 +11,7 @@
 #include <iostream>
 #include <string>
 
-#include "harmoloc/sim_host/cli.hpp"
+#include "harmoloc/firmware/cli.hpp"
 #include "harmoloc/sim_host/report.hpp"
 
 namespace {

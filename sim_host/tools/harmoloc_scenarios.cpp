@@ -14,7 +14,7 @@
 
 #include <CLI/CLI.hpp>
 
-#include "harmoloc/sim_host/cli.hpp"
+#include "harmoloc/firmware/cli.hpp"
 #include "harmoloc/sim_host/line_chart.hpp"
 #include "scenario_eval.hpp"
 

@@ -8,7 +8,7 @@
 
 #include <CLI/CLI.hpp>
 
-#include "harmoloc/sim_host/cli.hpp"
+#include "harmoloc/firmware/cli.hpp"
 #include "harmoloc/sim_host/random_scene.hpp"
 #include "harmoloc/sim_host/scenario.hpp"
 #include "harmoloc/sim_host/simulate.hpp"

@@ -15,8 +15,8 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "harmoloc/firmware/cli.hpp"
 #include "harmoloc/firmware/config.hpp"
-#include "harmoloc/sim_host/cli.hpp"
 #include "harmoloc/sim_host/scenario.hpp"
 #include "sweep_eval.hpp"
 

@@ -6,8 +6,8 @@
 
 #include <CLI/CLI.hpp>
 
+#include "harmoloc/firmware/cli.hpp"
 #include "harmoloc/firmware/config.hpp"
-#include "harmoloc/sim_host/cli.hpp"
 #include "harmoloc/sim_host/trainer.hpp"
 
 namespace {
@@ -135,12 +135,12 @@ int main(int argc, char** argv) {
     if (!placed_path.empty()) {
       if (!r.placement.used)
         throw std::runtime_error("--placed: the frames were not placed by odometry");
-      std::vector<sim_host::StampedPose> poses;
+      std::vector<dataset::StampedPose> poses;
       for (std::size_t i = 0; i < r.placement.poses.size(); ++i) {
         if (r.placement.placed[i])
-          poses.push_back(sim_host::StampedPose{r.placement.times_s[i], r.placement.poses[i]});
+          poses.push_back(dataset::StampedPose{r.placement.times_s[i], r.placement.poses[i]});
       }
-      sim_host::write_tum(placed_path, poses);
+      dataset::write_tum(placed_path, poses);
     }
     std::ofstream f(out, std::ios::binary);
     f.write(reinterpret_cast<const char*>(bytes.data()),

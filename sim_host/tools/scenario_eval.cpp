@@ -7,7 +7,7 @@
 
 #include "harmoloc/algorithms/geometry.hpp"
 #include "harmoloc/algorithms/segmentation.hpp"
-#include "harmoloc/sim_host/log_encoders.hpp"
+#include "harmoloc/host/log_encoders.hpp"
 #include "harmoloc/sim_host/sim_camera.hpp"
 
 namespace harmoloc::sim_host {
@@ -106,7 +106,7 @@ RunRecord replay_scenario(const Scenario& scenario, std::uint64_t seed,
   config.geometry = scenario.robot;  // the simulated robot, as a dataset's metadata gives it
   config.can_layout = scenario.can_layout;
   SimCamera camera(run);
-  LogEncoders encoders(run.encoder_frames(), config.can_layout);
+  host::LogEncoders encoders(run.encoder_frames(), config.can_layout);
   NullLink link;
   WallClock clock;
   auto cycle = std::make_unique<firmware::LocalizationCycle>(config, map, camera, encoders, link,

@@ -12,6 +12,7 @@
 #include "harmoloc/sim_host/trainer.hpp"
 
 namespace hs = harmoloc::sim_host;
+namespace hd = harmoloc::dataset;
 namespace ha = harmoloc::algorithms;
 
 namespace {
@@ -20,7 +21,7 @@ namespace {
 // differently) with the position, with pixel noise; labels evenly spread.
 struct Run {
   hs::AreaSeries areas;
-  std::vector<hs::StampedPose> labels;
+  std::vector<hd::StampedPose> labels;
 };
 
 Run make_run(std::size_t frames, std::size_t labels) {
@@ -45,7 +46,7 @@ Run make_run(std::size_t frames, std::size_t labels) {
     r.areas.timestamp_ns.push_back(static_cast<std::uint64_t>(std::llround(t * 1e6)) * 1000ULL);
     r.areas.areas.push_back(a);
     if ((i * labels) % frames < labels) {
-      hs::StampedPose p;
+      hd::StampedPose p;
       p.t_s = static_cast<double>(r.areas.timestamp_ns.back() / 1000U) * 1e-6;
       p.pose = ha::Pose2{x, y, 1.57};
       r.labels.push_back(p);

@@ -74,6 +74,10 @@ spec = [
     command("other_target", 31010, [], dt_ms=7, target=(9, 197)),
     command("relocalize", 31010, [], dt_ms=8),
     command("request_odometry", 512, [331], dt_ms=9),
+    # An autopilot's TIMESYNC request (its ids are not accepted for commands; answering changes
+    # nothing, so it is answered, signed as the link requires).
+    dict(name="timesync", message="timesync", ts1="1234567890123", sysid=1, compid=1,
+         targetSystem=0, targetComponent=0, key=key.hex(), linkId=0, timestampMs=now_ms + 10),
 ]
 with open(f"{out}/spec.json", "w") as f:
     json.dump(spec, f)
@@ -95,6 +99,7 @@ schedule = [
     (2.3, frames["unsupported"]),
     (2.6, frames["other_target"]),
     (2.9, garbage(1500, rng) + frames["relocalize"]),
+    (3.1, frames["timesync"]),
     (3.3, frames["request_odometry"][:odo_split]),  # one frame split over two writes
     (3.45, frames["request_odometry"][odo_split:]),
 ]
@@ -185,6 +190,16 @@ ro, rb = next_of(i_reloc, 331), previous_of(i_reloc, 331)
 if ro["resetCounter"] != (rb["resetCounter"] + 1) % 256:
     fail("relocalize did not count a reset")
 
+# TIMESYNC: answered once, to the autopilot, with its ts1 and our time (ns, ODOMETRY's clock).
+ts = [f for f in fs if f["msgid"] == 111]
+if len(ts) != 1 or ts[0]["ts1"] != "1234567890123" or int(ts[0]["tc1"]) <= 0 \
+        or (ts[0]["targetSystem"], ts[0]["targetComponent"]) != (1, 1):
+    fail(f"TIMESYNC answers {ts}, expected one with ts1 1234567890123 to 1/1")
+odo_before = previous_of(fs.index(ts[0]), 331)
+if odo_before is not None and abs(int(ts[0]["tc1"]) / 1000 - odo_before["timeUsec"]) > 1e6:
+    fail(f"TIMESYNC tc1 {ts[0]['tc1']} ns is not on ODOMETRY's clock ({odo_before['timeUsec']} us)")
+print(f"timesync: tc1 {ts[0]['tc1']} ns for ts1 {ts[0]['ts1']}")
+
 # The trajectory is the ODOMETRY stream, commands included.
 odo = [f for f in fs if f["msgid"] == 331]
 rows = tum(f"{out}/est.tum")
@@ -196,11 +211,12 @@ if worst > 2e-6:
 
 s = stats_inbound(f"{out}/stats.json")
 expect = dict(bytes_in=sent, commands_accepted=4, commands_refused=2, rejected_unsigned=1,
-              rejected_bad_signature=1, rejected_replay=1, rejected_source=1, ignored_messages=1)
+              rejected_bad_signature=1, rejected_replay=1, rejected_source=1, ignored_messages=1,
+              timesync_requests=1)
 wrong = {k: (s[k], v) for k, v in expect.items() if s[k] != v}
 if wrong:
     fail(f"inbound counters (got, expected): {wrong}; all: {s}")
-if s["frames_in"] != 11 or s["garbage_bytes"] < 2500:  # 10 frames, one sent twice
+if s["frames_in"] != 12 or s["garbage_bytes"] < 2500:  # 11 frames, one sent twice
     fail(f"inbound counters: {s}")
 print(f"inbound: {s}")
 

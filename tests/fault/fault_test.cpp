@@ -25,16 +25,18 @@
 #include "fault_harness.hpp"
 #include "harmoloc/algorithms/can_encoder_layout.hpp"
 #include "harmoloc/algorithms/quadrature.hpp"
+#include "harmoloc/dataset/candump_log.hpp"
+#include "harmoloc/dataset/frame_index.hpp"
+#include "harmoloc/dataset/metadata.hpp"
 #include "harmoloc/drivers/serial_link.hpp"
-#include "harmoloc/sim_host/candump_log.hpp"
-#include "harmoloc/sim_host/file_camera.hpp"
-#include "harmoloc/sim_host/frame_index.hpp"
-#include "harmoloc/sim_host/log_encoders.hpp"
-#include "harmoloc/sim_host/metadata.hpp"
+#include "harmoloc/host/file_camera.hpp"
+#include "harmoloc/host/log_encoders.hpp"
 #include "harmoloc/sim_host/sim_camera.hpp"
 #include "harmoloc/sim_host/simulate.hpp"
 
 namespace hs = harmoloc::sim_host;
+namespace hd = harmoloc::dataset;
+namespace hh = harmoloc::host;
 namespace ha = harmoloc::algorithms;
 namespace hf = harmoloc::firmware;
 namespace hal = harmoloc::hal;
@@ -185,7 +187,7 @@ Replay run_with_camera_faults(std::vector<Window> windows, std::size_t* faulted 
   harmoloc::fault::CachedCamera inner(tiny().frames);
   FaultyCamera camera(inner, sim.t0_s(), std::move(windows));
   const hf::FirmwareConfig config = config_override != nullptr ? *config_override : sim.config();
-  hs::LogEncoders encoders(sim.run.encoder_frames(), config.can_layout);
+  hh::LogEncoders encoders(sim.run.encoder_frames(), config.can_layout);
   harmoloc::fault::MemoryLink link;
   Replay r = harmoloc::fault::replay(sim, config, camera, encoders, link);
   if (faulted != nullptr)
@@ -312,9 +314,9 @@ TEST(Fault, FrameFilesGoBadDuringTheRun) {
   harmoloc::test::TempDir dir;
   const std::string data = dir.path("tiny");
   hs::simulate_dataset(hs::load_scenario("tiny"), 2, data, nullptr);
-  const hs::DatasetMetadata meta = hs::read_metadata(data);
-  hs::FileCamera camera(data, meta);  // start-up: every file checked
-  const auto entries = hs::read_frame_index(data + "/frames.csv");
+  const hd::DatasetMetadata meta = hd::read_metadata(data);
+  hh::FileCamera camera(data, meta);  // start-up: every file checked
+  const auto entries = hd::read_frame_index(data + "/frames.csv");
   const auto file = [&](std::size_t k) { return data + "/" + entries.at(k).file; };
   const auto size = fs::file_size(file(0));
   std::uint64_t rng = 7;
@@ -332,13 +334,13 @@ TEST(Fault, FrameFilesGoBadDuringTheRun) {
   fs::remove(file(180));                                // 6.0 s: gone
   fs::resize_file(file(195), size + 1);                 // 6.5 s: one byte more
   std::vector<std::uint8_t> small(80 * 60 * 3, 128);
-  hs::write_ppm(file(210), 80, 60, small.data());  // 7.0 s: another size
+  hd::write_ppm(file(210), 80, 60, small.data());  // 7.0 s: another size
   fs::remove(file(225));                           // 7.5 s: a directory
   fs::create_directory(file(225));
   const std::size_t noisy_from = 240, noisy = 10;  // 8.0-8.3 s: noise pixels
   for (std::size_t k = noisy_from; k < noisy_from + noisy; ++k) {
     const std::vector<std::uint8_t> pixels = noise(160 * 120 * 3);
-    hs::write_ppm(file(k), 160, 120, pixels.data());
+    hd::write_ppm(file(k), 160, 120, pixels.data());
   }
   const std::size_t corrupt = 6;
 
@@ -346,7 +348,7 @@ TEST(Fault, FrameFilesGoBadDuringTheRun) {
   hf::FirmwareConfig config = sim.config();
   config.geometry = meta.geometry;
   config.can_layout = meta.encoder_layout;
-  hs::LogEncoders encoders(data + "/" + meta.encoder_log, config.can_layout);
+  hh::LogEncoders encoders(data + "/" + meta.encoder_log, config.can_layout);
   harmoloc::fault::MemoryLink link;
   const Replay r = harmoloc::fault::replay(sim, config, camera, encoders, link);
   const Replay::Errors e = r.errors(3.0, 1e9);
@@ -391,13 +393,13 @@ TEST(Fault, HoleInTheFrameIndex) {
   const std::string data = dir.path("tiny");
   hs::simulate_dataset(hs::load_scenario("tiny"), 2, data, nullptr);
   const std::string index = data + "/frames.csv";
-  const auto all = hs::read_frame_index(index);
+  const auto all = hd::read_frame_index(index);
   constexpr std::size_t kFrom = 100, kMissing = 168;  // 3.33 s .. 8.93 s
-  std::vector<hs::FrameEntry> kept;
+  std::vector<hd::FrameEntry> kept;
   for (std::size_t k = 0; k < all.size(); ++k)
     if (k < kFrom || k >= kFrom + kMissing) kept.push_back(all[k]);
-  hs::write_frame_index(index, kept);
-  const hs::DatasetMetadata meta = hs::read_metadata(data);
+  hd::write_frame_index(index, kept);
+  const hd::DatasetMetadata meta = hd::read_metadata(data);
   const SimRun sim("tiny", 2);
   hf::FirmwareConfig config = sim.config();
   config.geometry = meta.geometry;
@@ -406,9 +408,9 @@ TEST(Fault, HoleInTheFrameIndex) {
   const double hole_to = static_cast<double>(kFrom + kMissing) * kPeriod_s;
   for (const bool fill : {true, false}) {
     SCOPED_TRACE(fill ? "ticks in the hole" : "negative control: no ticks");
-    hs::FileCamera camera(data, meta);
+    hh::FileCamera camera(data, meta);
     camera.set_fill_gaps(fill);
-    hs::LogEncoders encoders(data + "/" + meta.encoder_log, config.can_layout);
+    hh::LogEncoders encoders(data + "/" + meta.encoder_log, config.can_layout);
     harmoloc::fault::MemoryLink link(1U << 20);
     const Replay r = harmoloc::fault::replay(sim, config, camera, encoders, link);
     harmoloc::fault::StreamCheck stream;
@@ -483,7 +485,7 @@ TEST(Fault, EncoderLogGaps) {
   const hf::FirmwareConfig config = sim.config();
   const std::vector<ha::CanFrame> frames = frames_without(sim, {{5.0, 5.5}, {8.0, 11.0}});
   harmoloc::fault::CachedCamera camera(tiny().frames);
-  hs::LogEncoders encoders(frames, config.can_layout);
+  hh::LogEncoders encoders(frames, config.can_layout);
   harmoloc::fault::MemoryLink link;
   const Replay r = harmoloc::fault::replay(sim, config, camera, encoders, link);
   const std::size_t vision_only = r.cycles_in(hf::Health::kVisionOnly, 0, 1e9);
@@ -530,7 +532,7 @@ namespace {
 Replay run_with_encoder_frames(const std::vector<ha::CanFrame>& frames,
                                const hf::FirmwareConfig& config, std::uint8_t width_override = 0) {
   harmoloc::fault::CachedCamera camera(tiny().frames);
-  hs::LogEncoders log(frames, config.can_layout);
+  hh::LogEncoders log(frames, config.can_layout);
   struct Width final : hal::WheelEncoders {
     Width(hal::WheelEncoders& in, std::uint8_t b) : inner(in), bits(b) {}
     hal::EncoderStatus read(std::uint64_t t, hal::EncoderCounts& c) override {
@@ -893,7 +895,7 @@ TEST(Fault, SerialLineStopsTakingBytesFor5s) {
   const SimRun& sim = tiny().sim;
   const hf::FirmwareConfig config = sim.config();
   harmoloc::fault::CachedCamera camera(tiny().frames);
-  hs::LogEncoders encoders(sim.run.encoder_frames(), config.can_layout);
+  hh::LogEncoders encoders(sim.run.encoder_frames(), config.can_layout);
   const Replay r =
       harmoloc::fault::replay(sim, config, camera, encoders, link, [&](const CycleRecord& c) {
         written_by_cycles += c.link_frames;

@@ -38,9 +38,9 @@
 #include "harmoloc/algorithms/odometry.hpp"
 #include "harmoloc/drivers/monotonic_clock.hpp"
 #include "harmoloc/drivers/serial_link.hpp"
-#include "harmoloc/sim_host/log_encoders.hpp"
+#include "harmoloc/host/log_encoders.hpp"
 
-namespace hs = harmoloc::sim_host;
+namespace hh = harmoloc::host;
 namespace ha = harmoloc::algorithms;
 namespace hf = harmoloc::firmware;
 namespace hal = harmoloc::hal;
@@ -300,7 +300,7 @@ TEST(SoakWithFaults, OneHourOfCyclesWithFaultsAndKidnaps) {
 
   hf::FirmwareConfig config = lap.sim.config();
   PlanCamera camera(lap.frames, plan, t0);
-  hs::LogEncoders encoders(plan.bus, config.can_layout);
+  hh::LogEncoders encoders(plan.bus, config.can_layout);
   harmoloc::drivers::MonotonicClock clock;
   harmoloc::fault::ThreadCpuClock cpu_clock;
   auto cycle =

@@ -1,4 +1,4 @@
-// Fuzz target: one candump log line (sim_host::parse_candump_line). An accepted line must give a
+// Fuzz target: one candump log line (dataset::parse_candump_line). An accepted line must give a
 // frame within CAN's limits, and formatting that frame and parsing the result must give the same
 // frame back (the simulator writes logs with format_candump_line and the fake bus reads them).
 
@@ -6,7 +6,7 @@
 #include <string>
 
 #include "fuzz_common.hpp"
-#include "harmoloc/sim_host/candump_log.hpp"
+#include "harmoloc/dataset/candump_log.hpp"
 
 using namespace harmoloc;
 
@@ -23,7 +23,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const std::string line(reinterpret_cast<const char*>(data), size);
   algorithms::CanFrame frame;
   std::string reason;
-  if (!sim_host::parse_candump_line(line, frame, reason)) {
+  if (!dataset::parse_candump_line(line, frame, reason)) {
     HARMOLOC_FUZZ_CHECK(!reason.empty(), "rejected without a reason");
     return 0;
   }
@@ -37,10 +37,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   HARMOLOC_FUZZ_CHECK(frame.length <= 8, "more than 8 data bytes");
   HARMOLOC_FUZZ_CHECK(frame.extended ? frame.id <= 0x1FFFFFFFU : frame.id <= 0x7FFU,
                       "CAN ID out of range");
-  const std::string formatted = sim_host::format_candump_line(frame, "can0");
+  const std::string formatted = dataset::format_candump_line(frame, "can0");
   algorithms::CanFrame again;
   std::string why;
-  HARMOLOC_FUZZ_CHECK(sim_host::parse_candump_line(formatted, again, why),
+  HARMOLOC_FUZZ_CHECK(dataset::parse_candump_line(formatted, again, why),
                       "a formatted frame does not parse");
   HARMOLOC_FUZZ_CHECK(same_frame(frame, again), "parse(format(frame)) differs from frame");
   return 0;

@@ -1,4 +1,4 @@
-// Fuzz target: a whole candump log file (sim_host::read_candump_log), as the host board's
+// Fuzz target: a whole candump log file (dataset::read_candump_log), as the host board's
 // encoder fake reads it. Each input is written to a file in this process's scratch directory.
 // std::runtime_error is the documented answer to a malformed line; anything else is a finding.
 
@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "fuzz_common.hpp"
-#include "harmoloc/sim_host/candump_log.hpp"
+#include "harmoloc/dataset/candump_log.hpp"
 
 using namespace harmoloc;
 
@@ -17,7 +17,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   fuzz::write_file(path, data, size);
   std::vector<algorithms::CanFrame> frames;
   try {
-    frames = sim_host::read_candump_log(path);
+    frames = dataset::read_candump_log(path);
   } catch (const std::runtime_error& e) {
     HARMOLOC_FUZZ_CHECK(e.what() != nullptr && e.what()[0] != '\0', "empty error message");
     return 0;

@@ -1,5 +1,5 @@
-// Fuzz target: a GPIO encoder recording (encoders.csv, sim_host::read_encoder_csv) and its replay
-// (sim_host::GpioLogEncoders), as the host board reads it when the metadata says
+// Fuzz target: a GPIO encoder recording (encoders.csv, dataset::read_encoder_csv) and its replay
+// (host::GpioLogEncoders), as the host board reads it when the metadata says
 // [encoders] source = "gpio". Input: 1 byte choosing the counter width (8 + b % 25 bits), then
 // the file's bytes, written to a file in this process's scratch directory.
 // std::runtime_error is the documented answer to a bad recording; anything else is a finding.
@@ -20,8 +20,8 @@
 #include <vector>
 
 #include "fuzz_common.hpp"
-#include "harmoloc/sim_host/encoder_csv.hpp"
-#include "harmoloc/sim_host/gpio_log_encoders.hpp"
+#include "harmoloc/dataset/encoder_csv.hpp"
+#include "harmoloc/host/gpio_log_encoders.hpp"
 
 using namespace harmoloc;
 
@@ -70,9 +70,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         const std::size_t n = end - pos;
         std::unique_ptr<char[]> line(new char[n == 0 ? 1 : n]);
         if (n > 0) std::memcpy(line.get(), data + pos, n);
-        sim_host::EncoderSample s;
+        dataset::EncoderSample s;
         const char* why = nullptr;
-        const bool ok = sim_host::parse_encoder_csv_line(line.get(), n, bits, s, &why);
+        const bool ok = dataset::parse_encoder_csv_line(line.get(), n, bits, s, &why);
         HARMOLOC_FUZZ_CHECK(ok || (why != nullptr && why[0] != '\0'), "rejected without a reason");
         if (ok) {
           HARMOLOC_FUZZ_CHECK(s.left_ticks < span && s.right_ticks < span, "count beyond width");
@@ -94,9 +94,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     }
   }
 
-  std::vector<sim_host::EncoderSample> samples;
+  std::vector<dataset::EncoderSample> samples;
   try {
-    samples = sim_host::read_encoder_csv(path, bits);
+    samples = dataset::read_encoder_csv(path, bits);
   } catch (const std::runtime_error& e) {
     HARMOLOC_FUZZ_CHECK(e.what() != nullptr && e.what()[0] != '\0', "empty error message");
     HARMOLOC_FUZZ_CHECK(std::strncmp(e.what(), path.c_str(), path.size()) == 0,
@@ -108,24 +108,24 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   for (bool ok : line_ok) HARMOLOC_FUZZ_CHECK(ok, "the reader accepted a line the parser refuses");
   char buf[64];
   for (std::size_t i = 0; i < samples.size(); ++i) {
-    const sim_host::EncoderSample& s = samples[i];
+    const dataset::EncoderSample& s = samples[i];
     HARMOLOC_FUZZ_CHECK(s.left_ticks < span && s.right_ticks < span, "count beyond the width");
     if (i > 0)
       HARMOLOC_FUZZ_CHECK(s.timestamp_ns > samples[i - 1].timestamp_ns,
                           "timestamps not increasing");
-    const std::size_t n = sim_host::format_encoder_csv_line(s, buf, sizeof buf);
+    const std::size_t n = dataset::format_encoder_csv_line(s, buf, sizeof buf);
     HARMOLOC_FUZZ_CHECK(n > 0 && buf[n - 1] == '\n', "format failed");
-    sim_host::EncoderSample back;
+    dataset::EncoderSample back;
     const char* why = nullptr;
-    HARMOLOC_FUZZ_CHECK(sim_host::parse_encoder_csv_line(buf, n - 1, bits, back, &why),
+    HARMOLOC_FUZZ_CHECK(dataset::parse_encoder_csv_line(buf, n - 1, bits, back, &why),
                         "a formatted sample does not parse");
     HARMOLOC_FUZZ_CHECK(back == s, "format/parse round trip changed the sample");
   }
 
   // The replay: each sample at its own time, then the end.
-  sim_host::GpioLogEncoders replay(samples, bits);
+  host::GpioLogEncoders replay(samples, bits);
   hal::EncoderCounts c;
-  for (const sim_host::EncoderSample& s : samples) {
+  for (const dataset::EncoderSample& s : samples) {
     HARMOLOC_FUZZ_CHECK(replay.read(s.timestamp_ns, c) == hal::EncoderStatus::kFresh,
                         "a sample was not handed out at its time");
     HARMOLOC_FUZZ_CHECK(c.left_ticks == s.left_ticks && c.right_ticks == s.right_ticks &&
@@ -134,7 +134,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   }
   HARMOLOC_FUZZ_CHECK(replay.read(UINT64_MAX, c) == hal::EncoderStatus::kEnded, "no end");
   // Looped (for memory safety and the width; the shift may wrap 64 bits on huge timestamps).
-  sim_host::GpioLogEncoders looped(samples, bits);
+  host::GpioLogEncoders looped(samples, bits);
   looped.set_loops(2, samples.back().timestamp_ns - samples.front().timestamp_ns + 1);
   for (int k = 0; k < 4 && looped.read(UINT64_MAX, c) == hal::EncoderStatus::kFresh; ++k)
     HARMOLOC_FUZZ_CHECK(c.left_ticks < span && c.right_ticks < span, "looped count beyond width");

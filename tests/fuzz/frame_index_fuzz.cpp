@@ -1,4 +1,4 @@
-// Fuzz target: a dataset's frame index (sim_host::read_frame_index, frames.csv). Each input is
+// Fuzz target: a dataset's frame index (dataset::read_frame_index, frames.csv). Each input is
 // written to a file in this process's scratch directory. std::runtime_error is the documented
 // answer to a bad file; anything else is a finding. Accepted entries must be what FileCamera
 // relies on: increasing timestamps and non-empty relative paths that do not leave the dataset.
@@ -9,16 +9,16 @@
 #include <vector>
 
 #include "fuzz_common.hpp"
-#include "harmoloc/sim_host/frame_index.hpp"
+#include "harmoloc/dataset/frame_index.hpp"
 
 using namespace harmoloc;
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   static const std::string path = fuzz::scratch_dir() + "/frames.csv";
   fuzz::write_file(path, data, size);
-  std::vector<sim_host::FrameEntry> frames;
+  std::vector<dataset::FrameEntry> frames;
   try {
-    frames = sim_host::read_frame_index(path);
+    frames = dataset::read_frame_index(path);
   } catch (const std::runtime_error& e) {
     HARMOLOC_FUZZ_CHECK(e.what() != nullptr && e.what()[0] != '\0', "empty error message");
     return 0;

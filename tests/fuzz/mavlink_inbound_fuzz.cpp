@@ -378,7 +378,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   HARMOLOC_FUZZ_CHECK(p.bytes == p.garbage_bytes + p.frame_bytes + rx.parser().buffered(),
                       "bytes in do not add up to garbage, frames and what is buffered");
   HARMOLOC_FUZZ_CHECK(k.frames_in == admitted + k.rejected_unsigned + k.rejected_bad_signature +
-                                         k.rejected_replay + k.rejected_source + k.ignored_messages,
+                                         k.rejected_replay + k.rejected_source + k.ignored_messages +
+                                         k.timesync_requests,
                       "a frame was not counted exactly once");
   HARMOLOC_FUZZ_CHECK(k.commands_accepted + k.commands_refused == admitted,
                       "an answer not counted");

@@ -1,4 +1,4 @@
-// Fuzz target: a dataset's metadata.toml (sim_host::read_metadata). Each input is written as
+// Fuzz target: a dataset's metadata.toml (dataset::read_metadata). Each input is written as
 // metadata.toml in this process's scratch directory. std::runtime_error is the documented answer
 // to a bad file; anything else is a finding. Accepted metadata must satisfy what the fakes rely
 // on (a valid CAN layout, an even YUYV width, sizes within 2..8192), and write_metadata (the
@@ -11,7 +11,7 @@
 
 #include "fuzz_common.hpp"
 #include "harmoloc/algorithms/can_encoder_layout.hpp"
-#include "harmoloc/sim_host/metadata.hpp"
+#include "harmoloc/dataset/metadata.hpp"
 
 using namespace harmoloc;
 
@@ -19,9 +19,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   static const std::string dir = fuzz::scratch_dir();
   static const std::string path = dir + "/metadata.toml";
   fuzz::write_file(path, data, size);
-  sim_host::DatasetMetadata m;
+  dataset::DatasetMetadata m;
   try {
-    m = sim_host::read_metadata(dir);
+    m = dataset::read_metadata(dir);
   } catch (const std::runtime_error& e) {
     HARMOLOC_FUZZ_CHECK(e.what() != nullptr && e.what()[0] != '\0', "empty error message");
     return 0;
@@ -58,12 +58,12 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     std::filesystem::create_directories(d);
     return d;
   }();
-  sim_host::write_metadata(dir2, m);
-  sim_host::DatasetMetadata back;
+  dataset::write_metadata(dir2, m);
+  dataset::DatasetMetadata back;
   try {
-    back = sim_host::read_metadata(dir2);
+    back = dataset::read_metadata(dir2);
   } catch (const std::runtime_error&) {
-    fuzz::finding("metadata written by write_metadata does not read back");
+    fuzz::finding("metadata written by dataset::write_metadata does not read back");
   }
   const auto& a = m.encoder_layout;
   const auto& b = back.encoder_layout;
@@ -81,6 +81,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
                     back.geometry.ticks_per_rev == m.geometry.ticks_per_rev &&
                     back.geometry.left_direction == m.geometry.left_direction &&
                     back.geometry.right_direction == m.geometry.right_direction;
-  HARMOLOC_FUZZ_CHECK(same, "metadata written by write_metadata reads back different");
+  HARMOLOC_FUZZ_CHECK(same, "metadata written by dataset::write_metadata reads back different");
   return 0;
 }

@@ -1,4 +1,4 @@
-// Fuzz target: the binary PPM header parser (sim_host::parse_ppm_header), which reads the first
+// Fuzz target: the binary PPM header parser (dataset::parse_ppm_header), which reads the first
 // bytes of every frame file. The input is the start of a file, exactly sized, so any read past
 // it hits AddressSanitizer's redzone. An accepted header must be P6/255 with a non-zero size and
 // a data offset inside the bytes it was given.
@@ -7,18 +7,18 @@
 #include <cstring>
 
 #include "fuzz_common.hpp"
-#include "harmoloc/sim_host/frame_index.hpp"
+#include "harmoloc/dataset/frame_index.hpp"
 
 using namespace harmoloc;
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  sim_host::PpmHeader header;
+  dataset::PpmHeader header;
   const char* reason = nullptr;
-  if (!sim_host::parse_ppm_header(data, size, header, &reason)) {
+  if (!dataset::parse_ppm_header(data, size, header, &reason)) {
     HARMOLOC_FUZZ_CHECK(reason != nullptr && reason[0] != '\0', "rejected without a reason");
     // The reason may be left out.
-    sim_host::PpmHeader again;
-    HARMOLOC_FUZZ_CHECK(!sim_host::parse_ppm_header(data, size, again, nullptr),
+    dataset::PpmHeader again;
+    HARMOLOC_FUZZ_CHECK(!dataset::parse_ppm_header(data, size, again, nullptr),
                         "result depends on whether a reason is asked for");
     return 0;
   }

@@ -7,11 +7,14 @@
 //   node link_peer.js frames SPEC.json OUT.json
 //       SPEC: [{name, command, params: [7 numbers], sysid, compid, targetSystem, targetComponent,
 //               key: hex or null (unsigned), linkId, timestampMs (signing time, Unix ms)}]
+//             an entry with message: "timesync" is a TIMESYNC request (tc1 0, ts1: a decimal
+//             string) instead of a COMMAND_LONG
 //       OUT:  {name: hex of the whole frame}
 //   node link_peer.js decode LINK_FILE KEY_HEX_OR_- OUT.json
 //       OUT: {frames: [...], crcErrors, invalid}; each frame: msgid, seq, sysid, compid,
 //            signed, signatureOk (null without a key), linkId, timestamp, and the fields of
-//            COMMAND_ACK, HEARTBEAT and ODOMETRY (yaw from its quaternion)
+//            COMMAND_ACK, HEARTBEAT, ODOMETRY (yaw from its quaternion) and TIMESYNC (tc1 and
+//            ts1 as decimal strings)
 //   node link_peer.js table PARSER_CPP
 //       checks the firmware's table of CRC_EXTRA and payload lengths against node-mavlink's
 'use strict';
@@ -26,11 +29,18 @@ function frames(specPath, outPath) {
   const spec = JSON.parse(fs.readFileSync(specPath, 'utf8'));
   const out = {};
   spec.forEach((s, i) => {
-    const msg = new common.CommandLong();
-    msg.command = s.command;
+    let msg;
+    if (s.message === 'timesync') {
+      msg = new common.TimeSync();
+      msg.tc1 = BigInt(0);
+      msg.ts1 = BigInt(s.ts1);
+    } else {
+      msg = new common.CommandLong();
+      msg.command = s.command;
+      for (let k = 0; k < 7; k += 1) msg[`_param${k + 1}`] = s.params[k];
+    }
     msg.targetSystem = s.targetSystem;
     msg.targetComponent = s.targetComponent;
-    for (let k = 0; k < 7; k += 1) msg[`_param${k + 1}`] = s.params[k];
     const flags = s.key ? MavLinkProtocolV2.IFLAG_SIGNED : 0;
     const protocol = new MavLinkProtocolV2(s.sysid, s.compid, flags);
     let buffer = protocol.serialize(msg, i & 0xff);
@@ -71,6 +81,11 @@ function decode(linkPath, keyHex, outPath) {
           timeUsec: Number(d.timeUsec), x: d.x, y: d.y,
           yaw: Math.atan2(2 * (qw * qz + qx * qy), 1 - 2 * (qy * qy + qz * qz)),
           resetCounter: d.resetCounter,
+        });
+      } else if (h.msgid === 111) {
+        Object.assign(f, {
+          tc1: d.tc1.toString(), ts1: d.ts1.toString(),
+          targetSystem: d.targetSystem, targetComponent: d.targetComponent,
         });
       }
     }

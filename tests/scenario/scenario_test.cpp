@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "harmoloc/firmware/map_loader.hpp"
-#include "harmoloc/sim_host/log_encoders.hpp"
+#include "harmoloc/host/log_encoders.hpp"
 #include "harmoloc/sim_host/sim_camera.hpp"
 #include "scenario_eval.hpp"
 
@@ -237,7 +237,7 @@ TEST(FilterScenario, DegradedModesAndRecovery) {
   const double t0 = static_cast<double>(run.frame_timestamp_ns(0)) * 1e-9;
   hs::SimCamera sim(run);
   GappyCamera camera(sim, t0, {{8.0, 10.0}, {18.0, 20.0}});
-  harmoloc::sim_host::LogEncoders log(run.encoder_frames(), config.can_layout);
+  harmoloc::host::LogEncoders log(run.encoder_frames(), config.can_layout);
   GappyEncoders encoders(log, t0, {{13.0, 15.0}, {18.0, 20.0}});
   NullLink link;
   StepClock clock;

@@ -21,6 +21,8 @@
 #include <malloc.h>
 
 #include "../unit/mavlink_test_frames.hpp"
+#include "harmoloc/dataset/metadata.hpp"
+#include "harmoloc/dataset/tum_writer.hpp"
 #include "harmoloc/drivers/monotonic_clock.hpp"
 #include "harmoloc/drivers/record_file.hpp"
 #include "harmoloc/drivers/serial_link.hpp"
@@ -28,10 +30,8 @@
 #include "harmoloc/firmware/eigen_guard.hpp"
 #include "harmoloc/firmware/localization_cycle.hpp"
 #include "harmoloc/firmware/map_loader.hpp"
-#include "harmoloc/sim_host/file_camera.hpp"
-#include "harmoloc/sim_host/log_encoders.hpp"
-#include "harmoloc/sim_host/metadata.hpp"
-#include "harmoloc/sim_host/tum_writer.hpp"
+#include "harmoloc/host/file_camera.hpp"
+#include "harmoloc/host/log_encoders.hpp"
 
 extern "C" {
 void* __libc_malloc(std::size_t);
@@ -189,19 +189,19 @@ std::vector<std::uint8_t> inbound_traffic(const test::mav::Key& key) {
 
 // One start-up (allowed to allocate) and one run of the cycle over a whole dataset (not).
 PassResult run_pass(const std::string& dataset, Fault fault) {
-  const auto meta = sim_host::read_metadata(dataset);
+  const auto meta = dataset::read_metadata(dataset);
   firmware::FirmwareConfig config = firmware::default_config();
   config.geometry = meta.geometry;
   config.can_layout = meta.encoder_layout;
-  sim_host::FileCamera file_camera(dataset, meta);
+  host::FileCamera file_camera(dataset, meta);
   // Frames 100..200 go missing: odometry only for a while, then back to nominal.
   StallingCamera camera(file_camera, fault == Fault::kCameraStallMidRun ? 100 : 0,
                         fault == Fault::kCameraStallMidRun ? 200 : 0);
-  std::unique_ptr<sim_host::LogEncoders> encoders =
+  std::unique_ptr<host::LogEncoders> encoders =
       fault == Fault::kNoEncoders
-          ? std::make_unique<sim_host::LogEncoders>(std::vector<algorithms::CanFrame>{},
-                                                    config.can_layout)
-          : std::make_unique<sim_host::LogEncoders>(
+          ? std::make_unique<host::LogEncoders>(std::vector<algorithms::CanFrame>{},
+                                                config.can_layout)
+          : std::make_unique<host::LogEncoders>(
                 (std::filesystem::path(dataset) / meta.encoder_log).string(), config.can_layout);
   const std::string out =
       (std::filesystem::temp_directory_path() / ("harmoloc_noalloc_" + std::to_string(::getpid())))
@@ -218,7 +218,7 @@ PassResult run_pass(const std::string& dataset, Fault fault) {
   drivers::SerialLink link;
   EXPECT_EQ(link.open(out + ".link", config.link.baud), "");
   EXPECT_EQ(link.open_input(out + ".in"), "");
-  sim_host::TumWriter trajectory;
+  dataset::TumWriter trajectory;
   EXPECT_TRUE(trajectory.open(out + ".tum"));
   drivers::MonotonicClock clock;
   // The signing state is persisted as on a board (its writer thread started here, at start-up):

@@ -1,7 +1,7 @@
 // The area log (what a robot records for training without its frames) and the trainer that reads
 // it: round trip, strict reading with one-line errors, the thresholds fingerprint, and a map
 // trained from the log equal to one trained from the frames themselves.
-#include "harmoloc/sim_host/area_log.hpp"
+#include "harmoloc/dataset/area_log.hpp"
 
 #include <gtest/gtest.h>
 
@@ -15,6 +15,7 @@
 
 namespace ha = harmoloc::algorithms;
 namespace hs = harmoloc::sim_host;
+namespace hd = harmoloc::dataset;
 namespace ht = harmoloc::test;
 
 namespace {
@@ -23,7 +24,7 @@ const std::vector<std::string> kNames{"red", "green", "blue", "yellow", "magenta
 
 std::string write_log(const ht::TempDir& dir, const std::vector<ha::AreaVector>& frames) {
   const std::string path = dir.path("areas.csv");
-  hs::AreaLogWriter w;
+  hd::AreaLogWriter w;
   EXPECT_TRUE(w.open(path, 320, 240, ht::board_windows(), kNames));
   std::uint64_t t = 1767225600000000000ULL;
   for (const auto& a : frames) {
@@ -45,11 +46,11 @@ TEST(AreaLog, RoundTrip) {
       frames[i].pixels[k] = static_cast<std::uint32_t>(i * 100 + k);
   }
   frames[2].pixels[5] = 320 * 240;  // the whole frame is still a valid area
-  const hs::AreaLog log = hs::read_area_log(write_log(dir, frames));
+  const hd::AreaLog log = hd::read_area_log(write_log(dir, frames));
   EXPECT_EQ(log.image_width_px, 320U);
   EXPECT_EQ(log.image_height_px, 240U);
   EXPECT_EQ(log.board_names, kNames);
-  EXPECT_EQ(log.thresholds_crc32, hs::thresholds_fingerprint(ht::board_windows()));
+  EXPECT_EQ(log.thresholds_crc32, hd::thresholds_fingerprint(ht::board_windows()));
   ASSERT_EQ(log.areas.size(), 3U);
   EXPECT_EQ(log.timestamp_ns[1], 1767225600033333333ULL);
   for (std::size_t i = 0; i < 3; ++i) {
@@ -60,8 +61,8 @@ TEST(AreaLog, RoundTrip) {
 
 TEST(AreaLog, FingerprintFollowsEveryThresholdField) {
   const ha::ThresholdSet base = ht::board_windows();
-  const std::uint32_t f = hs::thresholds_fingerprint(base);
-  EXPECT_EQ(f, hs::thresholds_fingerprint(ht::board_windows()));
+  const std::uint32_t f = hd::thresholds_fingerprint(base);
+  EXPECT_EQ(f, hd::thresholds_fingerprint(ht::board_windows()));
   for (int field = 0; field < 5; ++field) {
     ha::ThresholdSet t = base;
     auto& b = t.boards[2];
@@ -82,9 +83,9 @@ TEST(AreaLog, FingerprintFollowsEveryThresholdField) {
         b.value_max -= 1;
         break;
     }
-    EXPECT_NE(hs::thresholds_fingerprint(t), f) << field;
+    EXPECT_NE(hd::thresholds_fingerprint(t), f) << field;
   }
-  EXPECT_NE(hs::thresholds_fingerprint(ht::board_windows(5)), f);
+  EXPECT_NE(hd::thresholds_fingerprint(ht::board_windows(5)), f);
 }
 
 TEST(AreaLog, BadFilesFailWithOneLine) {
@@ -115,9 +116,9 @@ TEST(AreaLog, BadFilesFailWithOneLine) {
   };
   for (const auto& [text, what] : cases) {
     ht::write_text(p, text);
-    ht::expect_one_line(ht::error_of([&] { hs::read_area_log(p); }), p + ":", what);
+    ht::expect_one_line(ht::error_of([&] { hd::read_area_log(p); }), p + ":", what);
   }
-  ht::expect_one_line(ht::error_of([&] { hs::read_area_log(p + ".missing"); }), p, "cannot read");
+  ht::expect_one_line(ht::error_of([&] { hd::read_area_log(p + ".missing"); }), p, "cannot read");
 }
 
 // The whole training workflow without frames: record areas, train from them; the map must equal
@@ -129,7 +130,7 @@ TEST(Trainer, FromAreaLogEqualsFromFrames) {
   const ha::ThresholdSet thresholds = ht::board_windows();
   const hs::AreaSeries from_frames = hs::segment_dataset(run, thresholds);
   {
-    hs::AreaLogWriter w;
+    hd::AreaLogWriter w;
     ASSERT_TRUE(w.open(dir.path("areas.csv"), from_frames.image_width_px,
                        from_frames.image_height_px, thresholds, kNames));
     for (std::size_t i = 0; i < from_frames.areas.size(); ++i)
@@ -147,7 +148,7 @@ TEST(Trainer, FromAreaLogEqualsFromFrames) {
   opt.areas_path = dir.path("areas.csv");
   // The area log brings no odometry: the run's encoder log goes beside it, decoded with the
   // robot's layout and geometry (the config's, which are the metadata's here).
-  const hs::DatasetMetadata meta = hs::read_metadata(run);
+  const hd::DatasetMetadata meta = hd::read_metadata(run);
   opt.encoders_path = run + "/encoders.log";
   opt.can_layout = meta.encoder_layout;
   opt.geometry = meta.geometry;

@@ -11,14 +11,14 @@
 #include <vector>
 
 #include "harmoloc/algorithms/geometry.hpp"
-#include "harmoloc/sim_host/candump_log.hpp"
-#include "harmoloc/sim_host/encoder_csv.hpp"
-#include "harmoloc/sim_host/frame_index.hpp"
-#include "harmoloc/sim_host/metadata.hpp"
-#include "harmoloc/sim_host/tum.hpp"
+#include "harmoloc/dataset/candump_log.hpp"
+#include "harmoloc/dataset/encoder_csv.hpp"
+#include "harmoloc/dataset/frame_index.hpp"
+#include "harmoloc/dataset/metadata.hpp"
+#include "harmoloc/dataset/tum.hpp"
 #include "test_support.hpp"
 
-namespace hs = harmoloc::sim_host;
+namespace hd = harmoloc::dataset;
 namespace ha = harmoloc::algorithms;
 namespace ht = harmoloc::test;
 using ha::kPi;
@@ -37,12 +37,12 @@ void expect_file_line_error(const std::string& msg, const std::string& file, int
 TEST(Tum, YawFromQuaternion) {
   for (double yaw : {0.0, 0.3, -1.2, kPi / 2.0, 3.0, -3.1, kPi - 1e-9}) {
     EXPECT_NEAR(ha::wrap_angle_rad(
-                    hs::yaw_from_quaternion(0, 0, std::sin(yaw / 2), std::cos(yaw / 2)) - yaw),
+                    hd::yaw_from_quaternion(0, 0, std::sin(yaw / 2), std::cos(yaw / 2)) - yaw),
                 0.0, 1e-12)
         << yaw;
     // q and -q are the same rotation.
     EXPECT_NEAR(ha::wrap_angle_rad(
-                    hs::yaw_from_quaternion(0, 0, -std::sin(yaw / 2), -std::cos(yaw / 2)) - yaw),
+                    hd::yaw_from_quaternion(0, 0, -std::sin(yaw / 2), -std::cos(yaw / 2)) - yaw),
                 0.0, 1e-12);
   }
   // Yaw of q = qz(a) * qx(b): a roll of b about the body x axis does not change the heading a.
@@ -50,21 +50,21 @@ TEST(Tum, YawFromQuaternion) {
   const double cz = std::cos(a / 2), sz = std::sin(a / 2), cx = std::cos(b / 2),
                sx = std::sin(b / 2);
   // (cz + sz k)(cx + sx i) = cz cx + cz sx i + sz cx k + sz sx (k i = j)
-  EXPECT_NEAR(hs::yaw_from_quaternion(cz * sx, sz * sx, sz * cx, cz * cx), a, 1e-12);
+  EXPECT_NEAR(hd::yaw_from_quaternion(cz * sx, sz * sx, sz * cx, cz * cx), a, 1e-12);
 }
 
 TEST(Tum, WriteReadRoundTrip) {
   ht::TempDir dir;
-  std::vector<hs::StampedPose> poses;
+  std::vector<hd::StampedPose> poses;
   for (int i = 0; i < 50; ++i) {
-    hs::StampedPose p;
+    hd::StampedPose p;
     p.t_s = 1767225600.0 + 0.033333 * i;
     p.pose = ha::Pose2{0.1 * i - 1.0, 2.0 - 0.05 * i, ha::wrap_angle_rad(0.3 * i)};
     poses.push_back(p);
   }
   const std::string path = dir.path("t.tum");
-  hs::write_tum(path, poses);
-  const std::vector<hs::StampedPose> back = hs::read_tum(path);
+  hd::write_tum(path, poses);
+  const std::vector<hd::StampedPose> back = hd::read_tum(path);
   ASSERT_EQ(back.size(), poses.size());
   for (std::size_t i = 0; i < poses.size(); ++i) {
     EXPECT_NEAR(back[i].t_s, poses[i].t_s, 1e-6);
@@ -74,7 +74,7 @@ TEST(Tum, WriteReadRoundTrip) {
   }
   // The line format: t x y 0 0 0 qz qw.
   char line[160];
-  const int n = hs::format_tum_line(line, sizeof line, 12.5, ha::Pose2{1.0, -2.0, kPi / 2.0});
+  const int n = hd::format_tum_line(line, sizeof line, 12.5, ha::Pose2{1.0, -2.0, kPi / 2.0});
   EXPECT_EQ(std::string(line, static_cast<std::size_t>(n)),
             "12.500000 1.000000 -2.000000 0 0 0 0.707106781 0.707106781\n");
 }
@@ -83,7 +83,7 @@ TEST(Tum, CommentsAndBlankLinesAreSkipped) {
   ht::TempDir dir;
   const std::string path =
       dir.write("t.tum", "# t x y z qx qy qz qw\n\n1.0 1 2 0 0 0 0 1\n   \n2.0 3 4 0 0 0 1 0\n");
-  const auto poses = hs::read_tum(path);
+  const auto poses = hd::read_tum(path);
   ASSERT_EQ(poses.size(), 2U);
   EXPECT_DOUBLE_EQ(poses[1].pose.x_m, 3.0);
   EXPECT_NEAR(std::fabs(poses[1].pose.yaw_rad), kPi, 1e-12);
@@ -108,14 +108,14 @@ TEST(Tum, MalformedLinesNameFileAndLine) {
   };
   for (const Case& c : cases) {
     const std::string p = dir.write(std::string(c.name) + ".tum", ok + c.body);
-    expect_file_line_error(ht::error_of([&] { hs::read_tum(p); }), p, c.line);
+    expect_file_line_error(ht::error_of([&] { hd::read_tum(p); }), p, c.line);
   }
-  EXPECT_NE(ht::error_of([&] { hs::read_tum(dir.path("missing.tum")); }).find("missing.tum"),
+  EXPECT_NE(ht::error_of([&] { hd::read_tum(dir.path("missing.tum")); }).find("missing.tum"),
             std::string::npos);
 }
 
 TEST(Tum, InterpolateAcrossPlusMinusPi) {
-  std::vector<hs::StampedPose> t(3);
+  std::vector<hd::StampedPose> t(3);
   t[0].t_s = 10.0;
   t[0].pose = ha::Pose2{0.0, 0.0, 3.0};
   t[1].t_s = 11.0;
@@ -123,23 +123,23 @@ TEST(Tum, InterpolateAcrossPlusMinusPi) {
   t[2].t_s = 13.0;
   t[2].pose = ha::Pose2{3.0, 2.0, -2.0};
   ha::Pose2 p;
-  ASSERT_TRUE(hs::interpolate(t, 10.5, p));
+  ASSERT_TRUE(hd::interpolate(t, 10.5, p));
   EXPECT_NEAR(p.x_m, 0.5, 1e-12);
   EXPECT_NEAR(p.y_m, 1.0, 1e-12);
   EXPECT_NEAR(ha::wrap_angle_rad(p.yaw_rad - kPi), 0.0, 1e-12);  // halfway: pi, not 0
-  ASSERT_TRUE(hs::interpolate(t, 10.25, p));
+  ASSERT_TRUE(hd::interpolate(t, 10.25, p));
   EXPECT_NEAR(ha::wrap_angle_rad(p.yaw_rad - (3.0 + 0.25 * (2.0 * kPi - 6.0))), 0.0, 1e-12);
-  ASSERT_TRUE(hs::interpolate(t, 12.0, p));
+  ASSERT_TRUE(hd::interpolate(t, 12.0, p));
   EXPECT_NEAR(p.x_m, 2.0, 1e-12);
   EXPECT_NEAR(p.yaw_rad, -2.5, 1e-12);
   // The ends are inside; outside is refused.
-  ASSERT_TRUE(hs::interpolate(t, 10.0, p));
+  ASSERT_TRUE(hd::interpolate(t, 10.0, p));
   EXPECT_NEAR(p.yaw_rad, 3.0, 1e-12);
-  ASSERT_TRUE(hs::interpolate(t, 13.0, p));
+  ASSERT_TRUE(hd::interpolate(t, 13.0, p));
   EXPECT_NEAR(p.x_m, 3.0, 1e-12);
-  EXPECT_FALSE(hs::interpolate(t, 9.999, p));
-  EXPECT_FALSE(hs::interpolate(t, 13.001, p));
-  EXPECT_FALSE(hs::interpolate({}, 1.0, p));
+  EXPECT_FALSE(hd::interpolate(t, 9.999, p));
+  EXPECT_FALSE(hd::interpolate(t, 13.001, p));
+  EXPECT_FALSE(hd::interpolate({}, 1.0, p));
 }
 
 // --- frames.csv and PPM ----------------------------------------------------------------------
@@ -150,7 +150,7 @@ TEST(FrameIndex, ParsesHeaderAndLines) {
       dir.write("frames.csv",
                 "timestamp_ns,file\n1000,frames/000000.ppm\r\n2000,frames/000001.ppm\n\n"
                 "9999999999999999999,frames/last.ppm\n");
-  const auto frames = hs::read_frame_index(p);
+  const auto frames = hd::read_frame_index(p);
   ASSERT_EQ(frames.size(), 3U);
   EXPECT_EQ(frames[0].timestamp_ns, 1000U);
   EXPECT_EQ(frames[0].file, "frames/000000.ppm");
@@ -158,8 +158,8 @@ TEST(FrameIndex, ParsesHeaderAndLines) {
   EXPECT_EQ(frames[2].timestamp_ns, 9999999999999999999ULL);  // 19 digits
   // Write and read back.
   const std::string q = dir.path("copy.csv");
-  hs::write_frame_index(q, frames);
-  const auto again = hs::read_frame_index(q);
+  hd::write_frame_index(q, frames);
+  const auto again = hd::read_frame_index(q);
   ASSERT_EQ(again.size(), frames.size());
   for (std::size_t i = 0; i < frames.size(); ++i) {
     EXPECT_EQ(again[i].timestamp_ns, frames[i].timestamp_ns);
@@ -191,15 +191,15 @@ TEST(FrameIndex, RejectsBadLinesWithFileAndLine) {
   };
   for (const Case& c : cases) {
     const std::string p = dir.write(std::string(c.name) + ".csv", head + c.body);
-    expect_file_line_error(ht::error_of([&] { hs::read_frame_index(p); }), p, c.line);
+    expect_file_line_error(ht::error_of([&] { hd::read_frame_index(p); }), p, c.line);
   }
 }
 
 TEST(Ppm, ParseHeaderVariants) {
-  auto parse = [](const std::string& s, hs::PpmHeader& h, const char** why) {
-    return hs::parse_ppm_header(reinterpret_cast<const std::uint8_t*>(s.data()), s.size(), h, why);
+  auto parse = [](const std::string& s, hd::PpmHeader& h, const char** why) {
+    return hd::parse_ppm_header(reinterpret_cast<const std::uint8_t*>(s.data()), s.size(), h, why);
   };
-  hs::PpmHeader h;
+  hd::PpmHeader h;
   const char* why = nullptr;
   std::string s = "P6\n4 3\n255\n";
   ASSERT_TRUE(parse(s + "pixels", h, &why));
@@ -248,17 +248,17 @@ TEST(Ppm, WriteThenParseRoundTrip) {
   for (std::size_t i = 0; i < rgb.size(); ++i) rgb[i] = static_cast<std::uint8_t>(i * 13U + 10U);
   rgb[0] = '\n';  // a first pixel byte that looks like whitespace
   const std::string path = dir.path("f.ppm");
-  hs::write_ppm(path, w, h, rgb.data());
+  hd::write_ppm(path, w, h, rgb.data());
   const std::vector<std::uint8_t> bytes = ht::read_bytes(path);
-  hs::PpmHeader header;
+  hd::PpmHeader header;
   const char* why = nullptr;
-  ASSERT_TRUE(hs::parse_ppm_header(bytes.data(), bytes.size(), header, &why)) << why;
+  ASSERT_TRUE(hd::parse_ppm_header(bytes.data(), bytes.size(), header, &why)) << why;
   EXPECT_EQ(header.width_px, w);
   EXPECT_EQ(header.height_px, h);
   ASSERT_EQ(bytes.size(), header.data_offset + rgb.size());
   EXPECT_TRUE(std::equal(rgb.begin(), rgb.end(),
                          bytes.begin() + static_cast<std::ptrdiff_t>(header.data_offset)));
-  EXPECT_THROW(hs::write_ppm(dir.path("no/such/dir/f.ppm"), w, h, rgb.data()), std::runtime_error);
+  EXPECT_THROW(hd::write_ppm(dir.path("no/such/dir/f.ppm"), w, h, rgb.data()), std::runtime_error);
 }
 
 // --- candump logs ------------------------------------------------------------------------------
@@ -266,7 +266,7 @@ TEST(Ppm, WriteThenParseRoundTrip) {
 TEST(Candump, ParsesStandardAndExtendedFrames) {
   ha::CanFrame f;
   std::string why;
-  ASSERT_TRUE(hs::parse_candump_line("(1700000000.123456) can0 181#0011223344556677", f, why))
+  ASSERT_TRUE(hd::parse_candump_line("(1700000000.123456) can0 181#0011223344556677", f, why))
       << why;
   EXPECT_EQ(f.id, 0x181U);
   EXPECT_FALSE(f.extended);
@@ -274,7 +274,7 @@ TEST(Candump, ParsesStandardAndExtendedFrames) {
   for (std::uint8_t i = 0; i < 8; ++i) EXPECT_EQ(f.data[i], 0x11 * i) << int{i};
   EXPECT_EQ(f.timestamp_ns, 1700000000123456000ULL);
 
-  ASSERT_TRUE(hs::parse_candump_line("(0000000001.000001) vcan1 18FF00a1#DeAd", f, why)) << why;
+  ASSERT_TRUE(hd::parse_candump_line("(0000000001.000001) vcan1 18FF00a1#DeAd", f, why)) << why;
   EXPECT_EQ(f.id, 0x18FF00A1U);
   EXPECT_TRUE(f.extended);
   EXPECT_EQ(f.length, 2);
@@ -283,10 +283,10 @@ TEST(Candump, ParsesStandardAndExtendedFrames) {
   EXPECT_EQ(f.data[2], 0);
   EXPECT_EQ(f.timestamp_ns, 1000001000ULL);
 
-  ASSERT_TRUE(hs::parse_candump_line("(5.000000) can0 7FF#", f, why)) << why;  // no data
+  ASSERT_TRUE(hd::parse_candump_line("(5.000000) can0 7FF#", f, why)) << why;  // no data
   EXPECT_EQ(f.id, 0x7FFU);
   EXPECT_EQ(f.length, 0);
-  ASSERT_TRUE(hs::parse_candump_line("(5.000000) can0 123#0102\r", f, why)) << why;  // CRLF file
+  ASSERT_TRUE(hd::parse_candump_line("(5.000000) can0 123#0102\r", f, why)) << why;  // CRLF file
   EXPECT_EQ(f.length, 2);
 }
 
@@ -316,14 +316,14 @@ TEST(Candump, RejectsMalformedLines) {
   for (const char* line : bad) {
     ha::CanFrame f;
     std::string why;
-    EXPECT_FALSE(hs::parse_candump_line(line, f, why)) << "accepted: " << line;
+    EXPECT_FALSE(hd::parse_candump_line(line, f, why)) << "accepted: " << line;
     EXPECT_FALSE(why.empty()) << line;
   }
   ha::CanFrame f;
   std::string why;
-  hs::parse_candump_line("(1.000000) can0 181##10011", f, why);
+  hd::parse_candump_line("(1.000000) can0 181##10011", f, why);
   EXPECT_NE(why.find("FD"), std::string::npos) << why;
-  hs::parse_candump_line("(1.000000) can0 181#R", f, why);
+  hd::parse_candump_line("(1.000000) can0 181#R", f, why);
   EXPECT_NE(why.find("remote"), std::string::npos) << why;
 }
 
@@ -340,10 +340,10 @@ TEST(Candump, FormatParseRoundTrip) {
     f.length = static_cast<std::uint8_t>(next() % 9);
     for (std::uint8_t k = 0; k < f.length; ++k) f.data[k] = static_cast<std::uint8_t>(next());
     f.timestamp_ns = (next() % 4000000000000000ULL) * 1000ULL;  // whole microseconds
-    const std::string line = hs::format_candump_line(f, "can0");
+    const std::string line = hd::format_candump_line(f, "can0");
     ha::CanFrame g;
     std::string why;
-    ASSERT_TRUE(hs::parse_candump_line(line, g, why)) << line << ": " << why;
+    ASSERT_TRUE(hd::parse_candump_line(line, g, why)) << line << ": " << why;
     EXPECT_EQ(g.id, f.id) << line;
     EXPECT_EQ(g.extended, f.extended) << line;
     EXPECT_EQ(g.length, f.length) << line;
@@ -356,17 +356,17 @@ TEST(Candump, FormatParseRoundTrip) {
   f.data[0] = 0x1A;
   f.data[1] = 0x0B;
   f.timestamp_ns = 1767225600010000000ULL;
-  EXPECT_EQ(hs::format_candump_line(f, "can0"), "(1767225600.010000) can0 181#1A0B");
+  EXPECT_EQ(hd::format_candump_line(f, "can0"), "(1767225600.010000) can0 181#1A0B");
 }
 
 TEST(Candump, ReadLogNamesFileAndLine) {
   ht::TempDir dir;
   std::string p = dir.write("ok.log", "(1.000000) can0 181#00\n\n(1.010000) can0 281#0102\n");
-  const auto frames = hs::read_candump_log(p);
+  const auto frames = hd::read_candump_log(p);
   ASSERT_EQ(frames.size(), 2U);
   EXPECT_EQ(frames[1].id, 0x281U);
   p = dir.write("bad.log", "(1.000000) can0 181#00\n(1.010000) can0 181#0\n");
-  expect_file_line_error(ht::error_of([&] { hs::read_candump_log(p); }), p, 2);
+  expect_file_line_error(ht::error_of([&] { hd::read_candump_log(p); }), p, 2);
 }
 
 // A line dated before the one above it made a 57 cm jump, and one dated ahead switched odometry
@@ -377,27 +377,27 @@ TEST(Candump, LinesOutOfTimeOrderAreRefusedAtFileAndLine) {
   std::string p = dir.write("same.log",
                             "(1.000000) can0 181#00\n(1.000000) can0 281#01\n"
                             "(1.010000) can0 181#02\n");
-  EXPECT_EQ(hs::read_candump_log(p).size(), 3U);
+  EXPECT_EQ(hd::read_candump_log(p).size(), 3U);
   p = dir.write("past.log",
                 "(1.000000) can0 181#00\n(1.010000) can0 181#01\n\n(0.500000) can0 181#02\n"
                 "(1.020000) can0 181#03\n");
-  std::string msg = ht::error_of([&] { hs::read_candump_log(p); });
+  std::string msg = ht::error_of([&] { hd::read_candump_log(p); });
   ht::expect_one_line(msg, p + ":4: ", "timestamp 0.500000 is before line 2's 1.010000");
   p = dir.write("future.log",
                 "(1.000000) can0 181#00\n(99999.010000) can0 181#01\n(1.020000) can0 181#02\n"
                 "(1.030000) can0 181#03\n");
-  msg = ht::error_of([&] { hs::read_candump_log(p); });
+  msg = ht::error_of([&] { hd::read_candump_log(p); });
   ht::expect_one_line(msg, p + ":3: ", "before line 2's 99999.010000");
 }
 
 // --- GPIO encoder recordings (encoders.csv) ---------------------------------------------------
 
 TEST(EncoderCsv, ParsesSignedAndUnsignedCountsWithinTheWidth) {
-  hs::EncoderSample s;
+  hd::EncoderSample s;
   const char* why = nullptr;
   auto parse = [&](const std::string& line, std::uint8_t bits) {
     why = nullptr;
-    return hs::parse_encoder_csv_line(line.data(), line.size(), bits, s, &why);
+    return hd::parse_encoder_csv_line(line.data(), line.size(), bits, s, &why);
   };
   ASSERT_TRUE(parse("1767225600033333333,27,4294967295", 32)) << why;
   EXPECT_EQ(s.timestamp_ns, 1767225600033333333ULL);
@@ -454,32 +454,32 @@ TEST(EncoderCsv, FormatParseRoundTrip) {
   for (int i = 0; i < 2000; ++i) {
     const std::uint8_t bits = static_cast<std::uint8_t>(8 + i % 25);
     const std::uint32_t mask = bits == 32 ? 0xFFFFFFFFU : (1U << bits) - 1U;
-    const hs::EncoderSample s{next(), static_cast<std::uint32_t>(next() >> 7) & mask,
+    const hd::EncoderSample s{next(), static_cast<std::uint32_t>(next() >> 7) & mask,
                               static_cast<std::uint32_t>(next() >> 11) & mask};
-    const std::size_t n = hs::format_encoder_csv_line(s, buf, sizeof buf);
+    const std::size_t n = hd::format_encoder_csv_line(s, buf, sizeof buf);
     ASSERT_GT(n, 0U);
     ASSERT_EQ(buf[n - 1], '\n');
-    hs::EncoderSample back;
+    hd::EncoderSample back;
     const char* why = nullptr;
-    ASSERT_TRUE(hs::parse_encoder_csv_line(buf, n - 1, bits, back, &why)) << buf << why;
+    ASSERT_TRUE(hd::parse_encoder_csv_line(buf, n - 1, bits, back, &why)) << buf << why;
     EXPECT_EQ(back, s) << buf;
   }
-  EXPECT_EQ(hs::format_encoder_csv_line(hs::EncoderSample{1, 2, 3}, buf, 5), 0U);  // too small
-  hs::format_encoder_csv_line(hs::EncoderSample{1767225600000000000ULL, 0, 4294967295U}, buf,
+  EXPECT_EQ(hd::format_encoder_csv_line(hd::EncoderSample{1, 2, 3}, buf, 5), 0U);  // too small
+  hd::format_encoder_csv_line(hd::EncoderSample{1767225600000000000ULL, 0, 4294967295U}, buf,
                               sizeof buf);
   EXPECT_STREQ(buf, "1767225600000000000,0,4294967295\n");
 }
 
 TEST(EncoderCsv, ReadNamesFileAndLine) {
   ht::TempDir dir;
-  const std::string header = std::string(hs::kEncoderCsvHeader) + "\n";
+  const std::string header = std::string(hd::kEncoderCsvHeader) + "\n";
   std::string p = dir.write("ok.csv", header + "100,1,2\n200,-1,3\n300,5,6");  // no final newline
-  const auto samples = hs::read_encoder_csv(p, 16);
+  const auto samples = hd::read_encoder_csv(p, 16);
   ASSERT_EQ(samples.size(), 3U);
-  EXPECT_EQ(samples[1], (hs::EncoderSample{200, 65535, 3}));
-  EXPECT_EQ(samples[2], (hs::EncoderSample{300, 5, 6}));
-  p = dir.write("crlf.csv", std::string(hs::kEncoderCsvHeader) + "\r\n100,1,2\r\n");
-  EXPECT_EQ(hs::read_encoder_csv(p, 32).size(), 1U);
+  EXPECT_EQ(samples[1], (hd::EncoderSample{200, 65535, 3}));
+  EXPECT_EQ(samples[2], (hd::EncoderSample{300, 5, 6}));
+  p = dir.write("crlf.csv", std::string(hd::kEncoderCsvHeader) + "\r\n100,1,2\r\n");
+  EXPECT_EQ(hd::read_encoder_csv(p, 32).size(), 1U);
 
   struct Case {
     std::string text;
@@ -499,12 +499,12 @@ TEST(EncoderCsv, ReadNamesFileAndLine) {
   };
   for (const Case& c : bad) {
     p = dir.write("bad.csv", c.text);
-    const std::string msg = ht::error_of([&] { hs::read_encoder_csv(p, 16); });
+    const std::string msg = ht::error_of([&] { hd::read_encoder_csv(p, 16); });
     ht::expect_one_line(msg, p + ":" + std::to_string(c.line) + ": ", c.what);
   }
   p = dir.write("empty.csv", header);
-  ht::expect_one_line(ht::error_of([&] { hs::read_encoder_csv(p, 16); }), p + ": ", "no samples");
-  ht::expect_one_line(ht::error_of([&] { hs::read_encoder_csv(dir.path("none.csv"), 16); }),
+  ht::expect_one_line(ht::error_of([&] { hd::read_encoder_csv(p, 16); }), p + ": ", "no samples");
+  ht::expect_one_line(ht::error_of([&] { hd::read_encoder_csv(dir.path("none.csv"), 16); }),
                       dir.path("none.csv") + ": ", "cannot open");
 }
 
@@ -512,7 +512,7 @@ TEST(EncoderCsv, ReadNamesFileAndLine) {
 
 TEST(Metadata, WriteReadRoundTrip) {
   ht::TempDir dir;
-  hs::DatasetMetadata m;
+  hd::DatasetMetadata m;
   m.name = "unit";
   m.image_width_px = 320;
   m.image_height_px = 240;
@@ -533,8 +533,8 @@ TEST(Metadata, WriteReadRoundTrip) {
   m.encoder_layout.counter_bits = 16;
   m.encoder_layout.byte_order = ha::ByteOrder::kBigEndian;
   m.seed = 1234;
-  hs::write_metadata(dir.dir(), m);
-  const hs::DatasetMetadata r = hs::read_metadata(dir.dir());
+  hd::write_metadata(dir.dir(), m);
+  const hd::DatasetMetadata r = hd::read_metadata(dir.dir());
   EXPECT_EQ(r.name, "unit");
   EXPECT_EQ(r.image_width_px, 320U);
   EXPECT_EQ(r.image_height_px, 240U);
@@ -557,21 +557,21 @@ TEST(Metadata, WriteReadRoundTrip) {
   EXPECT_EQ(r.encoder_layout.byte_order, ha::ByteOrder::kBigEndian);
   EXPECT_EQ(r.seed, 1234U);
 
-  EXPECT_EQ(r.encoder_source, hs::EncoderSource::kCan);
+  EXPECT_EQ(r.encoder_source, hd::EncoderSource::kCan);
 
   // No ground truth: the key is left out and reads back empty.
   m.ground_truth.clear();
-  hs::write_metadata(dir.dir(), m);
-  EXPECT_EQ(hs::read_metadata(dir.dir()).ground_truth, "");
+  hd::write_metadata(dir.dir(), m);
+  EXPECT_EQ(hd::read_metadata(dir.dir()).ground_truth, "");
   // A CAN dataset's metadata does not mention the source (files written before it existed
   // stay byte for byte the same); a GPIO recording's does.
   const std::vector<std::uint8_t> written = ht::read_bytes(dir.path("metadata.toml"));
   EXPECT_EQ(std::string(written.begin(), written.end()).find("source"), std::string::npos);
-  m.encoder_source = hs::EncoderSource::kGpio;
+  m.encoder_source = hd::EncoderSource::kGpio;
   m.encoder_log = "encoders.csv";
-  hs::write_metadata(dir.dir(), m);
-  EXPECT_EQ(hs::read_metadata(dir.dir()).encoder_source, hs::EncoderSource::kGpio);
-  EXPECT_EQ(hs::read_metadata(dir.dir()).encoder_log, "encoders.csv");
+  hd::write_metadata(dir.dir(), m);
+  EXPECT_EQ(hd::read_metadata(dir.dir()).encoder_source, hd::EncoderSource::kGpio);
+  EXPECT_EQ(hd::read_metadata(dir.dir()).encoder_log, "encoders.csv");
 }
 
 TEST(Metadata, EncoderSourceSelectsTheRecordingAndItsDefaultFile) {
@@ -580,16 +580,16 @@ TEST(Metadata, EncoderSourceSelectsTheRecordingAndItsDefaultFile) {
       "format_version = 1\n[camera]\nwidth_px = 160\nheight_px = 120\nrate_hz = 30\n"
       "[robot]\nwheel_radius_m = 0.05\ntrack_m = 0.3\nticks_per_rev = 4096\n";
   dir.write("metadata.toml", base);
-  hs::DatasetMetadata m = hs::read_metadata(dir.dir());
-  EXPECT_EQ(m.encoder_source, hs::EncoderSource::kCan);
+  hd::DatasetMetadata m = hd::read_metadata(dir.dir());
+  EXPECT_EQ(m.encoder_source, hd::EncoderSource::kCan);
   EXPECT_EQ(m.encoder_log, "encoders.log");
   dir.write("metadata.toml", base + "[encoders]\nsource = \"gpio\"\ncounter_bits = 16\n");
-  m = hs::read_metadata(dir.dir());
-  EXPECT_EQ(m.encoder_source, hs::EncoderSource::kGpio);
+  m = hd::read_metadata(dir.dir());
+  EXPECT_EQ(m.encoder_source, hd::EncoderSource::kGpio);
   EXPECT_EQ(m.encoder_log, "encoders.csv");
   EXPECT_EQ(m.encoder_layout.counter_bits, 16);
   dir.write("metadata.toml", base + "[encoders]\nsource = \"quadrature\"\n");
-  ht::expect_one_line(ht::error_of([&] { hs::read_metadata(dir.dir()); }),
+  ht::expect_one_line(ht::error_of([&] { hd::read_metadata(dir.dir()); }),
                       "metadata.toml: ", "encoders.source");
 }
 
@@ -597,15 +597,15 @@ TEST(Metadata, CalibratedGeometryKeepsItsPrecision) {
   // A calibrated robot's numbers (and an NTSC frame rate) must survive write -> read: the host
   // board takes the odometry geometry from the metadata when the config has no [odometry].
   ht::TempDir dir;
-  hs::DatasetMetadata m;
+  hd::DatasetMetadata m;
   m.image_width_px = 160;
   m.image_height_px = 120;
   m.frame_rate_hz = 30000.0 / 1001.0;
   m.geometry.wheel_radius_m = 0.0498731;
   m.geometry.track_m = 0.3012345;
   m.geometry.ticks_per_rev = 4096.0 * 4.0 * 19.2;  // 314572.8
-  hs::write_metadata(dir.dir(), m);
-  const hs::DatasetMetadata r = hs::read_metadata(dir.dir());
+  hd::write_metadata(dir.dir(), m);
+  const hd::DatasetMetadata r = hd::read_metadata(dir.dir());
   EXPECT_NEAR(r.geometry.wheel_radius_m, m.geometry.wheel_radius_m, 1e-12);
   EXPECT_NEAR(r.geometry.track_m, m.geometry.track_m, 1e-12);
   EXPECT_NEAR(r.geometry.ticks_per_rev, m.geometry.ticks_per_rev, 1e-9);
@@ -616,19 +616,19 @@ TEST(Metadata, ErrorsStartWithMetadataToml) {
   ht::TempDir dir;
   auto msg_for = [&](const std::string& text) {
     dir.write("metadata.toml", text);
-    return ht::error_of([&] { hs::read_metadata(dir.dir()); });
+    return ht::error_of([&] { hd::read_metadata(dir.dir()); });
   };
   auto expect_meta_error = [](const std::string& msg, const std::string& what) {
     ht::expect_one_line(msg, "metadata.toml: ", what);
   };
   // Missing file.
-  expect_meta_error(ht::error_of([&] { hs::read_metadata(dir.path("nothing-here")); }),
+  expect_meta_error(ht::error_of([&] { hd::read_metadata(dir.path("nothing-here")); }),
                     "not found");
   const std::string good =
       "format_version = 1\n[camera]\nwidth_px = 160\nheight_px = 120\nrate_hz = 30\n"
       "[robot]\nwheel_radius_m = 0.05\ntrack_m = 0.3\nticks_per_rev = 4096\n";
   dir.write("metadata.toml", good);
-  EXPECT_NO_THROW(hs::read_metadata(dir.dir()));
+  EXPECT_NO_THROW(hd::read_metadata(dir.dir()));
   expect_meta_error(msg_for("format_version = 2\n" + good.substr(good.find('\n') + 1)),
                     "format_version");
   expect_meta_error(msg_for(good.substr(good.find('\n') + 1)), "format_version");
@@ -673,7 +673,7 @@ TEST(Metadata, NamedFilesStayInsideTheDataset) {
     else
       text += "[" + section + "]\n" + line;
     dir.write("data/metadata.toml", text);
-    return ht::error_of([&] { hs::read_metadata(data); });
+    return ht::error_of([&] { hd::read_metadata(data); });
   };
   for (const std::string bad : {"../secret.csv", "/dev/zero", "frames/../../secret.csv"}) {
     ht::expect_one_line(error_for("camera", "frames_index", bad),
@@ -690,15 +690,15 @@ TEST(Metadata, NamedFilesStayInsideTheDataset) {
 TEST(Metadata, NotARegularFileOrTooDeepIsRefused) {
   ht::TempDir dir;
   dir.mkdir("folder/metadata.toml");
-  ht::expect_one_line(ht::error_of([&] { hs::read_metadata(dir.path("folder")); }),
+  ht::expect_one_line(ht::error_of([&] { hd::read_metadata(dir.path("folder")); }),
                       "metadata.toml: ", "not a regular file (a directory)");
   dir.mkdir("fifo");
   ASSERT_EQ(::mkfifo(dir.path("fifo/metadata.toml").c_str(), 0600), 0);
-  ht::expect_one_line(ht::error_of([&] { hs::read_metadata(dir.path("fifo")); }),
+  ht::expect_one_line(ht::error_of([&] { hd::read_metadata(dir.path("fifo")); }),
                       "metadata.toml: ", "not a regular file (a FIFO)");
   std::string deep;
   for (int i = 0; i < 50000; ++i) deep += "a.";
   dir.write("metadata.toml", deep + "a = 1\n");
-  ht::expect_one_line(ht::error_of([&] { hs::read_metadata(dir.dir()); }),
+  ht::expect_one_line(ht::error_of([&] { hd::read_metadata(dir.dir()); }),
                       "metadata.toml: ", "line 1: nested 50001 deep");
 }

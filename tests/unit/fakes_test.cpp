@@ -17,16 +17,17 @@
 #include <vector>
 
 #include "harmoloc/algorithms/can_encoder_layout.hpp"
+#include "harmoloc/dataset/encoder_csv.hpp"
+#include "harmoloc/dataset/frame_index.hpp"
+#include "harmoloc/dataset/metadata.hpp"
 #include "harmoloc/drivers/serial_link.hpp"
-#include "harmoloc/sim_host/encoder_csv.hpp"
-#include "harmoloc/sim_host/file_camera.hpp"
-#include "harmoloc/sim_host/frame_index.hpp"
-#include "harmoloc/sim_host/gpio_log_encoders.hpp"
-#include "harmoloc/sim_host/log_encoders.hpp"
-#include "harmoloc/sim_host/metadata.hpp"
+#include "harmoloc/host/file_camera.hpp"
+#include "harmoloc/host/gpio_log_encoders.hpp"
+#include "harmoloc/host/log_encoders.hpp"
 #include "test_support.hpp"
 
-namespace hs = harmoloc::sim_host;
+namespace hd = harmoloc::dataset;
+namespace hh = harmoloc::host;
 namespace ha = harmoloc::algorithms;
 namespace hal = harmoloc::hal;
 namespace fs = std::filesystem;
@@ -44,33 +45,33 @@ std::vector<std::uint8_t> frame_pixels(std::size_t k, std::size_t bytes) {
 constexpr std::uint32_t kW = 4, kH = 3;
 
 // A dataset of @p n frames at 1000, 2000, ... ns.
-hs::DatasetMetadata make_dataset(const ht::TempDir& dir, std::size_t n,
+hd::DatasetMetadata make_dataset(const ht::TempDir& dir, std::size_t n,
                                  hal::PixelFormat format = hal::PixelFormat::kRgb24) {
-  hs::DatasetMetadata m;
+  hd::DatasetMetadata m;
   m.name = "fake";
   m.image_width_px = kW;
   m.image_height_px = kH;
   m.pixel_format = format;
   dir.mkdir("frames");
-  std::vector<hs::FrameEntry> index;
+  std::vector<hd::FrameEntry> index;
   for (std::size_t k = 0; k < n; ++k) {
     char name[32];
     if (format == hal::PixelFormat::kRgb24) {
       std::snprintf(name, sizeof name, "frames/%06zu.ppm", k);
-      hs::write_ppm(dir.path(name), kW, kH, frame_pixels(k, kW * kH * 3).data());
+      hd::write_ppm(dir.path(name), kW, kH, frame_pixels(k, kW * kH * 3).data());
     } else {
       std::snprintf(name, sizeof name, "frames/%06zu.yuyv", k);
       dir.write_bytes(name, frame_pixels(k, kW * kH * 2));
     }
-    index.push_back(hs::FrameEntry{1000U * (k + 1), name});
+    index.push_back(hd::FrameEntry{1000U * (k + 1), name});
   }
-  hs::write_frame_index(dir.path("frames.csv"), index);
-  hs::write_metadata(dir.dir(), m);
-  return hs::read_metadata(dir.dir());
+  hd::write_frame_index(dir.path("frames.csv"), index);
+  hd::write_metadata(dir.dir(), m);
+  return hd::read_metadata(dir.dir());
 }
 
-std::string construct_error(const ht::TempDir& dir, const hs::DatasetMetadata& m) {
-  return ht::error_of([&] { hs::FileCamera camera(dir.dir(), m); });
+std::string construct_error(const ht::TempDir& dir, const hd::DatasetMetadata& m) {
+  return ht::error_of([&] { hh::FileCamera camera(dir.dir(), m); });
 }
 
 }  // namespace
@@ -79,8 +80,8 @@ std::string construct_error(const ht::TempDir& dir, const hs::DatasetMetadata& m
 
 TEST(FileCamera, FramesComeOutInOrderWithTimestamps) {
   ht::TempDir dir;
-  const hs::DatasetMetadata m = make_dataset(dir, 3);
-  hs::FileCamera camera(dir.dir(), m);
+  const hd::DatasetMetadata m = make_dataset(dir, 3);
+  hh::FileCamera camera(dir.dir(), m);
   EXPECT_EQ(camera.frame_count(), 3U);
   EXPECT_EQ(camera.first_timestamp_ns(), 1000U);
   for (std::size_t k = 0; k < 3; ++k) {
@@ -107,8 +108,8 @@ TEST(FileCamera, FramesComeOutInOrderWithTimestamps) {
 
 TEST(FileCamera, YuyvFrames) {
   ht::TempDir dir;
-  const hs::DatasetMetadata m = make_dataset(dir, 2, hal::PixelFormat::kYuyv);
-  hs::FileCamera camera(dir.dir(), m);
+  const hd::DatasetMetadata m = make_dataset(dir, 2, hal::PixelFormat::kYuyv);
+  hh::FileCamera camera(dir.dir(), m);
   for (std::size_t k = 0; k < 2; ++k) {
     hal::FrameView f;
     ASSERT_EQ(camera.acquire(f, 0), hal::CameraStatus::kFrame);
@@ -127,7 +128,7 @@ TEST(FileCamera, YuyvFrames) {
 
 TEST(FileCamera, StartupRejectsTruncatedFrame) {
   ht::TempDir dir;
-  const hs::DatasetMetadata m = make_dataset(dir, 3);
+  const hd::DatasetMetadata m = make_dataset(dir, 3);
   auto bytes = ht::read_bytes(dir.path("frames/000001.ppm"));
   bytes.resize(bytes.size() - 5);
   ht::write_bytes(dir.path("frames/000001.ppm"), bytes);
@@ -139,14 +140,14 @@ TEST(FileCamera, StartupRejectsTruncatedFrame) {
 
 TEST(FileCamera, StartupRejectsWrongSizePpm) {
   ht::TempDir dir;
-  const hs::DatasetMetadata m = make_dataset(dir, 3);
-  hs::write_ppm(dir.path("frames/000002.ppm"), kW + 1, kH,
+  const hd::DatasetMetadata m = make_dataset(dir, 3);
+  hd::write_ppm(dir.path("frames/000002.ppm"), kW + 1, kH,
                 frame_pixels(2, (kW + 1) * kH * 3).data());
   const std::string msg = construct_error(dir, m);
   EXPECT_NE(msg.find("frames/000002.ppm"), std::string::npos) << msg;
   EXPECT_NE(msg.find("5x3"), std::string::npos) << msg;
   // Same byte count, other shape (3x4 instead of 4x3): the header says so.
-  hs::write_ppm(dir.path("frames/000002.ppm"), kH, kW, frame_pixels(2, kW * kH * 3).data());
+  hd::write_ppm(dir.path("frames/000002.ppm"), kH, kW, frame_pixels(2, kW * kH * 3).data());
   EXPECT_NE(construct_error(dir, m).find("frames/000002.ppm"), std::string::npos);
   // Not a PPM at all.
   ht::write_bytes(dir.path("frames/000002.ppm"), std::vector<std::uint8_t>(60, 'x'));
@@ -155,22 +156,22 @@ TEST(FileCamera, StartupRejectsWrongSizePpm) {
 
 TEST(FileCamera, StartupRejectsMissingFileAndEmptyIndex) {
   ht::TempDir dir;
-  const hs::DatasetMetadata m = make_dataset(dir, 3);
+  const hd::DatasetMetadata m = make_dataset(dir, 3);
   fs::remove(dir.path("frames/000000.ppm"));
   const std::string msg = construct_error(dir, m);
   EXPECT_NE(msg.find("frames/000000.ppm"), std::string::npos) << msg;
   EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
 
   ht::TempDir other;
-  const hs::DatasetMetadata m2 = make_dataset(other, 1);
-  hs::write_frame_index(other.path("frames.csv"), {});
+  const hd::DatasetMetadata m2 = make_dataset(other, 1);
+  hd::write_frame_index(other.path("frames.csv"), {});
   EXPECT_NE(construct_error(other, m2).find("no frames"), std::string::npos);
 }
 
 TEST(FileCamera, FrameCorruptedAfterStartupIsCountedAndSkipped) {
   ht::TempDir dir;
-  const hs::DatasetMetadata m = make_dataset(dir, 4);
-  hs::FileCamera camera(dir.dir(), m);
+  const hd::DatasetMetadata m = make_dataset(dir, 4);
+  hh::FileCamera camera(dir.dir(), m);
   // Truncate frame 1, grow frame 2, and give frame 3 a header of the same length but another shape.
   auto bytes = ht::read_bytes(dir.path("frames/000001.ppm"));
   bytes.resize(bytes.size() / 2);
@@ -201,8 +202,8 @@ TEST(FileCamera, FrameCorruptedAfterStartupIsCountedAndSkipped) {
 // symbolic link) stops start-up.
 TEST(FileCamera, FrameReplacedByAFifoDoesNotBlock) {
   ht::TempDir dir;
-  const hs::DatasetMetadata m = make_dataset(dir, 3);
-  hs::FileCamera camera(dir.dir(), m);
+  const hd::DatasetMetadata m = make_dataset(dir, 3);
+  hh::FileCamera camera(dir.dir(), m);
   fs::remove(dir.path("frames/000001.ppm"));
   ASSERT_EQ(::mkfifo(dir.path("frames/000001.ppm").c_str(), 0600), 0);
   fs::remove(dir.path("frames/000002.ppm"));
@@ -218,7 +219,7 @@ TEST(FileCamera, FrameReplacedByAFifoDoesNotBlock) {
 
 TEST(FileCamera, StartupRejectsFramesThatAreNotRegularFiles) {
   ht::TempDir dir;
-  const hs::DatasetMetadata m = make_dataset(dir, 3);
+  const hd::DatasetMetadata m = make_dataset(dir, 3);
   fs::remove(dir.path("frames/000001.ppm"));
   ASSERT_EQ(::mkfifo(dir.path("frames/000001.ppm").c_str(), 0600), 0);
   ht::expect_one_line(construct_error(dir, m), "frame frames/000001.ppm: ", "not a regular file");
@@ -232,13 +233,13 @@ TEST(FileCamera, StartupRejectsFramesThatAreNotRegularFiles) {
 // without it, the frames come back to back as before.
 TEST(FileCamera, HoleInTheRecordingGivesANoFrameTickEachPeriod) {
   ht::TempDir dir;
-  hs::DatasetMetadata m = make_dataset(dir, 3);
+  hd::DatasetMetadata m = make_dataset(dir, 3);
   constexpr std::uint64_t kP = 33'333'333;  // llround(1e9 / 30)
-  hs::write_frame_index(dir.path("frames.csv"), {{1'000'000'000ULL, "frames/000000.ppm"},
+  hd::write_frame_index(dir.path("frames.csv"), {{1'000'000'000ULL, "frames/000000.ppm"},
                                                  {1'000'000'000ULL + kP, "frames/000001.ppm"},
                                                  {1'200'000'000ULL, "frames/000002.ppm"}});
   for (const bool fill : {true, false}) {
-    hs::FileCamera camera(dir.dir(), m);
+    hh::FileCamera camera(dir.dir(), m);
     camera.set_fill_gaps(fill);
     std::vector<std::uint64_t> next;
     std::vector<hal::CameraStatus> got;
@@ -270,8 +271,8 @@ TEST(FileCamera, HoleInTheRecordingGivesANoFrameTickEachPeriod) {
 
 TEST(FileCamera, NextFrameAfterACorruptOneStillWorks) {
   ht::TempDir dir;
-  const hs::DatasetMetadata m = make_dataset(dir, 3);
-  hs::FileCamera camera(dir.dir(), m);
+  const hd::DatasetMetadata m = make_dataset(dir, 3);
+  hh::FileCamera camera(dir.dir(), m);
   fs::remove(dir.path("frames/000001.ppm"));  // vanished after start-up
   hal::FrameView f;
   ASSERT_EQ(camera.acquire(f, 0), hal::CameraStatus::kFrame);
@@ -308,7 +309,7 @@ TEST(LogEncoders, HandsOutFramesByTimestamp) {
       frame_at(300, 0x181, 4, 9, 9),                                 // ours, wrong length
       frame_at(400, 0x181, 8, 5, 6), frame_at(500, 0x181, 8, 7, 8),
   };
-  hs::LogEncoders enc(frames, layout);
+  hh::LogEncoders enc(frames, layout);
   EXPECT_EQ(enc.frame_count(), 5U);
   hal::EncoderCounts c;
   EXPECT_EQ(enc.read(50, c), hal::EncoderStatus::kNoData);
@@ -340,7 +341,7 @@ TEST(LogEncoders, SixteenBitLayoutReportsItsWidth) {
   layout.length = 4;
   layout.right_offset = 2;
   layout.counter_bits = 16;
-  hs::LogEncoders enc({ha::encode_encoder_frame(layout, 65535, 3, 10)}, layout);
+  hh::LogEncoders enc({ha::encode_encoder_frame(layout, 65535, 3, 10)}, layout);
   hal::EncoderCounts c;
   ASSERT_EQ(enc.read(10, c), hal::EncoderStatus::kFresh);
   EXPECT_EQ(c.left_ticks, 65535U);
@@ -354,7 +355,7 @@ TEST(LogEncoders, FromALogFile) {
                                     "(1.000000) can0 181#0100000002000000\n"
                                     "(1.005000) can0 281#0100300C00000000\n"
                                     "(1.010000) can0 181#0300000004000000\n");
-  hs::LogEncoders enc(log, ha::EncoderFrameLayout{});
+  hh::LogEncoders enc(log, ha::EncoderFrameLayout{});
   EXPECT_EQ(enc.frame_count(), 3U);
   hal::EncoderCounts c;
   ASSERT_EQ(enc.read(1000000000ULL, c), hal::EncoderStatus::kFresh);
@@ -368,7 +369,7 @@ TEST(LogEncoders, FromALogFile) {
   const std::string bad =
       dir.write("bad.log", "(1.000000) can0 181#0100000002000000\n(1.010000) can0 181#R\n");
   const std::string msg =
-      ht::error_of([&] { hs::LogEncoders from_bad_log(bad, ha::EncoderFrameLayout{}); });
+      ht::error_of([&] { hh::LogEncoders from_bad_log(bad, ha::EncoderFrameLayout{}); });
   EXPECT_EQ(msg.rfind(bad + ":2: ", 0), 0U) << msg;
 }
 
@@ -377,7 +378,7 @@ TEST(LogEncoders, FromALogFile) {
 TEST(LogEncoders, ALogWithoutEncoderFramesIsRefused) {
   ht::TempDir dir;
   const auto error_of = [&](const std::string& path) {
-    return ht::error_of([&] { hs::LogEncoders enc(path, ha::EncoderFrameLayout{}); });
+    return ht::error_of([&] { hh::LogEncoders enc(path, ha::EncoderFrameLayout{}); });
   };
   std::string p = dir.write("empty.log", "");
   ht::expect_one_line(error_of(p), p + ": ", "no CAN frames");
@@ -394,7 +395,7 @@ TEST(LogEncoders, ALogWithoutEncoderFramesIsRefused) {
 // --- GPIO encoder recordings ---------------------------------------------------------------------
 
 TEST(GpioLogEncoders, HandsOutSamplesByTimestampWithTheRecordingsWidth) {
-  hs::GpioLogEncoders enc({{100, 1, 2}, {200, 3, 4}, {300, 65535, 0}, {400, 2, 1}}, 16);
+  hh::GpioLogEncoders enc({{100, 1, 2}, {200, 3, 4}, {300, 65535, 0}, {400, 2, 1}}, 16);
   EXPECT_EQ(enc.sample_count(), 4U);
   hal::EncoderCounts c;
   EXPECT_EQ(enc.read(50, c), hal::EncoderStatus::kNoData);
@@ -416,7 +417,7 @@ TEST(GpioLogEncoders, HandsOutSamplesByTimestampWithTheRecordingsWidth) {
 
 TEST(GpioLogEncoders, LoopsCarryTheCountersOnAcrossTheWrap) {
   // 8-bit counters advancing 200 a pass: the second pass continues from 210 and wraps.
-  hs::GpioLogEncoders enc({{0, 10, 250}, {10, 210, 50}}, 8);
+  hh::GpioLogEncoders enc({{0, 10, 250}, {10, 210, 50}}, 8);
   enc.set_loops(2, 20);
   hal::EncoderCounts c;
   ASSERT_EQ(enc.read(10, c), hal::EncoderStatus::kFresh);
@@ -435,7 +436,7 @@ TEST(GpioLogEncoders, FromAFileAndItsErrors) {
   const std::string ok = dir.write("encoders.csv",
                                    "timestamp_ns,left_ticks,right_ticks\n"
                                    "1000000000,0,0\n1010000000,-3,7\n");
-  hs::GpioLogEncoders enc(ok, 32);
+  hh::GpioLogEncoders enc(ok, 32);
   hal::EncoderCounts c;
   ASSERT_EQ(enc.read(1010000000ULL, c), hal::EncoderStatus::kFresh);
   EXPECT_EQ(c.left_ticks, 0xFFFFFFFDU);
@@ -443,7 +444,7 @@ TEST(GpioLogEncoders, FromAFileAndItsErrors) {
   const std::string bad = dir.write("bad.csv",
                                     "timestamp_ns,left_ticks,right_ticks\n"
                                     "1000000000,0,0\n1010000000,70000,7\n");
-  const std::string msg = ht::error_of([&] { hs::GpioLogEncoders from_bad(bad, 16); });
+  const std::string msg = ht::error_of([&] { hh::GpioLogEncoders from_bad(bad, 16); });
   EXPECT_EQ(msg.rfind(bad + ":3: ", 0), 0U) << msg;
 }
 
@@ -464,8 +465,8 @@ TEST(EncoderRecorder, RecordsFreshSamplesThatReplayIdentically) {
   const std::string path = dir.path("rec.csv");
   std::vector<std::pair<hal::EncoderStatus, hal::EncoderCounts>> original;
   {
-    hs::LogEncoders can(frames, layout);
-    hs::EncoderRecorder rec(can);
+    hh::LogEncoders can(frames, layout);
+    hd::EncoderRecorder rec(can);
     ASSERT_TRUE(rec.open(path));
     for (std::uint64_t t = 990; t <= 1600; t += 33) {
       hal::EncoderCounts c;
@@ -476,7 +477,7 @@ TEST(EncoderRecorder, RecordsFreshSamplesThatReplayIdentically) {
     EXPECT_GT(rec.samples_written(), 10U);
     ASSERT_TRUE(rec.close());
   }
-  hs::GpioLogEncoders replay(path, 16);
+  hh::GpioLogEncoders replay(path, 16);
   std::size_t i = 0;
   for (std::uint64_t t = 990; t <= 1600; t += 33, ++i) {
     hal::EncoderCounts c;
@@ -492,7 +493,7 @@ TEST(EncoderRecorder, RecordsFreshSamplesThatReplayIdentically) {
       EXPECT_NE(s, hal::EncoderStatus::kFresh) << "at " << t;
     }
   }
-  EXPECT_FALSE(hs::EncoderRecorder(replay).open(dir.path("no/such/dir/rec.csv")));
+  EXPECT_FALSE(hd::EncoderRecorder(replay).open(dir.path("no/such/dir/rec.csv")));
 }
 
 // --- SerialLink --------------------------------------------------------------------------------

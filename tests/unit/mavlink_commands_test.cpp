@@ -320,6 +320,34 @@ TEST(MavlinkCommands, RejectedCommandsGetNoAnswer) {
   EXPECT_EQ(r.cycle->inbound_counters().rejected_source, 1U);
 }
 
+TEST(MavlinkCommands, TimesyncIsAnsweredOnTheDataClock) {
+  Rig r;
+  r.start();
+  r.run();
+  auto frames = r.send_and_run(tf::timesync(0, 987'654'321, 0, 0, 1, 1));
+  const auto answers = of_type(frames, 111);
+  ASSERT_EQ(answers.size(), 1U);
+  const tf::Bytes& p = answers[0].payload;
+  // tc1: our time (ns) on ODOMETRY's clock, the data clock of this replay; ts1: the request's.
+  EXPECT_EQ(tf::i64(p, 0), static_cast<std::int64_t>(r.cycle->pose().data_time_ns));
+  EXPECT_GT(tf::i64(p, 0), 0);
+  EXPECT_EQ(tf::i64(p, 8), 987'654'321);
+  ASSERT_GE(p.size(), 18U);
+  EXPECT_EQ(p[16], 1);  // to the requester
+  EXPECT_EQ(p[17], 1);
+  // A flood: one answer a cycle.
+  tf::Bytes flood;
+  for (int i = 0; i < 10; ++i) {
+    const tf::Bytes t = tf::timesync(0, 1000 + i);
+    flood.insert(flood.end(), t.begin(), t.end());
+  }
+  frames = r.send_and_run(flood);
+  ASSERT_EQ(of_type(frames, 111).size(), 1U);
+  EXPECT_EQ(tf::i64(of_type(frames, 111)[0].payload, 8), 1009);
+  EXPECT_TRUE(of_type(r.run(), 111).empty());
+  EXPECT_EQ(r.cycle->inbound_counters().timesync_requests, 11U);
+}
+
 TEST(MavlinkCommands, SignedLink) {
   tf::Key key{};
   for (std::size_t i = 0; i < key.size(); ++i) key[i] = static_cast<std::uint8_t>(200 - i);

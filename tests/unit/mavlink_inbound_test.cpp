@@ -581,6 +581,50 @@ TEST(MavlinkReceiver, TargetAndSourceChecks) {
   EXPECT_EQ(c.rejected_unsigned, 0U);
 }
 
+TEST(MavlinkReceiver, TimesyncRequestsAreTakenFromAnySourceTheLatestOnly) {
+  Receiver r(link_config());
+  r.link.send(tf::timesync(0, 111));                 // autopilot 1/1, to everyone: taken
+  r.link.send(tf::timesync(0, 222, 1, 197, 42, 7));  // to us, from anyone: taken
+  r.link.send(tf::timesync(0, 333, 2, 0));           // to another system: ignored
+  r.link.send(tf::timesync(0, 444, 1, 100));         // to another component: ignored
+  r.link.send(tf::timesync(5, 555));                 // an answer (tc1 != 0): ignored
+  EXPECT_TRUE(r.cycle().empty());                    // none of them is a command
+  mv::TimesyncRequest t;
+  ASSERT_TRUE(r.rx.take_timesync(t));
+  EXPECT_EQ(t.ts1, 222);  // the latest of the cycle
+  EXPECT_EQ(t.system_id, 42);
+  EXPECT_EQ(t.component_id, 7);
+  EXPECT_FALSE(r.rx.take_timesync(t));  // taken once
+  const mv::InboundCounters c = r.rx.counters();
+  EXPECT_EQ(c.frames_in, 5U);
+  EXPECT_EQ(c.timesync_requests, 2U);
+  EXPECT_EQ(c.ignored_messages, 3U);
+  EXPECT_EQ(c.rejected_source, 0U);
+}
+
+TEST(MavlinkReceiver, TimesyncOnASignedLinkMustBeSigned) {
+  const tf::Key key = test_key();
+  mv::Signer signer;
+  signer.configure(key, 0);
+  signer.set_time(1'000'000, 0);
+  Receiver r(link_config(), &signer);
+  r.link.send(tf::timesync(0, 1));  // unsigned
+  tf::Key other = key;
+  other[3] ^= 1;
+  r.link.send(tf::timesync(0, 2, 0, 0, 1, 1, &other, 1'000'100));  // wrong key
+  r.cycle();
+  mv::TimesyncRequest t;
+  EXPECT_FALSE(r.rx.take_timesync(t));
+  r.link.send(tf::timesync(0, 3, 0, 0, 1, 1, &key, 1'000'200));
+  r.cycle();
+  ASSERT_TRUE(r.rx.take_timesync(t));
+  EXPECT_EQ(t.ts1, 3);
+  const mv::InboundCounters c = r.rx.counters();
+  EXPECT_EQ(c.rejected_unsigned, 1U);
+  EXPECT_EQ(c.rejected_bad_signature, 1U);
+  EXPECT_EQ(c.timesync_requests, 1U);
+}
+
 TEST(MavlinkReceiver, EmptyAcceptListTakesNoCommand) {
   hf::LinkConfig lc = link_config();
   lc.accept_system_ids.clear();

@@ -35,8 +35,8 @@ inline std::uint16_t crc16(const std::uint8_t* p, std::size_t n, std::uint16_t c
 
 /// CRC_EXTRA of the messages the tests send or read.
 inline std::uint8_t crc_extra(std::uint32_t msg_id) {
-  static const std::map<std::uint32_t, std::uint8_t> extras = {{0, 50},   {76, 152}, {77, 143},
-                                                               {253, 83}, {331, 91}, {75, 158}};
+  static const std::map<std::uint32_t, std::uint8_t> extras = {
+      {0, 50}, {76, 152}, {77, 143}, {253, 83}, {331, 91}, {75, 158}, {111, 34}};
   const auto it = extras.find(msg_id);
   return it == extras.end() ? 0 : it->second;
 }
@@ -127,6 +127,31 @@ inline Bytes command(std::uint16_t cmd, const std::array<float, 7>& params, std:
                   component_id, seq, key != nullptr ? 0x01 : 0x00);
   if (key != nullptr) sign(f, *key, link_id, timestamp);
   return f;
+}
+
+/// A TIMESYNC frame (tc1, ts1, then the extension's target system and component) from
+/// @p system_id / @p component_id, signed with @p key at @p timestamp when given.
+inline Bytes timesync(std::int64_t tc1, std::int64_t ts1, std::uint8_t target_system = 0,
+                      std::uint8_t target_component = 0, std::uint8_t system_id = 1,
+                      std::uint8_t component_id = 1, const Key* key = nullptr,
+                      std::uint64_t timestamp = 0) {
+  Bytes p;
+  for (const std::int64_t v : {tc1, ts1})
+    for (int i = 0; i < 8; ++i)
+      p.push_back(static_cast<std::uint8_t>(static_cast<std::uint64_t>(v) >> (8 * i)));
+  p.push_back(target_system);
+  p.push_back(target_component);
+  Bytes f = frame(111, p, system_id, component_id, 0, key != nullptr ? 0x01 : 0x00);
+  if (key != nullptr) sign(f, *key, 0, timestamp);
+  return f;
+}
+
+/// A TIMESYNC read back: tc1, ts1, target system and component.
+inline std::int64_t i64(const Bytes& p, std::size_t at) {
+  std::uint64_t u = 0;
+  for (std::size_t i = 0; i < 8 && at + i < p.size(); ++i)
+    u |= static_cast<std::uint64_t>(p[at + i]) << (8 * i);
+  return static_cast<std::int64_t>(u);
 }
 
 /// One frame read back from a byte stream.

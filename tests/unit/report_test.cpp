@@ -13,6 +13,7 @@
 #include <vector>
 
 namespace hs = harmoloc::sim_host;
+namespace hd = harmoloc::dataset;
 using harmoloc::algorithms::kPi;
 using harmoloc::algorithms::Pose2;
 
@@ -20,8 +21,8 @@ namespace {
 
 constexpr double kDeg = 180.0 / kPi;
 
-hs::StampedPose at(double t, double x, double y, double yaw = 0.0) {
-  hs::StampedPose p;
+hd::StampedPose at(double t, double x, double y, double yaw = 0.0) {
+  hd::StampedPose p;
   p.t_s = t;
   p.pose = Pose2{x, y, yaw};
   return p;
@@ -150,7 +151,7 @@ const char* const kStatsJson = R"({
 /// A circle of radius 1 m around (2, 1) in 20 s at 10 Hz, an estimate off by a constant
 /// 3 cm in x, and fixes off by 4 cm in y.
 struct Circle {
-  std::vector<hs::StampedPose> truth, estimate, fixes;
+  std::vector<hd::StampedPose> truth, estimate, fixes;
   Circle() {
     for (int i = 0; i <= 200; ++i) {
       const double t = 0.1 * i;
@@ -172,8 +173,8 @@ struct Circle {
 
 TEST(ReportEvaluate, HandComputedErrors) {
   // Truth along x at 1 m/s; estimates at t = 1, 4, 6 inside, t = -1 and 12 outside.
-  const std::vector<hs::StampedPose> truth = {at(0, 0, 0), at(10, 10, 0)};
-  const std::vector<hs::StampedPose> estimate = {at(-1, -1, 0), at(1, 1.03, 0.04, 0.1),
+  const std::vector<hd::StampedPose> truth = {at(0, 0, 0), at(10, 10, 0)};
+  const std::vector<hd::StampedPose> estimate = {at(-1, -1, 0), at(1, 1.03, 0.04, 0.1),
                                                  at(4, 4.0, 0.0, 0.0), at(6, 5.94, -0.08, -0.2),
                                                  at(12, 12, 0)};
   const hs::TrajectoryErrors e = hs::evaluate(truth, estimate);
@@ -200,7 +201,7 @@ TEST(ReportEvaluate, HandComputedErrors) {
 }
 
 TEST(ReportEvaluate, InterpolatesTruthBetweenPoses) {
-  const std::vector<hs::StampedPose> truth = {at(0, 0, 0, 0.0), at(2, 2, 4, 0.4)};
+  const std::vector<hd::StampedPose> truth = {at(0, 0, 0, 0.0), at(2, 2, 4, 0.4)};
   const hs::TrajectoryErrors e = hs::evaluate(truth, {at(1, 1, 2, 0.2), at(1.5, 1.5, 3.1, 0.3)});
   ASSERT_EQ(e.count, 2u);
   EXPECT_NEAR(e.samples[0].position_m, 0.0, 1e-12);
@@ -210,20 +211,20 @@ TEST(ReportEvaluate, InterpolatesTruthBetweenPoses) {
 }
 
 TEST(ReportEvaluate, HeadingErrorWrapsAroundPi) {
-  const std::vector<hs::StampedPose> truth = {at(0, 0, 0, 3.1), at(1, 0, 0, 3.1)};
+  const std::vector<hd::StampedPose> truth = {at(0, 0, 0, 3.1), at(1, 0, 0, 3.1)};
   const hs::TrajectoryErrors e = hs::evaluate(truth, {at(0.5, 0, 0, -3.1)});
   ASSERT_EQ(e.count, 1u);
   EXPECT_NEAR(e.samples[0].heading_rad, 2.0 * kPi - 6.2, 1e-12);
   EXPECT_NEAR(e.rmse_heading_deg, (2.0 * kPi - 6.2) * kDeg, 1e-9);
   // Truth interpolated across +-pi: 3.0 -> -3.0 passes through pi, not through 0.
-  const std::vector<hs::StampedPose> across = {at(0, 0, 0, 3.0), at(2, 0, 0, -3.0)};
+  const std::vector<hd::StampedPose> across = {at(0, 0, 0, 3.0), at(2, 0, 0, -3.0)};
   const hs::TrajectoryErrors f = hs::evaluate(across, {at(1, 0, 0, kPi)});
   ASSERT_EQ(f.count, 1u);
   EXPECT_NEAR(std::fabs(f.samples[0].heading_rad), 0.0, 1e-9);
 }
 
 TEST(ReportEvaluate, SkipInitialIsAnchoredOnTheTruthStart) {
-  std::vector<hs::StampedPose> truth, estimate;
+  std::vector<hd::StampedPose> truth, estimate;
   for (int i = 0; i <= 10; ++i) {
     truth.push_back(at(100 + i, i, 0));
     estimate.push_back(at(100 + i, i, i < 3 ? 1.0 : 0.01));  // 1 m off while converging
@@ -396,8 +397,8 @@ TEST(ReportBuild, RejectsUnusableInput) {
   hs::ReportInputs in;
   in.truth_path = "GT.tum";
   in.estimate_path = "EST.tum";
-  const auto message = [&](std::vector<hs::StampedPose> truth,
-                           std::vector<hs::StampedPose> estimate, double skip = 0.0) {
+  const auto message = [&](std::vector<hd::StampedPose> truth,
+                           std::vector<hd::StampedPose> estimate, double skip = 0.0) {
     hs::ReportInputs copy = in;
     copy.skip_initial_s = skip;
     try {
@@ -407,7 +408,7 @@ TEST(ReportBuild, RejectsUnusableInput) {
     }
     return std::string("no error");
   };
-  std::vector<hs::StampedPose> late = {at(100, 0, 0), at(101, 0, 0)};
+  std::vector<hd::StampedPose> late = {at(100, 0, 0), at(101, 0, 0)};
   EXPECT_EQ(message(c.truth, late).rfind("EST.tum: no pose lies within the ground truth", 0), 0u)
       << message(c.truth, late);
   EXPECT_EQ(message({at(0, 0, 0)}, c.estimate).rfind("GT.tum: ground truth needs", 0), 0u);
@@ -419,7 +420,7 @@ TEST(ReportBuild, RejectsUnusableInput) {
 TEST(ReportBuild, LoadReportNamesTheBadFile) {
   const ScratchDir scratch;
   const auto& dir = scratch.path();
-  hs::write_tum((dir / "gt.tum").string(), Circle().truth);
+  hd::write_tum((dir / "gt.tum").string(), Circle().truth);
   write_text(dir / "bad.tum", "0 1 2 3\n");
   hs::ReportInputs in;
   in.truth_path = (dir / "gt.tum").string();

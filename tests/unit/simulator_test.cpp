@@ -19,20 +19,22 @@
 #include "harmoloc/algorithms/odometry.hpp"
 #include "harmoloc/algorithms/random.hpp"
 #include "harmoloc/algorithms/segmentation.hpp"
-#include "harmoloc/sim_host/candump_log.hpp"
-#include "harmoloc/sim_host/file_camera.hpp"
-#include "harmoloc/sim_host/log_encoders.hpp"
-#include "harmoloc/sim_host/metadata.hpp"
+#include "harmoloc/dataset/candump_log.hpp"
+#include "harmoloc/dataset/metadata.hpp"
+#include "harmoloc/dataset/tum.hpp"
+#include "harmoloc/host/file_camera.hpp"
+#include "harmoloc/host/log_encoders.hpp"
 #include "harmoloc/sim_host/route.hpp"
 #include "harmoloc/sim_host/scenario.hpp"
 #include "harmoloc/sim_host/scenario_run.hpp"
 #include "harmoloc/sim_host/scene_renderer.hpp"
 #include "harmoloc/sim_host/sim_camera.hpp"
 #include "harmoloc/sim_host/simulate.hpp"
-#include "harmoloc/sim_host/tum.hpp"
 #include "test_support.hpp"
 
 namespace hs = harmoloc::sim_host;
+namespace hd = harmoloc::dataset;
+namespace hh = harmoloc::host;
 namespace ha = harmoloc::algorithms;
 namespace ht = harmoloc::test;
 namespace hal = harmoloc::hal;
@@ -1001,22 +1003,22 @@ TEST(SimCamera, ReplaysExactlyWhatTheDatasetHolds) {
   const hs::Scenario s = tiny_with_events();
   ht::TempDir dir;
   hs::simulate_dataset(s, 9, dir.dir(), nullptr);
-  const hs::DatasetMetadata meta = hs::read_metadata(dir.dir());
-  hs::FileCamera files(dir.dir(), meta);
-  hs::LogEncoders logged(dir.path("encoders.log"), meta.encoder_layout);
+  const hd::DatasetMetadata meta = hd::read_metadata(dir.dir());
+  hh::FileCamera files(dir.dir(), meta);
+  hh::LogEncoders logged(dir.path("encoders.log"), meta.encoder_layout);
 
   hs::ScenarioRun run(s, 9);
   hs::SimCamera camera(run);
-  hs::LogEncoders in_memory(run.encoder_frames(), s.can_layout);
+  hh::LogEncoders in_memory(run.encoder_frames(), s.can_layout);
   ASSERT_EQ(camera.frame_count(), files.frame_count());
   EXPECT_EQ(camera.first_timestamp_ns(), files.first_timestamp_ns());
   EXPECT_EQ(camera.last_timestamp_ns(), files.last_timestamp_ns());
   EXPECT_EQ(in_memory.frame_count(), logged.frame_count());
   EXPECT_EQ(in_memory.first_timestamp_ns(), logged.first_timestamp_ns());
   EXPECT_EQ(in_memory.last_timestamp_ns(), logged.last_timestamp_ns());
-  EXPECT_EQ(hs::read_candump_log(dir.path("encoders.log")).size(), run.encoder_frames().size());
+  EXPECT_EQ(hd::read_candump_log(dir.path("encoders.log")).size(), run.encoder_frames().size());
 
-  const std::vector<hs::StampedPose> truth = hs::read_tum(dir.path("groundtruth.tum"));
+  const std::vector<hd::StampedPose> truth = hd::read_tum(dir.path("groundtruth.tum"));
   ASSERT_EQ(truth.size(), run.frame_count());
   const std::uint8_t* first_buffer = nullptr;
   std::size_t frames = 0, encoder_reads = 0;

@@ -31,6 +31,7 @@ add_executable(firmware_test
   ${HARMOLOC_UNIT_DIR}/mavlink_inbound_test.cpp
   ${HARMOLOC_UNIT_DIR}/mavlink_commands_test.cpp
   ${HARMOLOC_UNIT_DIR}/mavlink_config_test.cpp
+  ${HARMOLOC_UNIT_DIR}/pose_messages_test.cpp
   ${HARMOLOC_UNIT_DIR}/latency_histogram_test.cpp
   ${HARMOLOC_UNIT_DIR}/map_loader_test.cpp
   ${HARMOLOC_UNIT_DIR}/device_config_test.cpp)
@@ -78,7 +79,7 @@ add_executable(sim_host_test
   ${HARMOLOC_UNIT_DIR}/forward_map_training_test.cpp
   ${HARMOLOC_UNIT_DIR}/random_scene_test.cpp
   ${HARMOLOC_UNIT_DIR}/simulator_test.cpp)
-target_link_libraries(sim_host_test PRIVATE harmoloc_sim_dataset harmoloc_sim_fakes harmoloc_simulator
+target_link_libraries(sim_host_test PRIVATE harmoloc_dataset harmoloc_drivers_host harmoloc_simulator
   harmoloc_trainer harmoloc_config
   harmoloc_drivers_common harmoloc_algorithms GTest::gtest_main harmoloc_warnings)
 gtest_discover_tests(sim_host_test DISCOVERY_TIMEOUT 60 PROPERTIES LABELS unit)

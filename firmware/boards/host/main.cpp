@@ -12,26 +12,28 @@
 
 #include <CLI/CLI.hpp>
 
+#include "board_run.hpp"
+
+#include "harmoloc/dataset/area_log.hpp"
+#include "harmoloc/dataset/encoder_csv.hpp"
+#include "harmoloc/dataset/metadata.hpp"
+#include "harmoloc/dataset/tum_writer.hpp"
 #include "harmoloc/drivers/monotonic_clock.hpp"
 #include "harmoloc/drivers/realtime_setup.hpp"
 #include "harmoloc/drivers/record_file.hpp"
 #include "harmoloc/drivers/serial_link.hpp"
 #include "harmoloc/drivers/stop_signals.hpp"
+#include "harmoloc/firmware/cli.hpp"
 #include "harmoloc/firmware/config.hpp"
 #include "harmoloc/firmware/cycle_pacer.hpp"
 #include "harmoloc/firmware/eigen_guard.hpp"
 #include "harmoloc/firmware/localization_cycle.hpp"
 #include "harmoloc/firmware/map_loader.hpp"
-#include "harmoloc/firmware/signing_startup.hpp"
 #include "harmoloc/firmware/stats_report.hpp"
-#include "harmoloc/sim_host/area_log.hpp"
-#include "harmoloc/sim_host/cli.hpp"
-#include "harmoloc/sim_host/encoder_csv.hpp"
-#include "harmoloc/sim_host/file_camera.hpp"
-#include "harmoloc/sim_host/gpio_log_encoders.hpp"
-#include "harmoloc/sim_host/log_encoders.hpp"
-#include "harmoloc/sim_host/metadata.hpp"
-#include "harmoloc/sim_host/tum_writer.hpp"
+#include "harmoloc/host/file_camera.hpp"
+#include "harmoloc/host/gpio_log_encoders.hpp"
+#include "harmoloc/host/log_encoders.hpp"
+#include "harmoloc/host/recorded_time_camera.hpp"
 
 namespace {
 
@@ -47,63 +49,8 @@ int fail(const std::string& why) {
   return 2;
 }
 
-sim_host::TumWriter g_trajectory, g_fixes;
-sim_host::AreaLogWriter g_areas;
-
-// Resident and peak memory (kB) from /proc/self/status; -1 where unavailable.
-void read_memory(long& rss_kb, long& peak_kb) {
-  rss_kb = peak_kb = -1;
-  std::FILE* f = std::fopen("/proc/self/status", "r");
-  if (f == nullptr) return;
-  char line[256];
-  while (std::fgets(line, sizeof line, f) != nullptr) {
-    if (std::strncmp(line, "VmRSS:", 6) == 0) rss_kb = std::strtol(line + 6, nullptr, 10);
-    if (std::strncmp(line, "VmHWM:", 6) == 0) peak_kb = std::strtol(line + 6, nullptr, 10);
-  }
-  std::fclose(f);
-}
-
-// A recording as a live camera would deliver it, for timer-paced real-time replays: a frame is
-// there from its recorded time on (mapped onto the monotonic clock from the start of the run),
-// acquire() never waits, and of the frames due by its deadline it hands over the newest, dropping
-// the older ones as the V4L2 and libcamera drivers do.
-class RecordedTimeCamera final : public hal::Camera {
- public:
-  explicit RecordedTimeCamera(sim_host::FileCamera& inner) : inner_(inner) {}
-  void start(std::uint64_t wall_start_ns, std::uint64_t data_start_ns) {
-    wall_start_ns_ = wall_start_ns;
-    data_start_ns_ = data_start_ns;
-  }
-  hal::CameraStatus acquire(hal::FrameView& frame, std::uint64_t deadline_ns) override {
-    if (taken_ >= inner_.frame_count()) return hal::CameraStatus::kEnded;
-    if (due_ns() > deadline_ns) return hal::CameraStatus::kNoFrame;
-    hal::CameraStatus status = inner_.acquire(frame, deadline_ns);
-    ++taken_;
-    // Bounded by the frames of the recording.
-    while (taken_ < inner_.frame_count() && due_ns() <= deadline_ns) {
-      if (status == hal::CameraStatus::kFrame) ++dropped_;
-      status = inner_.acquire(frame, deadline_ns);
-      ++taken_;
-    }
-    return status;
-  }
-  void release() override { inner_.release(); }
-  hal::CameraCounters counters() const override {
-    hal::CameraCounters c = inner_.counters();
-    c.dropped += dropped_;
-    return c;
-  }
-
- private:
-  std::uint64_t due_ns() const {
-    const std::uint64_t t = inner_.next_timestamp_ns();
-    return wall_start_ns_ + (t > data_start_ns_ ? t - data_start_ns_ : 0);
-  }
-  sim_host::FileCamera& inner_;
-  std::uint64_t wall_start_ns_ = 0, data_start_ns_ = 0;
-  std::size_t taken_ = 0;
-  std::uint64_t dropped_ = 0;
-};
+dataset::TumWriter g_trajectory, g_fixes;
+dataset::AreaLogWriter g_areas;
 
 // The files the cycle appends to, checked after every cycle: a write that failed (a full disk,
 // /dev/full) is said once, when it happens, naming its file; the run goes on (the pose still
@@ -111,7 +58,7 @@ class RecordedTimeCamera final : public hal::Camera {
 class OutputWatch {
  public:
   explicit OutputWatch(bool progress) : progress_(progress) {}
-  void add(const sim_host::BufferedOutput& out) { outputs_[count_++] = Watched{&out, false}; }
+  void add(const dataset::BufferedOutput& out) { outputs_[count_++] = Watched{&out, false}; }
   void check() {
     for (std::size_t i = 0; i < count_; ++i) report(outputs_[i]);
   }
@@ -127,7 +74,7 @@ class OutputWatch {
 
  private:
   struct Watched {
-    const sim_host::BufferedOutput* out;
+    const dataset::BufferedOutput* out;
     bool reported;
   };
   void report(Watched& w) const {
@@ -140,16 +87,6 @@ class OutputWatch {
   std::size_t count_ = 0;
   bool progress_;  // a progress line ("\r  cycle N/M") may be open on stderr
 };
-
-long count_open_fds() {
-  std::error_code ec;
-  long n = 0;
-  for (auto it = std::filesystem::directory_iterator("/proc/self/fd", ec);
-       !ec && it != std::filesystem::directory_iterator(); it.increment(ec)) {
-    ++n;
-  }
-  return ec ? -1 : n - 1;  // the iterator's own descriptor
-}
 
 }  // namespace
 
@@ -202,17 +139,17 @@ int main(int argc, char** argv) {
 
   // ---- start-up: everything is read, checked and reserved here ----
   firmware::FirmwareConfig config;
-  sim_host::DatasetMetadata meta;
-  std::unique_ptr<sim_host::FileCamera> camera;
-  std::unique_ptr<sim_host::LogEncoders> can_log;
-  std::unique_ptr<sim_host::GpioLogEncoders> gpio_log;
+  dataset::DatasetMetadata meta;
+  std::unique_ptr<host::FileCamera> camera;
+  std::unique_ptr<host::LogEncoders> can_log;
+  std::unique_ptr<host::GpioLogEncoders> gpio_log;
   hal::WheelEncoders* encoders = nullptr;
   std::size_t encoder_records = 0;
   std::uint64_t encoders_first_ns = 0, encoders_last_ns = 0;
   drivers::SerialLink link;
   try {
     config = config_path.empty() ? firmware::default_config() : firmware::load_config(config_path);
-    meta = sim_host::read_metadata(dataset);
+    meta = dataset::read_metadata(dataset);
     // The dataset describes the recorded robot; a config without these sections follows it.
     if (!config.has_odometry_section) config.geometry = meta.geometry;
     if (!config.has_can_section) config.can_layout = meta.encoder_layout;
@@ -232,18 +169,18 @@ int main(int argc, char** argv) {
         !e.empty()) {
       return fail(e);
     }
-    camera = std::make_unique<sim_host::FileCamera>(dataset, meta);
+    camera = std::make_unique<host::FileCamera>(dataset, meta);
     const std::string encoder_path = (std::filesystem::path(dataset) / meta.encoder_log).string();
-    if (meta.encoder_source == sim_host::EncoderSource::kGpio) {
+    if (meta.encoder_source == dataset::EncoderSource::kGpio) {
       // A GPIO recording: its counter width is the metadata's (the config's [can] is the bus's).
-      gpio_log = std::make_unique<sim_host::GpioLogEncoders>(encoder_path,
-                                                             meta.encoder_layout.counter_bits);
+      gpio_log =
+          std::make_unique<host::GpioLogEncoders>(encoder_path, meta.encoder_layout.counter_bits);
       encoders = gpio_log.get();
       encoder_records = gpio_log->sample_count();
       encoders_first_ns = gpio_log->first_timestamp_ns();
       encoders_last_ns = gpio_log->last_timestamp_ns();
     } else {
-      can_log = std::make_unique<sim_host::LogEncoders>(encoder_path, config.can_layout);
+      can_log = std::make_unique<host::LogEncoders>(encoder_path, config.can_layout);
       encoders = can_log.get();
       encoder_records = can_log->frame_count();
       encoders_first_ns = can_log->first_timestamp_ns();
@@ -306,10 +243,10 @@ int main(int argc, char** argv) {
   static firmware::CyclePacer pacer(
       clock, config.cycle.pacing,
       static_cast<std::uint64_t>(std::llround(1e9 / config.cycle.rate_hz)));
-  RecordedTimeCamera recorded_time_camera(*camera);
+  host::RecordedTimeCamera recorded_time_camera(*camera);
   hal::Camera& cycle_camera =
       timer_paced ? static_cast<hal::Camera&>(recorded_time_camera) : *camera;
-  sim_host::EncoderRecorder recorder(*encoders);
+  dataset::EncoderRecorder recorder(*encoders);
   if (!record_encoders_path.empty()) {
     if (!recorder.open(record_encoders_path)) return fail(record_encoders_path + ": cannot write");
     encoders = &recorder;
@@ -317,25 +254,9 @@ int main(int argc, char** argv) {
   auto cycle = std::make_unique<firmware::LocalizationCycle>(config, g_map, cycle_camera, *encoders,
                                                              link, clock, meta.pixel_format);
   cycle->set_overrun_alarm(realtime);
-  // The signing clock starts at the wall time (MAVLink signing timestamps are wall-clock based),
-  // unless the board has no clock (link.signing_clock = "peer": the first signed frame sets it);
-  // the replay protection carries on from what the previous run persisted.
-  const auto wall_us =
-      static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::microseconds>(
-                                     std::chrono::system_clock::now().time_since_epoch())
-                                     .count());
-  if (!config.link.signing_peer_clock) cycle->set_signing_time(wall_us);
   static drivers::RecordFile signing_store;
-  if (config.link.has_signing_key) {
-    firmware::SigningStartup signing;
-    if (const std::string e = firmware::start_signing_state(
-            config.link, firmware::mavlink::signing_timestamp_from_unix_us(wall_us), signing);
-        !e.empty()) {
-      return fail(e);
-    }
-    signing_store.start(config.link.signing_state_file, signing.durable);
-    cycle->restore_signing_state(signing.restored, &signing_store, signing.durable);
-  }
+  if (const std::string e = boards::start_signing(config, *cycle, signing_store); !e.empty())
+    return fail(e);
   if (!quiet) {
     std::fprintf(stderr,
                  "harmoloc: %zu frames %ux%u, %zu encoder %s, map of %u samples on %u boards, "
@@ -358,8 +279,8 @@ int main(int argc, char** argv) {
 
   firmware::RunCounters run;
   long unused_peak = 0;
-  read_memory(run.rss_kb_start, unused_peak);
-  run.open_fds_start = count_open_fds();
+  boards::read_memory(run.rss_kb_start, unused_peak);
+  run.open_fds_start = boards::count_open_fds();
   // From here a signal stops the run at the next cycle boundary, with every output written.
   drivers::install_stop_signals();
   OutputWatch watch(!quiet);
@@ -405,21 +326,13 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "\r  cycle %zu/%zu", done, camera->frame_count());
     }
   }
-  read_memory(run.rss_kb_end, run.peak_rss_kb);  // before the outputs are closed
-  run.open_fds_end = count_open_fds();
+  boards::read_memory(run.rss_kb_end, run.peak_rss_kb);  // before the outputs are closed
+  run.open_fds_end = boards::count_open_fds();
   if (!quiet) std::fprintf(stderr, "\r  cycle %zu/%zu\n", done, camera->frame_count());
   if (!quiet && drivers::stop_signal() != 0)
     std::fprintf(stderr, "harmoloc: stopped by %s\n", run.ended);
   // Every output is flushed and closed whatever happened to the others, then the stats written.
-  if (config.link.has_signing_key) {
-    signing_store.stop();
-    if (const std::string e =
-            firmware::write_signing_state(config.link, cycle->final_signing_state());
-        !e.empty()) {
-      std::fprintf(stderr, "harmoloc: %s\n", e.c_str());
-      ++run.outputs_failed;
-    }
-  }
+  boards::finish_signing(config, *cycle, signing_store, run);
   g_trajectory.close();
   g_fixes.close();
   g_areas.close();
@@ -445,13 +358,7 @@ int main(int argc, char** argv) {
   run.encoders = encoders->counters();
   run.link = link.counters();
   if (realtime) run.wakeup_latency = timer_paced ? &pacer.wakeup_latency() : &wakeup_latency;
-  if (!stats_path.empty()) {
-    if (const std::string e = firmware::write_stats(stats_path, firmware::stats_json(*cycle, run));
-        !e.empty()) {
-      std::fprintf(stderr, "harmoloc: %s\n", e.c_str());
-      ++run.outputs_failed;
-    }
-  }
+  boards::write_run_stats(*cycle, stats_path, run);
   const auto& c = cycle->counters();
   const auto& h = cycle->stage_histogram(firmware::Stage::kCycle);
   std::printf(

@@ -17,6 +17,9 @@
 
 #include <CLI/CLI.hpp>
 
+#include "board_run.hpp"
+
+#include "harmoloc/dataset/encoder_csv.hpp"
 #include "harmoloc/drivers/monotonic_clock.hpp"
 #include "harmoloc/drivers/realtime_setup.hpp"
 #include "harmoloc/drivers/record_file.hpp"
@@ -24,15 +27,13 @@
 #include "harmoloc/drivers/socketcan_encoders.hpp"
 #include "harmoloc/drivers/stop_signals.hpp"
 #include "harmoloc/drivers/v4l2_camera.hpp"
+#include "harmoloc/firmware/cli.hpp"
 #include "harmoloc/firmware/config.hpp"
 #include "harmoloc/firmware/cycle_pacer.hpp"
 #include "harmoloc/firmware/eigen_guard.hpp"
 #include "harmoloc/firmware/localization_cycle.hpp"
 #include "harmoloc/firmware/map_loader.hpp"
-#include "harmoloc/firmware/signing_startup.hpp"
 #include "harmoloc/firmware/stats_report.hpp"
-#include "harmoloc/sim_host/cli.hpp"
-#include "harmoloc/sim_host/encoder_csv.hpp"
 #ifdef HARMOLOC_WITH_GPIOD
 #include "harmoloc/drivers/gpio_quadrature_encoders.hpp"
 #endif
@@ -58,28 +59,6 @@ drivers::FormatRequest format_request(const std::string& name) {
   if (name == "yuyv") return drivers::FormatRequest::kYuyv;
   if (name == "rgb24") return drivers::FormatRequest::kRgb24;
   return drivers::FormatRequest::kAuto;
-}
-
-void read_memory(long& rss_kb, long& peak_kb) {
-  rss_kb = peak_kb = -1;
-  std::FILE* f = std::fopen("/proc/self/status", "r");
-  if (f == nullptr) return;
-  char line[256];
-  while (std::fgets(line, sizeof line, f) != nullptr) {
-    if (std::strncmp(line, "VmRSS:", 6) == 0) rss_kb = std::strtol(line + 6, nullptr, 10);
-    if (std::strncmp(line, "VmHWM:", 6) == 0) peak_kb = std::strtol(line + 6, nullptr, 10);
-  }
-  std::fclose(f);
-}
-
-long count_open_fds() {
-  std::error_code ec;
-  long n = 0;
-  for (auto it = std::filesystem::directory_iterator("/proc/self/fd", ec);
-       !ec && it != std::filesystem::directory_iterator(); it.increment(ec)) {
-    ++n;
-  }
-  return ec ? -1 : n - 1;
 }
 
 // The trajectory as TUM lines through a buffer reserved at start-up.
@@ -220,7 +199,7 @@ int main(int argc, char** argv) {
   }
 
   // Recording the counters the cycle reads (a 64 KiB buffer reserved here).
-  sim_host::EncoderRecorder recorder(*encoders);
+  dataset::EncoderRecorder recorder(*encoders);
   if (!record_encoders_path.empty()) {
     if (!recorder.open(record_encoders_path)) return fail(record_encoders_path + ": cannot write");
     encoders = &recorder;
@@ -244,25 +223,9 @@ int main(int argc, char** argv) {
   static firmware::CyclePacer pacer(
       clock, config.cycle.pacing,
       static_cast<std::uint64_t>(std::llround(1e9 / config.cycle.rate_hz)));
-  // The signing clock starts at the wall time (MAVLink signing timestamps are wall-clock based),
-  // unless the board has no clock (link.signing_clock = "peer": the first signed frame sets it);
-  // the replay protection carries on from what the previous run persisted.
-  const auto wall_us =
-      static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::microseconds>(
-                                     std::chrono::system_clock::now().time_since_epoch())
-                                     .count());
-  if (!config.link.signing_peer_clock) cycle->set_signing_time(wall_us);
   static drivers::RecordFile signing_store;
-  if (config.link.has_signing_key) {
-    firmware::SigningStartup signing;
-    if (const std::string e = firmware::start_signing_state(
-            config.link, firmware::mavlink::signing_timestamp_from_unix_us(wall_us), signing);
-        !e.empty()) {
-      return fail(e);
-    }
-    signing_store.start(config.link.signing_state_file, signing.durable);
-    cycle->restore_signing_state(signing.restored, &signing_store, signing.durable);
-  }
+  if (const std::string e = boards::start_signing(config, *cycle, signing_store); !e.empty())
+    return fail(e);
   if (!quiet) {
     std::fprintf(stderr, "harmoloc: camera %s\n", camera_text.c_str());
     std::fprintf(stderr, "harmoloc: encoders %s\n", encoders_text.c_str());
@@ -282,8 +245,8 @@ int main(int argc, char** argv) {
 
   firmware::RunCounters run;
   long unused_peak = 0;
-  read_memory(run.rss_kb_start, unused_peak);
-  run.open_fds_start = count_open_fds();
+  boards::read_memory(run.rss_kb_start, unused_peak);
+  run.open_fds_start = boards::count_open_fds();
 
   // ---- the cycle: camera-paced (acquire waits for the next frame, at most a period) or
   // timer-paced (wakes on an absolute grid, takes a ready frame or none) ----
@@ -325,20 +288,12 @@ int main(int argc, char** argv) {
       break;
     }
   }
-  read_memory(run.rss_kb_end, run.peak_rss_kb);
-  run.open_fds_end = count_open_fds();
+  boards::read_memory(run.rss_kb_end, run.peak_rss_kb);
+  run.open_fds_end = boards::count_open_fds();
   if (!quiet && drivers::stop_signal() != 0)
     std::fprintf(stderr, "harmoloc: stopped by %s\n", run.ended);
   // Every output is flushed and closed whatever happened to the others, then the stats written.
-  if (config.link.has_signing_key) {
-    signing_store.stop();
-    if (const std::string e =
-            firmware::write_signing_state(config.link, cycle->final_signing_state());
-        !e.empty()) {
-      std::fprintf(stderr, "harmoloc: %s\n", e.c_str());
-      ++run.outputs_failed;
-    }
-  }
+  boards::finish_signing(config, *cycle, signing_store, run);
   if (trajectory != nullptr && std::fclose(trajectory) != 0 && trajectory_error == 0) {
     trajectory_error = errno != 0 ? errno : EIO;
     std::fprintf(stderr, "harmoloc: %s: write failed (%s)\n", trajectory_path.c_str(),
@@ -359,13 +314,7 @@ int main(int argc, char** argv) {
   if (config.cycle.pacing == firmware::Pacing::kTimer) run.wakeup_latency = &pacer.wakeup_latency();
   run.encoders = encoders->counters();
   run.link = link.counters();
-  if (!stats_path.empty()) {
-    if (const std::string e = firmware::write_stats(stats_path, firmware::stats_json(*cycle, run));
-        !e.empty()) {
-      std::fprintf(stderr, "harmoloc: %s\n", e.c_str());
-      ++run.outputs_failed;
-    }
-  }
+  boards::write_run_stats(*cycle, stats_path, run);
   const auto& c = cycle->counters();
   const auto& h = cycle->stage_histogram(firmware::Stage::kCycle);
   std::printf(

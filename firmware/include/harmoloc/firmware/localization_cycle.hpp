@@ -20,6 +20,8 @@
 #include "harmoloc/firmware/mavlink_inbound.hpp"
 #include "harmoloc/firmware/mavlink_signing.hpp"
 #include "harmoloc/firmware/mavlink_v2.hpp"
+#include "harmoloc/firmware/pose_messages.hpp"
+#include "harmoloc/firmware/pose_output.hpp"
 #include "harmoloc/hal/camera.hpp"
 #include "harmoloc/hal/clock.hpp"
 #include "harmoloc/hal/persistent_record.hpp"
@@ -40,26 +42,6 @@ enum class Stage : std::uint8_t {
 };
 constexpr std::size_t kStageCount = 8;
 const char* stage_name(Stage stage);
-
-/// What the pose can be trusted for.
-enum class Health : std::uint8_t {
-  kNotInitialized = 0,  ///< no fix yet since start-up
-  kNominal = 1,         ///< camera and encoders both contribute
-  kOdometryOnly = 2,    ///< no usable frame lately: dead reckoning, covariance grows
-  kVisionOnly = 3,      ///< no encoder data lately: fixes only, motion unknown
-  kInvalid = 4,         ///< neither input lately: pose flagged invalid
-};
-const char* health_name(Health health);
-
-struct PoseOutput {
-  std::uint64_t data_time_ns = 0;
-  algorithms::Pose2 pose;
-  algorithms::PoseCovariance covariance;
-  double speed_mps = 0.0;
-  double yaw_rate_rps = 0.0;
-  Health health = Health::kNotInitialized;
-  bool valid = false;  ///< a pose exists (filter initialised)
-};
 
 struct FixOutput {
   algorithms::HarmonicFix fix;
@@ -185,7 +167,38 @@ class LocalizationCycle {
   bool overrun_alarm() const { return overrun_alarm_; }
 
  private:
+  using Features = std::array<float, algorithms::HarmonicModel::kMaxFeatures>;
+  /// The camera's part of one cycle: what acquire() gave, and whether it is a new frame of the
+  /// map's size (usable).
+  struct FrameIn {
+    hal::FrameView frame{};
+    hal::CameraStatus status = hal::CameraStatus::kNoFrame;
+    bool have_frame = false;  ///< a frame, not stale (it must be released)
+    bool usable = false;      ///< and of the map's image size
+  };
+  /// The encoders' part: the travel since the last sample, or the first sample after a gap.
+  struct EncoderIn {
+    algorithms::OdometryDelta delta{};
+    double dt_s = 0.0;          ///< time between the samples of delta
+    bool have_delta = false;    ///< delta holds the travel since the previous sample
+    bool bridge_now = false;    ///< the first sample after a diffused gap: move the cloud
+    bool fresh_sample = false;  ///< an encoder sample came in this cycle
+  };
+
+  /// One cycle: the stages below in order, each timed into its histogram.
   CycleResult run(std::uint64_t acquire_deadline_ns, bool have_deadline);
+  /// After acquire: stale frames, the data clock, the frame counters.
+  void take_frame(FrameIn& in, std::uint64_t cycle_start);
+  /// The boards' pixel areas of a usable frame (none otherwise).
+  void segment(const FrameIn& in, algorithms::AreaVector& areas);
+  /// The harmonic fix (fix_) and the features it was computed from.
+  void localize(bool usable, const algorithms::AreaVector& areas, Features& features);
+  EncoderIn read_encoders();
+  /// Moves the cloud by the travel (or bridges a gap, or diffuses without odometry).
+  void predict(const EncoderIn& encoders);
+  /// Weighs the cloud by the frame (or seeds it) and sets the pose and its health.
+  void update(const algorithms::AreaVector& areas, const Features& features, bool fresh_sample);
+  LatencyHistogram& histogram(Stage stage) { return histograms_[static_cast<std::size_t>(stage)]; }
   void account_overrun(bool overrun);
   void publish();
   // The link's inbound side and the commands (mavlink_commands.cpp).

@@ -2,9 +2,10 @@
 /// @file The inbound side of the link: reads what the peer sends (non-blocking, a bounded number
 /// of bytes and of frames a cycle), finds the frames (mavlink_parser.hpp) and lets through only
 /// COMMAND_LONG addressed to us, from an accepted system and component, and, when a signing key
-/// is configured, signed with it and not replayed (mavlink_signing.hpp). Everything else is
-/// dropped and counted. The cycle acts on what comes out (LocalizationCycle) and answers each
-/// command with a COMMAND_ACK. No allocation after construction. Protocol: docs/wire-protocol.md.
+/// is configured, signed with it and not replayed (mavlink_signing.hpp), and TIMESYNC requests
+/// to answer. Everything else is dropped and counted. The cycle acts on what comes out
+/// (LocalizationCycle) and answers each command with a COMMAND_ACK. No allocation after
+/// construction. Protocol: docs/wire-protocol.md.
 
 #include <array>
 #include <bitset>
@@ -37,6 +38,16 @@ struct CommandLong {
 
 /// Decodes a COMMAND_LONG payload (the frame's zero-restored payload).
 CommandLong decode_command_long(const RxFrame& frame);
+
+/// Decodes a TIMESYNC payload.
+Timesync decode_timesync(const RxFrame& frame);
+
+/// A TIMESYNC request to answer: the requester's time and identity.
+struct TimesyncRequest {
+  std::int64_t ts1 = 0;
+  std::uint8_t system_id = 0;
+  std::uint8_t component_id = 0;
+};
 
 /// "Set pose", checked and turned into the map frame (z up).
 struct SetPoseRequest {
@@ -78,6 +89,8 @@ struct InboundCounters {
   std::uint64_t rejected_future = 0;
   std::uint64_t rejected_source = 0;   ///< from a system or component not accepted
   std::uint64_t ignored_messages = 0;  ///< valid frames that are not a command for us
+  /// TIMESYNC requests that passed the checks (at most one a cycle is answered: the latest).
+  std::uint64_t timesync_requests = 0;
   std::uint64_t saturated_cycles = 0;  ///< cycles that stopped at a per-cycle limit
 };
 
@@ -104,6 +117,10 @@ class CommandReceiver {
   /// Reads and parses until a command passes every check (true, in @p out) or a limit or the
   /// end of the waiting bytes is reached (false).
   bool next_command(hal::PoseLink& link, CommandLong& out);
+  /// The latest TIMESYNC request of this cycle's reading, if any (true; it is then cleared).
+  /// A request (tc1 = 0) addressed to us or to every system is taken from any source: answering
+  /// changes nothing here. With a signing key it must be signed and not replayed, as commands.
+  bool take_timesync(TimesyncRequest& out);
   /// Counts the answer the cycle gave the last command.
   void count_result(MavResult result);
 
@@ -114,6 +131,9 @@ class CommandReceiver {
 
  private:
   bool admit(const RxFrame& frame, CommandLong& out);
+  // Whether a frame's signature holds up when a key is configured (rejections counted).
+  bool signature_ok(const RxFrame& frame);
+  void note_timesync(const RxFrame& frame);
 
   std::bitset<256> accept_systems_;
   std::bitset<256> accept_components_;
@@ -129,6 +149,8 @@ class CommandReceiver {
   std::uint32_t idle_cycles_ = 0;
   bool got_bytes_ = false;
   bool saturated_ = false;
+  bool timesync_pending_ = false;
+  TimesyncRequest timesync_{};
   InboundCounters counters_{};
 };
 

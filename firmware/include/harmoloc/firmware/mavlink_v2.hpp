@@ -23,10 +23,12 @@ constexpr std::uint8_t kIncompatSigned = 0x01;
 constexpr std::uint32_t kMsgHeartbeat = 0;
 constexpr std::uint32_t kMsgCommandLong = 76;
 constexpr std::uint32_t kMsgCommandAck = 77;
+constexpr std::uint32_t kMsgTimesync = 111;
 constexpr std::uint32_t kMsgStatustext = 253;
 constexpr std::uint32_t kMsgOdometry = 331;
 constexpr std::uint8_t kCrcExtraCommandLong = 152;
 constexpr std::uint8_t kCrcExtraCommandAck = 143;
+constexpr std::uint8_t kCrcExtraTimesync = 34;
 
 // Enumerations of the common set used here.
 constexpr std::uint8_t kMavTypeOnboardController = 18;
@@ -87,6 +89,15 @@ struct CommandAck {
   std::uint8_t target_component = 0;
 };
 
+/// TIMESYNC (#111): a request has tc1 = 0 and the requester's time in ts1 (ns); the answer
+/// carries the answering system's time in tc1 and the request's ts1, addressed to the requester.
+struct Timesync {
+  std::int64_t tc1 = 0;
+  std::int64_t ts1 = 0;
+  std::uint8_t target_system = 0;  ///< extension: 0 = every system
+  std::uint8_t target_component = 0;
+};
+
 using FrameBuffer = std::array<std::uint8_t, kMaxSignedFrameBytes>;
 
 class Signer;
@@ -105,6 +116,7 @@ class Encoder {
   /// @p text is cut at 50 characters.
   std::size_t statustext(std::uint8_t severity, const char* text, FrameBuffer& out);
   std::size_t command_ack(const CommandAck& msg, FrameBuffer& out);
+  std::size_t timesync(const Timesync& msg, FrameBuffer& out);
 
  private:
   std::size_t finish(std::uint32_t msg_id, std::uint8_t crc_extra, std::size_t payload_len,

@@ -12,7 +12,7 @@
 #include "harmoloc/algorithms/forward_map.hpp"
 #include "harmoloc/algorithms/geometry.hpp"
 #include "harmoloc/algorithms/harmonic_model.hpp"
-#include "harmoloc/sim_host/tum.hpp"
+#include "harmoloc/dataset/tum.hpp"
 
 namespace harmoloc::sim_host {
 
@@ -51,7 +51,7 @@ struct ForwardMapReport {
 /// 8 frames can be positioned.
 ForwardMapReport train_forward_map(const std::vector<std::vector<float>>& features,
                                    const std::vector<std::uint64_t>& timestamps_ns,
-                                   const std::vector<StampedPose>& labels,
+                                   const std::vector<dataset::StampedPose>& labels,
                                    const algorithms::HarmonicModel& model, std::size_t board_count,
                                    const ForwardMapOptions& options, algorithms::ForwardMap& out);
 

@@ -11,7 +11,7 @@
 #include <utility>
 #include <vector>
 
-#include "harmoloc/sim_host/tum.hpp"
+#include "harmoloc/dataset/tum.hpp"
 
 namespace harmoloc::sim_host {
 
@@ -64,8 +64,8 @@ struct TrajectoryErrors {
 /// estimate pose whose time lies in the truth's span is compared with the truth interpolated at
 /// that time. With no pose to score, returns count == 0 and zeros (the caller decides whether
 /// that is an error).
-TrajectoryErrors evaluate(const std::vector<StampedPose>& truth,
-                          const std::vector<StampedPose>& estimate,
+TrajectoryErrors evaluate(const std::vector<dataset::StampedPose>& truth,
+                          const std::vector<dataset::StampedPose>& estimate,
                           const EvaluateOptions& options = {});
 
 /// The p-th percentile (0..100) of @p values with linear interpolation between closest ranks
@@ -151,9 +151,9 @@ struct ReportInputs {
 
 struct Report {
   ReportInputs inputs;
-  std::vector<StampedPose> truth;
-  std::vector<StampedPose> estimate;
-  std::vector<StampedPose> fixes;  ///< Empty when inputs.fixes_path is empty.
+  std::vector<dataset::StampedPose> truth;
+  std::vector<dataset::StampedPose> estimate;
+  std::vector<dataset::StampedPose> fixes;  ///< Empty when inputs.fixes_path is empty.
   TrajectoryErrors estimate_all;
   std::optional<TrajectoryErrors> estimate_converged;  ///< Only with skip_initial_s > 0.
   std::optional<TrajectoryErrors> fixes_all;
@@ -164,9 +164,9 @@ struct Report {
 /// Scores the loaded trajectories (and keeps @p stats). Throws ReportError when the estimate (or
 /// the fixes) has no pose in the truth's time span, or the skip leaves none, or truth has fewer
 /// than two poses.
-Report build_report(ReportInputs inputs, std::vector<StampedPose> truth,
-                    std::vector<StampedPose> estimate, std::vector<StampedPose> fixes,
-                    std::optional<RunStats> stats);
+Report build_report(ReportInputs inputs, std::vector<dataset::StampedPose> truth,
+                    std::vector<dataset::StampedPose> estimate,
+                    std::vector<dataset::StampedPose> fixes, std::optional<RunStats> stats);
 
 /// Reads the files named in @p inputs and calls build_report. Throws std::runtime_error (one
 /// line) on missing or malformed files.

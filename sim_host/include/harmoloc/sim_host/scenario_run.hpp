@@ -9,10 +9,10 @@
 
 #include "harmoloc/algorithms/can_encoder_layout.hpp"
 #include "harmoloc/algorithms/geometry.hpp"
+#include "harmoloc/dataset/tum.hpp"
 #include "harmoloc/sim_host/route.hpp"
 #include "harmoloc/sim_host/scenario.hpp"
 #include "harmoloc/sim_host/scene_renderer.hpp"
-#include "harmoloc/sim_host/tum.hpp"
 
 namespace harmoloc::sim_host {
 
@@ -57,7 +57,7 @@ class ScenarioRun {
   /// Counter frames only (without the status frames).
   std::size_t counter_frame_count() const { return counter_frames_; }
   /// The labelled poses (labels.tum): a few evenly spread frames' true poses plus 3 mm noise.
-  const std::vector<StampedPose>& labels() const { return labels_; }
+  const std::vector<dataset::StampedPose>& labels() const { return labels_; }
   const std::vector<KidnapEvent>& kidnaps() const { return kidnaps_; }
   const RouteStats& route() const { return route_; }
   const Scenario& scenario() const { return scenario_; }
@@ -78,7 +78,7 @@ class ScenarioRun {
   std::vector<std::uint64_t> stamps_ns_;
   std::vector<algorithms::CanFrame> encoder_frames_;
   std::size_t counter_frames_ = 0;
-  std::vector<StampedPose> labels_;
+  std::vector<dataset::StampedPose> labels_;
   std::vector<std::uint64_t> noise_keys_;  ///< per frame, from the image stream (seed, 2)
   SceneRenderer renderer_;
   std::size_t next_frame_ = 0;

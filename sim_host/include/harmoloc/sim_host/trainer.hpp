@@ -13,9 +13,9 @@
 #include "harmoloc/algorithms/map_codec.hpp"
 #include "harmoloc/algorithms/odometry_calibration.hpp"
 #include "harmoloc/algorithms/segmentation.hpp"
+#include "harmoloc/dataset/tum.hpp"
 #include "harmoloc/sim_host/forward_map_training.hpp"
 #include "harmoloc/sim_host/training_odometry.hpp"
-#include "harmoloc/sim_host/tum.hpp"
 
 namespace harmoloc::sim_host {
 
@@ -142,13 +142,13 @@ AreaSeries read_area_series(const std::string& areas_path,
                             const algorithms::ThresholdSet& thresholds);
 
 /// Trains on measured areas; fills @p map. Throws std::runtime_error with one line on bad input.
-TrainReport train_on_areas(const AreaSeries& run, const std::vector<StampedPose>& labels,
+TrainReport train_on_areas(const AreaSeries& run, const std::vector<dataset::StampedPose>& labels,
                            const TrainOptions& options, algorithms::MapFile& map);
 
 /// Refuses a map no robot should use, with one line naming the reason: coordinates outside the
 /// labelled region (plus the extrapolation margin), or a cross-validated error above a quarter of
 /// the labels' extent.
-void check_trained_map(const TrainReport& report, const std::vector<StampedPose>& labels,
+void check_trained_map(const TrainReport& report, const std::vector<dataset::StampedPose>& labels,
                        const algorithms::MapFile& map, const TrainOptions& options);
 
 /// Reads the run (dataset_dir or areas_path) and the labels, trains, and checks the map

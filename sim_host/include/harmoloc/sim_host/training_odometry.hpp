@@ -10,8 +10,8 @@
 #include "harmoloc/algorithms/can_encoder_layout.hpp"
 #include "harmoloc/algorithms/odometry.hpp"
 #include "harmoloc/algorithms/route_placement.hpp"
-#include "harmoloc/sim_host/encoder_csv.hpp"
-#include "harmoloc/sim_host/metadata.hpp"
+#include "harmoloc/dataset/encoder_csv.hpp"
+#include "harmoloc/dataset/metadata.hpp"
 
 namespace harmoloc::sim_host {
 
@@ -32,13 +32,14 @@ OdometryTrack odometry_from_can(const std::vector<algorithms::CanFrame>& frames,
                                 const algorithms::DiffDriveGeometry& geometry);
 
 /// A GPIO encoder recording's samples, unwrapped at @p counter_bits.
-OdometryTrack odometry_from_gpio(const std::vector<EncoderSample>& samples,
+OdometryTrack odometry_from_gpio(const std::vector<dataset::EncoderSample>& samples,
                                  std::uint8_t counter_bits,
                                  const algorithms::DiffDriveGeometry& geometry);
 
 /// The odometry of a dataset folder (its metadata says where and how). Throws
 /// std::runtime_error with one line when the log cannot be read.
-OdometryTrack read_dataset_odometry(const std::string& dataset_dir, const DatasetMetadata& meta);
+OdometryTrack read_dataset_odometry(const std::string& dataset_dir,
+                                    const dataset::DatasetMetadata& meta);
 
 /// An encoder log given on its own (harmoloc-train --encoders): a GPIO recording when its first
 /// line is the recording's header, else a candump log decoded with @p layout.

@@ -1,0 +1,41 @@
+#pragma once
+/// @file The dataset folder's metadata.toml: what the recording is (image size, pixel format,
+/// rate, robot geometry, encoder frame layout). Schema in docs/dataset-format.md.
+
+#include <cstdint>
+#include <string>
+
+#include "harmoloc/algorithms/can_encoder_layout.hpp"
+#include "harmoloc/algorithms/odometry.hpp"
+#include "harmoloc/hal/frame.hpp"
+
+namespace harmoloc::dataset {
+
+/// Where the wheel encoder counts of a recording come from (`[encoders] source`).
+enum class EncoderSource : std::uint8_t {
+  kCan = 0,   ///< a `candump -l` log of the CAN bus (encoders.log)
+  kGpio = 1,  ///< a GPIO encoder recording, CSV (encoders.csv, encoder_csv.hpp)
+};
+
+struct DatasetMetadata {
+  std::string name;
+  std::uint32_t image_width_px = 0;
+  std::uint32_t image_height_px = 0;
+  hal::PixelFormat pixel_format = hal::PixelFormat::kRgb24;
+  double frame_rate_hz = 30.0;
+  std::string frames_index = "frames.csv";
+  EncoderSource encoder_source = EncoderSource::kCan;
+  std::string encoder_log = "encoders.log";      ///< "encoders.csv" by default for kGpio
+  std::string ground_truth = "groundtruth.tum";  ///< empty when there is none (a real recording)
+  std::string can_interface = "can0";
+  algorithms::DiffDriveGeometry geometry;
+  algorithms::EncoderFrameLayout encoder_layout;
+  std::uint64_t seed = 0;
+};
+
+/// Reads DIR/metadata.toml. Throws std::runtime_error("metadata.toml: reason") when it is
+/// missing, unparsable or out of range.
+DatasetMetadata read_metadata(const std::string& dataset_dir);
+void write_metadata(const std::string& dataset_dir, const DatasetMetadata& metadata);
+
+}  // namespace harmoloc::dataset

@@ -1,0 +1,32 @@
+#pragma once
+/// @file What the cycle publishes each period: the fused pose, its covariance and velocity, and
+/// how far it can be trusted. Plain data: the wire protocol (pose_messages.hpp), the trajectory
+/// writers and the tools read it.
+
+#include <cstdint>
+
+#include "harmoloc/algorithms/geometry.hpp"
+
+namespace harmoloc::firmware {
+
+/// What the pose can be trusted for.
+enum class Health : std::uint8_t {
+  kNotInitialized = 0,  ///< no fix yet since start-up
+  kNominal = 1,         ///< camera and encoders both contribute
+  kOdometryOnly = 2,    ///< no usable frame lately: dead reckoning, covariance grows
+  kVisionOnly = 3,      ///< no encoder data lately: fixes only, motion unknown
+  kInvalid = 4,         ///< neither input lately: pose flagged invalid
+};
+const char* health_name(Health health);
+
+struct PoseOutput {
+  std::uint64_t data_time_ns = 0;
+  algorithms::Pose2 pose;
+  algorithms::PoseCovariance covariance;
+  double speed_mps = 0.0;
+  double yaw_rate_rps = 0.0;
+  Health health = Health::kNotInitialized;
+  bool valid = false;  ///< a pose exists (filter initialised)
+};
+
+}  // namespace harmoloc::firmware

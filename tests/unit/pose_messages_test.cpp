@@ -1,0 +1,93 @@
+// The outbound mapping of the wire protocol (firmware/pose_messages.hpp): the map frame's pose
+// in MAV_FRAME_LOCAL_FRD, the covariance's signs, the quality, and what each health says.
+#include "harmoloc/firmware/pose_messages.hpp"
+
+#include <cmath>
+#include <cstring>
+
+#include <gtest/gtest.h>
+
+namespace hf = harmoloc::firmware;
+namespace mav = harmoloc::firmware::mavlink;
+
+namespace {
+
+hf::PoseOutput pose_at(double x_m, double y_m, double yaw_rad) {
+  hf::PoseOutput p;
+  p.pose = harmoloc::algorithms::Pose2{x_m, y_m, yaw_rad};
+  p.health = hf::Health::kNominal;
+  p.valid = true;
+  return p;
+}
+
+}  // namespace
+
+TEST(PoseMessages, OdometryIsInTheFrdFrame) {
+  hf::PoseOutput p = pose_at(1.5, 2.0, 0.5);
+  p.speed_mps = 0.3;
+  p.yaw_rate_rps = 0.2;
+  const mav::Odometry m = hf::odometry_message(p, 1'234'567'891, 7);
+  EXPECT_EQ(m.time_usec, 1'234'567U);
+  EXPECT_FLOAT_EQ(m.x, 1.5F);
+  EXPECT_FLOAT_EQ(m.y, -2.0F);  // y flips (z down)
+  EXPECT_FLOAT_EQ(m.z, 0.0F);
+  // yaw 0.5 rad counter-clockwise is -0.5 rad about the downward z: q = (cos -0.25, 0, 0, sin
+  // -0.25)
+  EXPECT_FLOAT_EQ(m.q[0], static_cast<float>(std::cos(-0.25)));
+  EXPECT_FLOAT_EQ(m.q[3], static_cast<float>(std::sin(-0.25)));
+  EXPECT_FLOAT_EQ(m.vx, 0.3F);
+  EXPECT_FLOAT_EQ(m.yawspeed, -0.2F);
+  EXPECT_EQ(m.reset_counter, 7);
+  EXPECT_TRUE(std::isnan(m.velocity_covariance[0]));  // velocity covariance not estimated
+}
+
+TEST(PoseMessages, CovarianceSignsFollowTheFlippedAxes) {
+  hf::PoseOutput p = pose_at(0, 0, 0);
+  auto& c = p.covariance;
+  c(0, 0) = 1e-4;
+  c(1, 1) = 4e-4;
+  c(2, 2) = 1e-2;
+  c(0, 1) = c(1, 0) = 2e-5;
+  c(0, 2) = c(2, 0) = 3e-5;
+  c(1, 2) = c(2, 1) = 5e-5;
+  const mav::Odometry m = hf::odometry_message(p, 0, 0);
+  EXPECT_FLOAT_EQ(m.pose_covariance[0], 1e-4F);
+  EXPECT_FLOAT_EQ(m.pose_covariance[1], -2e-5F);  // x y: y flips
+  EXPECT_FLOAT_EQ(m.pose_covariance[5], -3e-5F);  // x yaw: yaw flips
+  EXPECT_FLOAT_EQ(m.pose_covariance[6], 4e-4F);
+  EXPECT_FLOAT_EQ(m.pose_covariance[10], 5e-5F);  // y yaw: both flip
+  EXPECT_FLOAT_EQ(m.pose_covariance[20], 1e-2F);
+  EXPECT_FLOAT_EQ(m.pose_covariance[2], 0.0F);  // z rows are not estimated
+}
+
+TEST(PoseMessages, QualityFallsWithTheSpreadAndIsMinusOneWhenInvalid) {
+  hf::PoseOutput p = pose_at(0, 0, 0);
+  EXPECT_EQ(hf::odometry_message(p, 0, 0).quality, 100);
+  p.covariance(0, 0) = p.covariance(1, 1) = 0.05 * 0.05;  // 5 cm
+  EXPECT_EQ(hf::odometry_message(p, 0, 0).quality, 50);
+  p.covariance(0, 0) = p.covariance(1, 1) = 0.2 * 0.2;
+  EXPECT_EQ(hf::odometry_message(p, 0, 0).quality, 0);
+  p.health = hf::Health::kInvalid;
+  EXPECT_EQ(hf::odometry_message(p, 0, 0).quality, -1);
+}
+
+TEST(PoseMessages, HeartbeatStatusFollowsHealthAndTheOverrunAlarm) {
+  EXPECT_EQ(hf::heartbeat_status(hf::Health::kNotInitialized, false), mav::kMavStateStandby);
+  EXPECT_EQ(hf::heartbeat_status(hf::Health::kNominal, false), mav::kMavStateActive);
+  EXPECT_EQ(hf::heartbeat_status(hf::Health::kOdometryOnly, false), mav::kMavStateCritical);
+  EXPECT_EQ(hf::heartbeat_status(hf::Health::kVisionOnly, false), mav::kMavStateCritical);
+  EXPECT_EQ(hf::heartbeat_status(hf::Health::kInvalid, false), mav::kMavStateEmergency);
+  EXPECT_EQ(hf::heartbeat_status(hf::Health::kNominal, true), mav::kMavStateCritical);
+  EXPECT_EQ(hf::heartbeat_status(hf::Health::kNotInitialized, true), mav::kMavStateCritical);
+  EXPECT_EQ(hf::heartbeat_status(hf::Health::kInvalid, true), mav::kMavStateEmergency);
+}
+
+TEST(PoseMessages, HealthTextSaysWhyThePoseIsInvalid) {
+  EXPECT_EQ(hf::health_text(hf::Health::kNominal, false).severity, mav::kSeverityInfo);
+  EXPECT_EQ(hf::health_text(hf::Health::kVisionOnly, false).severity, mav::kSeverityWarning);
+  const hf::HealthText invalid = hf::health_text(hf::Health::kInvalid, false);
+  EXPECT_EQ(invalid.severity, mav::kSeverityCritical);
+  EXPECT_STREQ(invalid.text, "harmoloc: pose invalid (no camera, no encoders)");
+  EXPECT_STREQ(hf::health_text(hf::Health::kInvalid, true).text,
+               "harmoloc: pose invalid (outside the mapped region)");
+}
