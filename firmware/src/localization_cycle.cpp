@@ -278,6 +278,8 @@ void LocalizationCycle::take_frame(FrameIn& in, std::uint64_t cycle_start) {
     ++counters_.stale_frames;
   }
   in.have_frame = in.status == hal::CameraStatus::kFrame && !stale;
+  frame_this_cycle_ = in.have_frame;
+  if (in.have_frame) frame_time_ns_ = in.frame.timestamp_ns;
   if (in.have_frame) {
     // The data clock never goes back: a frame stamped before it (late) is used at its time.
     data_time_ns_ =
@@ -643,6 +645,10 @@ void LocalizationCycle::publish() {
 
   // Map frame -> MAV_FRAME_LOCAL_FRD (pose_messages.hpp).
   send(mavlink_.odometry(odometry_message(pose_, data_time_ns_, reset_counter_), frame_buffer_));
+  if (live_clock_ && frame_this_cycle_) {
+    const std::uint64_t sent_ns = clock_.now_ns();
+    capture_to_send_.record(sent_ns > frame_time_ns_ ? sent_ns - frame_time_ns_ : 0);
+  }
 }
 
 }  // namespace harmoloc::firmware

@@ -96,13 +96,15 @@ std::string stats_json(const LocalizationCycle& cycle, const RunCounters& run) {
     << ", \"ignored_messages\": " << in.ignored_messages
     << ", \"timesync_requests\": " << in.timesync_requests
     << ", \"saturated_cycles\": " << in.saturated_cycles << "}";
-  if (run.wakeup_latency != nullptr && run.wakeup_latency->count() > 0) {
-    const LatencyHistogram& w = *run.wakeup_latency;
-    o << ",\n  \"wakeup_latency\": {\"count\": " << w.count() << ", \"min_us\": " << us(w.min_ns())
-      << ", \"mean_us\": " << w.mean_ns() / 1000.0 << ", \"median_us\": " << us(w.quantile_ns(0.5))
-      << ", \"p99_us\": " << us(w.quantile_ns(0.99))
-      << ", \"p999_us\": " << us(w.quantile_ns(0.999)) << ", \"max_us\": " << us(w.max_ns()) << "}";
-  }
+  const auto latency = [&o](const char* name, const LatencyHistogram& h) {
+    o << ",\n  \"" << name << "\": {\"count\": " << h.count() << ", \"min_us\": " << us(h.min_ns())
+      << ", \"mean_us\": " << h.mean_ns() / 1000.0 << ", \"median_us\": " << us(h.quantile_ns(0.5))
+      << ", \"p99_us\": " << us(h.quantile_ns(0.99))
+      << ", \"p999_us\": " << us(h.quantile_ns(0.999)) << ", \"max_us\": " << us(h.max_ns()) << "}";
+  };
+  if (run.wakeup_latency != nullptr && run.wakeup_latency->count() > 0)
+    latency("wakeup_latency", *run.wakeup_latency);
+  if (cycle.capture_to_send().count() > 0) latency("capture_to_send", cycle.capture_to_send());
   if (run.rss_kb_end >= 0) {
     o << ",\n  \"resources\": {\"rss_kb_start\": " << run.rss_kb_start
       << ", \"rss_kb_end\": " << run.rss_kb_end << ", \"peak_rss_kb\": " << run.peak_rss_kb

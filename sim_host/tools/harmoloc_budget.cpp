@@ -65,6 +65,14 @@ int main(int argc, char** argv) {
           w.value("p999_us", 0.0), w.value("max_us", 0.0),
           static_cast<unsigned long long>(w.value("count", 0ULL)));
     }
+    if (j.is_object() && j.contains("capture_to_send") && j["capture_to_send"].is_object()) {
+      // What an autopilot's vision delay parameter is set from (docs/wire-protocol.md).
+      const auto& l = j["capture_to_send"];
+      std::printf(
+          "latency    capture to send: median %.1f ms, p99 %.1f ms, max %.1f ms over %llu poses\n",
+          l.value("median_us", 0.0) / 1000.0, l.value("p99_us", 0.0) / 1000.0,
+          l.value("max_us", 0.0) / 1000.0, static_cast<unsigned long long>(l.value("count", 0ULL)));
+    }
     // A run whose every cycle was before the first pose never segmented a known place, never
     // updated the filter: its times are not those of a localizing cycle.
     std::uint64_t without_pose = 0;

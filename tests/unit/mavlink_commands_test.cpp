@@ -348,6 +348,70 @@ TEST(MavlinkCommands, TimesyncIsAnsweredOnTheDataClock) {
   EXPECT_EQ(r.cycle->inbound_counters().timesync_requests, 11U);
 }
 
+namespace {
+
+// A live board's clock: 1 us a reading, from 1 s on.
+class LiveClock final : public hh::Clock {
+ public:
+  std::uint64_t now_ns() const override { return now_ += 1000; }
+  void sleep_until(std::uint64_t) override {}
+
+ private:
+  mutable std::uint64_t now_ = 1'000'000'000;
+};
+
+// Frames captured 5 ms before the cycle takes them.
+class LiveCamera final : public hh::Camera {
+ public:
+  explicit LiveCamera(const hh::Clock& clock) : clock_(clock), red_(kWidth * kHeight * 3) {
+    for (std::size_t i = 0; i < red_.size(); i += 3) red_[i] = 255;
+  }
+  hh::CameraStatus acquire(hh::FrameView& f, std::uint64_t) override {
+    f.data = red_.data();
+    f.width_px = kWidth;
+    f.height_px = kHeight;
+    f.stride_bytes = kWidth * 3;
+    f.format = hh::PixelFormat::kRgb24;
+    f.timestamp_ns = clock_.now_ns() - 5'000'000;
+    return hh::CameraStatus::kFrame;
+  }
+  void release() override {}
+  hh::CameraCounters counters() const override { return {}; }
+
+ private:
+  const hh::Clock& clock_;
+  std::vector<std::uint8_t> red_;
+};
+
+}  // namespace
+
+TEST(CaptureToSend, MeasuredFromTheFrameTimestampToTheOdometryOnALiveBoard) {
+  hf::FirmwareConfig config = hf::default_config();
+  config.filter.particles = 256;
+  LiveClock clock;
+  LiveCamera camera(clock);
+  NoEncoders encoders;
+  tf::QueueLink link;
+  hf::LocalizationCycle cycle(config, test_map(), camera, encoders, link, clock);
+  cycle.set_live_clock(true);
+  for (int i = 0; i < 10; ++i) cycle.run_once();
+  ASSERT_TRUE(cycle.pose().valid);
+  const hf::LatencyHistogram& h = cycle.capture_to_send();
+  EXPECT_EQ(h.count(), 10U);  // every cycle had a frame and sent a pose
+  EXPECT_GE(h.min_ns(), 5'000'000U);
+  EXPECT_LT(h.max_ns(), 5'000'000U + 1'000'000U);  // a few hundred clock readings at most
+
+  // A replay: frame times are the recording's, not the clock's; nothing is measured.
+  LiveClock replay_clock;
+  LiveCamera replay_camera(replay_clock);
+  tf::QueueLink replay_link;
+  hf::LocalizationCycle replay(config, test_map(), replay_camera, encoders, replay_link,
+                               replay_clock);
+  for (int i = 0; i < 10; ++i) replay.run_once();
+  EXPECT_TRUE(replay.pose().valid);
+  EXPECT_EQ(replay.capture_to_send().count(), 0U);
+}
+
 TEST(MavlinkCommands, SignedLink) {
   tf::Key key{};
   for (std::size_t i = 0; i < key.size(); ++i) key[i] = static_cast<std::uint8_t>(200 - i);

@@ -137,6 +137,11 @@ class LocalizationCycle {
     return histograms_[static_cast<std::size_t>(stage)];
   }
   std::uint64_t budget_ns() const { return budget_ns_; }
+  /// Live boards: from a frame's timestamp (its capture, on the monotonic clock) to the moment
+  /// the ODOMETRY computed from it was handed to the link, once per cycle with a frame and a
+  /// pose. What an autopilot's delay parameter (VISO_DELAY_MS, EKF2_EV_DELAY) is set from. Empty
+  /// in replays (their frame times are the recording's).
+  const LatencyHistogram& capture_to_send() const { return capture_to_send_; }
   mavlink::InboundCounters inbound_counters() const { return receiver_.counters(); }
 
   /// Sets the link's signing clock to the wall time @p unix_time_us (start-up; a board without
@@ -269,6 +274,9 @@ class LocalizationCycle {
   const bool use_boards_;
   mavlink::FrameBuffer frame_buffer_{};
   std::array<LatencyHistogram, kStageCount> histograms_{};
+  LatencyHistogram capture_to_send_{};
+  bool frame_this_cycle_ = false;  ///< a new frame was taken this cycle (at frame_time_ns_)
+  std::uint64_t frame_time_ns_ = 0;
 
   std::uint64_t period_ns_;
   std::uint64_t budget_ns_;
