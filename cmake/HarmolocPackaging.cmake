@@ -9,9 +9,12 @@ set(HARMOLOC_PACKAGING_DIR ${PROJECT_SOURCE_DIR}/packaging)
 if(TARGET harmoloc)
   install(TARGETS harmoloc RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
 endif()
-# Tools for the robot: the budget table of the stats the firmware writes.
+# Tools for the robot: the budget table of the stats the firmware writes, and the link monitor.
 if(TARGET harmoloc-budget)
   install(TARGETS harmoloc-budget RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+endif()
+if(TARGET harmoloc-monitor)
+  install(TARGETS harmoloc-monitor RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
 endif()
 
 # Configuration (conffiles: dpkg keeps local changes on upgrade). The default config is the

@@ -597,4 +597,8 @@ FirmwareConfig load_config(const std::string& path) {
   return c;
 }
 
+std::string read_signing_key_file(const std::string& path, std::array<std::uint8_t, 32>& key) {
+  return read_signing_key(path, key);
+}
+
 }  // namespace harmoloc::firmware

@@ -129,6 +129,18 @@ std::size_t Encoder::timesync(const Timesync& m, FrameBuffer& out) {
   return finish(kMsgTimesync, kCrcExtraTimesync, p.size(), out);
 }
 
+std::size_t Encoder::command_long(std::uint16_t command, const std::array<float, 7>& params,
+                                  std::uint8_t target_system, std::uint8_t target_component,
+                                  FrameBuffer& out) {
+  Payload p(out.data() + kHeaderBytes);
+  for (const float v : params) p.f32(v);
+  p.u16(command);
+  p.u8(target_system);
+  p.u8(target_component);
+  p.u8(0);  // confirmation
+  return finish(kMsgCommandLong, kCrcExtraCommandLong, p.size(), out);
+}
+
 std::size_t Encoder::statustext(std::uint8_t severity, const char* text, FrameBuffer& out) {
   Payload p(out.data() + kHeaderBytes);
   p.u8(severity);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <cstring>
 #include <limits>
 
 namespace harmoloc::firmware {
@@ -72,6 +73,92 @@ mavlink::Odometry odometry_message(const PoseOutput& pose, std::uint64_t time_ns
         static_cast<std::int8_t>(std::lround(std::clamp(100.0 - 1000.0 * sigma_m, 0.0, 100.0)));
   }
   return m;
+}
+
+namespace {
+
+float f32_at(const std::uint8_t* p, std::size_t at) {
+  std::uint32_t u = 0;
+  for (std::size_t i = 0; i < 4; ++i) u |= static_cast<std::uint32_t>(p[at + i]) << (8U * i);
+  float f = 0.0F;
+  std::memcpy(&f, &u, 4);
+  return f;
+}
+
+}  // namespace
+
+mavlink::Odometry decode_odometry(const std::uint8_t* p) {
+  // Wire order: time_usec, x y z, q[4], vx vy vz, roll/pitch/yawspeed, the two covariances (21
+  // floats each), frame_id, child_frame_id, reset_counter, estimator_type, quality (extension).
+  mavlink::Odometry m;
+  m.time_usec = 0;
+  for (std::size_t i = 0; i < 8; ++i) m.time_usec |= static_cast<std::uint64_t>(p[i]) << (8U * i);
+  m.x = f32_at(p, 8);
+  m.y = f32_at(p, 12);
+  m.z = f32_at(p, 16);
+  for (std::size_t i = 0; i < 4; ++i) m.q[i] = f32_at(p, 20 + 4 * i);
+  m.vx = f32_at(p, 36);
+  m.vy = f32_at(p, 40);
+  m.vz = f32_at(p, 44);
+  m.rollspeed = f32_at(p, 48);
+  m.pitchspeed = f32_at(p, 52);
+  m.yawspeed = f32_at(p, 56);
+  for (std::size_t i = 0; i < 21; ++i) m.pose_covariance[i] = f32_at(p, 60 + 4 * i);
+  for (std::size_t i = 0; i < 21; ++i) m.velocity_covariance[i] = f32_at(p, 144 + 4 * i);
+  m.frame_id = p[228];
+  m.child_frame_id = p[229];
+  m.reset_counter = p[230];
+  m.estimator_type = p[231];
+  m.quality = static_cast<std::int8_t>(p[232]);
+  return m;
+}
+
+MapPose map_pose(const mavlink::Odometry& m) {
+  MapPose out;
+  out.t_s = static_cast<double>(m.time_usec) / 1e6;
+  out.x_m = static_cast<double>(m.x);
+  out.y_m = -static_cast<double>(m.y);
+  // Yaw-only quaternion (w, 0, 0, z) about the downward axis.
+  const double yaw_frd = 2.0 * std::atan2(static_cast<double>(m.q[3]), static_cast<double>(m.q[0]));
+  out.yaw_rad = std::remainder(-yaw_frd, 6.283185307179586);  // wrapped to [-pi, pi]
+  const double var =
+      0.5 * (static_cast<double>(m.pose_covariance[0]) + static_cast<double>(m.pose_covariance[6]));
+  out.sigma_m = std::sqrt(std::max(0.0, var));
+  out.quality = m.quality;
+  out.reset_counter = m.reset_counter;
+  return out;
+}
+
+bool health_of_text(const char* text, std::size_t size, Health& health) {
+  const std::size_t n = ::strnlen(text, size);
+  for (const Health h : {Health::kNotInitialized, Health::kNominal, Health::kOdometryOnly,
+                         Health::kVisionOnly, Health::kInvalid}) {
+    for (const bool off : {false, true}) {
+      if (off && h != Health::kInvalid) continue;
+      const char* t = health_text(h, off).text;
+      if (std::strlen(t) == n && std::strncmp(t, text, n) == 0) {
+        health = h;
+        return true;
+      }
+    }
+  }
+  return false;
+}
+
+bool health_of_heartbeat(std::uint8_t system_status, Health& health) {
+  switch (system_status) {
+    case mavlink::kMavStateStandby:
+      health = Health::kNotInitialized;
+      return true;
+    case mavlink::kMavStateActive:
+      health = Health::kNominal;
+      return true;
+    case mavlink::kMavStateEmergency:
+      health = Health::kInvalid;
+      return true;
+    default:
+      return false;
+  }
 }
 
 }  // namespace harmoloc::firmware

@@ -431,7 +431,7 @@ def segment_seeds(e2e):
 
 FUZZ_KEY = bytes((11 + 31 * i) & 0xFF for i in range(32))  # make_key(11) in the target
 FUZZ_BASE_TS = 1000000000
-CRC_EXTRA = {0: 50, 76: 152, 77: 143, 253: 83, 331: 91}
+CRC_EXTRA = {0: 50, 76: 152, 77: 143, 111: 34, 253: 83, 331: 91}
 
 
 def x25(data, crc=0xFFFF):
@@ -459,6 +459,10 @@ def command_long(cmd, params=(), target=(1, 197), **kw):
     return mav_frame(76, p, **kw)
 
 
+def timesync(tc1, ts1, target=(0, 0), **kw):
+    return mav_frame(111, struct.pack("<qqBB", tc1, ts1, target[0], target[1]), **kw)
+
+
 def mavlink_seeds(e2e):
     hb = mav_frame(0, bytes([0, 0, 0, 0, 6, 8, 0, 0, 3]))
     pose = (2.0, -1.0, 0.5, 0.01, 0.01)
@@ -476,6 +480,14 @@ def mavlink_seeds(e2e):
         command_long(31011, pose, key=FUZZ_KEY, ts=FUZZ_BASE_TS + 1, link_id=2))
     put("mavlink_inbound", "raw-stalled-false-start.bin", bytes([0x00 | 6 << 2]) +
         bytes([0xFD, 233, 0, 0, 0, 1, 1, 0x4B, 0x01, 0]) + command_long(31010))
+    # TIMESYNC: requests to everyone and to us from an autopilot (1/1), an answer (tc1 != 0), one
+    # to another system; signed: a good one, a replay and one with the wrong key.
+    put("mavlink_inbound", "raw-timesync.bin", bytes([0x00 | 5 << 2]) +
+        timesync(0, 123456789, sysid=1, compid=1) + timesync(0, 5, (1, 197), sysid=1, compid=1) +
+        timesync(77, 5, sysid=1, compid=1) + timesync(0, 6, (2, 0)) + command_long(31010))
+    signed = timesync(0, 42, sysid=1, compid=1, key=FUZZ_KEY, ts=FUZZ_BASE_TS + 3)
+    put("mavlink_inbound", "raw-timesync-signed.bin", bytes([0x01 | 4 << 2]) + signed + signed +
+        timesync(0, 43, sysid=1, compid=1, key=bytes(32), ts=FUZZ_BASE_TS + 4))
     # Structured mode: ops 0 raw, 1 command, 2 other message, 3 replay, 4 truncated, 5 false start.
     prog = bytes([
         1, 0x00, 0x01, 1, 0xC0, 0, 0x3F, 0, 0x00, 0x00, 0, 0, 0, 0, 0, 1, 0x10, 0x00,  # set pose

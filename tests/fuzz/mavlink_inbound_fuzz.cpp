@@ -9,7 +9,8 @@
 // The structured mode gets the fuzzer past checksums and signatures, as map_decode does with the
 // map's CRC.
 //
-// Checked: per-cycle limits (bytes read, commands); every admitted command is a COMMAND_LONG with
+// Checked: per-cycle limits (bytes read, commands); at most one TIMESYNC request taken a cycle,
+// none more than the receiver counted; every admitted command is a COMMAND_LONG with
 // a valid checksum, from an accepted source, to us, and with a key, signed with it and newer than
 // its stream's last; every frame is counted once (bytes and frames add up); an accepted "set pose"
 // is finite and in range; every ACK sent is one valid frame, signed iff there is a key, and the
@@ -164,7 +165,7 @@ Bytes build_stream(Reader& r) {
   Bytes out;
   Bytes last;
   std::uint64_t ts = kBaseTimestamp;
-  static const std::uint32_t kOther[] = {0, 1, 75, 77, 253, 331, 256, 110};
+  static const std::uint32_t kOther[] = {0, 1, 75, 77, 253, 331, 256, 110, 111};
   while (r.more() && out.size() < 65536) {
     switch (r.u8() % 6) {
       case 0: {  // raw bytes
@@ -287,6 +288,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
 
   std::map<std::tuple<int, int, int>, std::uint64_t> stream_last;
   std::uint64_t admitted = 0;
+  std::uint64_t timesyncs = 0;
   std::uint32_t idle = 0;
   for (std::uint64_t cycle = 0; idle < mv::CommandReceiver::kStallCycles + 3; ++cycle) {
     signer.advance(cycle * kCycleNs);
@@ -363,6 +365,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       rx.count_result(ack.result);
       link.write_frame(buffer.data(), encoder.command_ack(ack, buffer));
     }
+    mv::TimesyncRequest request;
+    if (rx.take_timesync(request)) ++timesyncs;
+    HARMOLOC_FUZZ_CHECK(!rx.take_timesync(request), "a TIMESYNC request taken twice");
     HARMOLOC_FUZZ_CHECK(link.read_this_cycle <= mv::CommandReceiver::kMaxBytesPerCycle,
                         "read more than the per-cycle limit");
     HARMOLOC_FUZZ_CHECK(commands <= mv::CommandReceiver::kMaxCommandsPerCycle,
@@ -378,12 +383,13 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   HARMOLOC_FUZZ_CHECK(p.bytes == p.garbage_bytes + p.frame_bytes + rx.parser().buffered(),
                       "bytes in do not add up to garbage, frames and what is buffered");
   HARMOLOC_FUZZ_CHECK(k.frames_in == admitted + k.rejected_unsigned + k.rejected_bad_signature +
-                                         k.rejected_replay + k.rejected_source + k.ignored_messages +
-                                         k.timesync_requests,
+                                         k.rejected_replay + k.rejected_source +
+                                         k.ignored_messages + k.timesync_requests,
                       "a frame was not counted exactly once");
   HARMOLOC_FUZZ_CHECK(k.commands_accepted + k.commands_refused == admitted,
                       "an answer not counted");
   HARMOLOC_FUZZ_CHECK(link.acks == admitted, "a command without exactly one ACK");
+  HARMOLOC_FUZZ_CHECK(timesyncs <= k.timesync_requests, "a TIMESYNC request taken but not counted");
   if (!keyed) {
     HARMOLOC_FUZZ_CHECK(k.rejected_unsigned + k.rejected_bad_signature + k.rejected_replay == 0,
                         "signature checks without a key");

@@ -3,7 +3,7 @@
 #   check_package.sh DEB BUILD_DIR
 # - control: name, architecture (from the file name), Depends covering every shared library the
 #   binaries need, conffiles, maintainer scripts;
-# - contents: the firmware (when BUILD_DIR built one), harmoloc-budget, the config, the defaults
+# - contents: the firmware (when BUILD_DIR built one), harmoloc-budget, harmoloc-monitor, the config, the defaults
 #   file, the systemd unit, the docs; the packaged config is the documented example;
 # - the unit: systemd-analyze verify against the unpacked package, and the limits it must set;
 # - every packaged binary runs `--help` under qemu-user for its architecture (except one that
@@ -52,7 +52,7 @@ check "postinst makes the harmoloc system user" grep -q 'useradd --system' "$wor
 
 # ---- contents ----
 dpkg-deb -c "$deb" | awk '{print $6}' | sed 's|^\./|/|' > "$work/contents"
-expect=(/usr/bin/harmoloc-budget /etc/harmoloc/harmoloc.toml /etc/default/harmoloc
+expect=(/usr/bin/harmoloc-budget /usr/bin/harmoloc-monitor /etc/harmoloc/harmoloc.toml /etc/default/harmoloc
   /lib/systemd/system/harmoloc.service /usr/share/doc/harmoloc/deploy.md
   /usr/share/doc/harmoloc/config-format.md /usr/share/doc/harmoloc/copyright)
 if [ -x "$build/bin/harmoloc" ]; then

@@ -2,6 +2,8 @@
 // in MAV_FRAME_LOCAL_FRD, the covariance's signs, the quality, and what each health says.
 #include "harmoloc/firmware/pose_messages.hpp"
 
+#include "harmoloc/firmware/mavlink_parser.hpp"
+
 #include <cmath>
 #include <cstring>
 
@@ -90,4 +92,51 @@ TEST(PoseMessages, HealthTextSaysWhyThePoseIsInvalid) {
   EXPECT_STREQ(invalid.text, "harmoloc: pose invalid (no camera, no encoders)");
   EXPECT_STREQ(hf::health_text(hf::Health::kInvalid, true).text,
                "harmoloc: pose invalid (outside the mapped region)");
+}
+
+// ---- read back: what harmoloc-monitor decodes ----------------------------------------------
+
+TEST(PoseMessages, OdometryReadsBackInTheMapFrame) {
+  hf::PoseOutput p = pose_at(3.25, -1.5, 2.9);
+  p.covariance(0, 0) = 0.02 * 0.02;
+  p.covariance(1, 1) = 0.04 * 0.04;
+  p.health = hf::Health::kVisionOnly;
+  mav::Encoder encoder(1, 197);
+  mav::FrameBuffer buffer{};
+  const std::size_t n =
+      encoder.odometry(hf::odometry_message(p, 1'767'225'600'123'456'789, 9), buffer);
+  mav::FrameParser parser;
+  ASSERT_EQ(parser.push(buffer.data(), n), n);
+  mav::RxFrame frame;
+  std::size_t work = 1U << 20U;
+  ASSERT_TRUE(parser.next(frame, work));
+  ASSERT_EQ(frame.msg_id, mav::kMsgOdometry);
+  const hf::MapPose m = hf::map_pose(hf::decode_odometry(frame.payload.data()));
+  EXPECT_NEAR(m.t_s, 1'767'225'600.123456, 1e-6);
+  EXPECT_NEAR(m.x_m, 3.25, 1e-6);
+  EXPECT_NEAR(m.y_m, -1.5, 1e-6);  // the map frame again: y flipped back
+  EXPECT_NEAR(m.yaw_rad, 2.9, 1e-6);
+  EXPECT_NEAR(m.sigma_m, std::sqrt(0.5 * (0.02 * 0.02 + 0.04 * 0.04)), 1e-6);
+  EXPECT_EQ(m.reset_counter, 9);
+  EXPECT_EQ(m.quality, 68);  // 100 - 1000 x 0.0316
+}
+
+TEST(PoseMessages, HealthReadsBackFromItsTextAndHeartbeat) {
+  for (const hf::Health h :
+       {hf::Health::kNotInitialized, hf::Health::kNominal, hf::Health::kOdometryOnly,
+        hf::Health::kVisionOnly, hf::Health::kInvalid}) {
+    hf::Health got = hf::Health::kNominal;
+    const char* text = hf::health_text(h, false).text;
+    ASSERT_TRUE(hf::health_of_text(text, std::strlen(text), got));
+    EXPECT_EQ(got, h);
+  }
+  hf::Health got = hf::Health::kNominal;
+  const char* off = hf::health_text(hf::Health::kInvalid, true).text;
+  ASSERT_TRUE(hf::health_of_text(off, 50, got));
+  EXPECT_EQ(got, hf::Health::kInvalid);
+  EXPECT_FALSE(hf::health_of_text("harmoloc: overrun alarm", 50, got));
+  EXPECT_FALSE(hf::health_of_text("harmoloc: pose nominal", 8, got));  // cut short: no match
+  EXPECT_TRUE(hf::health_of_heartbeat(mav::kMavStateActive, got));
+  EXPECT_EQ(got, hf::Health::kNominal);
+  EXPECT_FALSE(hf::health_of_heartbeat(mav::kMavStateCritical, got));
 }

@@ -182,4 +182,9 @@ FirmwareConfig default_config();
 /// line "FILE: [line N:] what is wrong" for anything unreadable, unknown or out of range.
 FirmwareConfig load_config(const std::string& path);
 
+/// Reads a MAVLink signing key file: exactly 32 raw bytes, or 64 hex digits (surrounding
+/// whitespace allowed); a regular file only. Returns an empty string on success, else what is
+/// wrong. (The config's link.signing_key_file is read with it; so is harmoloc-monitor's --key.)
+std::string read_signing_key_file(const std::string& path, std::array<std::uint8_t, 32>& key);
+
 }  // namespace harmoloc::firmware

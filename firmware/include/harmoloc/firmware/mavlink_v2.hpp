@@ -117,6 +117,10 @@ class Encoder {
   std::size_t statustext(std::uint8_t severity, const char* text, FrameBuffer& out);
   std::size_t command_ack(const CommandAck& msg, FrameBuffer& out);
   std::size_t timesync(const Timesync& msg, FrameBuffer& out);
+  /// COMMAND_LONG (what a ground station or harmoloc-monitor sends): @p params 1..7.
+  std::size_t command_long(std::uint16_t command, const std::array<float, 7>& params,
+                           std::uint8_t target_system, std::uint8_t target_component,
+                           FrameBuffer& out);
 
  private:
   std::size_t finish(std::uint32_t msg_id, std::uint8_t crc_extra, std::size_t payload_len,

@@ -4,6 +4,7 @@
 /// PoseOutput, as PX4 keeps its ODOMETRY mapping in one stream: the cycle only decides when each
 /// message goes out.
 
+#include <cstddef>
 #include <cstdint>
 
 #include "harmoloc/firmware/mavlink_v2.hpp"
@@ -29,5 +30,30 @@ HealthText health_text(Health health, bool off_map);
 /// pose is invalid.
 mavlink::Odometry odometry_message(const PoseOutput& pose, std::uint64_t time_ns,
                                    std::uint8_t reset_counter);
+
+// ---- the other way: what a peer reads back (harmoloc-monitor, tests) ------------------------
+
+/// An ODOMETRY payload (zero-restored to its full length, as the frame parser gives it).
+mavlink::Odometry decode_odometry(const std::uint8_t* payload);
+
+/// ODOMETRY back in the map frame, as the TUM files have it.
+struct MapPose {
+  double t_s = 0.0;      ///< time_usec in seconds
+  double x_m = 0.0;      ///< x_map = x
+  double y_m = 0.0;      ///< y_map = -y
+  double yaw_rad = 0.0;  ///< yaw_map = -yaw_frd
+  double sigma_m = 0.0;  ///< sqrt of the mean of the x and y variances
+  int quality = 0;       ///< -1: invalid
+  std::uint8_t reset_counter = 0;
+};
+MapPose map_pose(const mavlink::Odometry& odometry);
+
+/// The health a STATUSTEXT of health_text() announces: true and @p health, or false for any
+/// other text (up to 50 characters, not necessarily terminated).
+bool health_of_text(const char* text, std::size_t size, Health& health);
+
+/// The health HEARTBEAT's system status says at least: STANDBY not initialised, ACTIVE nominal,
+/// EMERGENCY invalid; CRITICAL is one of the degraded modes (or an overrun): false.
+bool health_of_heartbeat(std::uint8_t system_status, Health& health);
 
 }  // namespace harmoloc::firmware
