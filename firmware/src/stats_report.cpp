@@ -105,6 +105,12 @@ std::string stats_json(const LocalizationCycle& cycle, const RunCounters& run) {
   if (run.wakeup_latency != nullptr && run.wakeup_latency->count() > 0)
     latency("wakeup_latency", *run.wakeup_latency);
   if (cycle.capture_to_send().count() > 0) latency("capture_to_send", cycle.capture_to_send());
+  if (run.recording.active) {
+    o << ",\n  \"recording\": {\"frames\": " << run.recording.frames
+      << ", \"dropped\": " << run.recording.dropped << ", \"skipped\": " << run.recording.skipped
+      << ", \"bytes\": " << run.recording.bytes << ", \"stopped\": \"" << run.recording.stopped
+      << "\"}";
+  }
   if (run.rss_kb_end >= 0) {
     o << ",\n  \"resources\": {\"rss_kb_start\": " << run.rss_kb_start
       << ", \"rss_kb_end\": " << run.rss_kb_end << ", \"peak_rss_kb\": " << run.peak_rss_kb

@@ -120,14 +120,16 @@ void train_from_labels(const AreaSeries& run, const std::vector<dataset::Stamped
   const std::size_t boards = opt.thresholds.count;
   if (labels.empty()) throw std::runtime_error("no labels");
 
-  // Which frames are labelled: a label whose timestamp is within 0.5 ms of a frame's.
+  // Which frames are labelled: the frame nearest a label's time, within the tolerance.
   const auto& stamps = run.timestamp_ns;
+  const std::uint64_t tol = opt.label_tolerance_ns;
   std::vector<int> label_of(run.areas.size(), -1);
   for (std::size_t l = 0; l < labels.size(); ++l) {
     const auto t_ns = static_cast<std::uint64_t>(std::llround(labels[l].t_s * 1e6)) * 1000ULL;
-    const auto it =
-        std::lower_bound(stamps.begin(), stamps.end(), t_ns > 500000 ? t_ns - 500000 : 0);
-    if (it != stamps.end() && (*it > t_ns ? *it - t_ns : t_ns - *it) <= 500000) {
+    auto it = std::lower_bound(stamps.begin(), stamps.end(), t_ns > tol ? t_ns - tol : 0);
+    const auto gap = [t_ns](std::uint64_t s) { return s > t_ns ? s - t_ns : t_ns - s; };
+    while (it != stamps.end() && it + 1 != stamps.end() && gap(*(it + 1)) < gap(*it)) ++it;
+    if (it != stamps.end() && gap(*it) <= tol) {
       label_of[static_cast<std::size_t>(it - stamps.begin())] = static_cast<int>(l);
     } else {
       ++report.labels_unmatched;
@@ -163,8 +165,8 @@ void train_from_labels(const AreaSeries& run, const std::vector<dataset::Stamped
   if (labelled_frames.size() < 4) {
     std::ostringstream s;
     s << "only " << labelled_frames.size() << " of " << labels.size()
-      << " labels match a frame with a board in view (labels must carry the frames' timestamps; at "
-         "least 4 needed)";
+      << " labels match a frame with a board in view (without wheel odometry a label must be "
+         "within --label-tolerance-ms of a frame's timestamp; at least 4 needed)";
     throw std::runtime_error(s.str());
   }
   std::size_t want = opt.unlabelled >= 0
@@ -753,9 +755,30 @@ TrainReport train_map(const TrainOptions& opt, algorithms::MapFile& map) {
                                           : read_area_series(opt.areas_path, opt.thresholds);
   if (!opt.areas_path.empty() && !opt.encoders_path.empty())
     run.odometry = read_odometry_file(opt.encoders_path, opt.can_layout, opt.geometry);
-  const std::vector<dataset::StampedPose> labels = dataset::read_tum(opt.labels_path);
+  std::vector<dataset::StampedPose> labels = dataset::read_tum(opt.labels_path);
   if (labels.empty()) throw std::runtime_error(opt.labels_path + ": no labels");
+  double offset_s = opt.label_offset_s;
+  LabelOffsetEstimate estimate;
+  if (opt.label_offset_auto) {
+    if (run.odometry.empty() || !opt.use_odometry) {
+      throw std::runtime_error(
+          "--label-offset auto needs the run's wheel odometry (a dataset folder's encoder log, or "
+          "--encoders with an area log)");
+    }
+    estimate = estimate_label_offset(run.odometry, labels);
+    if (!estimate.found) {
+      throw std::runtime_error("cannot estimate the labels' clock offset from the odometry: " +
+                               estimate.why_not + "; give --label-offset SECONDS");
+    }
+    offset_s = estimate.offset_s;
+  }
+  for (dataset::StampedPose& l : labels) l.t_s += offset_s;
   TrainReport report = train_on_areas(run, labels, opt, map);
+  report.label_offset_s = offset_s;
+  report.label_offset_estimated = opt.label_offset_auto;
+  report.label_offset = estimate;
+  for (const dataset::StampedPose& l : labels)
+    report.labels_have_yaw = report.labels_have_yaw || l.pose.yaw_rad != 0.0;
   check_trained_map(report, labels, map, opt);
   return report;
 }

@@ -1,4 +1,5 @@
 // harmoloc-train: trains the harmonic map from a recorded (or simulated) run and a few labels.
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <memory>
@@ -25,9 +26,11 @@ int main(int argc, char** argv) {
   CLI::App app{
       "harmoloc-train: train the harmonic localizer's map on the host (docs/training.md).\n"
       "Input is a run the robot recorded: a dataset folder (frames) or an area log\n"
-      "(harmoloc --record-areas), plus labelled poses (TUM) for a few of its frames. Frames whose\n"
-      "timestamp has a label are labelled; an evenly spread subset of the others is used\n"
-      "unlabelled. The trainer chooses the feature boards, the neighbour graph, gamma and the\n"
+      "(harmoloc --record DIR writes both), plus labelled poses (TUM) at some times of the run.\n"
+      "With the run's wheel odometry every frame is placed between the labels, which may fall at\n"
+      "any time; without it a label names the frame nearest its time (--label-tolerance-ms).\n"
+      "A label's heading is used only where the labels carry one (a non-zero yaw); the result\n"
+      "says which. The trainer chooses the feature boards, the neighbour graph, gamma and the\n"
       "kernel width per axis by k-fold cross-validation over the labelled frames, and calibrates\n"
       "the known-place test. The map records the colour thresholds and frame size it was trained\n"
       "with; the firmware refuses a map that does not match its config.",
@@ -41,9 +44,20 @@ int main(int argc, char** argv) {
   input->add_option("--areas", areas, "area log of the training run (harmoloc --record-areas)");
   input->require_option(1);
   app.add_option("--labels", labels,
-                 "labelled poses (TUM) on the run's clock; with wheel odometry any times within "
-                 "the run,\nwithout it timestamps equal to frame timestamps")
+                 "labelled poses (TUM) on the run's clock (or shifted onto it by --label-offset);\n"
+                 "with wheel odometry any times within the run, without it frame timestamps")
       ->required();
+  std::string label_offset = "0";
+  app.add_option(
+         "--label-offset", label_offset,
+         "SECONDS added to every label's time (the reference's clock against the robot's),\n"
+         "or 'auto': estimated from the run's wheel odometry (docs/training.md)")
+      ->capture_default_str();
+  double label_tolerance_ms = 0.5;
+  app.add_option("--label-tolerance-ms", label_tolerance_ms,
+                 "without wheel odometry: a label names the frame nearest its time within this")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1000.0));
   std::string encoders;
   app.add_option("--encoders", encoders,
                  "with --areas: the run's encoder log (candump -l log or GPIO recording), decoded\n"
@@ -105,6 +119,23 @@ int main(int argc, char** argv) {
     opt.can_layout = config.can_layout;
     opt.geometry = config.geometry;
     opt.use_odometry = !no_odometry;
+    opt.label_tolerance_ns = static_cast<std::uint64_t>(std::llround(label_tolerance_ms * 1e6));
+    if (label_offset == "auto") {
+      opt.label_offset_auto = true;
+    } else {
+      std::size_t used = 0;
+      try {
+        opt.label_offset_s = std::stod(label_offset, &used);
+      } catch (const std::exception&) {
+        used = 0;
+      }
+      if (used != label_offset.size() || !std::isfinite(opt.label_offset_s) ||
+          std::fabs(opt.label_offset_s) > 1e6) {
+        std::fprintf(stderr, "harmoloc-train: --label-offset: '%s' is not seconds or 'auto'\n",
+                     label_offset.c_str());
+        return 2;
+      }
+    }
     if (!encoders.empty() && areas.empty())
       throw std::runtime_error("--encoders goes with --areas (a dataset folder has its own log)");
     opt.thresholds = config.thresholds;
@@ -148,6 +179,20 @@ int main(int argc, char** argv) {
     if (!f) throw std::runtime_error(out + ": cannot write");
     if (!quiet) {
       const auto& names = config.board_names;
+      if (r.label_offset_estimated) {
+        std::printf(
+            "labels        time offset %+.3f s +- %.3f s, estimated from the wheel odometry "
+            "(label distances fit to %.1f mm RMS, %.1f mm without the offset)\n",
+            r.label_offset_s, r.label_offset.standard_error_s,
+            1000.0 * r.label_offset.rms_at_best_m, 1000.0 * r.label_offset.rms_at_zero_m);
+      } else if (r.label_offset_s != 0.0) {
+        std::printf("labels        time offset %+.3f s (--label-offset)\n", r.label_offset_s);
+      }
+      std::printf("labels        heading %s\n",
+                  r.labels_have_yaw
+                      ? "used: the labels carry one (the placement follows it)"
+                      : "not used: the labels carry none (the placement works it out from the "
+                        "positions and the odometry)");
       const sim_host::PlacementReport& pl = r.placement;
       if (pl.used) {
         std::printf(

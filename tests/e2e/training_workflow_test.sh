@@ -34,5 +34,42 @@ if "$BIN/harmoloc" --dataset "$WORK/test" --map "$out/from_areas.hmap" --config 
 fi
 [ "$(wc -l < "$out/err.txt")" -eq 1 ] && grep -q "retrain" "$out/err.txt" || fail "unclear: $(cat "$out/err.txt")"
 if "$BIN/harmoloc" --dataset "$WORK/test" --quiet > /dev/null 2> "$out/err.txt"; then fail "ran without a map"; fi
-grep -q "record-areas" "$out/err.txt" || fail "no hint at --record-areas: $(cat "$out/err.txt")"
+grep -q -- "--record" "$out/err.txt" || fail "no hint at --record: $(cat "$out/err.txt")"
+# Labels on another clock: an external reference 0.3 s ahead of the robot. Without the offset the
+# last label falls outside the run and is refused; --label-offset -0.3 puts them back; 'auto'
+# finds the offset from the wheel odometry (within 30 ms) and says so.
+python3 - "$WORK/train/labels.tum" "$out/labels_ahead.tum" 0.3 <<'PY'
+import sys
+with open(sys.argv[2], 'w') as out:
+    for l in open(sys.argv[1]):
+        f = l.split()
+        if f: f[0] = '%.9f' % (float(f[0]) + float(sys.argv[3])); out.write(' '.join(f) + '\n')
+PY
+if "$BIN/harmoloc-train" --dataset "$WORK/train" --labels "$out/labels_ahead.tum" --out "$out/x.hmap" \
+  > /dev/null 2> "$out/err.txt"; then fail "trained on labels 0.3 s off the run without an offset"; fi
+"$BIN/harmoloc-train" --dataset "$WORK/train" --labels "$out/labels_ahead.tum" --label-offset -0.3 \
+  --out "$out/offset.hmap" > "$out/offset.txt" || fail "--label-offset -0.3 refused"
+grep -q 'time offset -0.300 s (--label-offset)' "$out/offset.txt" || fail "the offset is not said"
+"$BIN/harmoloc-train" --dataset "$WORK/train" --labels "$out/labels_ahead.tum" --label-offset auto \
+  --out "$out/auto.hmap" > "$out/auto.txt" || fail "--label-offset auto refused"
+found=$(sed -n 's/^labels  *time offset \([-+0-9.]*\) s +- .*estimated.*/\1/p' "$out/auto.txt")
+[ -n "$found" ] || fail "no estimated offset said: $(head -3 "$out/auto.txt")"
+python3 -c "import sys; sys.exit(0 if abs(float(sys.argv[1]) + 0.3) <= 0.03 else 1)" "$found" \
+  || fail "estimated offset $found s, the labels are 0.3 s ahead"
+grep -q '^labels  *heading ' "$out/auto.txt" || fail "whether heading is used is not said"
+echo "ok  labels 0.3 s ahead: refused without an offset, trained with --label-offset -0.3 and with auto ($found s)"
+# Without odometry a label names the frame nearest its time within --label-tolerance-ms.
+python3 - "$WORK/train/labels.tum" "$out/labels_2ms.tum" 0.002 <<'PY'
+import sys
+with open(sys.argv[2], 'w') as out:
+    for l in open(sys.argv[1]):
+        f = l.split()
+        if f: f[0] = '%.9f' % (float(f[0]) + float(sys.argv[3])); out.write(' '.join(f) + '\n')
+PY
+if "$BIN/harmoloc-train" --dataset "$WORK/train" --labels "$out/labels_2ms.tum" --no-odometry \
+  --out "$out/x.hmap" > /dev/null 2> "$out/err.txt"; then fail "labels 2 ms off matched with 0.5 ms tolerance"; fi
+grep -q 'label-tolerance-ms' "$out/err.txt" || fail "no hint at --label-tolerance-ms: $(cat "$out/err.txt")"
+"$BIN/harmoloc-train" --dataset "$WORK/train" --labels "$out/labels_2ms.tum" --no-odometry \
+  --label-tolerance-ms 5 --out "$out/tol.hmap" > "$out/tol.txt" || fail "--label-tolerance-ms 5 refused"
+grep -q 'unmatched 0' "$out/tol.txt" || fail "labels unmatched with 5 ms tolerance: $(grep matched "$out/tol.txt")"
 echo "training workflow ok"

@@ -46,7 +46,8 @@ gtest_discover_tests(firmware_test DISCOVERY_TIMEOUT 60 PROPERTIES LABELS unit)
 # ring, SocketCAN frame handling, the serial link's raw mode. Nothing here links libcamera, so it
 # runs under qemu-aarch64 too. The devices themselves are tested in the VM (tests/vm/).
 add_executable(drivers_test ${HARMOLOC_UNIT_DIR}/drivers_test.cpp
-  ${HARMOLOC_UNIT_DIR}/input_file_test.cpp ${HARMOLOC_UNIT_DIR}/record_file_test.cpp)
+  ${HARMOLOC_UNIT_DIR}/input_file_test.cpp ${HARMOLOC_UNIT_DIR}/record_file_test.cpp
+  ${HARMOLOC_UNIT_DIR}/frame_recorder_test.cpp)
 target_link_libraries(drivers_test PRIVATE harmoloc_drivers_can harmoloc_drivers_v4l2
   harmoloc_drivers_common harmoloc_input_files harmoloc_algorithms GTest::gtest_main
   harmoloc_warnings)
@@ -77,6 +78,7 @@ add_executable(sim_host_test
   ${HARMOLOC_UNIT_DIR}/dataset_test.cpp
   ${HARMOLOC_UNIT_DIR}/fakes_test.cpp
   ${HARMOLOC_UNIT_DIR}/forward_map_training_test.cpp
+  ${HARMOLOC_UNIT_DIR}/label_offset_test.cpp
   ${HARMOLOC_UNIT_DIR}/random_scene_test.cpp
   ${HARMOLOC_UNIT_DIR}/simulator_test.cpp)
 target_link_libraries(sim_host_test PRIVATE harmoloc_dataset harmoloc_drivers_host harmoloc_simulator

@@ -71,6 +71,18 @@ echo "VMSTATS-BEGIN"
 cat /tmp/stats.json
 echo "VMSTATS-END"
 echo "VM: trajectory lines $(wc -l < /tmp/trajectory.tum)"
+# Recording a training run on the robot (no map): vivid's frames and vcan0's counters into a
+# dataset folder, the cycle never waiting for the disk. The host checks what it says.
+canplayer -l i -I /vm/e2e/encoders.log vcan0=can0 &
+player=$!
+/vm/harmoloc --config /vm/e2e/harmoloc.toml --link /dev/null --record /tmp/rec --duration 3 \
+  > /tmp/rec.out 2> /tmp/rec.err
+rc=$?
+kill "$player" 2> /dev/null
+echo "VMTEST-END record rc=$rc frames=$(($(wc -l < /tmp/rec/frames.csv) - 1)) files=$(ls /tmp/rec/frames | wc -l)" \
+  "encoders=$(($(wc -l < /tmp/rec/encoders.csv) - 1)) areas=$(($(wc -l < /tmp/rec/areas.csv) - 3))" \
+  "format=$(sed -n 's/^pixel_format = "\(.*\)"/\1/p' /tmp/rec/metadata.toml) $(grep -m1 'recorded' /tmp/rec.err || tail -1 /tmp/rec.err)"
+rm -rf /tmp/rec
 # A missing device must stop start-up with exit status 2 and one line.
 /vm/harmoloc --config /vm/e2e/bad_camera.toml --map /vm/e2e/map.hmap --link /dev/null > /tmp/out 2> /tmp/err
 echo "VMTEST-END bad_camera rc=$? lines=$(wc -l < /tmp/err) $(cat /tmp/err)"

@@ -300,6 +300,17 @@ grep -q '^VMTEST-END libcamera rc=0' "$CONSOLE" || {
   fail "the libcamera driver's test against vimc failed in the VM (vm_libcamera_test)"
 }
 grep -q '^VMTEST-END harmoloc rc=0' "$CONSOLE" || fail "harmoloc (Linux board) did not complete its run in the VM: $(grep -m3 'harmoloc' "$CONSOLE" | tr '\n' ' ')"
+# The recording on the robot: every file there, frames (vivid's YUYV) and counts that agree.
+REC_LINE=$(grep -m1 '^VMTEST-END record' "$CONSOLE" || true)
+say "recording in the VM: ${REC_LINE#VMTEST-END record }"
+python3 - "$REC_LINE" <<'PY' || fail "harmoloc --record on the Linux board in the VM: $REC_LINE"
+import re, sys
+f = dict(re.findall(r'(\w+)=(\S+)', sys.argv[1]))
+ok = (f.get('rc') == '0' and int(f.get('frames', 0)) >= 10 and f.get('files') == f.get('frames')
+      and int(f.get('encoders', 0)) >= 10 and int(f.get('areas', 0)) >= 10
+      and f.get('format') in ('yuyv', 'rgb24'))
+sys.exit(0 if ok else 1)
+PY
 grep -q '^VMTEST-END bad_camera rc=2 lines=1 harmoloc: camera /dev/video7: No such file or directory' "$CONSOLE" ||
   fail "a missing camera must give exit status 2 and one line: $(grep '^VMTEST-END bad_camera' "$CONSOLE")"
 sed -n '/^VMSTATS-BEGIN/,/^VMSTATS-END/p' "$CONSOLE" | sed '1d;$d' > "$WORK/stats.json"

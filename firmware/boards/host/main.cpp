@@ -13,6 +13,7 @@
 #include <CLI/CLI.hpp>
 
 #include "board_run.hpp"
+#include "run_recording.hpp"
 
 #include "harmoloc/dataset/area_log.hpp"
 #include "harmoloc/dataset/encoder_csv.hpp"
@@ -83,7 +84,7 @@ class OutputWatch {
     std::fprintf(stderr, "%sharmoloc: %s: write failed (%s)\n", progress_ ? "\n" : "",
                  w.out->path().c_str(), std::strerror(w.out->error()));
   }
-  Watched outputs_[4]{};
+  Watched outputs_[8]{};
   std::size_t count_ = 0;
   bool progress_;  // a progress line ("\r  cycle N/M") may be open on stderr
 };
@@ -103,11 +104,12 @@ int main(int argc, char** argv) {
       link_in_path, areas_path, record_encoders_path;
   bool realtime = false, quiet = false;
   std::uint32_t loops = 1;
+  boards::RecordOptions record;
   app.add_option("--dataset", dataset, "dataset folder (metadata.toml, frames.csv, encoders.log)")
       ->required();
   app.add_option("--map", map_path,
-                 "map file from harmoloc-train (may be left out with --record-areas, to record a\n"
-                 "first run before any map exists: nothing is localised then)");
+                 "map file from harmoloc-train (may be left out with --record or --record-areas,\n"
+                 "to record a first run before any map exists: nothing is localised then)");
   app.add_option("--config", config_path,
                  "firmware config (TOML, docs/config-format.md); default: built-in");
   app.add_option("--trajectory", trajectory_path, "write the fused pose of every cycle here (TUM)");
@@ -123,6 +125,10 @@ int main(int argc, char** argv) {
   app.add_option("--record-areas", areas_path,
                  "write every frame's board areas here (area log, docs/dataset-format.md): with\n"
                  "a few labelled poses, harmoloc-train --areas makes a map from it");
+  boards::add_record_options(app, record,
+                             "Unpaced, every frame is recorded; with --realtime a slow disk\ndrops "
+                             "frames (counted), as on a robot");
+
   app.add_option("--record-encoders", record_encoders_path,
                  "write every fresh encoder sample the cycle reads here, as a GPIO encoder\n"
                  "recording (encoders.csv, docs/dataset-format.md)");
@@ -155,14 +161,16 @@ int main(int argc, char** argv) {
     if (!config.has_can_section) config.can_layout = meta.encoder_layout;
     if (!map_path.empty()) {
       if (const std::string e = firmware::load_map(map_path, g_map); !e.empty()) return fail(e);
-    } else if (!areas_path.empty()) {
+    } else if (!areas_path.empty() || !record.dir.empty()) {
       // Recording a first run: an empty map with the config's thresholds segments every frame
       // and localises none.
       g_map.image_width_px = meta.image_width_px;
       g_map.image_height_px = meta.image_height_px;
       g_map.thresholds = config.thresholds;
     } else {
-      return fail("--map is required (or --record-areas to record a run before a map exists)");
+      return fail(
+          "--map is required (or --record DIR / --record-areas to record a run before a map "
+          "exists)");
     }
     if (const std::string e =
             firmware::check_map_matches(g_map, config, meta.image_width_px, meta.image_height_px);
@@ -251,8 +259,22 @@ int main(int argc, char** argv) {
     if (!recorder.open(record_encoders_path)) return fail(record_encoders_path + ": cannot write");
     encoders = &recorder;
   }
-  auto cycle = std::make_unique<firmware::LocalizationCycle>(config, g_map, cycle_camera, *encoders,
-                                                             link, clock, meta.pixel_format);
+  static boards::RunRecording recording;
+  // Unpaced, the replay's clock is the data's: waiting for the disk loses nothing, so every frame
+  // is recorded. Paced (--realtime), a slow disk drops frames as on a robot.
+  record.frames.wait_for_disk = !realtime;
+  {
+    dataset::DatasetMetadata recorded = meta;
+    recorded.geometry = config.geometry;
+    recorded.encoder_layout = config.can_layout;
+    if (const std::string e =
+            recording.start(record, recorded, config, !map_path.empty(), cycle_camera, *encoders);
+        !e.empty()) {
+      return fail(e);
+    }
+  }
+  auto cycle = std::make_unique<firmware::LocalizationCycle>(
+      config, g_map, recording.camera(), recording.encoders(), link, clock, meta.pixel_format);
   cycle->set_overrun_alarm(realtime);
   static drivers::RecordFile signing_store;
   if (const std::string e = boards::start_signing(config, *cycle, signing_store); !e.empty())
@@ -288,6 +310,11 @@ int main(int argc, char** argv) {
   watch.add(g_fixes.output());
   watch.add(g_areas.output());
   watch.add(recorder.output());
+  if (recording.active()) {
+    watch.add(recording.areas_output());
+    watch.add(recording.encoders_output());
+    watch.add(recording.pose_output());
+  }
   bool any_pose = false;
 
   // ---- the cycle; Eigen may not allocate from here on (it would stop the program) ----
@@ -318,6 +345,7 @@ int main(int argc, char** argv) {
     }
     const firmware::FixOutput& fix = cycle->last_fix();
     if (fix.present) g_areas.write(out.data_time_ns, fix.areas);
+    recording.after_cycle(*cycle);
     if (fix.present && fix.fix.known_place) {
       g_fixes.write(out.data_time_ns, algorithms::Pose2{fix.fix.x_m, fix.fix.y_m, 0.0});
     }
@@ -337,6 +365,9 @@ int main(int argc, char** argv) {
   g_fixes.close();
   g_areas.close();
   const bool recorded = recorder.close();
+  // The recording's frames and metadata; its text files are in the watch.
+  run.outputs_failed += recording.finish(quiet, stderr, false);
+  run.recording = recording.stats();
   run.outputs_failed += watch.finish();
   if (!record_encoders_path.empty() && recorded) {
     if (!quiet) {
@@ -387,7 +418,8 @@ int main(int argc, char** argv) {
                  run.outputs_failed, run.outputs_failed == 1 ? "" : "s");
     return firmware::kExitOutputFailed;
   }
-  if (!any_pose && !areas_path.empty() && map_path.empty()) return firmware::kExitOk;
+  if (!any_pose && (!areas_path.empty() || !record.dir.empty()) && map_path.empty())
+    return firmware::kExitOk;
   if (!any_pose) {
     std::fprintf(stderr,
                  "harmoloc: no pose in %llu cycles: the camera never showed a place of the map "

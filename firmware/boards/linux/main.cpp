@@ -18,6 +18,7 @@
 #include <CLI/CLI.hpp>
 
 #include "board_run.hpp"
+#include "run_recording.hpp"
 
 #include "harmoloc/dataset/encoder_csv.hpp"
 #include "harmoloc/drivers/monotonic_clock.hpp"
@@ -80,7 +81,10 @@ int main(int argc, char** argv) {
   double duration_s = 0.0;
   std::uint64_t max_cycles = 0;
   bool quiet = false;
-  app.add_option("--map", map_path, "map file from harmoloc-train")->required();
+  boards::RecordOptions record;
+  app.add_option("--map", map_path,
+                 "map file from harmoloc-train (may be left out with --record, to record a\n"
+                 "training run before any map exists: nothing is localised then)");
   app.add_option("--config", config_path,
                  "firmware config (TOML, docs/config-format.md); default: built-in");
   app.add_option("--link", link_path,
@@ -91,6 +95,9 @@ int main(int argc, char** argv) {
   app.add_option("--record-encoders", record_encoders_path,
                  "record the wheel counters the cycle reads as a GPIO encoder recording (CSV\n"
                  "timestamp_ns,left_ticks,right_ticks; docs/dataset-format.md)");
+  boards::add_record_options(
+      app, record,
+      "A slow disk drops frames (counted), a full one stops the\nrecording, never the cycle");
   app.add_option("--duration", duration_s, "stop after this many seconds (0: run until a signal)")
       ->check(CLI::Range(0.0, 1e9));
   app.add_option("--cycles", max_cycles, "stop after this many cycles (0: no limit)");
@@ -104,7 +111,17 @@ int main(int argc, char** argv) {
   } catch (const std::exception& e) {
     return fail(e.what());
   }
-  if (const std::string e = firmware::load_map(map_path, g_map); !e.empty()) return fail(e);
+  if (!map_path.empty()) {
+    if (const std::string e = firmware::load_map(map_path, g_map); !e.empty()) return fail(e);
+  } else if (!record.dir.empty()) {
+    // Recording a training run: an empty map with the config's thresholds segments every frame
+    // (the areas are recorded) and localises none.
+    g_map.image_width_px = config.camera.width_px;
+    g_map.image_height_px = config.camera.height_px;
+    g_map.thresholds = config.thresholds;
+  } else {
+    return fail("--map is required (or --record DIR to record a training run before a map exists)");
+  }
   if (const std::string e = firmware::check_map_matches(g_map, config, config.camera.width_px,
                                                         config.camera.height_px);
       !e.empty()) {
@@ -216,8 +233,26 @@ int main(int argc, char** argv) {
       config.realtime.enabled, config.realtime.priority, config.realtime.cpu,
       config.realtime.lock_memory, config.realtime.prefault_stack_kb});
 
-  auto cycle = std::make_unique<firmware::LocalizationCycle>(config, g_map, *camera, *encoders,
-                                                             link, clock, pixel_format);
+  // Recording (frame slots and text buffers reserved here).
+  static boards::RunRecording recording;
+  {
+    dataset::DatasetMetadata recorded;
+    recorded.image_width_px = config.camera.width_px;
+    recorded.image_height_px = config.camera.height_px;
+    recorded.pixel_format = pixel_format;
+    recorded.frame_rate_hz = config.cycle.rate_hz;
+    recorded.can_interface = config.can_interface;
+    recorded.geometry = config.geometry;
+    recorded.encoder_layout = config.can_layout;
+    if (const std::string e =
+            recording.start(record, recorded, config, !map_path.empty(), *camera, *encoders);
+        !e.empty()) {
+      return fail(e);
+    }
+  }
+
+  auto cycle = std::make_unique<firmware::LocalizationCycle>(
+      config, g_map, recording.camera(), recording.encoders(), link, clock, pixel_format);
   cycle->set_live_clock(true);
   cycle->set_overrun_alarm(true);
   static firmware::CyclePacer pacer(
@@ -267,6 +302,7 @@ int main(int argc, char** argv) {
     ++done;
     const firmware::PoseOutput& out = cycle->pose();
     any_pose = any_pose || out.valid;
+    recording.after_cycle(*cycle);
     if (trajectory != nullptr && out.valid) {
       const double yaw_half = 0.5 * out.pose.yaw_rad;
       if (std::fprintf(trajectory, "%.9f %.6f %.6f 0 0 0 %.9f %.9f\n",
@@ -305,6 +341,9 @@ int main(int argc, char** argv) {
                  std::strerror(recorder.output().error() != 0 ? recorder.output().error() : EIO));
     ++run.outputs_failed;
   }
+
+  run.outputs_failed += recording.finish(quiet, stderr);
+  run.recording = recording.stats();
 
   run.board = "linux";
   run.rate_hz = config.cycle.rate_hz;
@@ -345,7 +384,7 @@ int main(int argc, char** argv) {
       static_cast<unsigned long long>(c.cycles_in_health[4]), run.ended);
   std::fflush(stdout);
   if (run.outputs_failed > 0) return firmware::kExitOutputFailed;
-  if (!any_pose) {
+  if (!any_pose && !map_path.empty()) {
     std::fprintf(stderr, "harmoloc: no pose in %llu cycles\n",
                  static_cast<unsigned long long>(c.cycles));
     return firmware::kExitNeverLocalized;

@@ -8,6 +8,16 @@
 
 namespace harmoloc::firmware {
 
+/// `harmoloc --record DIR`: what the recording kept (boards/common/run_recording.hpp).
+struct RecordingCounters {
+  bool active = false;
+  std::uint64_t frames = 0;   ///< frame files written and listed in frames.csv
+  std::uint64_t dropped = 0;  ///< frames the disk could not take in time
+  std::uint64_t skipped = 0;  ///< frames left out by --record-every
+  std::uint64_t bytes = 0;    ///< bytes of frame files
+  const char* stopped = "";   ///< "", "size limit", "time limit" or "write failed"
+};
+
 struct RunCounters {
   const char* board = "host";
   double rate_hz = 30.0;
@@ -27,6 +37,7 @@ struct RunCounters {
   const char* ended = "end of the recording";
   /// Outputs (trajectory, recordings) whose writes failed.
   unsigned outputs_failed = 0;
+  RecordingCounters recording;
 };
 
 std::string stats_json(const LocalizationCycle& cycle, const RunCounters& run);

@@ -15,6 +15,7 @@
 #include "harmoloc/algorithms/segmentation.hpp"
 #include "harmoloc/dataset/tum.hpp"
 #include "harmoloc/sim_host/forward_map_training.hpp"
+#include "harmoloc/sim_host/label_offset.hpp"
 #include "harmoloc/sim_host/training_odometry.hpp"
 
 namespace harmoloc::sim_host {
@@ -34,6 +35,12 @@ struct TrainOptions {
   algorithms::EncoderFrameLayout can_layout;
   algorithms::DiffDriveGeometry geometry;
   std::string labels_path;
+  /// Added to every label's time: the external reference's clock against the robot's.
+  double label_offset_s = 0.0;
+  /// Estimate that offset from the run's wheel odometry instead (label_offset.hpp).
+  bool label_offset_auto = false;
+  /// Without odometry, a label names the frame whose timestamp is within this of its own.
+  std::uint64_t label_tolerance_ns = 500'000;
   /// Place every frame by the wheel odometry between the labels (when the run has odometry):
   /// the forward map and, where cross-validation prefers it, the harmonic map use every frame.
   bool use_odometry = true;
@@ -122,6 +129,12 @@ struct TrainReport {
   double kernel_average_cv_rmse_x_m = 0.0, kernel_average_cv_rmse_y_m = 0.0;
   bool has_forward_map = false;
   ForwardMapReport forward;
+  /// The offset added to the labels' times, and the estimate when it was estimated.
+  double label_offset_s = 0.0;
+  bool label_offset_estimated = false;
+  LabelOffsetEstimate label_offset;
+  /// Whether the labels carry a heading (a non-zero yaw), which the placement then follows.
+  bool labels_have_yaw = false;
   double forward_ms = 0;
 };
 
