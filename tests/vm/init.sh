@@ -75,7 +75,7 @@ echo "VM: trajectory lines $(wc -l < /tmp/trajectory.tum)"
 # dataset folder, the cycle never waiting for the disk. The host checks what it says.
 canplayer -l i -I /vm/e2e/encoders.log vcan0=can0 &
 player=$!
-/vm/harmoloc --config /vm/e2e/harmoloc.toml --link /dev/null --record /tmp/rec --duration 3 \
+/vm/harmoloc --config /vm/e2e/harmoloc.toml --link /dev/null --record /tmp/rec --duration 6 \
   > /tmp/rec.out 2> /tmp/rec.err
 rc=$?
 kill "$player" 2> /dev/null

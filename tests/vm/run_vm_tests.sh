@@ -306,8 +306,8 @@ say "recording in the VM: ${REC_LINE#VMTEST-END record }"
 python3 - "$REC_LINE" <<'PY' || fail "harmoloc --record on the Linux board in the VM: $REC_LINE"
 import re, sys
 f = dict(re.findall(r'(\w+)=(\S+)', sys.argv[1]))
-ok = (f.get('rc') == '0' and int(f.get('frames', 0)) >= 10 and f.get('files') == f.get('frames')
-      and int(f.get('encoders', 0)) >= 10 and int(f.get('areas', 0)) >= 10
+ok = (f.get('rc') == '0' and int(f.get('frames', 0)) >= 5 and f.get('files') == f.get('frames')
+      and int(f.get('encoders', 0)) >= 10 and int(f.get('areas', 0)) >= 5
       and f.get('format') in ('yuyv', 'rgb24'))
 sys.exit(0 if ok else 1)
 PY
