@@ -28,6 +28,12 @@ namespace {
 class FrameRecorderTest : public ::testing::Test {
  protected:
   void SetUp() override {
+#ifdef HARMOLOC_TESTS_UNDER_QEMU_USER
+    // The writer is a second thread, and qemu-user 7.2 never returns from a second thread's start
+    // (see SpscRing.TwoThreadsPassEveryValueInOrder): natively, under TSan and in the VM bench
+    // (which records on the Linux board) only.
+    GTEST_SKIP() << "threads hang under qemu-user";
+#endif
     dir_ = (fs::temp_directory_path() /
             ("harmoloc_frame_recorder_" + std::to_string(::getpid()) + "_" +
              ::testing::UnitTest::GetInstance()->current_test_info()->name()))
@@ -35,7 +41,9 @@ class FrameRecorderTest : public ::testing::Test {
     fs::remove_all(dir_);
     fs::create_directories(dir_);
   }
-  void TearDown() override { fs::remove_all(dir_); }
+  void TearDown() override {
+    if (!dir_.empty()) fs::remove_all(dir_);
+  }
 
   // A frame of @p w x @p h with a row stride larger than the pixels (as V4L2 may hand one),
   // every byte a function of its position and @p seed; the padding is 0xEE.
