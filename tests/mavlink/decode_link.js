@@ -20,6 +20,7 @@ const parser = new MavLinkPacketParser();
 const counts = {};
 const odometry = [];
 const heartbeats = [];
+let heartbeatsInSpan = 0;
 const statustexts = [];
 let lastSeq = null;
 let seqGaps = 0;
@@ -34,6 +35,10 @@ parser.on('data', (packet) => {
   const data = packet.protocol.data(packet.payload, clazz);
   if (id === 331) odometry.push(data);
   if (id === 0) heartbeats.push(data);
+  // The rate is checked over the ODOMETRY's own time span: before the first pose (waiting for a
+  // set-pose, a slow start under an emulator) the link carries HEARTBEATs for a time nothing
+  // in the stream dates.
+  if (id === 0 && odometry.length > 0) heartbeatsInSpan += 1;
   if (id === 253) statustexts.push(data.text);
 });
 
@@ -56,7 +61,7 @@ parser.on('finish', () => {
     const t0 = Number(odometry[0].timeUsec) / 1e6;
     const t1 = Number(odometry[odometry.length - 1].timeUsec) / 1e6;
     const expected = Math.floor(t1 - t0) + 1;
-    if (Math.abs(heartbeats.length - expected) > 1) failures.push(`${heartbeats.length} HEARTBEATs over ${(t1 - t0).toFixed(1)} s (1 Hz expected)`);
+    if (Math.abs(heartbeatsInSpan - expected) > 1) failures.push(`${heartbeatsInSpan} HEARTBEATs over the ${(t1 - t0).toFixed(1)} s of ODOMETRY (1 Hz expected)`);
   }
 
   if (tumPath) {
