@@ -1,5 +1,7 @@
 #include "harmoloc/sim_host/label_offset.hpp"
 
+#include "harmoloc/algorithms/odometry.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -7,8 +9,6 @@
 
 namespace harmoloc::sim_host {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 struct Track {
   std::vector<double> t_s, x_m, y_m;
@@ -28,30 +28,24 @@ struct Track {
 };
 
 Track dead_reckon(const OdometryTrack& odo) {
-  const algorithms::DiffDriveGeometry& g = odo.geometry;
-  const double per_tick = 2.0 * kPi * g.wheel_radius_m / g.ticks_per_rev;
   Track tr;
   const std::size_t n = odo.timestamp_ns.size();
   tr.t_s.reserve(n);
   tr.x_m.reserve(n);
   tr.y_m.reserve(n);
   const std::uint64_t t0 = odo.timestamp_ns.front();
-  double x = 0.0, y = 0.0, yaw = 0.0;
+  algorithms::Pose2 pose;
   for (std::size_t i = 0; i < n; ++i) {
     if (i > 0) {
-      const double dl = static_cast<double>(odo.left_ticks[i] - odo.left_ticks[i - 1]) * per_tick *
-                        g.left_direction * g.left_scale;
-      const double dr = static_cast<double>(odo.right_ticks[i] - odo.right_ticks[i - 1]) *
-                        per_tick * g.right_direction * g.right_scale;
-      const double ds = 0.5 * (dl + dr), dyaw = (dr - dl) / g.track_m;
-      x += ds * std::cos(yaw + 0.5 * dyaw);
-      y += ds * std::sin(yaw + 0.5 * dyaw);
-      yaw += dyaw;
+      pose = algorithms::apply_arc(
+          pose,
+          algorithms::odometry_from_ticks(odo.geometry, odo.left_ticks[i] - odo.left_ticks[i - 1],
+                                          odo.right_ticks[i] - odo.right_ticks[i - 1]));
     }
     // Seconds after the first sample (the labels are converted the same way).
     tr.t_s.push_back(static_cast<double>(odo.timestamp_ns[i] - t0) * 1e-9);
-    tr.x_m.push_back(x);
-    tr.y_m.push_back(y);
+    tr.x_m.push_back(pose.x_m);
+    tr.y_m.push_back(pose.y_m);
   }
   return tr;
 }

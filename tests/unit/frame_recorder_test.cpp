@@ -6,16 +6,17 @@
 
 #include <gtest/gtest.h>
 
-#include <unistd.h>
-
 #include <chrono>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <memory>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "strided_frame.hpp"
 #include "test_support.hpp"
 
 namespace hd = harmoloc::drivers;
@@ -34,35 +35,18 @@ class FrameRecorderTest : public ::testing::Test {
     // (which records on the Linux board) only.
     GTEST_SKIP() << "threads hang under qemu-user";
 #endif
-    dir_ = (fs::temp_directory_path() /
-            ("harmoloc_frame_recorder_" + std::to_string(::getpid()) + "_" +
-             ::testing::UnitTest::GetInstance()->current_test_info()->name()))
-               .string();
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override {
-    if (!dir_.empty()) fs::remove_all(dir_);
+    temp_.emplace();
+    dir_ = temp_->dir();
   }
 
-  // A frame of @p w x @p h with a row stride larger than the pixels (as V4L2 may hand one),
-  // every byte a function of its position and @p seed; the padding is 0xEE.
+  // A frame of @p w x @p h with padded rows (as V4L2 may hand one), every byte a function of its
+  // position and @p seed. Valid until the next call.
   hal::FrameView frame(std::uint32_t w, std::uint32_t h, hal::PixelFormat format,
                        std::uint64_t t_ns, std::uint8_t seed) {
-    const std::uint32_t row = w * (format == hal::PixelFormat::kRgb24 ? 3U : 2U);
-    const std::uint32_t stride = row + 16;
-    buffer_.assign(std::size_t{stride} * h, 0xEE);
-    for (std::uint32_t y = 0; y < h; ++y)
-      for (std::uint32_t x = 0; x < row; ++x)
-        buffer_[std::size_t{y} * stride + x] = static_cast<std::uint8_t>(seed + x * 7 + y * 13);
-    hal::FrameView f;
-    f.data = buffer_.data();
-    f.width_px = w;
-    f.height_px = h;
-    f.stride_bytes = stride;
-    f.format = format;
-    f.timestamp_ns = t_ns;
-    return f;
+    frame_ = std::make_unique<ht::StridedFrame>(
+        w, h, format, t_ns,
+        [seed](std::uint32_t y, std::uint32_t x) { return seed + x * 7 + y * 13; });
+    return frame_->view();
   }
 
   std::vector<std::string> index_lines() const {
@@ -72,8 +56,9 @@ class FrameRecorderTest : public ::testing::Test {
     return lines;
   }
 
+  std::optional<ht::TempDir> temp_;
   std::string dir_;
-  std::vector<std::uint8_t> buffer_;
+  std::unique_ptr<ht::StridedFrame> frame_;
 };
 
 // The writer thread takes a queued frame within a few milliseconds; wait for it, boundedly.

@@ -13,45 +13,29 @@
 #include "harmoloc/dataset/metadata.hpp"
 #include "harmoloc/drivers/frame_recorder.hpp"
 #include "harmoloc/host/file_camera.hpp"
+#include "strided_frame.hpp"
+#include "test_support.hpp"
 
 namespace hal = harmoloc::hal;
-namespace fs = std::filesystem;
 
 namespace {
 
 void round_trip(hal::PixelFormat format) {
-  const std::string dir =
-      (fs::temp_directory_path() / ("harmoloc_recording_replay_" + std::to_string(::getpid()) +
-                                    "_" + std::to_string(static_cast<int>(format))))
-          .string();
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+  const harmoloc::test::TempDir temp;
+  const std::string dir = temp.dir();
   constexpr std::uint32_t kW = 8, kH = 4;
-  const std::uint32_t row = kW * (format == hal::PixelFormat::kRgb24 ? 3U : 2U);
-  const std::uint32_t stride = row + 8;  // padded rows, as a driver may hand them
-  std::vector<std::vector<std::uint8_t>> sent;
+  const auto value = [](std::uint32_t n) {
+    return [n](std::uint32_t y, std::uint32_t x) { return n * 31 + y * 7 + x; };
+  };
+  std::uint32_t row = 0;
   {
     harmoloc::drivers::FrameRecorder recorder;
     ASSERT_EQ(recorder.start(dir, kW, kH, format, {}), "");
-    for (std::uint8_t n = 0; n < 5; ++n) {
-      std::vector<std::uint8_t> buffer(std::size_t{stride} * kH, 0xEE);
-      std::vector<std::uint8_t> packed;
-      for (std::uint32_t y = 0; y < kH; ++y) {
-        for (std::uint32_t x = 0; x < row; ++x) {
-          const auto v = static_cast<std::uint8_t>(n * 31 + y * 7 + x);
-          buffer[std::size_t{y} * stride + x] = v;
-          packed.push_back(v);
-        }
-      }
-      sent.push_back(packed);
-      hal::FrameView f;
-      f.data = buffer.data();
-      f.width_px = kW;
-      f.height_px = kH;
-      f.stride_bytes = stride;
-      f.format = format;
-      f.timestamp_ns = 1767225600000000000ULL + n * 33333333ULL;
-      recorder.offer(f);
+    for (std::uint32_t n = 0; n < 5; ++n) {
+      const harmoloc::test::StridedFrame f(kW, kH, format, 1767225600000000000ULL + n * 33333333ULL,
+                                           value(n));
+      row = f.row_bytes();
+      recorder.offer(f.view());
       // One frame at a time: the writer thread takes it before the buffer goes away.
       for (int i = 0; i < 1000 && recorder.counters().recorded <= n; ++i) ::usleep(2000);
     }
@@ -77,13 +61,13 @@ void round_trip(hal::PixelFormat format) {
     EXPECT_EQ(f.timestamp_ns, 1767225600000000000ULL + n * 33333333ULL);
     for (std::uint32_t y = 0; y < kH; ++y) {
       for (std::uint32_t x = 0; x < row; ++x) {
-        ASSERT_EQ(f.data[std::size_t{y} * f.stride_bytes + x], sent[n][std::size_t{y} * row + x])
+        ASSERT_EQ(f.data[std::size_t{y} * f.stride_bytes + x],
+                  static_cast<std::uint8_t>(value(static_cast<std::uint32_t>(n))(y, x)))
             << "frame " << n << " row " << y << " byte " << x;
       }
     }
     camera.release();
   }
-  fs::remove_all(dir);
 }
 
 TEST(RecordingReplay, YuyvFramesRecordedOnTheRobotReplayByteForByte) {

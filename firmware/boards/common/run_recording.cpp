@@ -45,10 +45,8 @@ std::string RunRecording::start(const RecordOptions& options, dataset::DatasetMe
   }
   dir_ = options.dir;
   drivers::FrameRecorderOptions frame_options = options.frames;
-  if (options.max_mb > 0.0)
-    frame_options.max_bytes = static_cast<std::uint64_t>(options.max_mb * 1e6);
-  if (options.max_seconds > 0.0)
-    frame_options.max_duration_ns = static_cast<std::uint64_t>(options.max_seconds * 1e9);
+  frame_options.max_bytes = static_cast<std::uint64_t>(options.max_mb * 1e6);
+  frame_options.max_duration_ns = static_cast<std::uint64_t>(options.max_seconds * 1e9);
   meta.name =
       dir.filename().empty() ? dir.parent_path().filename().string() : dir.filename().string();
   meta.seed = 0;
@@ -86,7 +84,6 @@ std::string RunRecording::start(const RecordOptions& options, dataset::DatasetMe
   camera_ = &*recording_camera_;
   encoders_ = &*encoder_recorder_;
   started_ = true;
-  recorded_ = true;
   return "";
 }
 
@@ -100,26 +97,14 @@ void RunRecording::after_cycle(const firmware::LocalizationCycle& cycle) {
 
 firmware::RecordingCounters RunRecording::stats() const {
   firmware::RecordingCounters r;
-  if (!recorded_) return r;
+  if (!recording_camera_) return r;  // built last in start(): nothing was recorded
   const drivers::FrameRecorderCounters c = frames_.counters();
   r.active = true;
   r.frames = c.recorded;
   r.dropped = c.dropped;
   r.skipped = c.skipped;
   r.bytes = c.bytes;
-  switch (frames_.stop_reason()) {
-    case drivers::RecordingStop::kSizeLimit:
-      r.stopped = "size limit";
-      break;
-    case drivers::RecordingStop::kTimeLimit:
-      r.stopped = "time limit";
-      break;
-    case drivers::RecordingStop::kWriteFailed:
-      r.stopped = "write failed";
-      break;
-    case drivers::RecordingStop::kNone:
-      break;
-  }
+  r.stopped = drivers::recording_stop_name(frames_.stop_reason());
   return r;
 }
 
@@ -154,28 +139,16 @@ unsigned RunRecording::finish(bool quiet, std::FILE* err, bool text_outputs) {
   }
   if (!quiet) {
     const drivers::FrameRecorderCounters c = frames_.counters();
-    const char* stopped = "";
-    switch (frames_.stop_reason()) {
-      case drivers::RecordingStop::kSizeLimit:
-        stopped = "; frames stopped at the size limit";
-        break;
-      case drivers::RecordingStop::kTimeLimit:
-        stopped = "; frames stopped at the time limit";
-        break;
-      case drivers::RecordingStop::kWriteFailed:
-        stopped = "; frames stopped by a failed write";
-        break;
-      case drivers::RecordingStop::kNone:
-        break;
-    }
+    const char* stopped = drivers::recording_stop_name(frames_.stop_reason());
     std::fprintf(err,
                  "harmoloc: recorded %s: %llu frames (%.1f MB; %llu dropped: disk too slow, %llu "
-                 "left out by --record-every), %llu encoder samples%s%s\n",
+                 "left out by --record-every), %llu encoder samples%s%s%s\n",
                  dir_.c_str(), static_cast<unsigned long long>(c.recorded),
                  static_cast<double>(c.bytes) / 1e6, static_cast<unsigned long long>(c.dropped),
                  static_cast<unsigned long long>(c.skipped),
                  static_cast<unsigned long long>(encoder_recorder_->samples_written()),
-                 with_pose_ ? ", poses in estimate.tum" : "", stopped);
+                 with_pose_ ? ", poses in estimate.tum" : "",
+                 *stopped != 0 ? "; frames stopped: " : "", stopped);
   }
   return failed;
 }

@@ -27,8 +27,8 @@ namespace harmoloc::boards {
 
 struct RecordOptions {
   std::string dir;                         ///< new or empty folder; "" records nothing
-  drivers::FrameRecorderOptions frames;    ///< every Nth frame, size and time limits
-  double max_mb = 0.0, max_seconds = 0.0;  ///< the limits as given on the command line
+  drivers::FrameRecorderOptions frames;    ///< every Nth frame, waiting for the disk
+  double max_mb = 0.0, max_seconds = 0.0;  ///< the limits (0: none); frames' own are set from them
 };
 
 /// --record DIR, --record-every, --record-max-mb, --record-seconds on a board's command line;
@@ -80,7 +80,6 @@ class RunRecording {
   dataset::TumWriter pose_;
   bool with_pose_ = false;
   bool started_ = false;
-  bool recorded_ = false;  // start() succeeded at some point (stats() after finish())
   hal::Camera* camera_ = nullptr;
   hal::WheelEncoders* encoders_ = nullptr;
   // Built at start() around the board's devices.

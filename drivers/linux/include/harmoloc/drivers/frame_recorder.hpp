@@ -38,8 +38,23 @@ struct FrameRecorderCounters {
   std::uint64_t bytes = 0;     ///< bytes of frame files written
 };
 
-/// Why a recording stopped before the run ended ("" while it records).
+/// Why a recording stopped before the run ended.
 enum class RecordingStop : std::uint8_t { kNone = 0, kSizeLimit, kTimeLimit, kWriteFailed };
+
+/// "" (still recording), "size limit", "time limit" or "write failed" (the stats' words).
+constexpr const char* recording_stop_name(RecordingStop reason) {
+  switch (reason) {
+    case RecordingStop::kSizeLimit:
+      return "size limit";
+    case RecordingStop::kTimeLimit:
+      return "time limit";
+    case RecordingStop::kWriteFailed:
+      return "write failed";
+    case RecordingStop::kNone:
+      break;
+  }
+  return "";
+}
 
 class FrameRecorder {
  public:
