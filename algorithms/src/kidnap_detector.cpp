@@ -13,7 +13,7 @@ void KidnapDetector::reset() {
   window_lost_evidence_ = 0;
   evidence_run_ = 0;
   lost_run_ = 0;
-  sum_x_ = sum_y_ = 0.0;
+  sum_x_ = sum_y_ = sum_fix_x_ = sum_fix_y_ = 0.0;
   consistent_ = 0;
 }
 
@@ -43,24 +43,33 @@ KidnapVerdict KidnapDetector::step(const KidnapInput& in, const KidnapParams& p)
   bool evidence = in.fix_known && far_and_preferred;
   const bool lost_evidence =
       !in.consensus && !in.fix_known && in.contradiction && far_and_preferred;
+  const bool searched = std::isfinite(in.place_x_m) && std::isfinite(in.place_y_m);
+  const double place_x_m = searched ? in.place_x_m : in.fix_x_m;
+  const double place_y_m = searched ? in.place_y_m : in.fix_y_m;
   if (evidence) {
     // Consistent with the previous evidence (the same place, give or take the robot's motion)?
-    // If not, this frame starts a new stretch.
-    if (consistent_ > 0 &&
-        std::hypot(in.fix_x_m - last_x_, in.fix_y_m - last_y_) > p.consistency_m) {
+    // If not, this frame starts a new stretch. Either the fix or the boards' place may hold
+    // still: where the boards hardly change along the route their best place wanders by more
+    // than a fix's error from frame to frame, and where few boards are seen the fix does.
+    if (consistent_ > 0 && std::hypot(place_x_m - last_x_, place_y_m - last_y_) > p.consistency_m &&
+        std::hypot(in.fix_x_m - last_fix_x_, in.fix_y_m - last_fix_y_) > p.consistency_m) {
       consistent_ = 0;
-      sum_x_ = sum_y_ = 0.0;
+      sum_x_ = sum_y_ = sum_fix_x_ = sum_fix_y_ = 0.0;
       evidence_run_ = 0;
       window_evidence_ = 0;
     }
-    sum_x_ += in.fix_x_m;
-    sum_y_ += in.fix_y_m;
+    sum_x_ += place_x_m;
+    sum_y_ += place_y_m;
+    sum_fix_x_ += in.fix_x_m;
+    sum_fix_y_ += in.fix_y_m;
     ++consistent_;
-    last_x_ = in.fix_x_m;
-    last_y_ = in.fix_y_m;
+    last_x_ = place_x_m;
+    last_y_ = place_y_m;
+    last_fix_x_ = in.fix_x_m;
+    last_fix_y_ = in.fix_y_m;
   } else if (!evidence && evidence_run_ == 0 && window_left_ == 0) {
     consistent_ = 0;
-    sum_x_ = sum_y_ = 0.0;
+    sum_x_ = sum_y_ = sum_fix_x_ = sum_fix_y_ = 0.0;
   }
   evidence_run_ = evidence ? evidence_run_ + 1 : 0;
   lost_run_ = lost_evidence ? lost_run_ + 1 : 0;
@@ -80,8 +89,11 @@ KidnapVerdict KidnapDetector::step(const KidnapInput& in, const KidnapParams& p)
   if (confirmed || evidence_run_ >= p.divergence_frames) {
     ++counters_.kidnaps;
     if (!confirmed) ++counters_.divergences;
-    evidence_x_m_ = consistent_ > 0 ? sum_x_ / static_cast<double>(consistent_) : in.fix_x_m;
-    evidence_y_m_ = consistent_ > 0 ? sum_y_ / static_cast<double>(consistent_) : in.fix_y_m;
+    const double n = static_cast<double>(consistent_);
+    evidence_x_m_ = consistent_ > 0 ? sum_x_ / n : place_x_m;
+    evidence_y_m_ = consistent_ > 0 ? sum_y_ / n : place_y_m;
+    evidence_fix_x_m_ = consistent_ > 0 ? sum_fix_x_ / n : in.fix_x_m;
+    evidence_fix_y_m_ = consistent_ > 0 ? sum_fix_y_ / n : in.fix_y_m;
     reset();
     return KidnapVerdict::kKidnapped;
   }

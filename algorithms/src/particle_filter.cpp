@@ -27,6 +27,21 @@ void ParticleFilter::initialize(const Pose2& centre, double position_sigma_m, do
   initialized_ = true;
 }
 
+void ParticleFilter::initialize_between(const Pose2& a, const Pose2& b, double position_sigma_m,
+                                        double yaw_sigma_rad, bool uniform_yaw) {
+  const double w = 1.0 / static_cast<double>(count_);
+  for (std::size_t i = 0; i < count_; ++i) {
+    const Pose2& centre = (i % 2 == 0) ? a : b;
+    Particle& p = particles_[i];
+    p.x_m = rng_.normal(centre.x_m, position_sigma_m);
+    p.y_m = rng_.normal(centre.y_m, position_sigma_m);
+    p.yaw_rad = uniform_yaw ? rng_.uniform(-kPi, kPi)
+                            : wrap_angle_rad(rng_.normal(centre.yaw_rad, yaw_sigma_rad));
+    weights_[i] = w;
+  }
+  initialized_ = true;
+}
+
 void ParticleFilter::initialize_around_points(const float* x_m, const float* y_m, std::size_t count,
                                               double position_sigma_m) {
   if (count == 0) return;

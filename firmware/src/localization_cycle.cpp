@@ -547,8 +547,8 @@ bool LocalizationCycle::update_with_boards(
           map_.forward, observed, evidence_fix.x_m, evidence_fix.y_m, reach, estimate.x_m,
           estimate.y_m, reach, params, leave_out);
       in.preference = best.nats;
-      in.fix_x_m = best.x_m;
-      in.fix_y_m = best.y_m;
+      in.place_x_m = best.x_m;
+      in.place_y_m = best.y_m;
     }
     in.contradiction = assessment_.exceeding > 0;
     kidnap_input_ = in;
@@ -559,7 +559,8 @@ bool LocalizationCycle::update_with_boards(
     counters_.lost = k.lost;
     if (kidnap_verdict_ == algorithms::KidnapVerdict::kKidnapped) {
       if (config_.kidnap.reseed == ReseedStrategy::kAroundFix && evidence_fix.known_place)
-        reseed_around(kidnap_.evidence_x_m(), kidnap_.evidence_y_m());
+        reseed_between(kidnap_.evidence_x_m(), kidnap_.evidence_y_m(), kidnap_.evidence_fix_x_m(),
+                       kidnap_.evidence_fix_y_m());
       else
         reseed_globally();
       pending_text_ = "harmoloc: kidnap detected, relocalized";
@@ -578,12 +579,39 @@ void LocalizationCycle::reseed_around(double x_m, double y_m) {
   const double sigma_m = filter_.initialized() ? reseed_sigma_m_ : init_sigma_m_;
   filter_.initialize(Pose2{x_m, y_m, yaw}, sigma_m,
                      config_.kidnap.yaw_sigma_deg * algorithms::kPi / 180.0, !heading);
+  after_reseed();
+}
+
+void LocalizationCycle::after_reseed() {
   if (gap_ == EncoderGap::kDiffused) gap_ = EncoderGap::kReseeded;
   kidnap_.reset();
   // What the boards' motion indices learnt was learnt against the old, wrong estimate.
   reliability_.reset(board_params_);
   fix_check_.reset();
   ++reset_counter_;
+}
+
+void LocalizationCycle::reseed_between(double place_x_m, double place_y_m, double fix_x_m,
+                                       double fix_y_m) {
+  // The boards' place and the fix's place: where the boards hardly change (across a route the
+  // training never left) the boards' best place can be centimetres off while the fix is not, and
+  // elsewhere the other way round. The cloud starts on both and the next frames choose. A cloud
+  // started on the wrong one alone converges all the same, but by selecting the particles whose
+  // heading carried them towards the truth: a heading bias that the odometry then turns into
+  // position error for seconds.
+  if (std::hypot(place_x_m - fix_x_m, place_y_m - fix_y_m) <= reseed_sigma_m_) {
+    reseed_around(place_x_m, place_y_m);
+    return;
+  }
+  const algorithms::ForwardMap& f = map_.forward;
+  const bool heading = use_boards_ && f.has_heading;
+  const auto yaw_at = [&](double x_m, double y_m) {
+    return heading ? static_cast<double>(algorithms::route_heading(f, x_m, y_m)) : 0.0;
+  };
+  filter_.initialize_between(Pose2{place_x_m, place_y_m, yaw_at(place_x_m, place_y_m)},
+                             Pose2{fix_x_m, fix_y_m, yaw_at(fix_x_m, fix_y_m)}, reseed_sigma_m_,
+                             config_.kidnap.yaw_sigma_deg * algorithms::kPi / 180.0, !heading);
+  after_reseed();
 }
 
 void LocalizationCycle::reseed_globally() {
@@ -597,11 +625,7 @@ void LocalizationCycle::reseed_globally() {
     filter_.initialize_around_points(m.target_x_m.data(), m.target_y_m.data(), m.sample_count,
                                      reseed_sigma_m_);
   }
-  if (gap_ == EncoderGap::kDiffused) gap_ = EncoderGap::kReseeded;
-  kidnap_.reset();
-  reliability_.reset(board_params_);
-  fix_check_.reset();
-  ++reset_counter_;
+  after_reseed();
 }
 
 void LocalizationCycle::send(std::size_t size) {

@@ -268,6 +268,32 @@ struct Sample {
 
 }  // namespace
 
+constexpr std::size_t kTraceCycles = 400;
+
+// One line per cycle: the error along and across the robot's heading, the heading error, the
+// cloud's spread, the boards agreeing, health, the global fix's error and the kidnap test's
+// input (the boards' preference, the fix's distance, the boards' place).
+static void trace(std::size_t i, const hf::LocalizationCycle& cycle, const ha::Pose2& truth) {
+  const hf::PoseOutput& pose = cycle.pose();
+  const double dx = pose.pose.x_m - truth.x_m, dy = pose.pose.y_m - truth.y_m;
+  const double c = std::cos(truth.yaw_rad), s = std::sin(truth.yaw_rad);
+  const ha::BoardAssessment& a = cycle.board_assessment();
+  const hf::FixOutput& f = cycle.last_fix();
+  const ha::KidnapInput& k = cycle.kidnap_input();
+  std::fprintf(stderr,
+               "cycle %zu (%.2f s) error along %.2f across %.2f cm, yaw %.1f deg, sd %.2f cm, "
+               "agree %zu/%zu, health %d; fix %d %.2f %.2f cm; kidnap: %.1f nats at %.2f m, "
+               "place %.2f %.2f cm, verdict %d\n",
+               i, static_cast<double>(i % kMinute) / 30.0, 100 * (dx * c + dy * s),
+               100 * (-dx * s + dy * c),
+               ha::wrap_angle_rad(pose.pose.yaw_rad - truth.yaw_rad) * 180.0 / ha::kPi,
+               100 * std::sqrt(pose.covariance(0, 0) + pose.covariance(1, 1)), a.agreeing,
+               a.modelled, static_cast<int>(pose.health), static_cast<int>(f.present),
+               100 * (f.fix.x_m - truth.x_m), 100 * (f.fix.y_m - truth.y_m), k.preference,
+               k.fix_distance_m, 100 * (k.place_x_m - truth.x_m), 100 * (k.place_y_m - truth.y_m),
+               static_cast<int>(cycle.kidnap_verdict()));
+}
+
 TEST(SoakWithFaults, OneHourOfCyclesWithFaultsAndKidnaps) {
   ha::MapFile* map = new ha::MapFile;  // kept to the end of the process (static storage)
   harmoloc::fault::load_fixture_map("HARMOLOC_SCENARIO_WORK", "desk-shuttle.hmap", *map);
@@ -313,6 +339,11 @@ TEST(SoakWithFaults, OneHourOfCyclesWithFaultsAndKidnaps) {
   (void)harmoloc::fault::resources();  // its own first-use allocations before the measurement
   const std::uint64_t wall_start = clock.now_ns();
   std::size_t ran = 0;
+  // HARMOLOC_SOAK_TRACE=CYCLE: what the cycle saw over kTraceCycles from there (stderr), to look
+  // into the cycles the summary names.
+  const char* trace_env = std::getenv("HARMOLOC_SOAK_TRACE");
+  const std::size_t trace_from =
+      trace_env != nullptr ? std::strtoul(trace_env, nullptr, 10) : kCycles;
   for (std::size_t i = 0; i < kCycles; ++i) {
     if (i == kWarmup) start = harmoloc::fault::resources();
     if (i > kWarmup && i % (10 * kMinute) == 0)
@@ -328,6 +359,7 @@ TEST(SoakWithFaults, OneHourOfCyclesWithFaultsAndKidnaps) {
       const ha::Pose2 truth = lap.sim.run.truth(plan.frame[i]);
       s.error_m =
           static_cast<float>(std::hypot(pose.pose.x_m - truth.x_m, pose.pose.y_m - truth.y_m));
+      if (i >= trace_from && i < trace_from + kTraceCycles) trace(i, *cycle, truth);
     }
     if (!plan.link_blocked[i]) drain();
     ++ran;
@@ -348,6 +380,7 @@ TEST(SoakWithFaults, OneHourOfCyclesWithFaultsAndKidnaps) {
   std::size_t detected = 0, recovered = 0;
   double worst_recovery_s = 0.0, sum_recovery_s = 0.0;
   double worst_detection_s = 0.0, sum_detection_s = 0.0;
+  std::size_t slowest_detection_at = 0;
   for (const KidnapPlan& k : plan.kidnaps) {
     const std::size_t end_i =
         std::min(kCycles, k.cycle + static_cast<std::size_t>(kKidnapWindow_s * 30));
@@ -360,6 +393,7 @@ TEST(SoakWithFaults, OneHourOfCyclesWithFaultsAndKidnaps) {
     for (std::size_t i = k.cycle; i < end_i; ++i) {
       if (!det && samples[i].kidnaps != before) {
         const double after_s = static_cast<double>(i - k.cycle) / 30.0;
+        if (after_s > worst_detection_s) slowest_detection_at = k.cycle;
         worst_detection_s = std::max(worst_detection_s, after_s);
         sum_detection_s += after_s;
       }
@@ -470,9 +504,10 @@ TEST(SoakWithFaults, OneHourOfCyclesWithFaultsAndKidnaps) {
   std::printf(
       "worst error outside kidnap windows at cycle %zu, %.2f s into its minute; outside "
       "the 5 s after camera and encoder faults too: %.2f cm at cycle %zu, %.2f s into its "
-      "minute\n",
+      "minute; slowest kidnap detection: the kidnap at cycle %zu (HARMOLOC_SOAK_TRACE=CYCLE "
+      "traces %zu cycles from there)\n",
       worst_at, static_cast<double>(worst_at % kMinute) / 30.0, 100 * worst_clean, worst_clean_at,
-      static_cast<double>(worst_clean_at % kMinute) / 30.0);
+      static_cast<double>(worst_clean_at % kMinute) / 30.0, slowest_detection_at, kTraceCycles);
   std::ofstream("soak_faults.json") << json;
 
   // No crash, no stall, no overrun; resources flat.

@@ -142,6 +142,31 @@ TEST(ParticleFilter, InitializeSpreadsAsAsked) {
   for (int q : quadrant) EXPECT_NEAR(q, 1000, 120);
 }
 
+TEST(ParticleFilter, InitializeBetweenSharesTheCloudByHalves) {
+  auto pf = make_filter(4000, 7);
+  pf->initialize_between(ha::Pose2{1.0, -2.0, 0.5}, ha::Pose2{1.3, -2.0, 0.7}, 0.02, 0.05, false);
+  int near_a = 0, near_b = 0;
+  double yaw_a = 0.0, yaw_b = 0.0;
+  for (std::size_t i = 0; i < pf->size(); ++i) {
+    const auto& q = pf->particle(i);
+    ASSERT_NEAR(q.y_m, -2.0, 0.15);
+    if (std::fabs(q.x_m - 1.0) < 0.1) {
+      ++near_a;
+      yaw_a += q.yaw_rad;
+    } else if (std::fabs(q.x_m - 1.3) < 0.1) {
+      ++near_b;
+      yaw_b += q.yaw_rad;
+    }
+    ASSERT_DOUBLE_EQ(pf->weight(i), 1.0 / 4000.0);
+  }
+  EXPECT_EQ(near_a, 2000);
+  EXPECT_EQ(near_b, 2000);
+  EXPECT_NEAR(yaw_a / near_a, 0.5, 0.005);  // each half with its centre's heading
+  EXPECT_NEAR(yaw_b / near_b, 0.7, 0.005);
+  const ha::PoseEstimate e = pf->estimate();
+  EXPECT_NEAR(e.mean.x_m, 1.15, 0.005);
+}
+
 TEST(ParticleFilter, PointInitialisationHasZeroCovariance) {
   auto pf = make_filter(64, 3);
   pf->initialize(ha::Pose2{0.5, 0.25, -1.0}, 0.0, 0.0, false);

@@ -562,6 +562,41 @@ TEST(KidnapDetector, EvidenceMustBeOnePlace) {
   EXPECT_NEAR(d.evidence_x_m(), 2.0, 0.01);
 }
 
+// Along a stretch where the boards hardly change, their best place near the fix wanders by more
+// than the consistency distance while the fix holds still (and where few boards are seen, the
+// other way round): one of the two holding still is one place. The detector reports both means,
+// and the cloud is re-seeded on both.
+TEST(KidnapDetector, EitherTheFixOrTheBoardsPlaceMayHoldStill) {
+  ha::KidnapParams p;
+  p.consistency_m = 0.05;
+  ha::KidnapDetector d;
+  d.step(nominal(1.0), p);
+  int frames = 0;
+  ha::KidnapVerdict v = ha::KidnapVerdict::kNone;
+  while (v != ha::KidnapVerdict::kKidnapped && frames < 100) {
+    ha::KidnapInput in = kidnapped(1.0);      // the fix at (2.0, 1.0), no trigger
+    in.place_x_m = frames % 2 ? 2.08 : 1.96;  // 12 cm jumps
+    in.place_y_m = 1.0;
+    v = d.step(in, p);
+    ++frames;
+  }
+  EXPECT_EQ(frames, p.divergence_frames);
+  EXPECT_NEAR(d.evidence_x_m(), 2.02, 1e-9);
+  EXPECT_NEAR(d.evidence_fix_x_m(), 2.0, 1e-9);
+  EXPECT_NEAR(d.evidence_fix_y_m(), 1.0, 1e-9);
+
+  // Both jumping: never one place.
+  ha::KidnapDetector e;
+  e.step(nominal(1.0), p);
+  for (int i = 0; i < 4 * p.divergence_frames; ++i) {
+    ha::KidnapInput in = kidnapped(1.0);
+    in.fix_x_m = i % 2 ? 2.1 : 2.0;
+    in.place_x_m = i % 2 ? 2.2 : 2.0;
+    in.place_y_m = 1.0;
+    ASSERT_EQ(e.step(in, p), ha::KidnapVerdict::kNone) << i;
+  }
+}
+
 TEST(KidnapDetector, LongEvidenceWithoutATriggerIsADivergence) {
   const ha::KidnapParams p;
   ha::KidnapDetector d;

@@ -18,6 +18,7 @@
 /// and re-seeded over the whole map, and given lost_frames to converge before the next time.
 
 #include <cstdint>
+#include <limits>
 
 namespace harmoloc::algorithms {
 
@@ -30,8 +31,8 @@ struct KidnapParams {
   /// Evidence: the boards' log-likelihood ratio of the fix's place over the estimate's, in nats
   /// (ln 100: the frame is a hundred times likelier at the fix).
   double preference_min = 4.6;
-  /// Evidence fixes farther apart than this from one frame to the next are not the same place:
-  /// the count starts over.
+  /// Evidence farther apart than this from one frame to the next, both the fixes and the boards'
+  /// places, is not the same place: the count starts over.
   double consistency_m = 0.15;
   int divergence_frames = 8;  ///< evidence in this many frames in a row, without a trigger
   int lost_frames = 90;       ///< the same for the evidence without a fix: lost
@@ -44,6 +45,10 @@ struct KidnapInput {
   bool fix_known = false;               ///< the global fix is a known place
   double fix_distance_m = 0.0;          ///< from the global fix to the estimate
   double fix_x_m = 0.0, fix_y_m = 0.0;  ///< the global fix
+  /// Where the boards place the robot near the fix (NaN: at the fix). The evidence's consistency
+  /// is checked on this place.
+  double place_x_m = std::numeric_limits<double>::quiet_NaN();
+  double place_y_m = std::numeric_limits<double>::quiet_NaN();
   /// The boards' log-likelihood ratio of the fix's place over the estimate's (nats).
   double preference = 0.0;
   bool contradiction = false;  ///< a disagreeing board shows more area than expected
@@ -74,10 +79,14 @@ class KidnapDetector {
 
   /// Yang et al.'s P of the last frame.
   double probability() const { return probability_; }
-  /// Where the evidence of the last confirmed kidnap put the robot: the mean of its consistent
-  /// fixes.
+  /// Where the evidence of the last confirmed kidnap put the robot: the mean of the boards'
+  /// places over its consistent frames.
   double evidence_x_m() const { return evidence_x_m_; }
   double evidence_y_m() const { return evidence_y_m_; }
+  /// The mean of the global fixes over the same frames. Where the boards tell places apart
+  /// poorly (across a route, which the training never left) the fix can be the nearer of the two.
+  double evidence_fix_x_m() const { return evidence_fix_x_m_; }
+  double evidence_fix_y_m() const { return evidence_fix_y_m_; }
   const KidnapCounters& counters() const { return counters_; }
 
  private:
@@ -91,9 +100,12 @@ class KidnapDetector {
   int lost_hold_ = 0;  // frames after a lost verdict without the short (window) path; not reset()
   // The current stretch of consistent evidence: its fixes' sum and count, the last fix.
   double sum_x_ = 0.0, sum_y_ = 0.0;
+  double sum_fix_x_ = 0.0, sum_fix_y_ = 0.0;
   int consistent_ = 0;
   double last_x_ = 0.0, last_y_ = 0.0;
+  double last_fix_x_ = 0.0, last_fix_y_ = 0.0;
   double evidence_x_m_ = 0.0, evidence_y_m_ = 0.0;
+  double evidence_fix_x_m_ = 0.0, evidence_fix_y_m_ = 0.0;
   KidnapCounters counters_{};
 };
 

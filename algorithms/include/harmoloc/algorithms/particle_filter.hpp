@@ -47,6 +47,11 @@ class ParticleFilter {
                   bool uniform_yaw);
   bool initialized() const { return initialized_; }
 
+  /// As initialize(), with the particles shared between two centres, half around each (the
+  /// same yaw for both): for two candidate places that the next frames will tell apart.
+  void initialize_between(const Pose2& a, const Pose2& b, double position_sigma_m,
+                          double yaw_sigma_rad, bool uniform_yaw);
+
   /// Spreads the particles over @p count candidate positions (each particle near one of them,
   /// picked at random: Gaussian in x and y), yaw uniform. For relocalizing when all that is
   /// known is that the robot is somewhere the map was trained (its training positions). Does

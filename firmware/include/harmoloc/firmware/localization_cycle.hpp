@@ -222,9 +222,13 @@ class LocalizationCycle {
   bool update_with_boards(
       const algorithms::AreaVector& areas,
       const std::array<float, algorithms::HarmonicModel::kMaxFeatures>& features);
-  // Re-seeds: around a global fix (heading from the map where it knows one), or over the map.
+  // Re-seeds: around a global fix (heading from the map where it knows one), around both the
+  // boards' place and the fix's after a kidnap, or over the map; after_reseed() forgets what
+  // was learnt against the old cloud.
   void reseed_around(double x_m, double y_m);
+  void reseed_between(double place_x_m, double place_y_m, double fix_x_m, double fix_y_m);
   void reseed_globally();
+  void after_reseed();
   void publish_pose_estimate();
 
   const FirmwareConfig& config_;
