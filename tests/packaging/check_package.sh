@@ -102,7 +102,7 @@ unit=$work/root/lib/systemd/system/harmoloc.service
 for key in 'LimitRTPRIO=[0-9]' 'LimitMEMLOCK=infinity' 'CPUAffinity=[0-9]' 'Restart=on-failure' \
   'ExecStart=/usr/bin/harmoloc .*--config /etc/harmoloc/harmoloc.toml' \
   'ExecStart=/usr/bin/harmoloc .*--map /etc/harmoloc/map.hmap' 'WantedBy=multi-user.target' \
-  'User=harmoloc'; do
+  'User=harmoloc' 'Type=notify' 'WatchdogSec=[0-9]'; do
   check "unit sets $key" grep -q "^$key" "$unit"
 done
 if command -v systemd-analyze > /dev/null; then

@@ -34,9 +34,10 @@ add_executable(firmware_test
   ${HARMOLOC_UNIT_DIR}/pose_messages_test.cpp
   ${HARMOLOC_UNIT_DIR}/latency_histogram_test.cpp
   ${HARMOLOC_UNIT_DIR}/map_loader_test.cpp
-  ${HARMOLOC_UNIT_DIR}/device_config_test.cpp)
+  ${HARMOLOC_UNIT_DIR}/device_config_test.cpp
+  ${HARMOLOC_UNIT_DIR}/health_log_test.cpp)
 target_link_libraries(firmware_test PRIVATE harmoloc_firmware harmoloc_config harmoloc_algorithms
-  harmoloc_drivers_common harmoloc::nettle GTest::gtest_main harmoloc_warnings)
+  harmoloc_board_common harmoloc_drivers_common harmoloc::nettle GTest::gtest_main harmoloc_warnings)
 if(CMAKE_CROSSCOMPILING)
   target_compile_definitions(firmware_test PRIVATE HARMOLOC_TESTS_UNDER_QEMU_USER)
 endif()
@@ -47,7 +48,8 @@ gtest_discover_tests(firmware_test DISCOVERY_TIMEOUT 60 PROPERTIES LABELS unit)
 # runs under qemu-aarch64 too. The devices themselves are tested in the VM (tests/vm/).
 add_executable(drivers_test ${HARMOLOC_UNIT_DIR}/drivers_test.cpp
   ${HARMOLOC_UNIT_DIR}/input_file_test.cpp ${HARMOLOC_UNIT_DIR}/record_file_test.cpp
-  ${HARMOLOC_UNIT_DIR}/frame_recorder_test.cpp)
+  ${HARMOLOC_UNIT_DIR}/frame_recorder_test.cpp
+  ${HARMOLOC_UNIT_DIR}/service_notifier_test.cpp)
 target_link_libraries(drivers_test PRIVATE harmoloc_drivers_can harmoloc_drivers_v4l2
   harmoloc_drivers_common harmoloc_input_files harmoloc_algorithms GTest::gtest_main
   harmoloc_warnings)

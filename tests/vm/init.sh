@@ -62,10 +62,19 @@ echo "VMTEST-END libcamera rc=$rc"
 echo "VMTEST-BEGIN harmoloc"
 canplayer -l i -I /vm/e2e/encoders.log vcan0=can0 &
 player=$!
+# As the packaged service runs it (Type=notify, WatchdogSec): the notify socket systemd would
+# give, its messages printed as NOTIFY lines for the host to check.
+/vm/notify_listener /tmp/notify "$((${HARMOLOC_VM_SECONDS:-12} + 20))" > /tmp/notify.log &
+listener=$!
+sleep 0.2
+NOTIFY_SOCKET=/tmp/notify WATCHDOG_USEC=1000000 \
 /vm/harmoloc --config /vm/e2e/harmoloc.toml --map /vm/e2e/map.hmap --duration "${HARMOLOC_VM_SECONDS:-12}" \
   --stats /tmp/stats.json --trajectory /tmp/trajectory.tum
 rc=$?
 kill "$player" 2> /dev/null
+sleep 0.3
+kill "$listener" 2> /dev/null
+cat /tmp/notify.log
 echo "VMTEST-END harmoloc rc=$rc"
 echo "VMSTATS-BEGIN"
 cat /tmp/stats.json

@@ -151,7 +151,7 @@ T1=$(date +%s.%N)
 PRESET=$([ "$ARCH" = x86_64 ] && echo linux || echo aarch64)
 say "building the Linux board for $ARCH (build/$(basename "$LINUX_BUILD")): harmoloc, vm_drivers_test"
 cmake --preset "$PRESET" > /dev/null
-cmake --build --preset "$PRESET" -j "$(nproc)" --target harmoloc vm_drivers_test vm_libcamera_test > "$CACHE/build-$ARCH.log" 2>&1 ||
+cmake --build --preset "$PRESET" -j "$(nproc)" --target harmoloc vm_drivers_test vm_libcamera_test notify_listener > "$CACHE/build-$ARCH.log" 2>&1 ||
   { tail -30 "$CACHE/build-$ARCH.log" >&2; echo "FAIL: the Linux board did not build" >&2; exit 1; }
 say "Linux board built ($(elapsed "$T1") s)"
 
@@ -179,7 +179,8 @@ for applet in $(busybox --list); do
   [ -e "$IRD/bin/$applet" ] || ln -s busybox "$IRD/bin/$applet"
 done
 cp tests/vm/init.sh "$IRD/init"; chmod +x "$IRD/init"
-cp "$LINUX_BUILD/bin/harmoloc" "$LINUX_BUILD/bin/vm_drivers_test" "$LINUX_BUILD/bin/vm_libcamera_test" "$CANPLAYER" "$IRD/vm/"
+cp "$LINUX_BUILD/bin/harmoloc" "$LINUX_BUILD/bin/vm_drivers_test" "$LINUX_BUILD/bin/vm_libcamera_test" \
+  "$LINUX_BUILD/bin/notify_listener" "$CANPLAYER" "$IRD/vm/"
 # libcamera's IPA modules, their proxies and configuration, where libcamera looks for them.
 cp -a "$IPA/usr" "$IRD/"
 ln -sf /vm/canplayer "$IRD/usr/bin/canplayer"
@@ -221,7 +222,7 @@ needed_closure() {
     done
   done
 }
-for lib in $(needed_closure "$IRD/vm/harmoloc" "$IRD/vm/vm_drivers_test" "$IRD/vm/vm_libcamera_test" "$IRD/vm/canplayer" \
+for lib in $(needed_closure "$IRD/vm/harmoloc" "$IRD/vm/vm_drivers_test" "$IRD/vm/vm_libcamera_test" "$IRD/vm/notify_listener" "$IRD/vm/canplayer" \
   "$IRD"/usr/lib/*/libcamera/ipa_vimc.so "$IRD"/usr/lib/*/libcamera/vimc_ipa_proxy | sort -u); do
   mkdir -p "$IRD$(dirname "$lib")"
   cp -L "$lib" "$IRD$lib"
@@ -300,6 +301,21 @@ grep -q '^VMTEST-END libcamera rc=0' "$CONSOLE" || {
   fail "the libcamera driver's test against vimc failed in the VM (vm_libcamera_test)"
 }
 grep -q '^VMTEST-END harmoloc rc=0' "$CONSOLE" || fail "harmoloc (Linux board) did not complete its run in the VM: $(grep -m3 'harmoloc' "$CONSOLE" | tr '\n' ' ')"
+# The service notifications (Type=notify with a 1 s watchdog): READY first, the watchdog fed all
+# along (every 0.5 s; at least a quarter of that is asked, as the VM's emulated CPU may lag), a
+# STATUS with the first health change (vivid shows no boards: odometry only), STOPPING last.
+NOTIFY_LOG=$(sed -n '/^VMTEST-BEGIN harmoloc/,/^VMTEST-END harmoloc/p' "$CONSOLE" | tr -d '\r' | grep '^NOTIFY ' || true)
+say "service notifications in the VM: $(grep -c 'WATCHDOG=1' <<< "$NOTIFY_LOG") watchdog, $(grep -m1 'READY=1' <<< "$NOTIFY_LOG" | cut -d' ' -f3-)"
+python3 - "${HARMOLOC_VM_SECONDS:-12}" "$NOTIFY_LOG" <<'PY' || fail "the service notifications (sd_notify) in the VM: $(head -c 600 <<< "$NOTIFY_LOG")"
+import sys
+seconds, lines = float(sys.argv[1]), [l.split(' ', 2)[2] for l in sys.argv[2].splitlines() if l.count(' ') >= 2]
+watchdogs = sum(1 for l in lines if l == 'WATCHDOG=1')
+ok = (bool(lines) and lines[0].startswith('READY=1|STATUS=localizing')
+      and lines[-1].startswith('STOPPING=1|STATUS=')
+      and any(l.startswith('STATUS=harmoloc: health ') for l in lines)
+      and watchdogs >= seconds / 2)
+sys.exit(0 if ok else 1)
+PY
 # The recording on the robot: every file there, frames (vivid's YUYV) and counts that agree.
 REC_LINE=$(grep -m1 '^VMTEST-END record' "$CONSOLE" || true)
 say "recording in the VM: ${REC_LINE#VMTEST-END record }"

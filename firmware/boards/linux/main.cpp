@@ -18,6 +18,7 @@
 #include <CLI/CLI.hpp>
 
 #include "board_run.hpp"
+#include "health_log.hpp"
 #include "run_recording.hpp"
 
 #include "harmoloc/dataset/encoder_csv.hpp"
@@ -25,6 +26,7 @@
 #include "harmoloc/drivers/realtime_setup.hpp"
 #include "harmoloc/drivers/record_file.hpp"
 #include "harmoloc/drivers/serial_link.hpp"
+#include "harmoloc/drivers/service_notifier.hpp"
 #include "harmoloc/drivers/socketcan_encoders.hpp"
 #include "harmoloc/drivers/stop_signals.hpp"
 #include "harmoloc/drivers/v4l2_camera.hpp"
@@ -277,6 +279,11 @@ int main(int argc, char** argv) {
   }
 
   drivers::install_stop_signals();
+  // Type=notify: READY once everything above has been checked, the watchdog fed from the loop.
+  static drivers::ServiceNotifier notifier;
+  if (const std::string e = notifier.open(); !e.empty()) return fail(e);
+  static boards::HealthLog health_log;
+  health_log.start();
 
   firmware::RunCounters run;
   long unused_peak = 0;
@@ -293,6 +300,12 @@ int main(int argc, char** argv) {
   bool any_pose = false;
   int trajectory_error = 0;  // errno of the trajectory's first failed write
   run.ended = "camera ended";
+  {
+    char status[128];
+    std::snprintf(status, sizeof status, "localizing at %.0f Hz, %zu particles, waiting for a fix",
+                  config.cycle.rate_hz, config.filter.particles);
+    notifier.ready(status);
+  }
   for (;;) {
     if (drivers::stop_signal() != 0) {
       run.ended = drivers::signal_name(drivers::stop_signal());
@@ -302,6 +315,12 @@ int main(int argc, char** argv) {
     ++done;
     const firmware::PoseOutput& out = cycle->pose();
     any_pose = any_pose || out.valid;
+    const std::uint64_t now_ns = clock.now_ns();
+    notifier.feed(now_ns);
+    if (!quiet) {
+      if (const char* line = health_log.observe(out.health, cycle->overrun_alarm(), now_ns))
+        notifier.status(line);
+    }
     recording.after_cycle(*cycle);
     if (trajectory != nullptr && out.valid) {
       const double yaw_half = 0.5 * out.pose.yaw_rad;
@@ -323,6 +342,11 @@ int main(int argc, char** argv) {
       run.ended = "duration";
       break;
     }
+  }
+  {
+    char status[96];
+    std::snprintf(status, sizeof status, "stopping: %s", run.ended);
+    notifier.stopping(status);
   }
   boards::read_memory(run.rss_kb_end, run.peak_rss_kb);
   run.open_fds_end = boards::count_open_fds();
