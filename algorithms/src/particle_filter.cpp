@@ -15,16 +15,7 @@ void ParticleFilter::configure(std::size_t particle_count, std::uint64_t seed,
 
 void ParticleFilter::initialize(const Pose2& centre, double position_sigma_m, double yaw_sigma_rad,
                                 bool uniform_yaw) {
-  const double w = 1.0 / static_cast<double>(count_);
-  for (std::size_t i = 0; i < count_; ++i) {
-    Particle& p = particles_[i];
-    p.x_m = rng_.normal(centre.x_m, position_sigma_m);
-    p.y_m = rng_.normal(centre.y_m, position_sigma_m);
-    p.yaw_rad = uniform_yaw ? rng_.uniform(-kPi, kPi)
-                            : wrap_angle_rad(rng_.normal(centre.yaw_rad, yaw_sigma_rad));
-    weights_[i] = w;
-  }
-  initialized_ = true;
+  initialize_between(centre, centre, position_sigma_m, yaw_sigma_rad, uniform_yaw);
 }
 
 void ParticleFilter::initialize_between(const Pose2& a, const Pose2& b, double position_sigma_m,
