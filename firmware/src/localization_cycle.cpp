@@ -572,13 +572,24 @@ bool LocalizationCycle::update_with_boards(
   return assessment_.consensus || robust_fix_.known_place;
 }
 
+bool LocalizationCycle::route_heading_known() const {
+  return use_boards_ && map_.forward.has_heading;
+}
+
+algorithms::Pose2 LocalizationCycle::route_pose(double x_m, double y_m) const {
+  const double yaw = route_heading_known()
+                         ? static_cast<double>(algorithms::route_heading(map_.forward, x_m, y_m))
+                         : 0.0;
+  return Pose2{x_m, y_m, yaw};
+}
+
+double LocalizationCycle::reseed_yaw_sigma_rad() const {
+  return config_.kidnap.yaw_sigma_deg * algorithms::kPi / 180.0;
+}
+
 void LocalizationCycle::reseed_around(double x_m, double y_m) {
-  const algorithms::ForwardMap& f = map_.forward;
-  const bool heading = use_boards_ && f.has_heading;
-  const double yaw = heading ? static_cast<double>(algorithms::route_heading(f, x_m, y_m)) : 0.0;
   const double sigma_m = filter_.initialized() ? reseed_sigma_m_ : init_sigma_m_;
-  filter_.initialize(Pose2{x_m, y_m, yaw}, sigma_m,
-                     config_.kidnap.yaw_sigma_deg * algorithms::kPi / 180.0, !heading);
+  filter_.initialize(route_pose(x_m, y_m), sigma_m, reseed_yaw_sigma_rad(), !route_heading_known());
   after_reseed();
 }
 
@@ -603,14 +614,8 @@ void LocalizationCycle::reseed_between(double place_x_m, double place_y_m, doubl
     reseed_around(place_x_m, place_y_m);
     return;
   }
-  const algorithms::ForwardMap& f = map_.forward;
-  const bool heading = use_boards_ && f.has_heading;
-  const auto yaw_at = [&](double x_m, double y_m) {
-    return heading ? static_cast<double>(algorithms::route_heading(f, x_m, y_m)) : 0.0;
-  };
-  filter_.initialize_between(Pose2{place_x_m, place_y_m, yaw_at(place_x_m, place_y_m)},
-                             Pose2{fix_x_m, fix_y_m, yaw_at(fix_x_m, fix_y_m)}, reseed_sigma_m_,
-                             config_.kidnap.yaw_sigma_deg * algorithms::kPi / 180.0, !heading);
+  filter_.initialize_between(route_pose(place_x_m, place_y_m), route_pose(fix_x_m, fix_y_m),
+                             reseed_sigma_m_, reseed_yaw_sigma_rad(), !route_heading_known());
   after_reseed();
 }
 

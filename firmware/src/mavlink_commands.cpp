@@ -103,14 +103,8 @@ mavlink::MavResult LocalizationCycle::relocalize(std::int32_t& how) {
     // The camera sees a trained place now: that fix is a global position (Yang et al.'s recovery,
     // with the harmonic localizer as the global guess). The heading is the training run's there
     // when the map knows it, else unknown.
-    const algorithms::ForwardMap& f = map_.forward;
-    const bool heading = use_boards_ && f.has_heading;
-    const double yaw = heading ? static_cast<double>(algorithms::route_heading(
-                                     f, last_known_fix_.x_m, last_known_fix_.y_m))
-                               : 0.0;
-    reseed_ = Reseed{Reseed::Kind::kAround,
-                     algorithms::Pose2{last_known_fix_.x_m, last_known_fix_.y_m, yaw}, sigma_m,
-                     config_.kidnap.yaw_sigma_deg * algorithms::kPi / 180.0, !heading};
+    reseed_ = Reseed{Reseed::Kind::kAround, route_pose(last_known_fix_.x_m, last_known_fix_.y_m),
+                     sigma_m, reseed_yaw_sigma_rad(), !route_heading_known()};
     how = kRelocalizedAroundFix;
   } else {
     // No trusted fix: the robot is somewhere on the trained route, nothing more is known.

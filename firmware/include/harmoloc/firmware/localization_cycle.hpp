@@ -229,6 +229,12 @@ class LocalizationCycle {
   void reseed_between(double place_x_m, double place_y_m, double fix_x_m, double fix_y_m);
   void reseed_globally();
   void after_reseed();
+  // Whether the map knows the training run's heading (and the boards are used): a re-seed then
+  // takes it at its centre, else the heading is left unknown.
+  bool route_heading_known() const;
+  // (x, y) with the training run's heading there when route_heading_known(), else 0.
+  algorithms::Pose2 route_pose(double x_m, double y_m) const;
+  double reseed_yaw_sigma_rad() const;
   void publish_pose_estimate();
 
   const FirmwareConfig& config_;
