@@ -4,6 +4,9 @@
 #include <cmath>
 #include <sstream>
 
+#include "harmoloc/sim_host/svg.hpp"
+#include "harmoloc/sim_host/svg_ticks.hpp"
+
 namespace harmoloc::sim_host {
 
 std::string line_chart(const std::string& title, const std::string& x_label,
@@ -15,15 +18,8 @@ std::string line_chart(const std::string& title, const std::string& x_label,
   double y_max = reference > 0 ? reference * 1.15 : 0.0;
   for (const auto& s : series)
     for (double v : s.y) y_max = std::max(y_max, v);
-  // Round ticks: a step of 1, 2 or 5 times a power of ten, five steps or fewer.
-  double step = std::pow(10.0, std::floor(std::log10(y_max <= 0 ? 1.0 : y_max / 5.0)));
-  for (double f : {1.0, 2.0, 5.0, 10.0}) {
-    if (f * step * 5.0 >= y_max) {
-      step *= f;
-      break;
-    }
-  }
-  y_max = step * 5.0;
+  // The y axis is always five steps from zero, so the top is a round number too.
+  y_max = svg::covering_step(y_max, 5.0) * 5.0;
   const double x_min = x.front(), x_max = x.back();
   const auto px = [&](double v) {
     return left + (w - left - right) * (x_max > x_min ? (v - x_min) / (x_max - x_min) : 0.5);
@@ -34,13 +30,14 @@ std::string line_chart(const std::string& title, const std::string& x_label,
   o << "<svg xmlns='http://www.w3.org/2000/svg' width='" << w << "' height='" << h
     << "' font-family='sans-serif' font-size='12'>\n<rect width='100%' height='100%' "
        "fill='white'/>\n<text x='"
-    << w / 2 << "' y='20' text-anchor='middle' font-size='14'>" << title << "</text>\n";
+    << w / 2 << "' y='20' text-anchor='middle' font-size='14'>" << svg::escape(title)
+    << "</text>\n";
   for (const Span& sp : spans) {
     const double a = std::clamp(px(sp.from), left, w - right);
     const double b = std::clamp(px(sp.to), left, w - right);
     o << "<rect x='" << a << "' y='" << top << "' width='" << std::max(1.0, b - a) << "' height='"
       << h - top - bottom << "' fill='#f2e6c9'/>\n<text x='" << a + 3 << "' y='" << top + 12
-      << "' fill='#8a6d2b'>" << sp.label << "</text>\n";
+      << "' fill='#8a6d2b'>" << svg::escape(sp.label) << "</text>\n";
   }
   for (int i = 0; i <= 5; ++i) {
     const double v = y_max * i / 5.0;
@@ -52,13 +49,7 @@ std::string line_chart(const std::string& title, const std::string& x_label,
   std::vector<double> ticks = x;
   if (x.size() > 12) {
     ticks.clear();
-    double xs = std::pow(10.0, std::floor(std::log10((x_max - x_min) / 8.0)));
-    for (double f : {1.0, 2.0, 5.0, 10.0}) {
-      if ((x_max - x_min) / (f * xs) <= 10.0) {
-        xs *= f;
-        break;
-      }
-    }
+    const double xs = svg::covering_step(x_max - x_min, 10.0, 8.0);
     for (double v = std::ceil(x_min / xs) * xs; v <= x_max; v += xs) ticks.push_back(v);
   }
   for (double v : ticks) {
@@ -66,13 +57,14 @@ std::string line_chart(const std::string& title, const std::string& x_label,
       << "</text>\n";
   }
   o << "<text x='" << (left + w - right) / 2 << "' y='" << h - 12 << "' text-anchor='middle'>"
-    << x_label << "</text>\n<text x='16' y='" << (top + h - bottom) / 2
+    << svg::escape(x_label) << "</text>\n<text x='16' y='" << (top + h - bottom) / 2
     << "' text-anchor='middle' transform='rotate(-90 16 " << (top + h - bottom) / 2 << ")'>"
-    << y_label << "</text>\n";
+    << svg::escape(y_label) << "</text>\n";
   if (reference > 0) {
     o << "<line x1='" << left << "' x2='" << w - right << "' y1='" << py(reference) << "' y2='"
       << py(reference) << "' stroke='#999' stroke-dasharray='6 4'/>\n<text x='" << w - right + 8
-      << "' y='" << py(reference) + 4 << "' fill='#666'>" << reference_label << "</text>\n";
+      << "' y='" << py(reference) + 4 << "' fill='#666'>" << svg::escape(reference_label)
+      << "</text>\n";
   }
   int row = 0;
   for (const auto& s : series) {
@@ -85,7 +77,8 @@ std::string line_chart(const std::string& title, const std::string& x_label,
         << "'/>\n";
     o << "<line x1='" << w - right + 8 << "' x2='" << w - right + 28 << "' y1='" << top + 20 * row
       << "' y2='" << top + 20 * row << "' stroke='" << s.colour << "' stroke-width='2'/><text x='"
-      << w - right + 34 << "' y='" << top + 20 * row + 4 << "'>" << s.name << "</text>\n";
+      << w - right + 34 << "' y='" << top + 20 * row + 4 << "'>" << svg::escape(s.name)
+      << "</text>\n";
     ++row;
   }
   o << "</svg>\n";

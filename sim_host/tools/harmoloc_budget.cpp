@@ -7,7 +7,7 @@
 
 #include "harmoloc/drivers/input_file.hpp"
 #include "harmoloc/firmware/cli.hpp"
-#include "harmoloc/sim_host/report.hpp"
+#include "harmoloc/sim_host/run_stats.hpp"
 
 int main(int argc, char** argv) {
   using namespace harmoloc::sim_host;

@@ -1,6 +1,8 @@
 #pragma once
 /// @file A small SVG line chart for the host tools' reports: one x axis, one or more series, an
-/// optional dashed reference line (a target or a bound).
+/// optional dashed reference line (a target or a bound). Its ticks and escaping are the SVG
+/// toolkit's (svg_ticks.hpp, svg.hpp); its own compact markup is kept so that charts already
+/// published (docs/images) do not change.
 
 #include <string>
 #include <vector>

@@ -1,0 +1,200 @@
+// The report's HTML page: self-contained (inline CSS, plots as relative <img>), so that the
+// folder can be copied or mailed and opened anywhere without a server.
+#include "harmoloc/sim_host/report.hpp"
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "format.hpp"
+#include "harmoloc/sim_host/svg.hpp"
+
+namespace harmoloc::sim_host {
+
+using report_text::budget;
+using report_text::cell;
+using report_text::format;
+using report_text::seconds;
+using svg::escape;
+
+namespace {
+
+const char* const kCss = R"(
+body { font-family: "DejaVu Sans", Helvetica, Arial, sans-serif; color: #222; margin: 2em auto;
+       max-width: 940px; padding: 0 1em; line-height: 1.4; }
+h1 { font-size: 1.7em; margin-bottom: 0.1em; }
+h2 { font-size: 1.25em; margin-top: 1.8em; border-bottom: 1px solid #ddd; padding-bottom: 0.2em; }
+p.subtitle { color: #555; margin-top: 0; font-size: 1.1em; }
+table { border-collapse: collapse; margin: 0.6em 0; font-size: 0.95em; }
+th, td { padding: 0.25em 0.8em; border-bottom: 1px solid #e4e4e4; text-align: right; }
+th { background: #f4f4f4; }
+td:first-child, th:first-child { text-align: left; }
+td.over { color: #c62828; font-weight: bold; }
+.files td { text-align: left; font-family: "DejaVu Sans Mono", monospace; font-size: 0.9em; }
+figure { margin: 1.2em 0; }
+figure img { max-width: 100%; border: 1px solid #e4e4e4; }
+figcaption { color: #555; font-size: 0.9em; }
+.note { color: #555; font-size: 0.9em; }
+.sections { display: flex; flex-wrap: wrap; gap: 0 2em; align-items: flex-start; }
+)";
+
+void html_row(std::string& out, const std::string& label, const std::vector<std::string>& cells,
+              const std::vector<bool>& over = {}) {
+  out += "<tr><td>" + escape(label) + "</td>";
+  for (std::size_t i = 0; i < cells.size(); ++i) {
+    const bool red = i < over.size() && over[i];
+    out += red ? "<td class=\"over\">" : "<td>";
+    out += escape(cells[i]) + "</td>";
+  }
+  out += "</tr>\n";
+}
+
+}  // namespace
+
+std::string index_html(const Report& report, const std::vector<std::string>& images) {
+  std::string out;
+  out +=
+      "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
+      "<title>harmoloc run report</title>\n<style>";
+  out += kCss;
+  out += "</style>\n</head>\n<body>\n<h1>harmoloc run report</h1>\n";
+  if (!report.inputs.title.empty()) {
+    out += "<p class=\"subtitle\">" + escape(report.inputs.title) + "</p>\n";
+  }
+
+  // Accuracy table: one column per scored set.
+  struct Column {
+    std::string name;
+    const TrajectoryErrors* errors;
+    bool heading;
+  };
+  std::vector<Column> columns = {{"fused estimate", &report.estimate_all, true}};
+  const double skip = report.inputs.skip_initial_s;
+  if (report.estimate_converged) {
+    columns.push_back({"fused, after " + seconds(skip), &*report.estimate_converged, true});
+  }
+  if (report.fixes_all) columns.push_back({"harmonic fixes", &*report.fixes_all, false});
+  if (report.fixes_converged) {
+    columns.push_back({"fixes, after " + seconds(skip), &*report.fixes_converged, false});
+  }
+  out += "<h2>Accuracy against ground truth</h2>\n<table>\n<tr><th></th>";
+  for (const Column& c : columns) out += "<th>" + escape(c.name) + "</th>";
+  out += "</tr>\n";
+  const auto row = [&](const std::string& label, auto value, bool heading_only = false) {
+    std::vector<std::string> cells;
+    for (const Column& c : columns) {
+      cells.push_back(heading_only && !c.heading ? "—" : value(*c.errors));
+    }
+    html_row(out, label, cells);
+  };
+  row("poses scored", [](const TrajectoryErrors& e) { return std::to_string(e.count); });
+  row("RMSE x (cm)", [](const TrajectoryErrors& e) { return cell(e.rmse_x_m * 100.0, 2); });
+  row("RMSE y (cm)", [](const TrajectoryErrors& e) { return cell(e.rmse_y_m * 100.0, 2); });
+  row("RMSE position (cm)",
+      [](const TrajectoryErrors& e) { return cell(e.rmse_position_m * 100.0, 2); });
+  row("MSE x (cm²)", [](const TrajectoryErrors& e) { return cell(e.mse_x_cm2, 2); });
+  row("MSE y (cm²)", [](const TrajectoryErrors& e) { return cell(e.mse_y_cm2, 2); });
+  row("mean position error (cm)",
+      [](const TrajectoryErrors& e) { return cell(e.mean_position_m * 100.0, 2); });
+  row("p95 position error (cm)",
+      [](const TrajectoryErrors& e) { return cell(e.p95_position_m * 100.0, 2); });
+  row("max position error (cm)",
+      [](const TrajectoryErrors& e) { return cell(e.max_position_m * 100.0, 2); });
+  row(
+      "RMSE heading (deg)", [](const TrajectoryErrors& e) { return cell(e.rmse_heading_deg, 2); },
+      true);
+  row(
+      "max heading error (deg)",
+      [](const TrajectoryErrors& e) { return cell(e.max_heading_deg, 2); }, true);
+  out += "</table>\n";
+  std::string note = "Each pose is compared with the ground truth interpolated at its time.";
+  if (report.estimate_all.outside_truth > 0) {
+    note += format(" %zu estimate poses outside the ground truth's time span were not scored.",
+                   report.estimate_all.outside_truth);
+  }
+  if (skip > 0.0) {
+    note += " The “after” columns leave out the first " + seconds(skip) +
+            " of the ground truth (convergence).";
+  }
+  note += " The harmonic localizer gives no heading.";
+  out += "<p class=\"note\">" + escape(note) + "</p>\n";
+
+  if (report.stats) {
+    const RunStats& s = *report.stats;
+    out += "<h2>Run and timing</h2>\n<table>\n";
+    const auto opt = [](const std::optional<std::uint64_t>& v) {
+      return v ? std::to_string(*v) : std::string("n/a");
+    };
+    if (!s.harmoloc_version.empty()) html_row(out, "harmoloc version", {s.harmoloc_version});
+    if (!s.board.empty()) html_row(out, "board", {s.board});
+    html_row(out, "frames", {opt(s.frames)});
+    html_row(out, "cycles", {opt(s.cycles)});
+    if (s.rate_hz) html_row(out, "rate", {format("%g Hz", *s.rate_hz)});
+    html_row(out, "budget per cycle", {budget(s.budget_us)});
+    html_row(out, "overruns", {opt(s.overruns)}, {s.overruns && *s.overruns > 0});
+    for (const auto& [name, count] : s.degraded) {
+      html_row(out, "degraded: " + name + " (cycles)", {std::to_string(count)}, {count > 0});
+    }
+    if (s.localizer_fixes) html_row(out, "harmonic fixes", {opt(s.localizer_fixes)});
+    if (s.localizer_unknown_place) {
+      html_row(out, "unknown place (fix refused)", {opt(s.localizer_unknown_place)});
+    }
+    out += "</table>\n";
+
+    out +=
+        "<table>\n<tr><th>stage (µs)</th><th>median</th><th>p99</th><th>p99.9</th>"
+        "<th>max</th><th>mean</th><th>p99 / budget</th></tr>\n";
+    for (const StageTiming& st : s.stages) {
+      const bool over = std::isfinite(st.max_us) && st.max_us > s.budget_us;
+      html_row(out, st.name,
+               {cell(st.median_us, 1), cell(st.p99_us, 1), cell(st.p999_us, 1), cell(st.max_us, 1),
+                cell(st.mean_us, 1), cell(st.p99_us / s.budget_us * 100.0, 2) + " %"},
+               {false, false, false, over, false, false});
+    }
+    out += "</table>\n<p class=\"note\">" +
+           escape("Budget " + budget(s.budget_us) +
+                  " per cycle; a maximum above it is shown in red.") +
+           "</p>\n";
+  }
+
+  for (const std::string& image : images) {
+    std::string caption;
+    if (image == "trajectory.svg") {
+      caption = "Ground truth and fused estimate in the map frame (metres, equal aspect).";
+    } else if (image == "error.svg") {
+      caption = "Position error (cm) and signed heading error (deg) over time.";
+    } else if (image == "timing.svg") {
+      caption = "Histogram of the whole-cycle compute time with its median and p99.";
+    } else if (image == "stages.svg") {
+      caption = "Median and p99 compute time of each stage of the cycle.";
+    }
+    out += "<figure><img src=\"" + escape(image) + "\" alt=\"" + escape(caption) +
+           "\"><figcaption>" + escape(caption) + "</figcaption></figure>\n";
+  }
+
+  if (report.stats && !report.stats->sections.empty()) {
+    out += "<h2>Other statistics</h2>\n<div class=\"sections\">\n";
+    for (const StatsSection& section : report.stats->sections) {
+      if (section.entries.empty()) continue;
+      out += "<table>\n<tr><th>" + escape(section.name) + "</th><th></th></tr>\n";
+      for (const auto& [key, value] : section.entries) html_row(out, key, {value});
+      out += "</table>\n";
+    }
+    out += "</div>\n";
+  }
+
+  out += "<h2>Inputs</h2>\n<table class=\"files\">\n";
+  html_row(out, "ground truth", {report.inputs.truth_path});
+  html_row(out, "fused estimate", {report.inputs.estimate_path});
+  if (!report.inputs.fixes_path.empty()) {
+    html_row(out, "harmonic fixes", {report.inputs.fixes_path});
+  }
+  if (!report.inputs.stats_path.empty()) html_row(out, "stats", {report.inputs.stats_path});
+  out +=
+      "</table>\n<p class=\"note\">Written by harmoloc-report. The numbers are also in "
+      "<a href=\"summary.json\">summary.json</a> and <a href=\"summary.txt\">summary.txt</a>."
+      "</p>\n</body>\n</html>\n";
+  return out;
+}
+
+}  // namespace harmoloc::sim_host
