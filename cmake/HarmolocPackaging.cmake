@@ -1,9 +1,7 @@
 # Install rules and the Debian package of a Linux board build (docs/deploy.md): the firmware, the
 # tools a robot needs, a default config and a systemd unit. `./run package` builds one .deb per
 # target architecture into build/packages/; tests/packaging/check_package.sh checks them.
-include(GNUInstallDirs)
-
-set(HARMOLOC_PACKAGING_DIR ${PROJECT_SOURCE_DIR}/packaging)
+include(HarmolocDebian)
 
 # The firmware itself: the Linux board's executable, once that board has one.
 if(TARGET harmoloc)
@@ -28,7 +26,11 @@ install(FILES
   ${PROJECT_SOURCE_DIR}/docs/wire-protocol.md
   ${PROJECT_SOURCE_DIR}/docs/stats-format.md
   DESTINATION ${CMAKE_INSTALL_DOCDIR})
-install(FILES ${PROJECT_SOURCE_DIR}/LICENSE DESTINATION ${CMAKE_INSTALL_DOCDIR} RENAME copyright)
+harmoloc_debian_docs(harmoloc)
+harmoloc_man_pages(
+  harmoloc "localize a mobile robot from a camera and its wheel encoders (the firmware)"
+  harmoloc-budget "per-stage cycle time against the compute budget, from harmoloc's stats"
+  harmoloc-monitor "show harmoloc's MAVLink pose stream and send it commands")
 
 # Debian architecture of the target: from the toolchain's multiarch triplet, else the build
 # machine's own.
@@ -44,12 +46,14 @@ endif()
 set(CPACK_GENERATOR DEB)
 set(CPACK_PACKAGE_NAME harmoloc)
 set(CPACK_PACKAGE_VERSION ${PROJECT_VERSION})
-set(CPACK_PACKAGE_CONTACT "harmoloc maintainers <harmoloc@localhost>")
+set(CPACK_PACKAGE_CONTACT "${HARMOLOC_MAINTAINER}")
 set(CPACK_PACKAGE_DESCRIPTION_SUMMARY "visual localization firmware for mobile robots (camera + wheel encoders)")
 string(CONCAT CPACK_PACKAGE_DESCRIPTION
-  "Localizes a mobile robot at 30 Hz from a monocular camera and its wheel encoders: board areas\n"
-  "in the raw frame, a precomputed harmonic localizer and a particle filter. The pose goes out as\n"
-  "MAVLink v2 on a serial line. Started at boot by harmoloc.service with real-time limits.")
+  "Localizes a mobile robot at 30 Hz from a monocular camera and its wheel\n"
+  "encoders: board areas in the raw frame, a precomputed harmonic localizer and a\n"
+  "particle filter. The pose goes out as MAVLink v2 on a serial line. Started at\n"
+  "boot by harmoloc.service with real-time limits.")
+harmoloc_check_description("${CPACK_PACKAGE_DESCRIPTION}")
 set(CPACK_PACKAGE_FILE_NAME harmoloc_${PROJECT_VERSION}_${HARMOLOC_DEB_ARCH})
 set(CPACK_PACKAGING_INSTALL_PREFIX /usr)
 set(CPACK_DEBIAN_PACKAGE_ARCHITECTURE ${HARMOLOC_DEB_ARCH})
@@ -57,9 +61,10 @@ set(CPACK_DEBIAN_PACKAGE_SECTION misc)
 set(CPACK_DEBIAN_PACKAGE_PRIORITY optional)
 # Shared-library dependencies from dpkg-shlibdeps, which reads the target architecture from the
 # binaries and finds its libraries among the installed multiarch packages; passwd for the
-# system user the package makes.
+# system user the package makes; init-system-helpers for deb-systemd-invoke in the maintainer
+# scripts.
 set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
-set(CPACK_DEBIAN_PACKAGE_DEPENDS "passwd")
+set(CPACK_DEBIAN_PACKAGE_DEPENDS "passwd, init-system-helpers (>= 1.52)")
 set(CPACK_DEBIAN_PACKAGE_SUGGESTS "can-utils")
 set(CPACK_DEBIAN_PACKAGE_CONTROL_STRICT_PERMISSION ON)
 set(HARMOLOC_CONTROL_DIR ${PROJECT_BINARY_DIR}/debian-control)

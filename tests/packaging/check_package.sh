@@ -9,6 +9,7 @@
 # - every packaged binary runs `--help` under qemu-user for its architecture (except one that
 #   links libcamera: that hangs under qemu-user), and every option the unit and the defaults file
 #   pass to harmoloc is one that it takes (from --help, else from the binary's strings).
+# - a manual page for every packaged program, the changelog, and lintian with no error or warning.
 # Prints one line per check and "N passed, N failed" at the end; exits 1 on any failure.
 set -uo pipefail
 deb=$1 build=$2
@@ -132,6 +133,10 @@ if [ $firmware -eq 1 ]; then
 else
   echo "     not checked without the firmware: harmoloc takes $(echo $opts)"
 fi
+
+# ---- Debian policy: manual pages, changelog, lintian ----
+source "$root/tests/packaging/debian_checks.sh"
+debian_checks "$deb" harmoloc "$work/root" "$work/contents"
 
 echo "$pass passed, $fail failed"
 [ $fail -eq 0 ]
