@@ -7,6 +7,8 @@
 
 #include <gtest/gtest.h>
 
+#include "harmoloc/dataset/frame_index.hpp"
+#include "harmoloc/dataset/metadata.hpp"
 #include "harmoloc/firmware/config.hpp"
 #include "harmoloc/sim_host/colour_preview.hpp"
 #include "harmoloc/sim_host/colour_windows.hpp"
@@ -362,6 +364,45 @@ TEST(ColourWindows, AutomaticFindsEveryBoardOfRandomScenes) {
           << "board " << t << ": IoU > 0.8 on " << frames_good << " of " << frames_shown;
     }
   }
+}
+
+}  // namespace
+
+namespace {
+
+// A robot's recording is YUYV: decoded as OpenCV (and the firmware's segmentation) decode it,
+// and every frame file checked when the folder is opened.
+TEST(ColourWindows, ReadsYuyvRecordingsAndRefusesBadFrames) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / "harmoloc_colour_windows_yuyv";
+  fs::remove_all(dir);
+  fs::create_directories(dir / "frames");
+  harmoloc::dataset::DatasetMetadata meta;
+  meta.image_width_px = 4;
+  meta.image_height_px = 2;
+  meta.pixel_format = harmoloc::hal::PixelFormat::kYuyv;
+  harmoloc::dataset::write_metadata(dir.string(), meta);
+  const std::vector<std::uint8_t> yuyv{16, 90,  235, 240, 81,  90,  145, 54,
+                                       41, 240, 210, 16,  128, 128, 128, 128};
+  std::ofstream(dir / "frames" / "000000.yuv", std::ios::binary)
+      .write(reinterpret_cast<const char*>(yuyv.data()), 16);
+  harmoloc::dataset::write_frame_index((dir / "frames.csv").string(),
+                                       {{1'000'000'000ULL, "frames/000000.yuv"}});
+  hc::DatasetFrames frames(dir.string());
+  ASSERT_EQ(frames.size(), 1U);
+  hc::RgbImage img;
+  frames.read(0, img);
+  for (std::size_t p = 0; p < 8; ++p) {
+    const std::uint8_t* q = &yuyv[4 * (p / 2)];
+    const alg::Rgb8 c = alg::yuv_to_rgb_opencv(q[2 * (p % 2)], q[1], q[3]);
+    EXPECT_EQ(img.rgb[3 * p], c.r);
+    EXPECT_EQ(img.rgb[3 * p + 1], c.g);
+    EXPECT_EQ(img.rgb[3 * p + 2], c.b);
+  }
+  std::ofstream(dir / "frames" / "000000.yuv", std::ios::binary).write("short", 5);
+  EXPECT_THROW(hc::DatasetFrames{dir.string()}, std::runtime_error);
+  EXPECT_THROW(hc::DatasetFrames{(dir / "nothing").string()}, std::runtime_error);
+  fs::remove_all(dir);
 }
 
 }  // namespace
