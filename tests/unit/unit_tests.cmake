@@ -89,6 +89,13 @@ target_link_libraries(sim_host_test PRIVATE harmoloc_dataset harmoloc_drivers_ho
   harmoloc_drivers_common harmoloc_algorithms GTest::gtest_main harmoloc_warnings)
 gtest_discover_tests(sim_host_test DISCOVERY_TIMEOUT 60 PROPERTIES LABELS unit)
 
+# harmoloc-colours' library: windows, clustering, guided mode, warnings, TOML, and the automatic
+# mode on three random simulated scenes against their true windows (about 20 s).
+add_executable(colour_windows_test ${HARMOLOC_UNIT_DIR}/colour_windows_test.cpp)
+target_link_libraries(colour_windows_test PRIVATE harmoloc_colours harmoloc_simulator
+  harmoloc_config GTest::gtest_main harmoloc_warnings)
+gtest_discover_tests(colour_windows_test DISCOVERY_TIMEOUT 60 PROPERTIES LABELS unit)
+
 # Segmentation against OpenCV itself: HSV of all 2^24 colours, board classes, simulated and
 # adversarial frames, YUYV. harmoloc_opencv_reference is defined in tests/CMakeLists.txt after
 # this file is included, so the condition is the one that defines it (HARMOLOC_HAVE_OPENCV):
