@@ -14,11 +14,6 @@ endif()
 if(TARGET harmoloc-monitor)
   install(TARGETS harmoloc-monitor RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
 endif()
-# The laptop's tools, should a build that has them be packaged (a Linux board builds none of
-# them today): the colour tool chooses the windows of the config above.
-if(TARGET harmoloc-colours)
-  install(TARGETS harmoloc-colours RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
-endif()
 
 # Configuration (conffiles: dpkg keeps local changes on upgrade). The default config is the
 # documented example, which the tests check to reproduce the built-in defaults.

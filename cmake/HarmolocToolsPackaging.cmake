@@ -1,12 +1,13 @@
 # The Debian package of the host tools, harmoloc-tools (docs/deploy.md, "The laptop's tools"):
-# what a robot owner runs beside the robot: the simulator, the trainer, the report, the sweep,
-# the stats budget, the link monitor and the host board's replay (`harmoloc --dataset`). Built
+# what a robot owner runs beside the robot: the simulator, the colour tool, the trainer, the
+# report, the sweep, the stats budget, the link monitor and the host board's replay
+# (`harmoloc --dataset`). Built
 # from the host build; `./run package` puts it beside the firmware packages and
 # tests/packaging/check_tools_package.sh checks it.
 include(HarmolocDebian)
 
 set(HARMOLOC_HOST_TOOLS harmoloc harmoloc-sim harmoloc-train harmoloc-report harmoloc-accuracy
-  harmoloc-scenarios harmoloc-sweep harmoloc-budget harmoloc-monitor)
+  harmoloc-scenarios harmoloc-sweep harmoloc-colours harmoloc-budget harmoloc-monitor)
 foreach(tool IN LISTS HARMOLOC_HOST_TOOLS)
   if(TARGET ${tool})
     install(TARGETS ${tool} RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
@@ -20,6 +21,7 @@ harmoloc_man_pages(
   harmoloc-accuracy "the harmonic localizer's accuracy on simulated routes"
   harmoloc-scenarios "the particle filter's table of simulated scenarios"
   harmoloc-sweep "train and evaluate the estimator on many random scenes"
+  harmoloc-colours "propose the boards' colour windows from a recording, with mask previews"
   harmoloc-budget "per-stage cycle time against the compute budget, from harmoloc's stats"
   harmoloc-monitor "show harmoloc's MAVLink pose stream and send it commands")
 
@@ -27,6 +29,7 @@ set(doc /usr/share/doc/harmoloc-tools)
 install(FILES
   ${PROJECT_SOURCE_DIR}/README.md
   ${PROJECT_SOURCE_DIR}/docs/training.md
+  ${PROJECT_SOURCE_DIR}/docs/colours.md
   ${PROJECT_SOURCE_DIR}/docs/dataset-format.md
   ${PROJECT_SOURCE_DIR}/docs/scenarios.md
   ${PROJECT_SOURCE_DIR}/docs/sweep.md

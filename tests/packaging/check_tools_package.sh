@@ -38,9 +38,9 @@ echo "     Depends: $depends"
 # ---- contents ----
 dpkg-deb -c "$deb" | awk '{print $6}' | sed 's|^\./|/|' > "$work/contents"
 tools=(harmoloc harmoloc-sim harmoloc-train harmoloc-report harmoloc-accuracy harmoloc-scenarios
-  harmoloc-sweep harmoloc-budget harmoloc-monitor)
+  harmoloc-sweep harmoloc-colours harmoloc-budget harmoloc-monitor)
 for t in "${tools[@]}"; do check "contains /usr/bin/$t" grep -qx "/usr/bin/$t" "$work/contents"; done
-for d in training.md dataset-format.md config-format.md stats-format.md wire-protocol.md; do
+for d in training.md colours.md dataset-format.md config-format.md stats-format.md wire-protocol.md; do
   check "contains /usr/share/doc/harmoloc-tools/$d" \
     grep -qx "/usr/share/doc/harmoloc-tools/$d" "$work/contents"
 done
