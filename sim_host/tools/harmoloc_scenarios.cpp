@@ -390,7 +390,7 @@ int main(int argc, char** argv) {
          << ", max " << fmt("%.1f cm", 100 * e.max_m) << ".\n";
       js << "\"false_alarms\": {\"minutes\": " << sim_minutes
          << ", \"confirmed\": " << j.result.counters.kidnaps
-         << ", \"seed004_triggers\": " << j.result.counters.kidnap_triggers
+         << ", \"change_rate_triggers\": " << j.result.counters.kidnap_triggers
          << ", \"rmse_m\": " << e.rmse_m << ", \"max_m\": " << e.max_m << "}";
       json.push_back(js.str());
     }

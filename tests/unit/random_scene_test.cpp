@@ -112,13 +112,13 @@ TEST(Lens, InverseMatchesTheForwardModel) {
     }
   }
   // Wu & Qin's lens: the monotonic region ends where 1 + 3 k r^2 = 0.
-  const hs::LensModel seed000(-0.15, 0, 0, 0, 0);
-  EXPECT_DOUBLE_EQ(seed000.max_radius(), 1.0 / std::sqrt(0.45));
+  const hs::LensModel wu_qin_lens(-0.15, 0, 0, 0, 0);
+  EXPECT_DOUBLE_EQ(wu_qin_lens.max_radius(), 1.0 / std::sqrt(0.45));
   double x = 0, y = 0;
   const double rd_max =
-      seed000.max_radius() * (1.0 - 0.15 * seed000.max_radius() * seed000.max_radius());
-  EXPECT_FALSE(seed000.undistort(rd_max * 1.001, 0.0, x, y));
-  EXPECT_TRUE(seed000.undistort(rd_max * 0.999, 0.0, x, y));
+      wu_qin_lens.max_radius() * (1.0 - 0.15 * wu_qin_lens.max_radius() * wu_qin_lens.max_radius());
+  EXPECT_FALSE(wu_qin_lens.undistort(rd_max * 1.001, 0.0, x, y));
+  EXPECT_TRUE(wu_qin_lens.undistort(rd_max * 0.999, 0.0, x, y));
 }
 
 TEST(Lens, PixelsOutsideTheImageCircleAreBlackAndProjectionsLandOnTheirBoards) {

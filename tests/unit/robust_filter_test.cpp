@@ -231,7 +231,7 @@ TEST(BoardObservation, WithoutConsensusNothingIsScaledAndNothingLearnt) {
     EXPECT_NEAR(reliability.static_probability(b), params.motion_index_max, 1e-9);
 }
 
-TEST(BoardObservation, NonRobustIsSeed001sPlainProduct) {
+TEST(BoardObservation, NonRobustIsGuoAndLisPlainProduct) {
   const auto map = make_forward_map();
   ha::BoardModelParams params;
   params.robust = false;
@@ -482,7 +482,7 @@ ha::KidnapInput kidnapped(double match) {
 
 }  // namespace
 
-TEST(KidnapDetector, Seed004ChangeRate) {
+TEST(KidnapDetector, YangEtAlChangeRate) {
   ha::KidnapParams p;
   p.confirm = false;
   ha::KidnapDetector d;
