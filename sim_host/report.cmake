@@ -12,7 +12,7 @@ add_library(harmoloc_report STATIC ${HARMOLOC_REPORT_SOURCES}
 add_library(harmoloc::report ALIAS harmoloc_report)
 target_include_directories(harmoloc_report PUBLIC ${CMAKE_CURRENT_SOURCE_DIR}/include)
 target_link_libraries(harmoloc_report
-  PUBLIC harmoloc_dataset nlohmann_json::nlohmann_json
+  PUBLIC harmoloc_dataset harmoloc_stats_document nlohmann_json::nlohmann_json
   PRIVATE harmoloc_warnings)
 
 add_executable(harmoloc-report ${CMAKE_CURRENT_SOURCE_DIR}/tools/harmoloc_report.cpp)

@@ -3,9 +3,7 @@
 #include <sstream>
 
 #include <CLI/CLI.hpp>
-#include <nlohmann/json.hpp>
 
-#include "harmoloc/drivers/input_file.hpp"
 #include "harmoloc/firmware/cli.hpp"
 #include "harmoloc/sim_host/run_stats.hpp"
 
@@ -45,39 +43,30 @@ int main(int argc, char** argv) {
     }
     const std::uint64_t overruns = stats.overruns.value_or(0);
     std::printf("overruns   %llu\n", static_cast<unsigned long long>(overruns));
-    std::string text;  // read_stats checked the file; read again the same careful way
-    harmoloc::drivers::read_regular_file(stats_path, harmoloc::drivers::input_limits::kStatsBytes,
-                                         text);
-    const nlohmann::json j = nlohmann::json::parse(text, nullptr, false);
-    if (j.is_object() && j.contains("pacing") && j["pacing"].is_object()) {
-      const auto& p = j["pacing"];
+    const harmoloc::firmware::stats::Document& doc = stats.document;
+    if (doc.pacing) {
       std::printf("pacing     %s, %llu skipped ticks, %llu overrun alarms\n",
-                  p.value("mode", std::string("?")).c_str(),
-                  static_cast<unsigned long long>(p.value("skipped_ticks", 0ULL)),
-                  static_cast<unsigned long long>(p.value("overrun_alarms", 0ULL)));
+                  doc.pacing->mode.empty() ? "?" : doc.pacing->mode.c_str(),
+                  static_cast<unsigned long long>(doc.pacing->skipped_ticks),
+                  static_cast<unsigned long long>(doc.pacing->overrun_alarms));
     }
-    if (j.is_object() && j.contains("wakeup_latency") && j["wakeup_latency"].is_object()) {
-      const auto& w = j["wakeup_latency"];
+    if (const auto& w = doc.wakeup_latency) {
       std::printf(
           "wake-up    min %.1f us, median %.1f us, p99 %.1f us, p99.9 %.1f us, max %.1f us over "
           "%llu wake-ups\n",
-          w.value("min_us", 0.0), w.value("median_us", 0.0), w.value("p99_us", 0.0),
-          w.value("p999_us", 0.0), w.value("max_us", 0.0),
-          static_cast<unsigned long long>(w.value("count", 0ULL)));
+          w->min_us, w->median_us, w->p99_us, w->p999_us, w->max_us,
+          static_cast<unsigned long long>(w->count));
     }
-    if (j.is_object() && j.contains("capture_to_send") && j["capture_to_send"].is_object()) {
+    if (const auto& l = doc.capture_to_send) {
       // What an autopilot's vision delay parameter is set from (docs/wire-protocol.md).
-      const auto& l = j["capture_to_send"];
       std::printf(
           "latency    capture to send: median %.1f ms, p99 %.1f ms, max %.1f ms over %llu poses\n",
-          l.value("median_us", 0.0) / 1000.0, l.value("p99_us", 0.0) / 1000.0,
-          l.value("max_us", 0.0) / 1000.0, static_cast<unsigned long long>(l.value("count", 0ULL)));
+          l->median_us / 1000.0, l->p99_us / 1000.0, l->max_us / 1000.0,
+          static_cast<unsigned long long>(l->count));
     }
     // A run whose every cycle was before the first pose never segmented a known place, never
     // updated the filter: its times are not those of a localizing cycle.
-    std::uint64_t without_pose = 0;
-    if (j.is_object() && j.contains("health_cycles") && j["health_cycles"].is_object())
-      without_pose = j["health_cycles"].value("not_initialized", 0ULL);
+    const std::uint64_t without_pose = doc.health_cycles ? doc.health_cycles->not_initialized : 0;
     const std::uint64_t cycles = stats.cycles.value_or(0);
     const bool never_localized = cycles > 0 && without_pose >= cycles;
     std::printf("localised  %s (%llu of %llu cycles without a pose)\n",

@@ -590,3 +590,50 @@ TEST(ReportWrite, UnevenHistogramBuckets) {
   const auto bars = timing.find("<g class=\"bars\">");
   EXPECT_EQ(count_of(timing.substr(bars, timing.find("</g>", bars) - bars), "<rect"), 5u);
 }
+
+// The firmware writes the stats through the same definition the tools read them with
+// (firmware/stats_document.hpp): what goes out comes back, in the documented layout.
+TEST(ReportStats, FirmwareDocumentRoundTrips) {
+  namespace fs = harmoloc::firmware::stats;
+  fs::Document d;
+  d.harmoloc_version = "0.1.0";
+  d.board = "host";
+  d.ended = "SIGTERM";
+  d.outputs_failed = 1;
+  d.rate_hz = 30.0;
+  d.budget_us = 15000.0;
+  d.cycles = 898;
+  d.frames = 897;
+  d.overruns = 0;
+  d.pacing = fs::Pacing{"timer", 2, 1};
+  d.stages = {{"acquire", {45.123, 67.6, 290.5, 290.5, 45.4}},
+              {"cycle", {1000.001, 1200.0, 1500.0, 1600.0, 1010.5}}};
+  d.cycle_histogram = fs::CycleHistogram{{1000.448, 1016.32}, {400, 498}};
+  d.health_cycles = fs::HealthCycles{1, 890, 4, 2, 1};
+  d.degraded = fs::Degraded{4, 2, 1};
+  d.localizer = fs::Localizer{880, 10, 0, 1};
+  d.wakeup_latency = fs::LatencySummary{462, 9.0, 28.1, 27.4, 57.3, 65.4, 65.4};
+  const std::string text = fs::dump(d);
+  EXPECT_NE(text.find("\n  \"pacing\": {\"mode\": \"timer\", \"skipped_ticks\": 2, "
+                      "\"overrun_alarms\": 1},\n"),
+            std::string::npos)
+      << text;
+  EXPECT_NE(text.find("\n    \"acquire\": {\"median_us\": 45.123, "), std::string::npos) << text;
+  const hs::RunStats s = hs::parse_stats(text);
+  const fs::Document& back = s.document;
+  EXPECT_EQ(back.ended, "SIGTERM");
+  EXPECT_EQ(back.outputs_failed, 1u);
+  EXPECT_EQ(s.cycles, 898u);
+  EXPECT_EQ(back.pacing->mode, "timer");
+  EXPECT_EQ(back.pacing->skipped_ticks, 2u);
+  ASSERT_EQ(back.stages.size(), 2u);
+  EXPECT_EQ(back.stages[1].first, "cycle");
+  EXPECT_EQ(back.stages[1].second.median_us, 1000.001);  // shortest round-trip digits: exact
+  EXPECT_EQ(back.cycle_histogram->upper_us, d.cycle_histogram->upper_us);
+  EXPECT_EQ(back.health_cycles->not_initialized, 1u);
+  EXPECT_EQ(back.localizer->fixes, 880u);
+  EXPECT_EQ(back.wakeup_latency->count, 462u);
+  EXPECT_EQ(back.wakeup_latency->p999_us, 65.4);
+  EXPECT_FALSE(back.capture_to_send);
+  EXPECT_EQ(fs::dump(back).find("\"camera\""), fs::dump(d).find("\"camera\""));
+}

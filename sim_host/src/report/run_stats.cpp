@@ -1,9 +1,7 @@
 #include "harmoloc/sim_host/run_stats.hpp"
 
 #include <algorithm>
-#include <cmath>
 #include <iterator>
-#include <limits>
 #include <nlohmann/json.hpp>
 
 #include "format.hpp"
@@ -13,70 +11,9 @@ namespace harmoloc::sim_host {
 
 namespace {
 
-using Json = nlohmann::ordered_json;
+using Json = firmware::stats::Json;
+namespace stats = firmware::stats;
 using report_text::format;
-
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-// Typed access to the parsed JSON. Every failure names the file and the field in one line,
-// which the tools print as it is.
-class StatsReader {
- public:
-  explicit StatsReader(std::string origin) : origin_(std::move(origin)) {}
-
-  [[noreturn]] void fail(const std::string& reason) const {
-    throw ReportError(origin_ + ": " + reason);
-  }
-
-  std::optional<double> number(const Json& object, const std::string& key,
-                               const std::string& where) const {
-    const auto it = object.find(key);
-    if (it == object.end() || it->is_null()) return std::nullopt;
-    if (!it->is_number()) fail(where + key + " is not a number");
-    return it->get<double>();
-  }
-
-  std::optional<std::uint64_t> count(const Json& value, const std::string& what) const {
-    if (value.is_null()) return std::nullopt;
-    if (value.is_number_unsigned()) return value.get<std::uint64_t>();
-    if (value.is_number_integer()) {
-      const auto v = value.get<std::int64_t>();
-      if (v < 0) fail(what + " is negative");
-      return static_cast<std::uint64_t>(v);
-    }
-    if (value.is_number_float()) {
-      const double v = value.get<double>();
-      if (v < 0.0 || v != std::floor(v) || v > 1.8e19) fail(what + " is not a count");
-      return static_cast<std::uint64_t>(v);
-    }
-    fail(what + " is not a count");
-  }
-
-  std::optional<std::uint64_t> count(const Json& object, const std::string& key,
-                                     const std::string& where) const {
-    const auto it = object.find(key);
-    if (it == object.end()) return std::nullopt;
-    return count(*it, where + key);
-  }
-
-  std::string string(const Json& object, const std::string& key) const {
-    const auto it = object.find(key);
-    if (it == object.end() || it->is_null()) return "";
-    if (!it->is_string()) fail(key + " is not a string");
-    return it->get<std::string>();
-  }
-
-  /// The object at @p key, nullptr when missing; fails when present but not an object.
-  const Json* object(const Json& parent, const std::string& key) const {
-    const auto it = parent.find(key);
-    if (it == parent.end() || it->is_null()) return nullptr;
-    if (!it->is_object()) fail("\"" + key + "\" is not an object");
-    return &*it;
-  }
-
- private:
-  std::string origin_;
-};
 
 std::string scalar_text(const Json& value) {
   if (value.is_string()) return value.get<std::string>();
@@ -137,96 +74,63 @@ const StageTiming* RunStats::stage(const std::string& name) const {
 }
 
 RunStats parse_stats(const std::string& text, const std::string& origin) {
-  const StatsReader reader(origin);
-  Json doc;
+  Json json;
   try {
-    doc = Json::parse(text);
+    json = Json::parse(text);
   } catch (const Json::exception& e) {
     std::string what = e.what();
     const auto bracket = what.find("] ");
     if (what.rfind("[json.exception", 0) == 0 && bracket != std::string::npos) {
       what = what.substr(bracket + 2);
     }
-    reader.fail("not valid JSON (" + what + ")");
+    throw ReportError(origin + ": not valid JSON (" + what + ")");
   }
-  if (!doc.is_object()) reader.fail("not a JSON object");
-
-  RunStats stats;
-  stats.harmoloc_version = reader.string(doc, "harmoloc_version");
-  stats.board = reader.string(doc, "board");
-  stats.cycles = reader.count(doc, "cycles", "");
-  stats.frames = reader.count(doc, "frames", "");
-  stats.overruns = reader.count(doc, "overruns", "");
-  stats.rate_hz = reader.number(doc, "rate_hz", "");
-  if (const auto budget = reader.number(doc, "budget_us", "")) {
-    if (!(*budget > 0.0)) reader.fail("budget_us must be positive");
-    stats.budget_us = *budget;
+  RunStats out;
+  try {
+    out.document = json.get<stats::Document>();
+  } catch (const stats::FormatError& e) {
+    throw ReportError(origin + ": " + e.what());
   }
+  const stats::Document& d = out.document;
+  out.harmoloc_version = d.harmoloc_version;
+  out.board = d.board;
+  out.cycles = d.cycles;
+  out.frames = d.frames;
+  out.overruns = d.overruns;
+  out.rate_hz = d.rate_hz;
+  out.budget_us = d.budget_us.value_or(out.budget_us);
 
-  const Json* stages = reader.object(doc, "stages");
-  if (stages == nullptr) reader.fail("no \"stages\" section (is this a harmoloc --stats file?)");
   // Known stages in display order, then unknown ones in file order, the whole cycle last.
   std::vector<std::string> names(std::begin(kStageOrder), std::end(kStageOrder) - 1);
-  for (const auto& item : stages->items()) {
-    if (std::find(std::begin(kStageOrder), std::end(kStageOrder), item.key()) ==
+  for (const auto& stage : d.stages) {
+    if (std::find(std::begin(kStageOrder), std::end(kStageOrder), stage.first) ==
         std::end(kStageOrder)) {
-      names.push_back(item.key());
+      names.push_back(stage.first);
     }
   }
   names.push_back("cycle");
   for (const std::string& name : names) {
-    const auto it = stages->find(name);
-    if (it == stages->end()) continue;
-    if (!it->is_object()) reader.fail("stages." + name + " is not an object");
-    const std::string where = "stages." + name + ".";
-    StageTiming s;
-    s.name = name;
-    s.median_us = reader.number(*it, "median_us", where).value_or(kNaN);
-    s.p99_us = reader.number(*it, "p99_us", where).value_or(kNaN);
-    s.p999_us = reader.number(*it, "p999_us", where).value_or(kNaN);
-    s.max_us = reader.number(*it, "max_us", where).value_or(kNaN);
-    s.mean_us = reader.number(*it, "mean_us", where).value_or(kNaN);
-    stats.stages.push_back(s);
+    const auto it = std::find_if(d.stages.begin(), d.stages.end(),
+                                 [&name](const auto& stage) { return stage.first == name; });
+    if (it == d.stages.end()) continue;
+    const stats::StageTiming& t = it->second;
+    out.stages.push_back({name, t.median_us, t.p99_us, t.p999_us, t.max_us, t.mean_us});
   }
-
-  if (const Json* histogram = reader.object(doc, "cycle_histogram")) {
-    const auto upper = histogram->find("upper_us");
-    const auto counts = histogram->find("counts");
-    if (upper == histogram->end() || !upper->is_array() || counts == histogram->end() ||
-        !counts->is_array()) {
-      reader.fail("cycle_histogram needs the arrays \"upper_us\" and \"counts\"");
-    }
-    CycleHistogram h;
-    for (const Json& v : *upper) {
-      if (!v.is_number()) reader.fail("cycle_histogram.upper_us holds a non-number");
-      const double bound = v.get<double>();
-      if (!(bound > 0.0) || (!h.upper_us.empty() && !(bound > h.upper_us.back()))) {
-        reader.fail("cycle_histogram.upper_us must be positive and increasing");
-      }
-      h.upper_us.push_back(bound);
-    }
-    for (const Json& v : *counts) {
-      h.counts.push_back(reader.count(v, "a cycle_histogram count").value_or(0));
-    }
-    if (h.counts.size() != h.upper_us.size() && h.counts.size() != h.upper_us.size() + 1) {
-      reader.fail(format("cycle_histogram has %zu counts for %zu buckets", h.counts.size(),
-                         h.upper_us.size()));
-    }
-    if (!h.upper_us.empty()) stats.cycle_histogram = std::move(h);
+  if (d.cycle_histogram && !d.cycle_histogram->upper_us.empty()) {
+    out.cycle_histogram = CycleHistogram{d.cycle_histogram->upper_us, d.cycle_histogram->counts};
   }
-
-  if (const Json* degraded = reader.object(doc, "degraded")) {
-    for (const auto& item : degraded->items()) {
-      if (const auto c = reader.count(item.value(), "degraded." + item.key())) {
-        stats.degraded.emplace_back(item.key(), *c);
-      }
-    }
+  if (d.degraded) {
+    out.degraded = {{"odometry_only", d.degraded->odometry_only},
+                    {"vision_only", d.degraded->vision_only},
+                    {"invalid", d.degraded->invalid}};
   }
-  if (const Json* localizer = reader.object(doc, "localizer")) {
-    stats.localizer_fixes = reader.count(*localizer, "fixes", "localizer.");
-    stats.localizer_unknown_place = reader.count(*localizer, "unknown_place", "localizer.");
+  if (d.localizer) {
+    out.localizer_fixes = d.localizer->fixes;
+    out.localizer_unknown_place = d.localizer->unknown_place;
   }
-  for (const auto& item : doc.items()) {
+  // Every other section as the file has it, for the report's tables: counters a newer firmware
+  // adds show up without a change here.
+  for (const auto& item : json.items()) {
     if (!item.value().is_object() || item.key() == "stages" || item.key() == "cycle_histogram" ||
         item.key() == "degraded") {
       continue;
@@ -234,9 +138,9 @@ RunStats parse_stats(const std::string& text, const std::string& origin) {
     StatsSection section;
     section.name = item.key();
     flatten(item.value(), "", section.entries);
-    stats.sections.push_back(std::move(section));
+    out.sections.push_back(std::move(section));
   }
-  return stats;
+  return out;
 }
 
 RunStats read_stats(const std::string& path) {

@@ -13,6 +13,7 @@
 #include <cstdint>
 
 #include "harmoloc/firmware/config.hpp"
+#include "harmoloc/firmware/inbound_counters.hpp"
 #include "harmoloc/firmware/mavlink_parser.hpp"
 #include "harmoloc/firmware/mavlink_signing.hpp"
 #include "harmoloc/firmware/mavlink_v2.hpp"
@@ -72,27 +73,6 @@ MavResult read_set_pose(const CommandLong& command, double default_position_sigm
 /// Reads "request message": param1 is a message id (a whole number 0..2^24-1): kAccepted with
 /// @p msg_id, else kDenied.
 MavResult read_request_message(const CommandLong& command, std::uint32_t& msg_id);
-
-struct InboundCounters {
-  std::uint64_t bytes_in = 0;
-  std::uint64_t frames_in = 0;          ///< frames with a valid checksum
-  std::uint64_t crc_errors = 0;         ///< candidate frames whose checksum failed
-  std::uint64_t bad_headers = 0;        ///< start bytes followed by a header that cannot be checked
-  std::uint64_t garbage_bytes = 0;      ///< bytes dropped outside valid frames
-  std::uint64_t commands_accepted = 0;  ///< acted on, ACKed MAV_RESULT_ACCEPTED
-  std::uint64_t commands_refused = 0;   ///< ACKed with another result (denied, unsupported, ...)
-  std::uint64_t rejected_unsigned = 0;  ///< a key is configured and the command was not signed
-  std::uint64_t rejected_bad_signature = 0;
-  std::uint64_t rejected_replay = 0;
-  /// Signed and valid, but dated too far ahead of the signing clock, or beyond the persisted
-  /// high-water mark yet (docs/wire-protocol.md, "Signing").
-  std::uint64_t rejected_future = 0;
-  std::uint64_t rejected_source = 0;   ///< from a system or component not accepted
-  std::uint64_t ignored_messages = 0;  ///< valid frames that are not a command for us
-  /// TIMESYNC requests that passed the checks (at most one a cycle is answered: the latest).
-  std::uint64_t timesync_requests = 0;
-  std::uint64_t saturated_cycles = 0;  ///< cycles that stopped at a per-cycle limit
-};
 
 class CommandReceiver {
  public:

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "harmoloc/firmware/localization_cycle.hpp"
+#include "harmoloc/firmware/stats_document.hpp"
 
 namespace harmoloc::firmware {
 
@@ -40,6 +41,9 @@ struct RunCounters {
   RecordingCounters recording;
 };
 
+/// The run's statistics, taken after the cycle (allocates).
+stats::Document stats_document(const LocalizationCycle& cycle, const RunCounters& run);
+/// stats_document() as the file's text (stats::dump).
 std::string stats_json(const LocalizationCycle& cycle, const RunCounters& run);
 
 /// Writes @p json to @p path (created or truncated). Returns an empty string, or "PATH: write

@@ -8,6 +8,7 @@
 #include <utility>
 #include <vector>
 
+#include "harmoloc/firmware/stats_document.hpp"
 #include "harmoloc/sim_host/report_error.hpp"
 
 namespace harmoloc::sim_host {
@@ -59,6 +60,9 @@ struct RunStats {
   std::optional<std::uint64_t> localizer_unknown_place;
   /// Every other object-valued top-level section (camera, encoders, link, localizer, ...).
   std::vector<StatsSection> sections;
+
+  /// The file as read (firmware/stats_document.hpp): pacing, health cycles, latencies.
+  firmware::stats::Document document;
 
   /// The stage called @p name, or nullptr.
   const StageTiming* stage(const std::string& name) const;
