@@ -14,16 +14,8 @@
 set -uo pipefail
 deb=$1 build=$2
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
-pass=0 fail=0
-ok() { echo "ok   $*"; pass=$((pass + 1)); }
-bad() { echo "FAIL $*"; fail=$((fail + 1)); }
-check() {  # check DESCRIPTION COMMAND...
-  local what=$1
-  shift
-  if "$@"; then ok "$what"; else bad "$what"; fi
-}
-
-[ -f "$deb" ] || { echo "FAIL no package $deb"; echo "0 passed, 1 failed"; exit 1; }
+source "$root/tests/packaging/package_checks.sh"
+require_package "$deb"
 name=$(basename "$deb" .deb)
 arch=${name##*_}
 case $arch in
@@ -135,7 +127,6 @@ else
 fi
 
 # ---- Debian policy: manual pages, changelog, lintian ----
-source "$root/tests/packaging/debian_checks.sh"
 debian_checks "$deb" harmoloc "$work/root" "$work/contents"
 
 echo "$pass passed, $fail failed"

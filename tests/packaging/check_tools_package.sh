@@ -6,21 +6,13 @@
 #   programs need, Conflicts with the firmware package (same program names);
 # - contents: every host tool, the docs a robot owner follows;
 # - every program runs --help and --version from the unpacked package;
-# - manual pages, changelog, copyright and lintian (tests/packaging/debian_checks.sh).
+# - manual pages, changelog, copyright and lintian (tests/packaging/package_checks.sh).
 # Prints one line per check and "N passed, N failed" at the end; exits 1 on any failure.
 set -uo pipefail
 deb=$1
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
-pass=0 fail=0
-ok() { echo "ok   $*"; pass=$((pass + 1)); }
-bad() { echo "FAIL $*"; fail=$((fail + 1)); }
-check() {  # check DESCRIPTION COMMAND...
-  local what=$1
-  shift
-  if "$@"; then ok "$what"; else bad "$what"; fi
-}
-
-[ -f "$deb" ] || { echo "FAIL no package $deb"; echo "0 passed, 1 failed"; exit 1; }
+source "$root/tests/packaging/package_checks.sh"
+require_package "$deb"
 arch=$(dpkg --print-architecture)
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
@@ -70,7 +62,6 @@ for bin in "$work"/root/usr/bin/*; do
 done
 
 # ---- Debian policy: manual pages, changelog, lintian ----
-source "$root/tests/packaging/debian_checks.sh"
 debian_checks "$deb" harmoloc-tools "$work/root" "$work/contents"
 
 echo "$pass passed, $fail failed"

@@ -1,10 +1,23 @@
-# What both packages are checked for beyond their contents (sourced by check_package.sh and
-# check_tools_package.sh, which define check, ok and bad):
+# What the two package checks share (sourced by check_package.sh and check_tools_package.sh):
+# the pass/fail counting, and what both packages are checked for beyond their contents:
 #   debian_checks DEB PACKAGE UNPACKED_ROOT CONTENTS_LIST
 # - every program in /usr/bin has its manual page (help2man, from the program's --help), and the
 #   page names the program's options;
 # - the changelog and the copyright file are where Debian policy puts them;
 # - lintian reports no error and no warning.
+pass=0 fail=0
+ok() { echo "ok   $*"; pass=$((pass + 1)); }
+bad() { echo "FAIL $*"; fail=$((fail + 1)); }
+check() {  # check DESCRIPTION COMMAND...
+  local what=$1
+  shift
+  if "$@"; then ok "$what"; else bad "$what"; fi
+}
+# The package file must exist; else one failure and the end.
+require_package() {
+  [ -f "$1" ] || { echo "FAIL no package $1"; echo "0 passed, 1 failed"; exit 1; }
+}
+
 debian_checks() {
   local deb=$1 package=$2 root=$3 contents=$4 bin name page out
   for bin in "$root"/usr/bin/*; do
