@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <memory>
 
 #include "harmoloc/firmware/stats_document.hpp"
 
@@ -32,26 +33,42 @@ stats::LatencySummary latency(const LatencyHistogram& h) {
 
 }  // namespace
 
-stats::Document stats_document(const LocalizationCycle& cycle, const RunCounters& run) {
-  const CycleCounters& c = cycle.counters();
+void take_snapshot(const LocalizationCycle& cycle, const RunCounters& run, StatsSnapshot& out) {
+  out.counters = cycle.counters();
+  for (std::size_t s = 0; s < kStageCount; ++s)
+    out.stages[s] = cycle.stage_histogram(static_cast<Stage>(s));
+  out.capture_to_send = cycle.capture_to_send();
+  out.inbound = cycle.inbound_counters();
+  out.budget_ns = cycle.budget_ns();
+  out.uses_boards = cycle.uses_boards();
+  out.run = run;
+  if (run.wakeup_latency != nullptr) {
+    out.wakeup_latency = *run.wakeup_latency;
+    out.run.wakeup_latency = &out.wakeup_latency;
+  }
+}
+
+stats::Document stats_document(const StatsSnapshot& snapshot) {
+  const CycleCounters& c = snapshot.counters;
+  const RunCounters& run = snapshot.run;
   stats::Document d;
   d.harmoloc_version = HARMOLOC_VERSION;
   d.board = run.board;
   d.ended = run.ended;
   d.outputs_failed = run.outputs_failed;
   d.rate_hz = run.rate_hz;
-  d.budget_us = us(cycle.budget_ns());
+  d.budget_us = us(snapshot.budget_ns);
   d.cycles = c.cycles;
   d.frames = c.frames;
   d.overruns = c.overruns;
   d.pacing = stats::Pacing{run.pacing, run.skipped_ticks, c.overrun_alarms};
   for (std::size_t s = 0; s < kStageCount; ++s) {
-    const LatencyHistogram& h = cycle.stage_histogram(static_cast<Stage>(s));
+    const LatencyHistogram& h = snapshot.stages[s];
     d.stages.emplace_back(stage_name(static_cast<Stage>(s)),
                           stats::StageTiming{us(h.quantile_ns(0.5)), us(h.quantile_ns(0.99)),
                                              us(h.quantile_ns(0.999)), us(h.max_ns()), mean_us(h)});
   }
-  const LatencyHistogram& whole = cycle.stage_histogram(Stage::kCycle);
+  const LatencyHistogram& whole = snapshot.stages[static_cast<std::size_t>(Stage::kCycle)];
   stats::CycleHistogram histogram;
   for (std::size_t i = 0; i < LatencyHistogram::kBuckets; ++i) {
     if (whole.bucket_count(i) == 0) continue;
@@ -67,7 +84,7 @@ stats::Document stats_document(const LocalizationCycle& cycle, const RunCounters
   d.link = run.link;
   d.localizer =
       stats::Localizer{c.fixes_used, c.unknown_place, c.implausible_frames, c.off_map_cycles};
-  d.filter = {cycle.uses_boards() ? "boards" : "fix",
+  d.filter = {snapshot.uses_boards ? "boards" : "fix",
               c.resamples,
               c.no_consensus,
               c.distrusted_boards,
@@ -75,10 +92,10 @@ stats::Document stats_document(const LocalizationCycle& cycle, const RunCounters
               c.kidnap_triggers,
               c.kidnaps,
               c.lost};
-  d.inbound = cycle.inbound_counters();
+  d.inbound = snapshot.inbound;
   if (run.wakeup_latency != nullptr && run.wakeup_latency->count() > 0)
     d.wakeup_latency = latency(*run.wakeup_latency);
-  if (cycle.capture_to_send().count() > 0) d.capture_to_send = latency(cycle.capture_to_send());
+  if (snapshot.capture_to_send.count() > 0) d.capture_to_send = latency(snapshot.capture_to_send);
   if (run.recording.active) {
     const RecordingCounters& r = run.recording;
     d.recording = stats::Recording{r.frames, r.dropped, r.skipped, r.bytes, r.stopped};
@@ -88,6 +105,17 @@ stats::Document stats_document(const LocalizationCycle& cycle, const RunCounters
                                    run.open_fds_start, run.open_fds_end};
   }
   return d;
+}
+
+std::string stats_json(const StatsSnapshot& snapshot) {
+  return stats::dump(stats_document(snapshot));
+}
+
+stats::Document stats_document(const LocalizationCycle& cycle, const RunCounters& run) {
+  // 10 KB: on the heap, as this is the allocating side anyway.
+  const auto snapshot = std::make_unique<StatsSnapshot>();
+  take_snapshot(cycle, run, *snapshot);
+  return stats_document(*snapshot);
 }
 
 std::string stats_json(const LocalizationCycle& cycle, const RunCounters& run) {

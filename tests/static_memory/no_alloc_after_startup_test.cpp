@@ -13,12 +13,14 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <memory>
 #include <new>
 #include <string>
 #include <vector>
 
 #include <malloc.h>
+#include <pthread.h>
 
 #include "../unit/mavlink_test_frames.hpp"
 #include "harmoloc/dataset/metadata.hpp"
@@ -33,6 +35,7 @@
 #include "harmoloc/host/file_camera.hpp"
 #include "harmoloc/host/log_encoders.hpp"
 #include "run_recording.hpp"
+#include "stats_dumper.hpp"
 
 extern "C" {
 void* __libc_malloc(std::size_t);
@@ -47,9 +50,16 @@ namespace {
 std::atomic<bool> g_armed{false};
 std::atomic<std::uint64_t> g_allocations{0};
 std::atomic<std::size_t> g_first_size{0};
+// Counting only the cycle's thread: the stats-on-request writer thread allocates by design (it
+// builds the JSON); the cycle that hands it a snapshot must not.
+std::atomic<bool> g_cycle_thread_only{false};
+pthread_t g_cycle_thread{};
 
 void count(std::size_t size) {
   if (!g_armed.load(std::memory_order_relaxed)) return;
+  if (g_cycle_thread_only.load(std::memory_order_relaxed) &&
+      pthread_equal(pthread_self(), g_cycle_thread) == 0)
+    return;
   if (g_allocations.fetch_add(1) == 0) g_first_size = size;
 }
 
@@ -130,7 +140,10 @@ struct PassResult {
 
 // kRecording: the run is recorded as `harmoloc --record` does (every board): frame copies into
 // the slots, the writer thread's files, the text logs; none of it may allocate either.
-enum class Fault { kNone, kCameraStallMidRun, kNoEncoders, kRecording };
+// kStatsOnRequest: the stats file is asked for every 300 cycles, as SIGUSR1 does on the Linux
+// board (boards/common/stats_dumper.hpp): the cycle's thread takes the snapshots without
+// allocating; the writer thread's allocations are not counted.
+enum class Fault { kNone, kCameraStallMidRun, kNoEncoders, kRecording, kStatsOnRequest };
 
 // The camera delivers nothing for cycles [from, to): its frames are taken and dropped.
 class StallingCamera final : public hal::Camera {
@@ -245,19 +258,44 @@ PassResult run_pass(const std::string& dataset, Fault fault) {
                                                              recording.encoders(), link, clock);
   cycle->restore_signing_state(firmware::mavlink::SigningState{}, &signing_store, 1'000'000);
 
+  boards::StatsDumper stats_dumper;
+  firmware::RunCounters run_counters;
+  if (fault == Fault::kStatsOnRequest) EXPECT_EQ(stats_dumper.start(out + ".stats.json", true), "");
+  std::uint64_t stats_taken = 0;
+  bool stats_wanted = false;
+
   PassResult r;
   firmware::forbid_eigen_heap();  // as the board mains do after start-up
   g_allocations = 0;
+  g_cycle_thread = pthread_self();
+  g_cycle_thread_only = fault == Fault::kStatsOnRequest;
   g_armed = true;
   while (cycle->run_once() == firmware::CycleResult::kRan) {
     ++r.cycles;
     const firmware::PoseOutput& pose = cycle->pose();
     if (pose.valid) trajectory.write(pose.data_time_ns, pose.pose);
     recording.after_cycle(*cycle);
+    // As the board's loop does: a request the busy writer could not take is made again on the
+    // next cycle.
+    stats_wanted = fault == Fault::kStatsOnRequest && (stats_wanted || r.cycles % 300 == 0);
+    if (stats_wanted && stats_dumper.request(*cycle, run_counters)) {
+      stats_wanted = false;
+      ++stats_taken;
+    }
   }
   // The writer thread wrote under the counting allocator all along; the end of the run (closing,
   // metadata.toml rewritten) may allocate, as the board mains' ends do.
   g_armed = false;
+  g_cycle_thread_only = false;
+  if (fault == Fault::kStatsOnRequest) {
+    stats_dumper.stop();
+    EXPECT_GE(stats_taken, 1U);  // how many more depends on how fast the writer thread runs
+    EXPECT_EQ(stats_dumper.written(), stats_taken);
+    std::ifstream in(out + ".stats.json");
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    EXPECT_NE(text.find("\"ended\": \"running\""), std::string::npos) << text.substr(0, 200);
+    std::filesystem::remove(out + ".stats.json");
+  }
   const std::uint64_t recorded_frames = recording.frame_counters().recorded;
   recording.finish(true, stderr);
   signing_store.stop();
@@ -351,9 +389,13 @@ TEST(StaticMemory, NoAllocationAfterStartUp) {
     const char* dataset;
     Fault fault;
   };
-  const Pass passes[] = {
-      {"test", Fault::kNone},  {"wrap16", Fault::kNone},     {"test", Fault::kCameraStallMidRun},
-      {"train", Fault::kNone}, {"test", Fault::kNoEncoders}, {"test", Fault::kRecording}};
+  const Pass passes[] = {{"test", Fault::kNone},
+                         {"wrap16", Fault::kNone},
+                         {"test", Fault::kCameraStallMidRun},
+                         {"train", Fault::kNone},
+                         {"test", Fault::kNoEncoders},
+                         {"test", Fault::kRecording},
+                         {"test", Fault::kStatsOnRequest}};
   std::uint64_t total = 0, kidnaps = 0;
   std::array<std::uint64_t, 5> health{};
   for (const Pass& pass : passes) {

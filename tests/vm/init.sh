@@ -69,7 +69,17 @@ listener=$!
 sleep 0.2
 NOTIFY_SOCKET=/tmp/notify WATCHDOG_USEC=1000000 \
 /vm/harmoloc --config /vm/e2e/harmoloc.toml --map /vm/e2e/map.hmap --duration "${HARMOLOC_VM_SECONDS:-12}" \
-  --stats /tmp/stats.json --trajectory /tmp/trajectory.tum
+  --stats /tmp/stats.json --trajectory /tmp/trajectory.tum &
+firmware=$!
+# Stats on request while it runs (SIGUSR1, as `systemctl kill -s USR1 harmoloc` sends it): once
+# start-up is over (READY=1 to the notify socket) and a second has run, the file must appear
+# without the run stopping.
+for _ in $(seq 200); do grep -q 'READY=1' /tmp/notify.log 2> /dev/null && break; sleep 0.1; done
+sleep 1
+kill -USR1 "$firmware"
+for _ in $(seq 50); do [ -s /tmp/stats.json ] && break; sleep 0.1; done
+cp /tmp/stats.json /tmp/stats_on_request.json 2> /dev/null
+wait "$firmware"
 rc=$?
 kill "$player" 2> /dev/null
 sleep 0.3
@@ -79,6 +89,9 @@ echo "VMTEST-END harmoloc rc=$rc"
 echo "VMSTATS-BEGIN"
 cat /tmp/stats.json
 echo "VMSTATS-END"
+echo "VMSTATS-REQUEST-BEGIN"
+cat /tmp/stats_on_request.json 2> /dev/null
+echo "VMSTATS-REQUEST-END"
 echo "VM: trajectory lines $(wc -l < /tmp/trajectory.tum)"
 # Recording a training run on the robot (no map): vivid's frames and vcan0's counters into a
 # dataset folder, the cycle never waiting for the disk. The host checks what it says.

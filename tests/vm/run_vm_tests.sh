@@ -353,6 +353,22 @@ print(f"VM e2e: cycle median {s['stages']['cycle']['median_us']} us, p99 {s['sta
       f"acquire median {s['stages']['acquire']['median_us']} us, overruns {s['overruns']}")
 sys.exit(1 if bad else 0)
 PY
+# The stats asked for with SIGUSR1 mid-run: written by then, the run still going, fewer cycles
+# than at the end.
+sed -n '/^VMSTATS-REQUEST-BEGIN/,/^VMSTATS-REQUEST-END/p' "$CONSOLE" | sed '1d;$d' > "$WORK/stats_on_request.json"
+python3 - "$WORK/stats_on_request.json" "$WORK/stats.json" >&2 <<'PY' || fail "no stats on SIGUSR1 while running"
+import json, sys
+try:
+    mid = json.load(open(sys.argv[1]))
+except ValueError as e:
+    print(f"FAIL the stats file written on SIGUSR1 is not JSON ({e})")
+    sys.exit(1)
+end = json.load(open(sys.argv[2]))
+ok = mid.get("ended") == "running" and 0 < mid.get("cycles", 0) < end["cycles"]
+print(("ok   " if ok else "FAIL ") + f"stats on SIGUSR1 mid-run: ended {mid.get('ended')!r}, "
+      f"{mid.get('cycles')} cycles of {end['cycles']}")
+sys.exit(0 if ok else 1)
+PY
 [ -s "$WORK/link.bin" ] || fail "nothing arrived on the link ($LINK_DEV)"
 if [ -s "$WORK/link.bin" ]; then
   say "decoding the link ($(stat -c %s "$WORK/link.bin") bytes from $LINK_DEV) with node-mavlink"

@@ -13,6 +13,12 @@ extern "C" void on_stop_signal(int signal) {
   g_stop_signal = signal;
 }
 
+volatile std::sig_atomic_t g_stats_request = 0;
+
+extern "C" void on_stats_signal(int) {
+  g_stats_request = 1;
+}
+
 }  // namespace
 
 void install_stop_signals() {
@@ -29,6 +35,20 @@ void install_stop_signals() {
   ignore.sa_handler = SIG_IGN;
   sigemptyset(&ignore.sa_mask);
   sigaction(SIGPIPE, &ignore, nullptr);
+}
+
+void install_stats_signal() {
+  struct sigaction sa {};
+  sa.sa_handler = on_stats_signal;
+  sigemptyset(&sa.sa_mask);
+  sa.sa_flags = SA_RESTART;
+  sigaction(SIGUSR1, &sa, nullptr);
+}
+
+bool take_stats_request() {
+  if (g_stats_request == 0) return false;
+  g_stats_request = 0;
+  return true;
 }
 
 int stop_signal() {

@@ -111,6 +111,13 @@ void Application::run(BoardLoop& loop, bool progress_line) {
   run_.open_fds_start = count_open_fds();
   // From here a signal stops the run at the next cycle boundary, with every output written.
   drivers::install_stop_signals();
+  if (options_.stats_on_request && !options_.stats_path.empty()) {
+    // The signal's handler is the board main's first act (SIGUSR1 would otherwise end the
+    // process): a request made during start-up is served after the first cycle.
+    if (const std::string e = stats_dumper_.start(options_.stats_path, options_.quiet); !e.empty())
+      std::fprintf(stderr, "harmoloc: no stats on SIGUSR1: %s\n", e.c_str());
+  }
+  bool stats_wanted = false;
   watch_.progress_line = progress_line;
   watch_.add(trajectory_.output());
   watch_.add(fixes_.output());
@@ -145,12 +152,21 @@ void Application::run(BoardLoop& loop, bool progress_line) {
       fixes_.write(out.data_time_ns, algorithms::Pose2{fix.fix.x_m, fix.fix.y_m, 0.0});
     // A failed write is said when it happens; the pose still goes out on the link.
     watch_.check();
+    stats_wanted = stats_dumper_.running() && (drivers::take_stats_request() || stats_wanted);
+    if (stats_wanted) {
+      run_.camera = camera_->counters();
+      run_.encoders = encoders().counters();
+      run_.link = link_.counters();
+      run_.skipped_ticks = pacer_->skipped_ticks();
+      stats_wanted = !stats_dumper_.request(*cycle_, run_);  // busy: again after the next cycle
+    }
     if (const char* why = loop.after_cycle(*cycle_, cycles)) {
       run_.ended = why;
       break;
     }
   }
   loop.stopping(run_.ended, cycles);
+  stats_dumper_.stop();                            // before the final stats go to the same file
   read_memory(run_.rss_kb_end, run_.peak_rss_kb);  // before the outputs are closed
   run_.open_fds_end = count_open_fds();
   if (!options_.quiet && drivers::stop_signal() != 0)

@@ -12,6 +12,7 @@
 
 #include "board_run.hpp"
 #include "run_recording.hpp"
+#include "stats_dumper.hpp"
 
 #include "harmoloc/dataset/area_log.hpp"
 #include "harmoloc/dataset/encoder_csv.hpp"
@@ -44,6 +45,8 @@ struct AppOptions {
   std::string trajectory_path, fixes_path, areas_path, record_encoders_path;
   RecordOptions record;
   bool quiet = false;
+  /// SIGUSR1 writes the stats file (--stats) without stopping (stats_dumper.hpp).
+  bool stats_on_request = false;
   /// A run that records (--record, --record-areas) may go without a map.
   bool records() const { return !record.dir.empty() || !areas_path.empty(); }
 };
@@ -144,6 +147,7 @@ class Application {
   hal::WheelEncoders* encoders_ = nullptr;
   hal::Camera* camera_ = nullptr;
   RunRecording recording_;
+  StatsDumper stats_dumper_;
   std::unique_ptr<firmware::LocalizationCycle> cycle_;
   std::optional<firmware::CyclePacer> pacer_;
   drivers::RecordFile signing_store_;

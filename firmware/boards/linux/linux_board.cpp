@@ -34,7 +34,8 @@ void add_linux_options(CLI::App& app, LinuxOptions& l) {
   app.add_option("--link", o.link_path,
                  "serial device for the MAVLink v2 stream (overrides link.device); a file works");
   app.add_option("--stats", o.stats_path,
-                 "write run statistics here at the end (JSON: per-stage timing, counters)");
+                 "write run statistics here at the end (JSON: per-stage timing, counters), and\n"
+                 "on SIGUSR1 while running (replaced whole, never half-written)");
   app.add_option("--trajectory", o.trajectory_path,
                  "write the fused pose of every cycle here (TUM)");
   app.add_option("--record-encoders", o.record_encoders_path,

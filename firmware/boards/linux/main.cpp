@@ -13,22 +13,27 @@
 #include "linux_board.hpp"
 
 #include "harmoloc/drivers/service_notifier.hpp"
+#include "harmoloc/drivers/stop_signals.hpp"
 #include "harmoloc/firmware/cli.hpp"
 
 int main(int argc, char** argv) {
   using namespace harmoloc;
+  // First: SIGUSR1's default action ends the process, and a service manager may send it at any
+  // time (stats_dumper.hpp).
+  drivers::install_stats_signal();
   CLI::App cli{
       "harmoloc (Linux board): runs the firmware's fixed-rate localization cycle on the robot's\n"
       "devices: a V4L2 or libcamera camera, SocketCAN or GPIO quadrature wheel encoders, and a\n"
       "serial line for the MAVLink v2 pose stream (docs/drivers.md, docs/config-format.md).\n"
       "Runs until SIGTERM/SIGINT/SIGHUP (stops at the next cycle, writes every output),\n"
-      "--duration or --cycles. Exit status 0 after a run, 1 if an output could not be written,\n"
-      "2 with a one-line reason on a bad config, map or a missing device, 3 if no pose was ever\n"
-      "produced.",
+      "--duration or --cycles; SIGUSR1 writes --stats without stopping. Exit status 0 after a\n"
+      "run, 1 if an output could not be written, 2 with a one-line reason on a bad config, map\n"
+      "or a missing device, 3 if no pose was ever produced.",
       "harmoloc"};
   static boards::LinuxOptions o;
   boards::add_linux_options(cli, o);
   if (const auto status = harmoloc::cli::parse(cli, argc, argv)) return *status;
+  o.app.stats_on_request = true;
 
   // ---- start-up: everything is read, checked, opened and reserved here ----
   static boards::Application app(boards::RunKind::kLive, o.app);

@@ -2,6 +2,8 @@
 /// @file The run statistics as JSON (`harmoloc --stats`): per-stage timing, overruns, frames,
 /// degraded-mode counts and the hal counters. Schema in docs/stats-format.md.
 
+#include <array>
+#include <memory>
 #include <string>
 
 #include "harmoloc/firmware/localization_cycle.hpp"
@@ -41,9 +43,28 @@ struct RunCounters {
   RecordingCounters recording;
 };
 
-/// The run's statistics, taken after the cycle (allocates).
+/// Everything the stats file is made of, copied out of the cycle (about 10 KB, fixed size): taken
+/// in the run loop without allocating, turned into the file elsewhere (a writer thread on
+/// SIGUSR1, boards/common/stats_dumper.hpp), so the cycle never waits for a file.
+struct StatsSnapshot {
+  CycleCounters counters;
+  std::array<LatencyHistogram, kStageCount> stages{};
+  LatencyHistogram capture_to_send;
+  LatencyHistogram wakeup_latency;  ///< RunCounters::wakeup_latency points here when set
+  mavlink::InboundCounters inbound;
+  std::uint64_t budget_ns = 0;
+  bool uses_boards = false;
+  RunCounters run;
+};
+
+/// Copies the cycle's and the run's counters into @p out. Never allocates.
+void take_snapshot(const LocalizationCycle& cycle, const RunCounters& run, StatsSnapshot& out);
+
+/// The run's statistics (allocates).
+stats::Document stats_document(const StatsSnapshot& snapshot);
 stats::Document stats_document(const LocalizationCycle& cycle, const RunCounters& run);
 /// stats_document() as the file's text (stats::dump).
+std::string stats_json(const StatsSnapshot& snapshot);
 std::string stats_json(const LocalizationCycle& cycle, const RunCounters& run);
 
 /// Writes @p json to @p path (created or truncated). Returns an empty string, or "PATH: write

@@ -16,4 +16,10 @@ int stop_signal();
 /// "SIGTERM", "SIGINT", "SIGHUP" or "signal N".
 const char* signal_name(int signal);
 
+/// SIGUSR1 asks for the stats file without stopping (the Linux board with --stats): the handler
+/// only sets a flag, which take_stats_request() reads and clears at a cycle boundary. Requests
+/// that arrive before the last one was taken are one request.
+void install_stats_signal();
+bool take_stats_request();
+
 }  // namespace harmoloc::drivers
