@@ -1,4 +1,5 @@
 #include "harmoloc/sim_host/colour_preview.hpp"
+#include "harmoloc/sim_host/svg.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -29,29 +30,6 @@ void put_chunk(std::vector<std::uint8_t>& out, const char* type,
   out.insert(out.end(), data.begin(), data.end());
   const uLong crc = crc32(0L, out.data() + start, static_cast<uInt>(out.size() - start));
   put_u32(out, static_cast<std::uint32_t>(crc));
-}
-
-std::string html_escape(const std::string& text) {
-  std::string out;
-  for (const char c : text) {
-    switch (c) {
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '&':
-        out += "&amp;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
 }
 
 // A fully saturated colour of hue @p h8 (8-bit steps), as CSS and as bytes.
@@ -212,7 +190,7 @@ std::string write_preview(const std::string& dir, FrameSource& frames, const Pre
 
   std::ostringstream html;
   html << "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>harmoloc-colours: "
-       << html_escape(in.title)
+       << svg::escape(in.title)
        << "</title>\n<style>body{font-family:sans-serif;margin:1.5em;max-width:1400px}"
           "figure{display:inline-block;margin:0.5em;vertical-align:top}"
           ".stack{position:relative;display:inline-block}"
@@ -220,7 +198,7 @@ std::string write_preview(const std::string& dir, FrameSource& frames, const Pre
           ".stack img.mask{position:absolute;left:0;top:0;opacity:0.75}"
           "table{border-collapse:collapse}td,th{border:1px solid #ccc;padding:2px 8px}"
           ".warn{color:#a00}</style></head><body>\n<h1>Colour windows: "
-       << html_escape(in.title) << "</h1>\n";
+       << svg::escape(in.title) << "</h1>\n";
   html << "<h2>Boards</h2>\n<table><tr><th>board</th><th>window (the firmware's)</th>"
           "<th>median area (px)</th><th>largest area (px)</th><th>frames in view</th></tr>\n";
   for (std::size_t b = 0; b < in.boards.size(); ++b) {
@@ -230,7 +208,7 @@ std::string write_preview(const std::string& dir, FrameSource& frames, const Pre
     for (const auto x : v) seen += x > 0 ? 1 : 0;
     const auto swatch = css(hue_rgb(in.boards[b].hue_centre_h8));
     html << "<tr><td><span style=\"background:" << swatch << "\">&nbsp;&nbsp;&nbsp;</span> "
-         << html_escape(in.boards[b].name) << "</td><td>" << describe_window(in.boards[b].window)
+         << svg::escape(in.boards[b].name) << "</td><td>" << describe_window(in.boards[b].window)
          << "</td><td>" << (v.empty() ? 0 : v[v.size() / 2]) << "</td><td>"
          << (v.empty() ? 0 : v.back()) << "</td><td>" << seen << " of " << v.size()
          << "</td></tr>\n";
@@ -238,7 +216,7 @@ std::string write_preview(const std::string& dir, FrameSource& frames, const Pre
   html << "</table>\n";
   html << "<h2>Warnings</h2>\n";
   if (in.warnings.empty()) html << "<p>None.</p>\n";
-  for (const auto& w : in.warnings) html << "<p class=\"warn\">" << html_escape(w) << "</p>\n";
+  for (const auto& w : in.warnings) html << "<p class=\"warn\">" << svg::escape(w) << "</p>\n";
 
   html << "<h2>Masks</h2>\n<p>Each board's pixels (as the firmware counts them) drawn over the "
           "frame in the opposite hue; hover the frame to see it without the masks.</p>\n";
@@ -256,7 +234,7 @@ std::string write_preview(const std::string& dir, FrameSource& frames, const Pre
     for (std::size_t b = 0; b < a.boards; ++b)
       if (largest[b] == k)
         why += (why.empty() ? "" : "; ") + ("largest area of " + in.boards[b].name);
-    html << ": " << html_escape(why);
+    html << ": " << svg::escape(why);
     html << "</h3>\n<figure><div class=\"stack\" onmouseover=\"for(const m of "
             "this.querySelectorAll('.mask'))m.style.display='none'\" onmouseout=\"for(const m of "
             "this.querySelectorAll('.mask'))m.style.display='block'\"><img src=\""
@@ -274,7 +252,7 @@ std::string write_preview(const std::string& dir, FrameSource& frames, const Pre
     for (std::size_t b = 0; b < a.boards; ++b) {
       html << "<figure><div class=\"stack\"><img src=\"" << frame_file
            << "\" alt=\"frame\"><img class=\"mask\" src=\"" << per_board[b]
-           << "\" alt=\"mask\"></div><figcaption>" << html_escape(in.boards[b].name) << ": "
+           << "\" alt=\"mask\"></div><figcaption>" << svg::escape(in.boards[b].name) << ": "
            << a.area_px[b][k] << " px</figcaption></figure>\n";
     }
   }
@@ -302,7 +280,7 @@ std::string write_preview(const std::string& dir, FrameSource& frames, const Pre
       html << "<tr><td><span style=\"background:" << css(hue_rgb(c.peak_h8))
            << "\">&nbsp;&nbsp;&nbsp;</span> " << 2 * c.range.lo_h8 << ".." << 2 * c.range.hi_h8
            << "</td><td>" << 2 * c.peak_h8 << "</td><td>" << static_cast<long long>(c.pixels)
-           << "</td><td>" << (c.is_board ? "<b>" : "") << html_escape(c.verdict)
+           << "</td><td>" << (c.is_board ? "<b>" : "") << svg::escape(c.verdict)
            << (c.is_board ? "</b>" : "") << "</td></tr>\n";
     }
     html << "</table>\n";
