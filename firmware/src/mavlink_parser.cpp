@@ -42,6 +42,7 @@ constexpr MessageInfo kMessages[] = {
     {110, 84, 254},   // FILE_TRANSFER_PROTOCOL
     {111, 34, 18},    // TIMESYNC
     {126, 220, 81},   // SERIAL_CONTROL
+    {251, 170, 18},   // NAMED_VALUE_FLOAT
     {253, 83, 54},    // STATUSTEXT
     {256, 71, 42},    // SETUP_SIGNING
     {331, 91, 233},   // ODOMETRY

@@ -129,6 +129,17 @@ std::size_t Encoder::timesync(const Timesync& m, FrameBuffer& out) {
   return finish(kMsgTimesync, kCrcExtraTimesync, p.size(), out);
 }
 
+std::size_t Encoder::named_value_float(std::uint32_t time_boot_ms, const char* name, float value,
+                                       FrameBuffer& out) {
+  Payload p(out.data() + kHeaderBytes);
+  p.u32(time_boot_ms);
+  p.f32(value);
+  std::size_t n = 0;
+  for (; n < kNamedValueNameBytes && name[n] != '\0'; ++n) p.u8(static_cast<std::uint8_t>(name[n]));
+  for (; n < kNamedValueNameBytes; ++n) p.u8(0);
+  return finish(kMsgNamedValueFloat, kCrcExtraNamedValueFloat, p.size(), out);
+}
+
 std::size_t Encoder::command_long(std::uint16_t command, const std::array<float, 7>& params,
                                   std::uint8_t target_system, std::uint8_t target_component,
                                   FrameBuffer& out) {

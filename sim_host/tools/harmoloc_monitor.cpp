@@ -129,7 +129,20 @@ struct View {
   std::uint64_t frames = 0, odometry = 0, heartbeats = 0, texts = 0, acks = 0, other = 0;
   std::uint64_t signed_ok = 0, signed_bad = 0, unsigned_frames = 0;
   double first_t_s = 0.0;  // ODOMETRY's time of the first one seen: the rate is over data time
+  // Capture to send over the last heartbeat period (NAMED_VALUE_FLOAT c2s_p50_ms, c2s_max_ms;
+  // live boards only).
+  std::optional<double> latency_p50_ms, latency_max_ms;
 };
+
+// NAMED_VALUE_FLOAT: time_boot_ms (4), value (4), name (10, not terminated when full).
+void take_named_value(const mv::RxFrame& frame, View& v) {
+  float value = 0.0F;
+  std::memcpy(&value, frame.payload.data() + 4, sizeof value);
+  const char* name = reinterpret_cast<const char*>(frame.payload.data() + 8);
+  const std::string key(name, ::strnlen(name, mv::kNamedValueNameBytes));
+  if (key == "c2s_p50_ms") v.latency_p50_ms = value;
+  if (key == "c2s_max_ms") v.latency_max_ms = value;
+}
 
 double odometry_rate_hz(const View& v) {
   if (!v.pose || v.odometry < 2 || !(v.pose->t_s > v.first_t_s)) return 0.0;
@@ -161,6 +174,12 @@ void draw(const View& v, const mv::ParserCounters& p, const std::string& source,
   }
   std::snprintf(line, sizeof line, "health   %s\n", health_text_of(v).c_str());
   out += line;
+  if (v.latency_p50_ms && v.latency_max_ms) {
+    std::snprintf(line, sizeof line,
+                  "latency  capture to send %.1f ms median, %.1f ms max (last second)\n",
+                  *v.latency_p50_ms, *v.latency_max_ms);
+    out += line;
+  }
   std::snprintf(line, sizeof line, "status   %s\n",
                 v.last_text.empty() ? "-" : v.last_text.c_str());
   out += line;
@@ -214,8 +233,9 @@ int main(int argc, char** argv) {
   CLI::App app{
       "harmoloc-monitor: reads harmoloc's MAVLink stream from a serial device, a pty or a\n"
       "recorded link file (harmoloc --link FILE) and shows the pose in the map frame (as the TUM\n"
-      "files), its spread and quality, the health, the last STATUSTEXT, message rates and link\n"
-      "errors: a live view on a terminal, one JSON line per ODOMETRY with --json, TUM with --tum.\n"
+      "files), its spread and quality, the health, the last STATUSTEXT, message rates, link\n"
+      "errors and the capture-to-send latency: a live view on a terminal, one JSON line per\n"
+      "ODOMETRY with --json, TUM with --tum.\n"
       "With a device it can send the commands (relocalize, set pose, request), signed with --key.\n"
       "A file is read to its end; a device until Ctrl-C, --duration or --count.",
       "harmoloc-monitor"};
@@ -229,7 +249,8 @@ int main(int argc, char** argv) {
   app.add_option("SOURCE", source_path, "serial device, pty or recorded link file")->required();
   app.add_flag("--json", json,
                "one JSON object per ODOMETRY on stdout: t (s), x, y (m), yaw (rad) in the map\n"
-               "frame, sigma_m, quality, reset_counter, health");
+               "frame, sigma_m, quality, reset_counter, health; capture_to_send_ms (the last\n"
+               "second's median, live boards) once the link has said it");
   app.add_option("--tum", tum_path, "write every ODOMETRY's pose here (TUM, map frame)");
   app.add_option("--baud", baud, "baud of a serial device (as the firmware's link.baud)")
       ->check(CLI::Range(50U, 4000000U));
@@ -364,6 +385,7 @@ int main(int argc, char** argv) {
             j["quality"] = m.quality;
             j["reset_counter"] = m.reset_counter;
             j["health"] = m.quality < 0 ? std::string("invalid") : health_text_of(view);
+            if (view.latency_p50_ms) j["capture_to_send_ms"] = *view.latency_p50_ms;
             std::printf("%s\n", j.dump().c_str());
           }
           if (tum != nullptr) {
@@ -391,6 +413,10 @@ int main(int argc, char** argv) {
           if (!json && !live_view) std::fprintf(stderr, "STATUSTEXT %s\n", view.last_text.c_str());
           break;
         }
+        case mv::kMsgNamedValueFloat:
+          ++view.other;
+          take_named_value(frame, view);
+          break;
         case mv::kMsgCommandAck: {
           ++view.acks;
           const std::uint16_t command =

@@ -4,7 +4,8 @@
 # (x, y and yaw mirrored back to the map frame), a corrupted copy shows CRC errors, and a file
 # with commands is refused. (2) Live: the firmware on one pty, the monitor on another, bytes
 # relayed between them; the monitor sends a signed "set pose" in map coordinates, gets its ACK
-# and then sees the pose there.
+# and then sees the pose there. A capture-to-send report spliced into the recorded link shows in
+# the view and the JSON lines as node-mavlink reads it.
 source "$(dirname "$0")/lib.sh" "$1" "$2"
 PEER_DIR=$3
 [ -d "$PEER_DIR/node_modules/node-mavlink" ] || fail "node-mavlink is not installed in $PEER_DIR (run ./run setup)"
@@ -49,6 +50,58 @@ view = open(f"{out}/view.txt").read()
 if f"{len(est)} ODOMETRY" not in view or "0 CRC errors" not in view:
     fail(f"summary: {view}")
 print(f"recorded: {len(lines)} ODOMETRY decoded, equal to the trajectory and to node-mavlink")
+PY
+# A live board's capture-to-send report (NAMED_VALUE_FLOAT pair after a HEARTBEAT), spliced in
+# after the third HEARTBEAT of the recorded link: the monitor shows it, node-mavlink agrees.
+python3 - "$out/link.bin" "$out/latency.bin" <<'PY'
+import struct, sys
+def crc(data, c=0xFFFF):
+    for b in data:
+        t = (b ^ c) & 0xFF
+        t = (t ^ (t << 4)) & 0xFF
+        c = ((c >> 8) ^ (t << 8) ^ (t << 3) ^ (t >> 4)) & 0xFFFF
+    return c
+def named(seq, name, value):
+    payload = struct.pack("<If", 5000, value) + name.encode().ljust(10, b"\0")
+    while len(payload) > 1 and payload[-1] == 0:
+        payload = payload[:-1]
+    head = bytes([0xFD, len(payload), 0, 0, seq, 1, 197, 251, 0, 0])
+    c = crc(head[1:] + payload + bytes([170]))
+    return head + payload + struct.pack("<H", c)
+data = open(sys.argv[1], "rb").read()
+i, heartbeats, at = 0, 0, None
+while i < len(data):
+    n = data[i + 1]
+    msg = data[i + 7] | data[i + 8] << 8 | data[i + 9] << 16
+    i += 12 + n + (13 if data[i + 2] & 1 else 0)
+    if msg == 0:
+        heartbeats += 1
+        if heartbeats == 3:
+            at = i
+            break
+assert at is not None, "fewer than 3 HEARTBEATs in the link"
+open(sys.argv[2], "wb").write(data[:at] + named(200, "c2s_p50_ms", 7.25) + named(201, "c2s_max_ms", 11.5) + data[at:])
+PY
+"$MON" --json "$out/latency.bin" > "$out/latency.jsonl" 2> /dev/null
+"$MON" "$out/latency.bin" > "$out/latency.txt" 2> /dev/null
+node "$PEER_DIR/link_peer.js" decode "$out/latency.bin" - "$out/latency-peer.json"
+python3 - "$out" <<'PY'
+import json, sys
+out = sys.argv[1]
+def fail(m): sys.exit(f"FAIL: {m}")
+lines = [json.loads(l) for l in open(f"{out}/latency.jsonl")]
+with_latency = [l for l in lines if "capture_to_send_ms" in l]
+if not with_latency or len(with_latency) == len(lines):
+    fail(f"{len(with_latency)} of {len(lines)} JSON lines carry capture_to_send_ms (expected the ones after the report)")
+if any(abs(l["capture_to_send_ms"] - 7.25) > 1e-6 for l in with_latency):
+    fail(f"capture_to_send_ms {with_latency[0]['capture_to_send_ms']}, expected 7.25")
+peer = [f for f in json.load(open(f"{out}/latency-peer.json"))["frames"] if f["msgid"] == 251]
+if [(f["name"], f["value"]) for f in peer] != [("c2s_p50_ms", 7.25), ("c2s_max_ms", 11.5)]:
+    fail(f"node-mavlink read {peer}")
+view = open(f"{out}/latency.txt").read()
+if "capture to send 7.2 ms median, 11.5 ms max" not in view:
+    fail(f"the view does not show the latency: {view}")
+print(f"latency report: in {len(with_latency)} of {len(lines)} JSON lines and the view, as node-mavlink reads it")
 PY
 python3 - "$out/link.bin" "$out/bad.bin" <<'PY'
 import sys

@@ -1,16 +1,22 @@
 #!/usr/bin/env node
 // Decodes a harmoloc link capture with node-mavlink (an independent MAVLink v2 implementation)
 // and checks it against the firmware's TUM trajectory.
-//   node decode_link.js LINK_FILE [TRAJECTORY.tum]
+//   node decode_link.js [--expect-latency] LINK_FILE [TRAJECTORY.tum]
 // Checks: no CRC errors, no unknown messages, HEARTBEAT at about 1 Hz, one ODOMETRY per pose, and
 // ODOMETRY (MAV_FRAME_LOCAL_FRD) equal to the TUM pose (map frame, z up): x = x, y = -y, yaw = -yaw.
+// Capture-to-send reports (NAMED_VALUE_FLOAT c2s_p50_ms and c2s_max_ms, a pair after a
+// HEARTBEAT): well formed wherever they are; with --expect-latency (a live board) after every
+// HEARTBEAT but the first.
 'use strict';
 const fs = require('fs');
 const { MavLinkPacketSplitter, MavLinkPacketParser, minimal, common } = require('node-mavlink');
 
-const [linkPath, tumPath] = process.argv.slice(2);
+const args = process.argv.slice(2);
+const expectLatency = args[0] === '--expect-latency';
+if (expectLatency) args.shift();
+const [linkPath, tumPath] = args;
 if (!linkPath) {
-  console.error('usage: decode_link.js LINK_FILE [TRAJECTORY.tum]');
+  console.error('usage: decode_link.js [--expect-latency] LINK_FILE [TRAJECTORY.tum]');
   process.exit(2);
 }
 const REGISTRY = { ...minimal.REGISTRY, ...common.REGISTRY };
@@ -23,6 +29,8 @@ const heartbeats = [];
 let heartbeatsInSpan = 0;
 const statustexts = [];
 let lastSeq = null;
+const named = [];
+let previousId = null;
 let seqGaps = 0;
 
 parser.on('data', (packet) => {
@@ -40,6 +48,8 @@ parser.on('data', (packet) => {
   // in the stream dates.
   if (id === 0 && odometry.length > 0) heartbeatsInSpan += 1;
   if (id === 253) statustexts.push(data.text);
+  if (id === 251) named.push({ name: data.name, value: data.value, afterHeartbeat: previousId });
+  previousId = id;
 });
 
 const failures = [];
@@ -50,6 +60,19 @@ parser.on('finish', () => {
   if (unknown > 0) failures.push(`${unknown} packets of unknown message ids`);
   if (seqGaps > 0) failures.push(`${seqGaps} gaps in the sequence numbers`);
   if (heartbeats.length === 0) failures.push('no HEARTBEAT');
+  // NAMED_VALUE_FLOAT pairs: the median right after a HEARTBEAT, then the maximum.
+  let pairs = 0;
+  for (let i = 0; i < named.length; i += 1) {
+    const n = named[i];
+    if (n.name !== 'c2s_p50_ms') { failures.push(`NAMED_VALUE_FLOAT ${n.name} where c2s_p50_ms was expected`); break; }
+    const m = named[i + 1];
+    if (!m || m.name !== 'c2s_max_ms' || m.afterHeartbeat !== 251 || n.afterHeartbeat !== 0) { failures.push('c2s_p50_ms not after a HEARTBEAT and before c2s_max_ms'); break; }
+    if (!(n.value > 0 && n.value <= m.value && m.value < 10000)) { failures.push(`capture to send ${n.value} / ${m.value} ms out of order or range`); break; }
+    pairs += 1;
+    i += 1;
+  }
+  // Every HEARTBEAT after the first pose closes a period with poses in it (one may be cut short).
+  if (expectLatency && (pairs === 0 || pairs < heartbeatsInSpan - 1)) failures.push(`${pairs} capture-to-send reports for ${heartbeatsInSpan} HEARTBEATs after the first pose`);
   if (odometry.length === 0) failures.push('no ODOMETRY');
 
   for (const o of odometry) {
@@ -89,6 +112,11 @@ parser.on('finish', () => {
   }
   const byName = Object.entries(counts).map(([id, c]) => `#${id} x${c}`).join(', ');
   console.log(`decoded ${splitter.validPackages} packets (${byName}); CRC errors ${crcErrors}; status texts: ${JSON.stringify(statustexts)}`);
+  if (pairs > 0) {
+    const p50 = named.filter((n) => n.name === 'c2s_p50_ms').map((n) => n.value).sort((a, b) => a - b);
+    const max = Math.max(...named.filter((n) => n.name === 'c2s_max_ms').map((n) => n.value));
+    console.log(`capture to send: ${pairs} reports, median of the periods' medians ${p50[(p50.length - 1) >> 1].toFixed(2)} ms, largest maximum ${max.toFixed(2)} ms`);
+  }
   if (failures.length) {
     for (const f of failures) console.error(`FAIL: ${f}`);
     process.exit(1);

@@ -82,6 +82,8 @@ function decode(linkPath, keyHex, outPath) {
           yaw: Math.atan2(2 * (qw * qz + qx * qy), 1 - 2 * (qy * qy + qz * qz)),
           resetCounter: d.resetCounter,
         });
+      } else if (h.msgid === 251) {
+        Object.assign(f, { timeBootMs: d.timeBootMs, name: d.name, value: d.value });
       } else if (h.msgid === 111) {
         Object.assign(f, {
           tc1: d.tc1.toString(), ts1: d.ts1.toString(),

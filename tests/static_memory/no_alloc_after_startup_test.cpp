@@ -143,7 +143,30 @@ struct PassResult {
 // kStatsOnRequest: the stats file is asked for every 300 cycles, as SIGUSR1 does on the Linux
 // board (boards/common/stats_dumper.hpp): the cycle's thread takes the snapshots without
 // allocating; the writer thread's allocations are not counted.
-enum class Fault { kNone, kCameraStallMidRun, kNoEncoders, kRecording, kStatsOnRequest };
+// kLiveClock: the cycle runs as on a live board (set_live_clock): it measures capture to send
+// and reports each heartbeat period's latencies on the link (NAMED_VALUE_FLOAT).
+enum class Fault {
+  kNone,
+  kCameraStallMidRun,
+  kNoEncoders,
+  kRecording,
+  kStatsOnRequest,
+  kLiveClock
+};
+
+// A monotonic clock an hour ahead of the recording's first frame: a live board's clock, as far
+// as the cycle can tell (every frame's capture to send is positive, below the histogram's top).
+class AheadOfTheFramesClock final : public hal::Clock {
+ public:
+  explicit AheadOfTheFramesClock(std::uint64_t first_frame_ns)
+      : offset_ns_(first_frame_ns + 3'600'000'000'000ULL - mono_.now_ns()) {}
+  std::uint64_t now_ns() const override { return mono_.now_ns() + offset_ns_; }
+  void sleep_until(std::uint64_t) override {}
+
+ private:
+  drivers::MonotonicClock mono_;
+  std::uint64_t offset_ns_;
+};
 
 // The camera delivers nothing for cycles [from, to): its frames are taken and dropped.
 class StallingCamera final : public hal::Camera {
@@ -203,6 +226,15 @@ std::vector<std::uint8_t> inbound_traffic(const test::mav::Key& key) {
   return out;
 }
 
+// The first frame's timestamp from the dataset's frame index (timestamp_ns,file).
+std::uint64_t first_frame_ns(const std::string& dataset, const dataset::DatasetMetadata& meta) {
+  std::ifstream in(std::filesystem::path(dataset) / meta.frames_index);
+  std::string header, line;
+  std::getline(in, header);
+  std::getline(in, line);
+  return std::stoull(line);
+}
+
 // One start-up (allowed to allocate) and one run of the cycle over a whole dataset (not).
 PassResult run_pass(const std::string& dataset, Fault fault) {
   const auto meta = dataset::read_metadata(dataset);
@@ -254,8 +286,11 @@ PassResult run_pass(const std::string& dataset, Fault fault) {
   } else {
     EXPECT_EQ(recording.start(boards::RecordOptions{}, meta, config, true, camera, *encoders), "");
   }
-  auto cycle = std::make_unique<firmware::LocalizationCycle>(config, g_map, recording.camera(),
-                                                             recording.encoders(), link, clock);
+  AheadOfTheFramesClock ahead(first_frame_ns(dataset, meta));
+  hal::Clock& cycle_clock = fault == Fault::kLiveClock ? static_cast<hal::Clock&>(ahead) : clock;
+  auto cycle = std::make_unique<firmware::LocalizationCycle>(
+      config, g_map, recording.camera(), recording.encoders(), link, cycle_clock);
+  if (fault == Fault::kLiveClock) cycle->set_live_clock(true);
   cycle->restore_signing_state(firmware::mavlink::SigningState{}, &signing_store, 1'000'000);
 
   boards::StatsDumper stats_dumper;
@@ -297,6 +332,7 @@ PassResult run_pass(const std::string& dataset, Fault fault) {
     std::filesystem::remove(out + ".stats.json");
   }
   const std::uint64_t recorded_frames = recording.frame_counters().recorded;
+  if (fault == Fault::kLiveClock) EXPECT_GT(cycle->capture_to_send().count(), 100U);
   recording.finish(true, stderr);
   signing_store.stop();
   EXPECT_GT(signing_store.durable_tag(), 1'000'000U) << "the signing state was never renewed";
@@ -395,7 +431,8 @@ TEST(StaticMemory, NoAllocationAfterStartUp) {
                          {"train", Fault::kNone},
                          {"test", Fault::kNoEncoders},
                          {"test", Fault::kRecording},
-                         {"test", Fault::kStatsOnRequest}};
+                         {"test", Fault::kStatsOnRequest},
+                         {"test", Fault::kLiveClock}};
   std::uint64_t total = 0, kidnaps = 0;
   std::array<std::uint64_t, 5> health{};
   for (const Pass& pass : passes) {

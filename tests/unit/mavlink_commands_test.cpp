@@ -350,13 +350,15 @@ TEST(MavlinkCommands, TimesyncIsAnsweredOnTheDataClock) {
 
 namespace {
 
-// A live board's clock: 1 us a reading, from 1 s on.
+// A live board's clock: @p step_ns (1 us) a reading, from 1 s on.
 class LiveClock final : public hh::Clock {
  public:
-  std::uint64_t now_ns() const override { return now_ += 1000; }
+  explicit LiveClock(std::uint64_t step_ns = 1000) : step_ns_(step_ns) {}
+  std::uint64_t now_ns() const override { return now_ += step_ns_; }
   void sleep_until(std::uint64_t) override {}
 
  private:
+  std::uint64_t step_ns_;
   mutable std::uint64_t now_ = 1'000'000'000;
 };
 
@@ -410,6 +412,60 @@ TEST(CaptureToSend, MeasuredFromTheFrameTimestampToTheOdometryOnALiveBoard) {
   for (int i = 0; i < 10; ++i) replay.run_once();
   EXPECT_TRUE(replay.pose().valid);
   EXPECT_EQ(replay.capture_to_send().count(), 0U);
+}
+
+TEST(CaptureToSend, EachHeartbeatPeriodsMedianAndMaximumGoOnTheLinkAfterTheHeartbeat) {
+  hf::FirmwareConfig config = hf::default_config();
+  config.filter.particles = 256;
+  LiveClock clock(7'000'000);  // 7 ms a reading: latencies of 5 ms plus some readings
+  LiveCamera camera(clock);
+  NoEncoders encoders;
+  tf::QueueLink link;
+  hf::LocalizationCycle cycle(config, test_map(), camera, encoders, link, clock);
+  cycle.set_live_clock(true);
+  for (int i = 0; i < 120; ++i) cycle.run_once();
+  const hf::LatencyHistogram& h = cycle.capture_to_send();
+  ASSERT_EQ(h.count(), 120U);
+
+  const auto frames = tf::decode(link.written);
+  std::size_t heartbeats = 0, reports = 0;
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    if (frames[i].msg_id == 0) ++heartbeats;
+    if (frames[i].msg_id != mv::kMsgNamedValueFloat) continue;
+    // A pair, right after a heartbeat: the median, then the maximum.
+    ASSERT_GE(i, 1U);
+    ASSERT_EQ(frames[i - 1].msg_id, 0U);
+    ASSERT_LT(i + 1, frames.size());
+    const tf::Decoded& median = frames[i];
+    const tf::Decoded& max = frames[i + 1];
+    ASSERT_EQ(max.msg_id, mv::kMsgNamedValueFloat);
+    EXPECT_EQ(std::string(reinterpret_cast<const char*>(median.payload.data() + 8), 10),
+              "c2s_p50_ms");
+    EXPECT_EQ(std::string(reinterpret_cast<const char*>(max.payload.data() + 8), 10), "c2s_max_ms");
+    const double median_ms = tf::f32(median.payload, 4), max_ms = tf::f32(max.payload, 4);
+    EXPECT_GE(median_ms, static_cast<double>(h.min_ns()) * 1e-6 - 1e-3);
+    EXPECT_GE(max_ms, median_ms);
+    EXPECT_LE(max_ms, static_cast<double>(h.max_ns()) * 1e-6 + 1e-3);
+    // time_boot_ms: the data clock (frame times on a live board), after the first second.
+    std::uint32_t boot_ms = 0;
+    for (int b = 3; b >= 0; --b) boot_ms = (boot_ms << 8U) | median.payload[b];
+    EXPECT_GT(boot_ms, 1000U);
+    ++reports;
+    ++i;
+  }
+  // The first heartbeat (first cycle) has no period behind it; every later one has.
+  EXPECT_GE(heartbeats, 3U);
+  EXPECT_EQ(reports, heartbeats - 1);
+
+  // A replay sends none.
+  LiveClock replay_clock(7'000'000);
+  LiveCamera replay_camera(replay_clock);
+  tf::QueueLink replay_link;
+  hf::LocalizationCycle replay(config, test_map(), replay_camera, encoders, replay_link,
+                               replay_clock);
+  for (int i = 0; i < 120; ++i) replay.run_once();
+  for (const tf::Decoded& f : tf::decode(replay_link.written))
+    EXPECT_NE(f.msg_id, mv::kMsgNamedValueFloat);
 }
 
 TEST(MavlinkCommands, SignedLink) {

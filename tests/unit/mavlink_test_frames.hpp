@@ -36,7 +36,7 @@ inline std::uint16_t crc16(const std::uint8_t* p, std::size_t n, std::uint16_t c
 /// CRC_EXTRA of the messages the tests send or read.
 inline std::uint8_t crc_extra(std::uint32_t msg_id) {
   static const std::map<std::uint32_t, std::uint8_t> extras = {
-      {0, 50}, {76, 152}, {77, 143}, {253, 83}, {331, 91}, {75, 158}, {111, 34}};
+      {0, 50}, {76, 152}, {77, 143}, {253, 83}, {331, 91}, {75, 158}, {111, 34}, {251, 170}};
   const auto it = extras.find(msg_id);
   return it == extras.end() ? 0 : it->second;
 }

@@ -33,6 +33,7 @@ add_executable(firmware_test
   ${HARMOLOC_UNIT_DIR}/mavlink_config_test.cpp
   ${HARMOLOC_UNIT_DIR}/pose_messages_test.cpp
   ${HARMOLOC_UNIT_DIR}/latency_histogram_test.cpp
+  ${HARMOLOC_UNIT_DIR}/latency_window_test.cpp
   ${HARMOLOC_UNIT_DIR}/map_loader_test.cpp
   ${HARMOLOC_UNIT_DIR}/device_config_test.cpp
   ${HARMOLOC_UNIT_DIR}/health_log_test.cpp)

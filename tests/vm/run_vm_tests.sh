@@ -372,7 +372,7 @@ PY
 [ -s "$WORK/link.bin" ] || fail "nothing arrived on the link ($LINK_DEV)"
 if [ -s "$WORK/link.bin" ]; then
   say "decoding the link ($(stat -c %s "$WORK/link.bin") bytes from $LINK_DEV) with node-mavlink"
-  node tests/mavlink/decode_link.js "$WORK/link.bin" || fail "node-mavlink did not decode the VM's link cleanly"
+  node tests/mavlink/decode_link.js --expect-latency "$WORK/link.bin" || fail "node-mavlink did not decode the VM's link cleanly (or its capture-to-send reports)"
   # Negative control: a flipped byte must be caught.
   python3 -c "import sys; d=bytearray(open(sys.argv[1],'rb').read()); d[len(d)//2]^=0x40; open(sys.argv[2],'wb').write(d)" "$WORK/link.bin" "$WORK/link-bad.bin"
   if node tests/mavlink/decode_link.js "$WORK/link-bad.bin" > /dev/null 2>&1; then fail "a corrupted copy of the link passed the decoder"; fi

@@ -17,6 +17,7 @@
 #include "harmoloc/algorithms/segmentation.hpp"
 #include "harmoloc/firmware/config.hpp"
 #include "harmoloc/firmware/latency_histogram.hpp"
+#include "harmoloc/firmware/latency_window.hpp"
 #include "harmoloc/firmware/mavlink_inbound.hpp"
 #include "harmoloc/firmware/mavlink_signing.hpp"
 #include "harmoloc/firmware/mavlink_v2.hpp"
@@ -140,7 +141,9 @@ class LocalizationCycle {
   /// Live boards: from a frame's timestamp (its capture, on the monotonic clock) to the moment
   /// the ODOMETRY computed from it was handed to the link, once per cycle with a frame and a
   /// pose. What an autopilot's delay parameter (VISO_DELAY_MS, EKF2_EV_DELAY) is set from. Empty
-  /// in replays (their frame times are the recording's).
+  /// in replays (their frame times are the recording's). Each heartbeat period's median and
+  /// maximum also go on the link (NAMED_VALUE_FLOAT c2s_p50_ms, c2s_max_ms, after the
+  /// HEARTBEAT).
   const LatencyHistogram& capture_to_send() const { return capture_to_send_; }
   mavlink::InboundCounters inbound_counters() const { return receiver_.counters(); }
 
@@ -206,6 +209,8 @@ class LocalizationCycle {
   LatencyHistogram& histogram(Stage stage) { return histograms_[static_cast<std::size_t>(stage)]; }
   void account_overrun(bool overrun);
   void publish();
+  /// The capture-to-send latencies since the last heartbeat, on the link (live boards).
+  void report_capture_to_send();
   // The link's inbound side and the commands (mavlink_commands.cpp).
   void service_link();
   mavlink::MavResult execute(const mavlink::CommandLong& command, std::int32_t& result_param2);
@@ -285,6 +290,7 @@ class LocalizationCycle {
   mavlink::FrameBuffer frame_buffer_{};
   std::array<LatencyHistogram, kStageCount> histograms_{};
   LatencyHistogram capture_to_send_{};
+  LatencyWindow capture_to_send_window_{};  ///< this heartbeat period's, for the link
   bool frame_this_cycle_ = false;  ///< a new frame was taken this cycle (at frame_time_ns_)
   std::uint64_t frame_time_ns_ = 0;
 

@@ -1,6 +1,7 @@
 #pragma once
 /// @file MAVLink v2 framing and the messages the firmware sends: HEARTBEAT (#0), STATUSTEXT
-/// (#253), ODOMETRY (#331) and COMMAND_ACK (#77), from the common message set. Frames are built
+/// (#253), ODOMETRY (#331), COMMAND_ACK (#77), TIMESYNC (#111) and NAMED_VALUE_FLOAT (#251),
+/// from the common message set. Frames are built
 /// into a caller's fixed buffer and signed when a Signer is set; nothing allocates. Wire details
 /// in docs/wire-protocol.md. Inbound frames: mavlink_parser.hpp, mavlink_inbound.hpp.
 
@@ -24,11 +25,15 @@ constexpr std::uint32_t kMsgHeartbeat = 0;
 constexpr std::uint32_t kMsgCommandLong = 76;
 constexpr std::uint32_t kMsgCommandAck = 77;
 constexpr std::uint32_t kMsgTimesync = 111;
+constexpr std::uint32_t kMsgNamedValueFloat = 251;
 constexpr std::uint32_t kMsgStatustext = 253;
 constexpr std::uint32_t kMsgOdometry = 331;
 constexpr std::uint8_t kCrcExtraCommandLong = 152;
 constexpr std::uint8_t kCrcExtraCommandAck = 143;
 constexpr std::uint8_t kCrcExtraTimesync = 34;
+constexpr std::uint8_t kCrcExtraNamedValueFloat = 170;
+/// NAMED_VALUE_FLOAT's name field: 10 characters, not terminated when all are used.
+constexpr std::size_t kNamedValueNameBytes = 10;
 
 // Enumerations of the common set used here.
 constexpr std::uint8_t kMavTypeOnboardController = 18;
@@ -117,6 +122,9 @@ class Encoder {
   std::size_t statustext(std::uint8_t severity, const char* text, FrameBuffer& out);
   std::size_t command_ack(const CommandAck& msg, FrameBuffer& out);
   std::size_t timesync(const Timesync& msg, FrameBuffer& out);
+  /// @p name is cut at kNamedValueNameBytes characters.
+  std::size_t named_value_float(std::uint32_t time_boot_ms, const char* name, float value,
+                                FrameBuffer& out);
   /// COMMAND_LONG (what a ground station or harmoloc-monitor sends): @p params 1..7.
   std::size_t command_long(std::uint16_t command, const std::array<float, 7>& params,
                            std::uint8_t target_system, std::uint8_t target_component,
