@@ -56,9 +56,14 @@ int main(int argc, char** argv) {
                  "optional: the firmware's timing statistics, `harmoloc --stats OUT.json` "
                  "(per-stage timing, cycle histogram, overruns, degraded modes)")
       ->type_name("STATS.json");
+  app.add_option("--link", inputs.link_path,
+                 "optional: the firmware's recorded link, `harmoloc --link OUT` (MAVLink): adds "
+                 "the health timeline and the claimed 2-sigma spread against the actual error")
+      ->type_name("LINK");
   app.add_option("--out", out_dir,
                  "report folder to write (created if needed): index.html, trajectory.svg, "
-                 "error.svg, timing.svg, stages.svg, summary.json, summary.txt")
+                 "error.svg, error_xy.svg, timing.svg, stages.svg, health.svg, sigma.svg, "
+                 "summary.json, summary.txt")
       ->required()
       ->type_name("DIR");
   app.add_option("--title", inputs.title, "free text shown under the report's title")
