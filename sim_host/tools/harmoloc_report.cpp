@@ -12,6 +12,7 @@
 #include <string>
 
 #include "harmoloc/firmware/cli.hpp"
+#include "harmoloc/sim_host/link_log.hpp"
 #include "harmoloc/sim_host/report.hpp"
 
 namespace {
@@ -83,7 +84,9 @@ int main(int argc, char** argv) {
   if (const auto status = harmoloc::cli::parse(app, argc, argv)) return *status;
 
   try {
-    const harmoloc::sim_host::Report report = harmoloc::sim_host::load_report(inputs);
+    harmoloc::sim_host::Report report = harmoloc::sim_host::load_report(inputs);
+    if (!inputs.link_path.empty())
+      report.link = harmoloc::sim_host::read_link_log(inputs.link_path);
     const std::filesystem::path dir(out_dir);
     harmoloc::sim_host::write_report(report, dir);
     std::cout << harmoloc::sim_host::summary_text(report, (dir / "index.html").string());

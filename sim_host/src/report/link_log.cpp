@@ -78,22 +78,6 @@ class HealthTimeline {
 
 }  // namespace
 
-const char* health_label(Health health) {
-  switch (health) {
-    case Health::kNotInitialized:
-      return "not initialised";
-    case Health::kNominal:
-      return "nominal";
-    case Health::kOdometryOnly:
-      return "odometry only";
-    case Health::kVisionOnly:
-      return "vision only";
-    case Health::kInvalid:
-      return "invalid";
-  }
-  return "unknown";
-}
-
 LinkLog parse_link_log(const std::vector<std::uint8_t>& bytes) {
   LinkLog log;
   HealthTimeline timeline;

@@ -103,10 +103,8 @@ Report load_report(const ReportInputs& inputs) {
   if (!inputs.fixes_path.empty()) fixes = dataset::read_tum(inputs.fixes_path);
   std::optional<RunStats> stats;
   if (!inputs.stats_path.empty()) stats = read_stats(inputs.stats_path);
-  Report report = build_report(inputs, std::move(truth), std::move(estimate), std::move(fixes),
-                               std::move(stats));
-  if (!inputs.link_path.empty()) report.link = read_link_log(inputs.link_path);
-  return report;
+  return build_report(inputs, std::move(truth), std::move(estimate), std::move(fixes),
+                      std::move(stats));
 }
 
 std::vector<std::string> write_report(const Report& report, const std::filesystem::path& dir) {

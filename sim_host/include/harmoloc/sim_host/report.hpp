@@ -37,8 +37,8 @@ struct Report {
   std::optional<TrajectoryErrors> fixes_all;
   std::optional<TrajectoryErrors> fixes_converged;
   std::optional<RunStats> stats;
-  /// The link recording (`harmoloc --link FILE`): health and spread over time. Set by
-  /// load_report when inputs.link_path is given, or by the caller.
+  /// The link recording (`harmoloc --link FILE`): health and spread over time. Set by the
+  /// caller from read_link_log(inputs.link_path) (link_log.hpp, library harmoloc_report_link).
   std::optional<LinkLog> link;
   /// The fused estimate's Relative Pose Error (relative_error.hpp) over 1 m and over 1 s, on
   /// the poses estimate_all scores and, with a skip, on those estimate_converged scores.
