@@ -11,7 +11,7 @@ if [ -z "$browser" ]; then
   echo "SKIP: chromium is not installed (apt-get install chromium; ./run setup installs it)"
   exit 77
 fi
-out="$WORK/browser"
+out="$(cd "$WORK" && pwd)/browser"  # absolute: it goes into file:// URLs
 rm -rf "$out"
 mkdir -p "$out"
 "$BIN/harmoloc" --dataset "$WORK/test" --map "$WORK/tiny.hmap" --trajectory "$out/est.tum" \
@@ -45,12 +45,14 @@ for (const src of srcs) {
 open(sys.argv[1], "w", encoding="utf-8").write(page)
 EOF
 
-# --no-sandbox: CI runs as root, where chromium's sandbox refuses to start. The virtual time
-# budget lets every image finish loading before the screenshot is taken.
+# --no-sandbox: CI runs as root, where chromium's sandbox refuses to start. A profile of its own
+# keeps the run independent of HOME (and out of it). The virtual time budget lets every image
+# finish loading before the screenshot is taken.
+profile="$out/chromium-profile"
 shoot() {
   local url=$1 png=$2 log=$3
   timeout 120 "$browser" --headless --no-sandbox --disable-gpu --no-first-run \
-    --enable-logging=stderr --v=0 --virtual-time-budget=5000 --window-size=1000,5000 \
+    --user-data-dir="$profile" --enable-logging=stderr --v=0 --virtual-time-budget=5000 --window-size=1000,5000 \
     --screenshot="$png" "$url" > "$log" 2>&1 || { cat "$log"; fail "chromium failed on $url"; }
   test -s "$png" || { cat "$log"; fail "no screenshot of $url"; }
   if grep -E "CONSOLE|Uncaught" "$log"; then fail "console messages on $url (above)"; fi
@@ -61,8 +63,8 @@ shoot "file://$out/report/check.html" "$out/check.png" "$out/check.log"
 # The harness must be able to fail: a missing image is reported.
 cp "$out/report/check.html" "$out/report/check_broken.html"
 sed -i 's/"trajectory.svg"/"no-such-plot.svg"/' "$out/report/check_broken.html"
-timeout 120 "$browser" --headless --no-sandbox --disable-gpu --no-first-run --enable-logging=stderr \
-  --v=0 --virtual-time-budget=5000 --screenshot="$out/broken.png" \
+timeout 120 "$browser" --headless --no-sandbox --disable-gpu --no-first-run \
+  --user-data-dir="$profile" --enable-logging=stderr --v=0 --virtual-time-budget=5000 --screenshot="$out/broken.png" \
   "file://$out/report/check_broken.html" > "$out/broken.log" 2>&1 || true
 grep -q "image failed to load: no-such-plot.svg" "$out/broken.log" ||
   { cat "$out/broken.log"; fail "the harness did not report a missing image"; }
