@@ -12,6 +12,7 @@
 #include <string>
 
 #include "harmoloc/firmware/cli.hpp"
+#include "harmoloc/sim_host/link_log.hpp"
 #include "harmoloc/sim_host/report.hpp"
 
 namespace {
@@ -56,9 +57,14 @@ int main(int argc, char** argv) {
                  "optional: the firmware's timing statistics, `harmoloc --stats OUT.json` "
                  "(per-stage timing, cycle histogram, overruns, degraded modes)")
       ->type_name("STATS.json");
+  app.add_option("--link", inputs.link_path,
+                 "optional: the firmware's recorded link, `harmoloc --link OUT` (MAVLink): adds "
+                 "the health timeline and the claimed 2-sigma spread against the actual error")
+      ->type_name("LINK");
   app.add_option("--out", out_dir,
                  "report folder to write (created if needed): index.html, trajectory.svg, "
-                 "error.svg, timing.svg, stages.svg, summary.json, summary.txt")
+                 "error.svg, error_xy.svg, timing.svg, stages.svg, health.svg, sigma.svg, "
+                 "summary.json, summary.txt")
       ->required()
       ->type_name("DIR");
   app.add_option("--title", inputs.title, "free text shown under the report's title")
@@ -78,7 +84,9 @@ int main(int argc, char** argv) {
   if (const auto status = harmoloc::cli::parse(app, argc, argv)) return *status;
 
   try {
-    const harmoloc::sim_host::Report report = harmoloc::sim_host::load_report(inputs);
+    harmoloc::sim_host::Report report = harmoloc::sim_host::load_report(inputs);
+    if (!inputs.link_path.empty())
+      report.link = harmoloc::sim_host::read_link_log(inputs.link_path);
     const std::filesystem::path dir(out_dir);
     harmoloc::sim_host::write_report(report, dir);
     std::cout << harmoloc::sim_host::summary_text(report, (dir / "index.html").string());

@@ -546,7 +546,8 @@ TEST(ReportWrite, WithoutStatsOrFixes) {
   const Circle c;
   const hs::Report r = hs::build_report({}, c.truth, c.estimate, {}, std::nullopt);
   const std::vector<std::string> written = hs::write_report(r, dir);
-  EXPECT_EQ(written.size(), 5u);
+  // trajectory, error, error_xy (x/y components), index.html, summary.json, summary.txt
+  EXPECT_EQ(written.size(), 6u);
   EXPECT_FALSE(std::filesystem::exists(dir / "timing.svg"));
   EXPECT_FALSE(std::filesystem::exists(dir / "stages.svg"));
   const std::string html = read_text(dir / "index.html");

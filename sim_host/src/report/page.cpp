@@ -49,6 +49,90 @@ void html_row(std::string& out, const std::string& label, const std::vector<std:
   out += "</tr>\n";
 }
 
+std::string rpe_cell(const RelativeErrors& r, double metres) {
+  return r.pairs == 0 ? std::string("n/a") : cell(metres * 100.0, 2);
+}
+
+// Relative error (drift over 1 m and 1 s, evo_rpe's translation part) beside the absolute one.
+void relative_error_table(std::string& out, const Report& report) {
+  struct Column {
+    std::string name;
+    const RelativeErrors* m;
+    const RelativeErrors* s;
+    const TrajectoryErrors* absolute;
+  };
+  std::vector<Column> columns = {
+      {"fused estimate", &report.rpe_1m, &report.rpe_1s, &report.estimate_all}};
+  if (report.rpe_1m_converged && report.rpe_1s_converged && report.estimate_converged) {
+    columns.push_back({"fused, after " + seconds(report.inputs.skip_initial_s),
+                       &*report.rpe_1m_converged, &*report.rpe_1s_converged,
+                       &*report.estimate_converged});
+  }
+  out += "<h2>Relative error (drift)</h2>\n<table class=\"rpe\">\n<tr><th></th>";
+  for (const Column& c : columns) out += "<th>" + escape(c.name) + "</th>";
+  out += "</tr>\n";
+  const auto row = [&](const std::string& label, auto value) {
+    std::vector<std::string> cells;
+    for (const Column& c : columns) cells.push_back(value(c));
+    html_row(out, label, cells);
+  };
+  row("absolute: RMSE position (cm)",
+      [](const Column& c) { return cell(c.absolute->rmse_position_m * 100.0, 2); });
+  for (const bool metres : {true, false}) {
+    const std::string over = metres ? "RPE over 1 m" : "RPE over 1 s";
+    const auto pick = [metres](const Column& c) { return metres ? c.m : c.s; };
+    row(over + ": pairs", [&](const Column& c) { return std::to_string(pick(c)->pairs); });
+    row(over + ": RMSE (cm)", [&](const Column& c) { return rpe_cell(*pick(c), pick(c)->rmse_m); });
+    row(over + ": median (cm)",
+        [&](const Column& c) { return rpe_cell(*pick(c), pick(c)->median_m); });
+    row(over + ": max (cm)", [&](const Column& c) { return rpe_cell(*pick(c), pick(c)->max_m); });
+  }
+  out += "</table>\n<p class=\"note\">" +
+         escape(
+             "Relative Pose Error, translation part, as evo_rpe reports it with consecutive "
+             "pairs: over 1 m of the estimate's path (evo_rpe --delta 1 --delta_unit m) and "
+             "over 1 s (at a steady rate, evo's --delta_unit f with the frames of a second). A "
+             "constant offset costs nothing here; drift does.") +
+         "</p>\n";
+}
+
+// What the link recording adds: time in each health and how honest the claimed spread is.
+void link_table(std::string& out, const Report& report) {
+  const LinkLog& link = *report.link;
+  out += "<h2>Health and spread (from the link)</h2>\n<table class=\"link\">\n";
+  html_row(out, "poses on the link", {std::to_string(link.poses.size())});
+  html_row(out, "health changes",
+           {std::to_string(link.health.empty() ? 0 : link.health.size() - 1)});
+  double total_s = 0.0;
+  for (const HealthSpan& span : link.health) total_s += span.end_s - span.start_s;
+  for (const firmware::Health h :
+       {firmware::Health::kNominal, firmware::Health::kOdometryOnly, firmware::Health::kVisionOnly,
+        firmware::Health::kInvalid, firmware::Health::kNotInitialized}) {
+    double time_s = 0.0;
+    for (const HealthSpan& span : link.health) {
+      if (span.health == h) time_s += span.end_s - span.start_s;
+    }
+    if (time_s <= 0.0) continue;
+    html_row(out, std::string("time ") + health_label(h),
+             {format("%.1f s (%.1f%%)", time_s, total_s > 0.0 ? 100.0 * time_s / total_s : 0.0)},
+             {h == firmware::Health::kInvalid});
+  }
+  const SigmaConsistency c = sigma_consistency(report);
+  if (c.poses > 0) {
+    const auto share = [&](std::size_t inside) {
+      return format("%.1f%%", 100.0 * static_cast<double>(inside) / static_cast<double>(c.poses));
+    };
+    html_row(out, "x error within ±2 sigma", {share(c.inside_x)});
+    html_row(out, "y error within ±2 sigma", {share(c.inside_y)});
+  }
+  out += "</table>\n<p class=\"note\">" +
+         escape(
+             "Health from the STATUSTEXTs the firmware sends on each change; sigma from each "
+             "ODOMETRY's covariance. A consistent filter keeps about 95% of each axis's errors "
+             "within ±2 sigma.") +
+         "</p>\n";
+}
+
 }  // namespace
 
 std::string index_html(const Report& report, const std::vector<std::string>& images) {
@@ -118,6 +202,8 @@ std::string index_html(const Report& report, const std::vector<std::string>& ima
   }
   note += " The harmonic localizer gives no heading.";
   out += "<p class=\"note\">" + escape(note) + "</p>\n";
+  relative_error_table(out, report);
+  if (report.link) link_table(out, report);
 
   if (report.stats) {
     const RunStats& s = *report.stats;
@@ -164,9 +250,17 @@ std::string index_html(const Report& report, const std::vector<std::string>& ima
     } else if (image == "error.svg") {
       caption = "Position error (cm) and signed heading error (deg) over time.";
     } else if (image == "timing.svg") {
-      caption = "Histogram of the whole-cycle compute time with its median and p99.";
+      caption =
+          "Histogram of the whole-cycle compute time (true bucket widths) with its median, p99 "
+          "and the budget.";
     } else if (image == "stages.svg") {
       caption = "Median and p99 compute time of each stage of the cycle.";
+    } else if (image == "error_xy.svg") {
+      caption = "The error's x and y components over time (estimate - truth, cm).";
+    } else if (image == "sigma.svg") {
+      caption = "The pose on the link: its x and y errors against the ±2 sigma it claims.";
+    } else if (image == "health.svg") {
+      caption = "Health over time (from the link's STATUSTEXTs) and the quality of each pose.";
     }
     out += "<figure><img src=\"" + escape(image) + "\" alt=\"" + escape(caption) +
            "\"><figcaption>" + escape(caption) + "</figcaption></figure>\n";
@@ -190,6 +284,7 @@ std::string index_html(const Report& report, const std::vector<std::string>& ima
     html_row(out, "harmonic fixes", {report.inputs.fixes_path});
   }
   if (!report.inputs.stats_path.empty()) html_row(out, "stats", {report.inputs.stats_path});
+  if (!report.inputs.link_path.empty()) html_row(out, "link", {report.inputs.link_path});
   out +=
       "</table>\n<p class=\"note\">Written by harmoloc-report. The numbers are also in "
       "<a href=\"summary.json\">summary.json</a> and <a href=\"summary.txt\">summary.txt</a>."

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <system_error>
 
 #include "format.hpp"
@@ -70,6 +71,16 @@ Report build_report(ReportInputs inputs, std::vector<dataset::StampedPose> truth
       if (converged.count > 0) report.fixes_converged = std::move(converged);
     }
   }
+  // Relative error on the same poses as the absolute error (all, and after the skip).
+  const double all_from_s = -std::numeric_limits<double>::infinity();
+  const std::vector<PosePair> all_pairs = pair_with_truth(truth, estimate, all_from_s);
+  report.rpe_1m = relative_errors(all_pairs, 1.0, DeltaUnit::kMetres);
+  report.rpe_1s = relative_errors(all_pairs, 1.0, DeltaUnit::kSeconds);
+  if (skip > 0.0) {
+    const std::vector<PosePair> late = pair_with_truth(truth, estimate, truth.front().t_s + skip);
+    report.rpe_1m_converged = relative_errors(late, 1.0, DeltaUnit::kMetres);
+    report.rpe_1s_converged = relative_errors(late, 1.0, DeltaUnit::kSeconds);
+  }
   report.inputs = std::move(inputs);
   report.truth = std::move(truth);
   report.estimate = std::move(estimate);
@@ -79,8 +90,8 @@ Report build_report(ReportInputs inputs, std::vector<dataset::StampedPose> truth
 }
 
 Report load_report(const ReportInputs& inputs) {
-  for (const std::string* path :
-       {&inputs.truth_path, &inputs.estimate_path, &inputs.fixes_path, &inputs.stats_path}) {
+  for (const std::string* path : {&inputs.truth_path, &inputs.estimate_path, &inputs.fixes_path,
+                                  &inputs.stats_path, &inputs.link_path}) {
     std::error_code ec;
     if (!path->empty() && std::filesystem::is_directory(*path, ec)) {
       throw ReportError(*path + ": is a directory, expected a file");
@@ -117,6 +128,17 @@ std::vector<std::string> write_report(const Report& report, const std::filesyste
   images.push_back("trajectory.svg");
   put("error.svg", error_svg(report));
   images.push_back("error.svg");
+  put("error_xy.svg", xy_error_svg(report));
+  images.push_back("error_xy.svg");
+  if (report.link) {
+    put("sigma.svg", sigma_svg(report));
+    images.push_back("sigma.svg");
+    put("health.svg", health_svg(report));
+    images.push_back("health.svg");
+  } else {
+    drop("sigma.svg");
+    drop("health.svg");
+  }
   if (report.stats && report.stats->cycle_histogram) {
     put("timing.svg", timing_svg(*report.stats));
     images.push_back("timing.svg");

@@ -1,6 +1,7 @@
 // The report's text summary (the terminal) and its JSON twin (summary.json, for scripts).
 #include "harmoloc/sim_host/report.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <nlohmann/json.hpp>
@@ -55,6 +56,40 @@ Json errors_json(const TrajectoryErrors& e, bool heading) {
   return j;
 }
 
+Json rpe_json(const RelativeErrors& r) {
+  Json j;
+  j["delta"] = r.delta;
+  j["delta_unit"] = r.unit == DeltaUnit::kMetres ? "m" : "s";
+  j["pairs"] = r.pairs;
+  const auto value = [&](double m) { return r.pairs == 0 ? Json(nullptr) : Json(m * 100.0); };
+  j["rmse_cm"] = value(r.rmse_m);
+  j["mean_cm"] = value(r.mean_m);
+  j["median_cm"] = value(r.median_m);
+  j["max_cm"] = value(r.max_m);
+  return j;
+}
+
+std::string rpe_line(const RelativeErrors& r) {
+  if (r.pairs == 0) return "n/a (too short for one pair)";
+  return format("RMSE %s  median %s  max %s over %zu pairs", cm(r.rmse_m).c_str(),
+                cm(r.median_m).c_str(), cm(r.max_m).c_str(), r.pairs);
+}
+
+/// Seconds spent in each health on the link, in the order health_label's callers show them.
+std::vector<std::pair<firmware::Health, double>> health_time(const LinkLog& link) {
+  std::vector<std::pair<firmware::Health, double>> out;
+  for (const HealthSpan& span : link.health) {
+    auto it =
+        std::find_if(out.begin(), out.end(), [&](const auto& e) { return e.first == span.health; });
+    if (it == out.end()) {
+      out.emplace_back(span.health, 0.0);
+      it = out.end() - 1;
+    }
+    it->second += span.end_s - span.start_s;
+  }
+  return out;
+}
+
 Json number_or_null(double v) {
   return std::isfinite(v) ? Json(v) : Json(nullptr);
 }
@@ -93,6 +128,10 @@ std::string summary_text(const Report& report, const std::string& index_path) {
     out += format("%s%.2f deg  (max %.1f deg)\n", after.c_str(), late->rmse_heading_deg,
                   late->max_heading_deg);
   }
+  out += "RPE 1 m        " + rpe_line(report.rpe_1m) + "\n";
+  if (report.rpe_1m_converged) out += after + rpe_line(*report.rpe_1m_converged) + "\n";
+  out += "RPE 1 s        " + rpe_line(report.rpe_1s) + "\n";
+  if (report.rpe_1s_converged) out += after + rpe_line(*report.rpe_1s_converged) + "\n";
   if (report.fixes_all) {
     out += "harmonic fixes " + fixes_line(*report.fixes_all) + "\n";
   }
@@ -143,6 +182,27 @@ std::string summary_text(const Report& report, const std::string& index_path) {
       out += "degraded       " + list + "\n";
     }
   }
+  if (report.link) {
+    const std::vector<std::pair<firmware::Health, double>> spent = health_time(*report.link);
+    double total_s = 0.0;
+    for (const auto& e : spent) total_s += e.second;
+    std::string list;
+    for (const auto& [health, time_s] : spent) {
+      if (!list.empty()) list += ", ";
+      list +=
+          format("%s %.1f%%", health_label(health), total_s > 0.0 ? 100.0 * time_s / total_s : 0.0);
+    }
+    out += "health (link)  " + (list.empty() ? std::string("n/a") : list) +
+           format(" (%zu changes)\n",
+                  report.link->health.empty() ? 0 : report.link->health.size() - 1);
+    const SigmaConsistency c = sigma_consistency(report);
+    if (c.poses > 0) {
+      out +=
+          format("2 sigma (link) x %.1f%%  y %.1f%% of %zu poses within +-2 sigma\n",
+                 100.0 * static_cast<double>(c.inside_x) / static_cast<double>(c.poses),
+                 100.0 * static_cast<double>(c.inside_y) / static_cast<double>(c.poses), c.poses);
+    }
+  }
   if (!index_path.empty()) out += "report         " + index_path + "\n";
   return out;
 }
@@ -154,13 +214,22 @@ std::string summary_json(const Report& report) {
       {"truth", report.inputs.truth_path},
       {"estimate", report.inputs.estimate_path},
       {"fixes", report.inputs.fixes_path.empty() ? Json(nullptr) : Json(report.inputs.fixes_path)},
-      {"stats", report.inputs.stats_path.empty() ? Json(nullptr) : Json(report.inputs.stats_path)}};
+      {"stats", report.inputs.stats_path.empty() ? Json(nullptr) : Json(report.inputs.stats_path)},
+      {"link", report.inputs.link_path.empty() ? Json(nullptr) : Json(report.inputs.link_path)}};
   j["skip_initial_s"] = report.inputs.skip_initial_s;
   j["units"] = "lengths in cm, MSE in cm2, angles in degrees, times in microseconds";
   Json estimate;
   estimate["all"] = errors_json(report.estimate_all, true);
+  estimate["all"]["rpe_1m"] = rpe_json(report.rpe_1m);
+  estimate["all"]["rpe_1s"] = rpe_json(report.rpe_1s);
   if (report.estimate_converged) {
     estimate["after_convergence"] = errors_json(*report.estimate_converged, true);
+    if (report.rpe_1m_converged) {
+      estimate["after_convergence"]["rpe_1m"] = rpe_json(*report.rpe_1m_converged);
+    }
+    if (report.rpe_1s_converged) {
+      estimate["after_convergence"]["rpe_1s"] = rpe_json(*report.rpe_1s_converged);
+    }
   }
   j["estimate"] = estimate;
   if (report.fixes_all) {
@@ -170,6 +239,27 @@ std::string summary_json(const Report& report) {
       fixes["after_convergence"] = errors_json(*report.fixes_converged, false);
     }
     j["fixes"] = fixes;
+  }
+  if (report.link) {
+    Json link;
+    link["poses"] = report.link->poses.size();
+    link["frames"] = report.link->frames;
+    link["crc_errors"] = report.link->crc_errors;
+    link["health_changes"] = report.link->health.empty() ? 0 : report.link->health.size() - 1;
+    Json spent = Json::object();
+    for (const auto& [health, time_s] : health_time(*report.link)) {
+      spent[health_label(health)] = time_s;
+    }
+    link["health_time_s"] = spent;
+    const SigmaConsistency c = sigma_consistency(report);
+    const auto share = [&](std::size_t inside) {
+      return c.poses == 0
+                 ? Json(nullptr)
+                 : Json(100.0 * static_cast<double>(inside) / static_cast<double>(c.poses));
+    };
+    link["within_2sigma_x_percent"] = share(c.inside_x);
+    link["within_2sigma_y_percent"] = share(c.inside_y);
+    j["link"] = link;
   }
   if (report.stats) {
     const RunStats& s = *report.stats;

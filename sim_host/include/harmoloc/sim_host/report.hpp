@@ -9,6 +9,8 @@
 #include <vector>
 
 #include "harmoloc/dataset/tum.hpp"
+#include "harmoloc/sim_host/link_log.hpp"
+#include "harmoloc/sim_host/relative_error.hpp"
 #include "harmoloc/sim_host/report_error.hpp"
 #include "harmoloc/sim_host/run_stats.hpp"
 #include "harmoloc/sim_host/trajectory_evaluation.hpp"
@@ -21,6 +23,7 @@ struct ReportInputs {
   std::string estimate_path;
   std::string fixes_path;  ///< Empty: no harmonic fixes.
   std::string stats_path;  ///< Empty: no timing.
+  std::string link_path;   ///< Empty: no health timeline and no 2-sigma plot.
   double skip_initial_s = 0.0;
 };
 
@@ -34,7 +37,24 @@ struct Report {
   std::optional<TrajectoryErrors> fixes_all;
   std::optional<TrajectoryErrors> fixes_converged;
   std::optional<RunStats> stats;
+  /// The link recording (`harmoloc --link FILE`): health and spread over time. Set by the
+  /// caller from read_link_log(inputs.link_path) (link_log.hpp, library harmoloc_report_link).
+  std::optional<LinkLog> link;
+  /// The fused estimate's Relative Pose Error (relative_error.hpp) over 1 m and over 1 s, on
+  /// the poses estimate_all scores and, with a skip, on those estimate_converged scores.
+  RelativeErrors rpe_1m;
+  RelativeErrors rpe_1s;
+  std::optional<RelativeErrors> rpe_1m_converged;
+  std::optional<RelativeErrors> rpe_1s_converged;
 };
+
+/// How many poses on the link keep their x and y errors within 2 sigma.
+struct SigmaConsistency {
+  std::size_t poses = 0;  ///< Link poses within the truth's time span.
+  std::size_t inside_x = 0;
+  std::size_t inside_y = 0;
+};
+SigmaConsistency sigma_consistency(const Report& report);
 
 /// Scores the loaded trajectories (and keeps @p stats). Throws ReportError when the estimate (or
 /// the fixes) has no pose in the truth's time span, or the skip leaves none, or truth has fewer
@@ -59,6 +79,9 @@ std::string trajectory_svg(const Report& report);
 std::string error_svg(const Report& report);
 std::string timing_svg(const RunStats& stats);  ///< Requires stats.cycle_histogram.
 std::string stages_svg(const RunStats& stats);
+std::string xy_error_svg(const Report& report);  ///< x and y error components over time.
+std::string health_svg(const Report& report);    ///< Requires report.link.
+std::string sigma_svg(const Report& report);     ///< Requires report.link.
 
 /// The self-contained HTML page; @p images are the SVG file names (relative to the page).
 std::string index_html(const Report& report, const std::vector<std::string>& images);
