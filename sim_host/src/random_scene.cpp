@@ -10,6 +10,7 @@
 
 #include "harmoloc/algorithms/geometry.hpp"
 #include "harmoloc/algorithms/random.hpp"
+#include "harmoloc/dataset/toml_writer.hpp"
 #include "harmoloc/sim_host/lens.hpp"
 #include "harmoloc/sim_host/route.hpp"
 #include "harmoloc/sim_host/scenario_run.hpp"
@@ -809,30 +810,31 @@ algorithms::ThresholdSet threshold_set(
 }
 
 std::string firmware_config_toml(const Scenario& s) {
-  std::ostringstream o;
-  char line[160];
-  o << "# harmoloc firmware configuration for the simulated scene '" << s.name
-    << "' (docs/config-format.md):\n# the robot's nominal geometry, its encoder frames and a "
-       "colour window per board.\n\n[odometry]\n";
-  std::snprintf(line, sizeof line, "wheel_radius_m = %.6g\ntrack_m = %.6g\nticks_per_rev = %.0f\n",
-                s.robot.wheel_radius_m, s.robot.track_m, s.robot.ticks_per_rev);
-  o << line << "\n[can]\n";
-  std::snprintf(line, sizeof line,
-                "encoder_id = %u\nlength = %d\nleft_offset = %d\nright_offset = %d\n"
-                "counter_bits = %d\n",
-                s.can_layout.id, int{s.can_layout.length}, int{s.can_layout.left_offset},
-                int{s.can_layout.right_offset}, int{s.can_layout.counter_bits});
-  o << line;
+  dataset::TomlWriter w("harmoloc firmware configuration for the simulated scene '" + s.name +
+                        "' (docs/config-format.md):\nthe robot's nominal geometry, its encoder "
+                        "frames and a colour window per board.");
+  w.table("odometry")
+      .set("wheel_radius_m", s.robot.wheel_radius_m)
+      .set("track_m", s.robot.track_m)
+      .set("ticks_per_rev", s.robot.ticks_per_rev);
+  w.table("can")
+      .set("encoder_id", s.can_layout.id)
+      .set("length", int{s.can_layout.length})
+      .set("left_offset", int{s.can_layout.left_offset})
+      .set("right_offset", int{s.can_layout.right_offset})
+      .set("counter_bits", int{s.can_layout.counter_bits});
   for (const auto& [name, t] : thresholds_for(s)) {
-    std::snprintf(line, sizeof line,
-                  "\n[[board]]\nname = \"%s\"\nhue_deg = [%.1f, %.1f]\nsaturation_min = %d\n"
-                  "value_min = %d\nvalue_max = %d\n",
-                  name.c_str(), static_cast<double>(t.hue_min_deg),
-                  static_cast<double>(t.hue_max_deg), int{t.saturation_min}, int{t.value_min},
-                  int{t.value_max});
-    o << line;
+    toml::array hue;
+    dataset::push_number(hue, dataset::decimal_of(t.hue_min_deg));
+    dataset::push_number(hue, dataset::decimal_of(t.hue_max_deg));
+    w.array_table("board")
+        .set("name", name)
+        .set("hue_deg", hue)
+        .set("saturation_min", int{t.saturation_min})
+        .set("value_min", int{t.value_min})
+        .set("value_max", int{t.value_max});
   }
-  return o.str();
+  return w.text();
 }
 
 Scenario with_other_lighting(const Scenario& s, std::uint64_t seed) {

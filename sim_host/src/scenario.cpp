@@ -1,15 +1,16 @@
 #include "harmoloc/sim_host/scenario.hpp"
 
 #include <algorithm>
-#include <charconv>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <sstream>
 #include <stdexcept>
 
 #include <toml++/toml.h>
 
-#include "harmoloc/dataset/toml_text.hpp"
+#include "harmoloc/dataset/toml_writer.hpp"
 #include "harmoloc/drivers/input_file.hpp"
 #include "harmoloc/sim_host/route.hpp"
 
@@ -665,116 +666,127 @@ Scenario load_scenario_at_depth(const std::string& name_or_file, int depth) {
 
 namespace {
 
-// The shortest decimal that reads back as the same double (scenario files round-trip exactly).
-std::string num_text(double v) {
-  char buf[64];
-  const auto r = std::to_chars(buf, buf + sizeof buf, v);
-  return std::string(buf, r.ptr);
-}
-
 // Degrees computed from radians: 12 significant digits, so that -75 stays -75 (a scenario's
 // angles are whole or decimal degrees; they read back to the same radians).
-std::string deg_text(double rad) {
+double degrees(double rad) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.12g", rad / kDeg);
-  return buf;
+  return std::strtod(buf, nullptr);
 }
 
-std::string rgb_text(const Rgb& c) {
-  return "[" + std::to_string(int{c.r}) + ", " + std::to_string(int{c.g}) + ", " +
-         std::to_string(int{c.b}) + "]";
-}
-
-template <std::size_t N>
-std::string array_text(const std::array<double, N>& a) {
-  std::string out = "[";
-  for (std::size_t i = 0; i < N; ++i) out += (i ? ", " : "") + num_text(a[i]);
-  return out + "]";
-}
-
-template <std::size_t N>
-std::string list_text(const std::vector<std::array<double, N>>& list) {
-  std::string out = "[";
-  for (std::size_t i = 0; i < list.size(); ++i) out += (i ? ", " : "") + array_text(list[i]);
-  return out + "]";
+toml::array rgb(const Rgb& c) {
+  return toml::array{int{c.r}, int{c.g}, int{c.b}};
 }
 
 }  // namespace
 
 std::string scenario_to_toml(const Scenario& s) {
-  const auto n = num_text;
-  std::ostringstream o;
+  using dataset::number_array;
+  using dataset::number_arrays;
+  dataset::TomlWriter w("Scenario as simulated (format: docs/scenarios.md)");
+  w.set("name", s.name)
+      .set("description", s.description)
+      .set("labelled_frames", s.labelled_frames)
+      .set("labels_with_heading", s.labels_with_heading)
+      .set("start_time_s", s.start_time_s);
+  w.table("room")
+      .set("x_m", number_array(s.room.x_m))
+      .set("y_m", number_array(s.room.y_m))
+      .set("height_m", s.room.height_m)
+      .set("floor_colour", rgb(s.room.floor_colour))
+      .set("floor_tile_colour", rgb(s.room.floor_tile_colour))
+      .set("tile_m", s.room.tile_m)
+      .set("wall_colour", rgb(s.room.wall_colour))
+      .set("side_wall_colour", rgb(s.room.side_wall_colour))
+      .set("ceiling_colour", rgb(s.room.ceiling_colour));
+  w.table("desk")
+      .set("present", s.desk.present)
+      .set("x_m", number_array(s.desk.x_m))
+      .set("front_y_m", s.desk.front_y_m)
+      .set("height_m", s.desk.height_m)
+      .set("colour", rgb(s.desk.colour))
+      .set("top_colour", rgb(s.desk.top_colour));
   const CameraSpec& c = s.camera;
-  o << "# Scenario as simulated (format: docs/scenarios.md)\n"
-    << "name = " << dataset::toml_string(s.name) << "\n"
-    << "description = " << dataset::toml_string(s.description) << "\n"
-    << "labelled_frames = " << s.labelled_frames << "\n"
-    << "labels_with_heading = " << (s.labels_with_heading ? "true" : "false") << "\n"
-    << "start_time_s = " << n(s.start_time_s) << "\n";
-  o << "\n[room]\nx_m = " << array_text(s.room.x_m) << "\ny_m = " << array_text(s.room.y_m)
-    << "\nheight_m = " << n(s.room.height_m) << "\nfloor_colour = " << rgb_text(s.room.floor_colour)
-    << "\nfloor_tile_colour = " << rgb_text(s.room.floor_tile_colour)
-    << "\ntile_m = " << n(s.room.tile_m) << "\nwall_colour = " << rgb_text(s.room.wall_colour)
-    << "\nside_wall_colour = " << rgb_text(s.room.side_wall_colour)
-    << "\nceiling_colour = " << rgb_text(s.room.ceiling_colour) << "\n";
-  o << "\n[desk]\npresent = " << (s.desk.present ? "true" : "false")
-    << "\nx_m = " << array_text(s.desk.x_m) << "\nfront_y_m = " << n(s.desk.front_y_m)
-    << "\nheight_m = " << n(s.desk.height_m) << "\ncolour = " << rgb_text(s.desk.colour)
-    << "\ntop_colour = " << rgb_text(s.desk.top_colour) << "\n";
-  o << "\n[camera]\nwidth_px = " << c.width_px << "\nheight_px = " << c.height_px
-    << "\nhorizontal_fov_deg = " << n(c.horizontal_fov_deg) << "\nk1 = " << n(c.k1)
-    << "\nk2 = " << n(c.k2) << "\nk3 = " << n(c.k3) << "\np1 = " << n(c.p1) << "\np2 = " << n(c.p2)
-    << "\nprincipal_offset_px = [" << n(c.principal_offset_x_px) << ", "
-    << n(c.principal_offset_y_px) << "]\nvignetting = " << n(c.vignetting)
-    << "\nheight_m = " << n(c.height_m) << "\npitch_deg = " << n(c.pitch_deg)
-    << "\nmount_yaw_deg = " << n(c.mount_yaw_deg)
-    << "\nforward_offset_m = " << n(c.forward_offset_m) << "\nrate_hz = " << n(c.rate_hz)
-    << "\npixel_noise = " << n(c.pixel_noise) << "\nlight_gain = " << n(c.light_gain) << "\n";
-  o << "\n[lighting]\ndrift_amplitude = " << n(s.lighting.drift_amplitude)
-    << "\ndrift_period_s = " << n(s.lighting.drift_period_s)
-    << "\ndrift_phase_deg = " << n(s.lighting.drift_phase_deg)
-    << "\nsteps = " << list_text(s.lighting.steps) << "\n";
-  o << "\n[route]\nshape = " << (s.route.shape == RouteShape::kLoop ? "\"loop\"" : "\"shuttle\"")
-    << "\nwaypoints = " << list_text(s.route.waypoints_m)
-    << "\nspeed_mps = " << n(s.route.speed_mps)
-    << "\nacceleration_mps2 = " << n(s.route.acceleration_mps2)
-    << "\npause_s = " << n(s.route.pause_s) << "\nlaps = " << s.route.laps
-    << "\nwander_m = " << n(s.route.wander_m);
-  o << "\n\n[encoders]\nrate_hz = " << n(s.encoders.rate_hz)
-    << "\nslip_sigma = " << n(s.encoders.slip_sigma)
-    << "\nleft_scale_error = " << n(s.encoders.left_scale_error)
-    << "\nright_scale_error = " << n(s.encoders.right_scale_error)
-    << "\ninitial_left = " << s.encoders.initial_left
-    << "\ninitial_right = " << s.encoders.initial_right
-    << "\ncounter_bits = " << int{s.can_layout.counter_bits}
-    << "\n\n[robot]\nwheel_radius_m = " << n(s.robot.wheel_radius_m)
-    << "\ntrack_m = " << n(s.robot.track_m) << "\nticks_per_rev = " << n(s.robot.ticks_per_rev)
-    << "\n";
+  w.table("camera")
+      .set("width_px", c.width_px)
+      .set("height_px", c.height_px)
+      .set("horizontal_fov_deg", c.horizontal_fov_deg)
+      .set("k1", c.k1)
+      .set("k2", c.k2)
+      .set("k3", c.k3)
+      .set("p1", c.p1)
+      .set("p2", c.p2)
+      .set("principal_offset_px",
+           number_array(std::array<double, 2>{c.principal_offset_x_px, c.principal_offset_y_px}))
+      .set("vignetting", c.vignetting)
+      .set("height_m", c.height_m)
+      .set("pitch_deg", c.pitch_deg)
+      .set("mount_yaw_deg", c.mount_yaw_deg)
+      .set("forward_offset_m", c.forward_offset_m)
+      .set("rate_hz", c.rate_hz)
+      .set("pixel_noise", c.pixel_noise)
+      .set("light_gain", c.light_gain);
+  w.table("lighting")
+      .set("drift_amplitude", s.lighting.drift_amplitude)
+      .set("drift_period_s", s.lighting.drift_period_s)
+      .set("drift_phase_deg", s.lighting.drift_phase_deg)
+      .set("steps", number_arrays(s.lighting.steps));
+  w.table("route")
+      .set("shape", s.route.shape == RouteShape::kLoop ? "loop" : "shuttle")
+      .set("waypoints", number_arrays(s.route.waypoints_m))
+      .set("speed_mps", s.route.speed_mps)
+      .set("acceleration_mps2", s.route.acceleration_mps2)
+      .set("pause_s", s.route.pause_s)
+      .set("laps", s.route.laps)
+      .set("wander_m", s.route.wander_m);
+  w.table("encoders")
+      .set("rate_hz", s.encoders.rate_hz)
+      .set("slip_sigma", s.encoders.slip_sigma)
+      .set("left_scale_error", s.encoders.left_scale_error)
+      .set("right_scale_error", s.encoders.right_scale_error)
+      .set("initial_left", s.encoders.initial_left)
+      .set("initial_right", s.encoders.initial_right)
+      .set("counter_bits", int{s.can_layout.counter_bits});
+  w.table("robot")
+      .set("wheel_radius_m", s.robot.wheel_radius_m)
+      .set("track_m", s.robot.track_m)
+      .set("ticks_per_rev", s.robot.ticks_per_rev);
   for (const BoardSpec& b : s.boards) {
-    o << "\n[[boards]]\nname = " << dataset::toml_string(b.name)
-      << "\ncolour = " << rgb_text(b.colour) << "\ncentre = [" << n(b.centre_x_m) << ", "
-      << n(b.centre_y_m) << ", " << n(b.centre_z_m) << "]\nsize = [" << n(b.width_m) << ", "
-      << n(b.height_m) << "]\nfacing_deg = " << deg_text(b.facing_yaw_rad)
-      << "\nshape = " << (b.shape == BoardShape::kEllipse ? "\"ellipse\"" : "\"rectangle\"")
-      << "\ntilt_deg = " << deg_text(b.tilt_rad) << "\nstand = " << (b.stand ? "true" : "false")
-      << "\n";
+    w.array_table("boards")
+        .set("name", b.name)
+        .set("colour", rgb(b.colour))
+        .set("centre",
+             number_array(std::array<double, 3>{b.centre_x_m, b.centre_y_m, b.centre_z_m}))
+        .set("size", number_array(std::array<double, 2>{b.width_m, b.height_m}))
+        .set("facing_deg", degrees(b.facing_yaw_rad))
+        .set("shape", b.shape == BoardShape::kEllipse ? "ellipse" : "rectangle")
+        .set("tilt_deg", degrees(b.tilt_rad))
+        .set("stand", b.stand);
   }
   // Events only when there are any.
   for (const OccluderSpec& oc : s.occluders) {
-    o << "\n[[occluders]]\nname = " << dataset::toml_string(oc.name)
-      << "\ncolour = " << rgb_text(oc.colour) << "\nradius_m = " << n(oc.radius_m)
-      << "\nheight_m = " << n(oc.height_m) << "\npath = " << list_text(oc.path) << "\n";
+    w.array_table("occluders")
+        .set("name", oc.name)
+        .set("colour", rgb(oc.colour))
+        .set("radius_m", oc.radius_m)
+        .set("height_m", oc.height_m)
+        .set("path", number_arrays(oc.path));
   }
   for (const BoardMoveSpec& m : s.board_moves) {
-    o << "\n[[board_moves]]\nboard = " << dataset::toml_string(m.board) << "\nat_s = " << n(m.at_s)
-      << "\noffset_m = " << array_text(m.offset_m) << "\nturn_deg = " << n(m.turn_deg) << "\n";
+    w.array_table("board_moves")
+        .set("board", m.board)
+        .set("at_s", m.at_s)
+        .set("offset_m", number_array(m.offset_m))
+        .set("turn_deg", m.turn_deg);
   }
   if (s.kidnaps.count > 0) {
-    o << "\n[kidnaps]\ncount = " << s.kidnaps.count << "\nfirst_s = " << n(s.kidnaps.first_s)
-      << "\ninterval_s = " << n(s.kidnaps.interval_s)
-      << "\nmin_distance_m = " << n(s.kidnaps.min_distance_m) << "\n";
+    w.table("kidnaps")
+        .set("count", s.kidnaps.count)
+        .set("first_s", s.kidnaps.first_s)
+        .set("interval_s", s.kidnaps.interval_s)
+        .set("min_distance_m", s.kidnaps.min_distance_m);
   }
-  return o.str();
+  return w.text();
 }
 
 std::string describe_events(const Scenario& s) {

@@ -18,11 +18,15 @@
 #include "harmoloc/firmware/cli.hpp"
 #include "harmoloc/firmware/config.hpp"
 #include "harmoloc/sim_host/scenario.hpp"
+#include "harmoloc/sim_host/svg.hpp"
+#include "harmoloc/sim_host/svg_plot.hpp"
+#include "harmoloc/sim_host/svg_ticks.hpp"
 #include "sweep_eval.hpp"
 
 namespace fs = std::filesystem;
 using namespace harmoloc;
 using sim_host::SceneResult;
+namespace svg = sim_host::svg;
 
 namespace {
 
@@ -186,31 +190,8 @@ std::string fmt(double v, int decimals = 2) {
   return b;
 }
 
-std::string escape(const std::string& s) {
-  std::string o;
-  for (char c : s) {
-    switch (c) {
-      case '<':
-        o += "&lt;";
-        break;
-      case '>':
-        o += "&gt;";
-        break;
-      case '&':
-        o += "&amp;";
-        break;
-      case '"':
-        o += "&quot;";
-        break;
-      default:
-        o += c;
-    }
-  }
-  return o;
-}
-
-// A strip plot: one dot per scene on a horizontal axis, the median and p90 marked, the target
-// dashed, the worst scene labelled by seed; the default scene as a ring.
+// A strip plot: one dot per scene on a horizontal axis, the median marked, the targets dashed,
+// the worst scene labelled by seed; the default scene as a ring. Hover a dot for its seed.
 std::string strip_svg(const Figure& f, const std::vector<SceneResult>& results,
                       const SceneResult* reference) {
   const Distribution d = distribution(results, f);
@@ -219,54 +200,62 @@ std::string strip_svg(const Figure& f, const std::vector<SceneResult>& results,
     const double x = r.error.empty() ? f.value(r) : -1.0;
     if (x >= 0.0 && std::isfinite(x)) v.emplace_back(x, r.seed);
   }
+  const double ref = reference != nullptr ? f.value(*reference) : -1.0;
   double hi = 0.0;
   for (const auto& p : v) hi = std::max(hi, p.first);
-  if (f.target_worst > 0.0) hi = std::max(hi, f.target_worst);
-  if (f.target_median > 0.0) hi = std::max(hi, f.target_median);
-  if (reference != nullptr && f.value(*reference) >= 0.0) hi = std::max(hi, f.value(*reference));
+  hi = std::max({hi, f.target_worst, f.target_median, ref});
   if (f.unit == "%") hi = 100.0;
-  if (hi <= 0.0) hi = 1.0;
-  const double w = 640, h = 92, left = 20, right = 20, axis_y = 60;
-  const auto x_of = [&](double x) { return left + (w - left - right) * x / hi; };
-  std::ostringstream o;
-  o << "<svg xmlns='http://www.w3.org/2000/svg' width='" << w << "' height='" << h
-    << "' font-family='sans-serif' font-size='11'>";
-  o << "<text x='" << left << "' y='14' font-weight='bold'>" << escape(f.title)
-    << (f.unit.empty() ? "" : " (" + escape(f.unit) + ")") << "</text>";
-  o << "<line x1='" << left << "' y1='" << axis_y << "' x2='" << w - right << "' y2='" << axis_y
-    << "' stroke='#888'/>";
-  for (int t = 0; t <= 4; ++t) {
-    const double x = hi * t / 4.0;
-    o << "<line x1='" << x_of(x) << "' y1='" << axis_y << "' x2='" << x_of(x) << "' y2='"
-      << axis_y + 4 << "' stroke='#888'/><text x='" << x_of(x) << "' y='" << axis_y + 16
-      << "' text-anchor='middle' fill='#555'>" << fmt(x, hi < 10 ? 2 : 1) << "</text>";
+  if (!(hi > 0.0) || !std::isfinite(hi)) hi = 1.0;
+  // The axis from 0 to a whole number of round steps.
+  const double step = svg::nice_step(hi, 4);
+  hi = std::ceil(hi / step - 1e-9) * step;
+  const double width = 640.0;
+  const svg::Area area{20.0, 22.0, width - 40.0, 38.0};
+  const svg::Scale sx{0.0, hi, area.left, area.right()};
+  constexpr const char* kDot = "#0066cc";
+  constexpr const char* kWorst = "#cc0000";
+  svg::Canvas c(width, 92.0);
+  c.text(area.left, 14.0, f.title + (f.unit.empty() ? "" : " (" + f.unit + ")"), "start", 11.0,
+         svg::kTextColour, " font-weight=\"bold\"");
+  c.line(area.left, area.bottom(), area.right(), area.bottom(), "#888888", 1.0);
+  for (const svg::Tick& t : svg::make_ticks(sx, step)) {
+    c.line(t.px, area.bottom(), t.px, area.bottom() + 4.0, "#888888", 1.0);
+    c.text(t.px, area.bottom() + 16.0, t.label, "middle", 11.0, svg::kMutedColour);
   }
   const auto vline = [&](double x, const char* colour, const char* label, bool dashed) {
-    o << "<line x1='" << x_of(x) << "' y1='22' x2='" << x_of(x) << "' y2='" << axis_y
-      << "' stroke='" << colour << "'" << (dashed ? " stroke-dasharray='4,3'" : "") << "/>";
-    o << "<text x='" << x_of(x) + 3 << "' y='30' fill='" << colour << "'>" << label << "</text>";
+    c.line(sx(x), area.top, sx(x), area.bottom(), colour, 1.0,
+           dashed ? " stroke-dasharray=\"4,3\"" : "");
+    // The label right of the line, or left of it where it would run off the plot.
+    const bool fits = sx(x) + 3.0 + svg::text_width(label, 11.0) <= width;
+    c.text(fits ? sx(x) + 3.0 : sx(x) - 3.0, area.top + 8.0, label, fits ? "start" : "end", 11.0,
+           colour);
   };
-  if (f.target_worst >= 0.0) vline(f.target_worst, "#c00", "target (worst)", true);
-  if (f.target_median > 0.0) vline(f.target_median, "#e80", "target (median)", true);
-  if (d.n > 0) vline(d.median, "#06c", "median", false);
+  if (f.target_worst >= 0.0) vline(f.target_worst, kWorst, "target (worst)", true);
+  if (f.target_median > 0.0) vline(f.target_median, "#ee8800", "target (median)", true);
+  if (d.n > 0) vline(d.median, kDot, "median", false);
+  const auto with_tooltip = [&c](const std::string& tip, const auto& draw) {
+    c.raw("<g><title>" + svg::escape(tip) + "</title>\n");
+    draw();
+    c.raw("</g>\n");
+  };
   std::size_t i = 0;
-  for (const auto& p : v) {
+  for (const auto& [x, seed] : v) {
     const double jitter = static_cast<double>((i++ * 7) % 11) - 5.0;
-    o << "<circle cx='" << x_of(p.first) << "' cy='" << axis_y - 12 + jitter
-      << "' r='3' fill='#06c' fill-opacity='0.6'><title>seed " << p.second << ": " << fmt(p.first)
-      << "</title></circle>";
+    with_tooltip("seed " + std::to_string(seed) + ": " + fmt(x), [&] {
+      c.circle(sx(x), area.bottom() - 12.0 + jitter, 3.0, kDot, " fill-opacity=\"0.6\"");
+    });
   }
   if (d.n > 0 && !d.worst_seeds.empty()) {
-    o << "<text x='" << std::min(x_of(d.worst), w - 60) << "' y='" << axis_y - 22
-      << "' fill='#c00'>seed " << d.worst_seeds.front() << "</text>";
+    c.text(std::min(sx(d.worst), width - 60.0), area.bottom() - 22.0,
+           "seed " + std::to_string(d.worst_seeds.front()), "start", 11.0, kWorst);
   }
-  if (reference != nullptr && f.value(*reference) >= 0.0) {
-    o << "<circle cx='" << x_of(f.value(*reference)) << "' cy='" << axis_y - 12
-      << "' r='5' fill='none' stroke='#080' stroke-width='2'><title>default scene: "
-      << fmt(f.value(*reference)) << "</title></circle>";
+  if (ref >= 0.0) {
+    with_tooltip("default scene: " + fmt(ref), [&] {
+      c.circle(sx(ref), area.bottom() - 12.0, 5.0, "none",
+               " stroke=\"#008800\" stroke-width=\"2\"");
+    });
   }
-  o << "</svg>";
-  return o.str();
+  return svg::inline_svg(c.finish());
 }
 
 void write_html(const std::string& path, const std::vector<SceneResult>& results,
@@ -277,7 +266,7 @@ void write_html(const std::string& path, const std::vector<SceneResult>& results
     << "table{border-collapse:collapse}td,th{border:1px solid #ccc;padding:3px 6px;"
     << "text-align:right}th{background:#eee}td.l{text-align:left}.bad{color:#c00;"
     << "font-weight:bold}</style></head><body>";
-  o << "<h1>harmoloc sweep over random scenes</h1><p>" << escape(command) << "</p>";
+  o << "<h1>harmoloc sweep over random scenes</h1><p>" << svg::escape(command) << "</p>";
   std::size_t failed = 0;
   for (const SceneResult& r : results) failed += r.error.empty() ? 0 : 1;
   o << "<p>" << results.size() << " scenes, " << failed
@@ -295,7 +284,7 @@ void write_html(const std::string& path, const std::vector<SceneResult>& results
       target += std::string(target.empty() ? "" : ", ") + "worst &le; " + fmt(f.target_worst, 1);
     const bool bad = (f.target_worst >= 0.0 && d.n > 0 && d.worst > f.target_worst) ||
                      (f.target_median >= 0.0 && d.n > 0 && d.median > f.target_median);
-    o << "<tr><td class='l'>" << escape(f.title) << (f.unit.empty() ? "" : " (" + f.unit + ")")
+    o << "<tr><td class='l'>" << svg::escape(f.title + (f.unit.empty() ? "" : " (" + f.unit + ")"))
       << "</td><td>" << d.n << "</td><td>" << fmt(d.median) << "</td><td>" << fmt(d.p90)
       << "</td><td" << (bad ? " class='bad'" : "") << ">" << fmt(d.worst) << "</td><td class='l'>"
       << seeds << "</td><td>" << (reference != nullptr ? fmt(f.value(*reference)) : "-")
@@ -307,11 +296,11 @@ void write_html(const std::string& path, const std::vector<SceneResult>& results
     << "<th>fused RMSE (cm)</th><th>start-up (s)</th><th>kidnaps in 1 s</th>"
     << "<th>false alarms</th><th>dynamic max (cm)</th><th class='l'>error</th></tr>";
   for (const SceneResult& r : results) {
-    o << "<tr><td>" << r.seed << "</td><td class='l'>" << escape(r.summary) << "</td><td>"
+    o << "<tr><td>" << r.seed << "</td><td class='l'>" << svg::escape(r.summary) << "</td><td>"
       << fmt(cm2(r.fix_mse_x_m2), 1) << " / " << fmt(cm2(r.fix_mse_y_m2), 1) << "</td><td>"
       << fmt(cm(r.fused_rmse_m)) << "</td><td>" << fmt(r.startup_s) << "</td><td>"
       << r.kidnaps_recovered_1s << "/" << r.kidnaps << "</td><td>" << r.long_false_alarms
-      << "</td><td>" << fmt(cm(r.dynamic_max_m), 1) << "</td><td class='l'>" << escape(r.error)
+      << "</td><td>" << fmt(cm(r.dynamic_max_m), 1) << "</td><td class='l'>" << svg::escape(r.error)
       << "</td></tr>";
   }
   o << "</table></body></html>\n";

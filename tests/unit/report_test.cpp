@@ -1,4 +1,5 @@
 #include "harmoloc/sim_host/report.hpp"
+#include "harmoloc/sim_host/svg.hpp"
 
 #include <gtest/gtest.h>
 
@@ -637,4 +638,16 @@ TEST(ReportStats, FirmwareDocumentRoundTrips) {
   EXPECT_EQ(back.wakeup_latency->p999_us, 65.4);
   EXPECT_FALSE(back.capture_to_send);
   EXPECT_EQ(fs::dump(back).find("\"camera\""), fs::dump(d).find("\"camera\""));
+}
+
+TEST(ReportSvg, InlineSvgDropsTheXmlDeclarationOnly) {
+  hs::svg::Canvas c(100.0, 50.0);
+  c.text(10.0, 20.0, "a <b> & \"c\"");
+  const std::string document = c.finish();
+  ASSERT_EQ(document.rfind("<?xml", 0), 0U);
+  const std::string inlined = hs::svg::inline_svg(document);
+  EXPECT_EQ(inlined.rfind("<svg ", 0), 0U) << inlined;
+  EXPECT_EQ(document.substr(document.size() - inlined.size()), inlined);
+  EXPECT_NE(inlined.find("a &lt;b&gt; &amp; &quot;c&quot;"), std::string::npos) << inlined;
+  EXPECT_EQ(hs::svg::inline_svg("<svg/>"), "<svg/>");
 }

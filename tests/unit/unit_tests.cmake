@@ -84,7 +84,8 @@ add_executable(sim_host_test
   ${HARMOLOC_UNIT_DIR}/label_offset_test.cpp
   ${HARMOLOC_UNIT_DIR}/random_scene_test.cpp
   ${HARMOLOC_UNIT_DIR}/recording_replay_test.cpp
-  ${HARMOLOC_UNIT_DIR}/simulator_test.cpp)
+  ${HARMOLOC_UNIT_DIR}/simulator_test.cpp
+  ${HARMOLOC_UNIT_DIR}/toml_writer_test.cpp)
 target_link_libraries(sim_host_test PRIVATE harmoloc_dataset harmoloc_drivers_host harmoloc_simulator
   harmoloc_trainer harmoloc_config
   harmoloc_drivers_common harmoloc_algorithms GTest::gtest_main harmoloc_warnings)

@@ -2,13 +2,12 @@
 
 #include <filesystem>
 #include <fstream>
-#include <limits>
 #include <sstream>
 #include <stdexcept>
 
 #include <toml++/toml.h>
 
-#include "harmoloc/dataset/toml_text.hpp"
+#include "harmoloc/dataset/toml_writer.hpp"
 #include "harmoloc/drivers/input_file.hpp"
 
 namespace harmoloc::dataset {
@@ -161,44 +160,48 @@ DatasetMetadata read_metadata(const std::string& dataset_dir) {
   return m;
 }
 
+std::string metadata_toml(const DatasetMetadata& m) {
+  TomlWriter w("harmoloc dataset metadata (schema: docs/dataset-format.md)");
+  w.set("format_version", 1).set("name", m.name).set("seed", m.seed);
+  w.table("camera")
+      .set("width_px", m.image_width_px)
+      .set("height_px", m.image_height_px)
+      .set("pixel_format", m.pixel_format == hal::PixelFormat::kRgb24 ? "rgb24" : "yuyv")
+      .set("rate_hz", m.frame_rate_hz)
+      .set("frames_index", m.frames_index);
+  // A CAN dataset's metadata does not name the source (the files written before it existed).
+  w.table("encoders");
+  if (m.encoder_source == EncoderSource::kGpio) w.set("source", "gpio");
+  const auto& lay = m.encoder_layout;
+  w.set("log", m.encoder_log)
+      .set("interface", m.can_interface)
+      .set_hex("can_id", lay.id)
+      .set("length", int{lay.length})
+      .set("left_offset", int{lay.left_offset})
+      .set("right_offset", int{lay.right_offset})
+      .set("counter_bits", int{lay.counter_bits})
+      .set("byte_order", lay.byte_order == algorithms::ByteOrder::kLittleEndian ? "little" : "big");
+  w.table("robot")
+      .set("wheel_radius_m", m.geometry.wheel_radius_m)
+      .set("track_m", m.geometry.track_m)
+      .set("ticks_per_rev", m.geometry.ticks_per_rev)
+      .set("left_direction", m.geometry.left_direction)
+      .set("right_direction", m.geometry.right_direction);
+  if (!m.ground_truth.empty()) w.table("ground_truth").set("file", m.ground_truth);
+  return w.text();
+}
+
 void write_metadata(const std::string& dataset_dir, const DatasetMetadata& m) {
   const std::string path = (std::filesystem::path(dataset_dir) / "metadata.toml").string();
+  std::string text;
+  try {
+    text = metadata_toml(m);
+  } catch (const std::runtime_error& e) {
+    throw std::runtime_error(path + ": " + e.what());
+  }
   std::ofstream out(path);
   if (!out) throw std::runtime_error(path + ": cannot write");
-  out.precision(std::numeric_limits<double>::max_digits10);
-  char id[16];
-  std::snprintf(id, sizeof id, "0x%X", m.encoder_layout.id);
-  out << "# harmoloc dataset metadata (schema: docs/dataset-format.md)\n"
-      << "format_version = 1\n"
-      << "name = " << toml_string(m.name) << "\n"
-      << "seed = " << m.seed << "\n\n"
-      << "[camera]\n"
-      << "width_px = " << m.image_width_px << "\n"
-      << "height_px = " << m.image_height_px << "\n"
-      << "pixel_format = \"" << (m.pixel_format == hal::PixelFormat::kRgb24 ? "rgb24" : "yuyv")
-      << "\"\n"
-      << "rate_hz = " << m.frame_rate_hz << "\n"
-      << "frames_index = " << toml_string(m.frames_index) << "\n\n"
-      << "[encoders]\n"
-      << (m.encoder_source == EncoderSource::kGpio ? "source = \"gpio\"\n" : "")
-      << "log = " << toml_string(m.encoder_log) << "\n"
-      << "interface = " << toml_string(m.can_interface) << "\n"
-      << "can_id = " << id << "\n"
-      << "length = " << int{m.encoder_layout.length} << "\n"
-      << "left_offset = " << int{m.encoder_layout.left_offset} << "\n"
-      << "right_offset = " << int{m.encoder_layout.right_offset} << "\n"
-      << "counter_bits = " << int{m.encoder_layout.counter_bits} << "\n"
-      << "byte_order = \""
-      << (m.encoder_layout.byte_order == algorithms::ByteOrder::kLittleEndian ? "little" : "big")
-      << "\"\n\n"
-      << "[robot]\n"
-      << "wheel_radius_m = " << m.geometry.wheel_radius_m << "\n"
-      << "track_m = " << m.geometry.track_m << "\n"
-      << "ticks_per_rev = " << m.geometry.ticks_per_rev << "\n"
-      << "left_direction = " << m.geometry.left_direction << "\n"
-      << "right_direction = " << m.geometry.right_direction << "\n";
-  if (!m.ground_truth.empty())
-    out << "\n[ground_truth]\nfile = " << toml_string(m.ground_truth) << "\n";
+  out << text;
   if (!out) throw std::runtime_error(path + ": write failed");
 }
 

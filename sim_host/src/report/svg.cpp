@@ -45,6 +45,15 @@ double text_width(const std::string& text, double size) {
   return 0.6 * size * static_cast<double>(text.size());
 }
 
+std::string inline_svg(const std::string& document) {
+  if (document.rfind("<?xml", 0) != 0) return document;
+  const std::size_t end = document.find("?>");
+  if (end == std::string::npos) return document;
+  std::size_t start = end + 2;
+  while (start < document.size() && document[start] == '\n') ++start;
+  return document.substr(start);
+}
+
 Canvas::Canvas(double width, double height) : width_(width), height_(height) {
   out_ << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
        << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << number(width) << "\" height=\""

@@ -27,6 +27,9 @@ std::string number(double v);
 /// no font metrics on a headless host, and the layouts only need to avoid overlaps.
 double text_width(const std::string& text, double size);
 
+/// @p document without its XML declaration, for an <svg> element inside an HTML page.
+std::string inline_svg(const std::string& document);
+
 /// A standalone SVG document being written, white background first. Colours are code
 /// constants and pass through; text content is escaped. @p extra is appended raw inside the
 /// element (further attributes, each with a leading space).

@@ -36,6 +36,10 @@ struct DatasetMetadata {
 /// Reads DIR/metadata.toml. Throws std::runtime_error("metadata.toml: reason") when it is
 /// missing, unparsable or out of range.
 DatasetMetadata read_metadata(const std::string& dataset_dir);
+/// DIR/metadata.toml's text (toml_writer.hpp: numbers in their shortest exact form).
+std::string metadata_toml(const DatasetMetadata& metadata);
+/// Writes metadata_toml() to DIR/metadata.toml (at start-up and at the end of a recording: it
+/// allocates).
 void write_metadata(const std::string& dataset_dir, const DatasetMetadata& metadata);
 
 }  // namespace harmoloc::dataset
