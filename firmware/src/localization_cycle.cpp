@@ -330,6 +330,7 @@ void LocalizationCycle::segment(const FrameIn& in, algorithms::AreaVector& areas
 void LocalizationCycle::localize(bool usable, const algorithms::AreaVector& areas,
                                  Features& features) {
   fix_.present = false;
+  fix_.distrusted_mask = 0;
   if (usable) {
     algorithms::areas_to_features(map_.model, areas, features);
     fix_.fix = algorithms::harmonic_query(map_.model, features);
@@ -500,6 +501,7 @@ bool LocalizationCycle::update_with_boards(
     distrusted_mask |= 1U << b;
   }
   counters_.distrusted_boards += distrusted;
+  fix_.distrusted_mask = distrusted_mask;
   robust_fix_ =
       fix_check_.fix(map_.model, features, use, estimate.x_m, estimate.y_m, fix_check_params_);
   counters_.fix_board_suspicions = fix_check_.suspicions();

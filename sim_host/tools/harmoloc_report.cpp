@@ -10,8 +10,10 @@
 #include <filesystem>
 #include <iostream>
 #include <string>
+#include <vector>
 
 #include "harmoloc/firmware/cli.hpp"
+#include "harmoloc/sim_host/comparison.hpp"
 #include "harmoloc/sim_host/link_log.hpp"
 #include "harmoloc/sim_host/report.hpp"
 
@@ -37,18 +39,30 @@ int main(int argc, char** argv) {
       "harmoloc-report: evaluates a replay run against ground truth and writes a report folder\n"
       "(index.html with SVG plots, summary.json, summary.txt). Trajectory files are TUM\n"
       "(`t x y z qx qy qz qw` a line, seconds and metres; planar: z = 0, yaw-only quaternion).\n"
-      "Each estimate pose is compared with the ground truth interpolated at its time.",
+      "Each estimate pose is compared with the ground truth interpolated at its time.\n"
+      "With --compare NAME=PATH ... (instead of --estimate) it writes one page comparing several\n"
+      "runs on the same ground truth (e.g. two maps or two configs).",
       "harmoloc-report"};
   harmoloc::sim_host::ReportInputs inputs;
   std::string out_dir;
+  std::vector<std::string> compare;
   app.add_option("--truth", inputs.truth_path,
                  "ground-truth trajectory (TUM), e.g. the simulator's groundtruth.tum")
       ->required()
       ->type_name("GT.tum");
   app.add_option("--estimate", inputs.estimate_path,
-                 "fused pose the firmware wrote (TUM), `harmoloc --trajectory OUT.tum`")
-      ->required()
+                 "fused pose the firmware wrote (TUM), `harmoloc --trajectory OUT.tum` "
+                 "(required unless --compare is given)")
       ->type_name("EST.tum");
+  app.add_option("--compare", compare,
+                 "instead of --estimate: two or more runs on the same ground truth, each NAME=PATH "
+                 "with PATH a TUM trajectory or a run folder holding trajectory.tum (or "
+                 "estimate.tum) and optionally stats.json; writes one page with a table (RMSE, "
+                 "median, max, RPE, cycle p99 per run) and overlaid error and trajectory plots "
+                 "(index.html, compare_error.svg, compare_trajectory.svg, summary.json, "
+                 "summary.txt). Takes --truth, --skip-initial, --title and --out only")
+      ->type_name("NAME=PATH")
+      ->expected(1, -1);
   app.add_option("--fixes", inputs.fixes_path,
                  "optional: raw harmonic-localizer fixes (TUM; their heading is ignored), "
                  "drawn as dots and scored separately")
@@ -61,9 +75,15 @@ int main(int argc, char** argv) {
                  "optional: the firmware's recorded link, `harmoloc --link OUT` (MAVLink): adds "
                  "the health timeline and the claimed 2-sigma spread against the actual error")
       ->type_name("LINK");
+  app.add_option("--areas", inputs.areas_path,
+                 "optional: the firmware's area log, `harmoloc --record-areas FILE` (or areas.csv "
+                 "of `harmoloc --record DIR`): each board's area over time with the periods the "
+                 "filter distrusted it shaded")
+      ->type_name("AREAS.csv");
   app.add_option("--out", out_dir,
                  "report folder to write (created if needed): index.html, trajectory.svg, "
                  "error.svg, error_xy.svg, timing.svg, stages.svg, health.svg, sigma.svg, "
+                 "areas.svg, "
                  "summary.json, summary.txt")
       ->required()
       ->type_name("DIR");
@@ -82,6 +102,32 @@ int main(int argc, char** argv) {
           "S >= 0")
       ->type_name("S");
   if (const auto status = harmoloc::cli::parse(app, argc, argv)) return *status;
+
+  if (compare.empty() && inputs.estimate_path.empty()) {
+    return fail("--estimate is required (or --compare NAME=PATH ...)");
+  }
+  if (!compare.empty()) {
+    if (!inputs.estimate_path.empty() || !inputs.fixes_path.empty() || !inputs.stats_path.empty() ||
+        !inputs.link_path.empty() || !inputs.areas_path.empty()) {
+      return fail(
+          "--compare takes the runs' estimates (and stats) from NAME=PATH: leave out "
+          "--estimate, --fixes, --stats, --link and --areas");
+    }
+    try {
+      std::vector<harmoloc::sim_host::RunSpec> specs;
+      for (const std::string& text : compare)
+        specs.push_back(harmoloc::sim_host::parse_run_spec(text));
+      const auto runs = harmoloc::sim_host::load_comparison(inputs, specs);
+      const std::filesystem::path dir(out_dir);
+      harmoloc::sim_host::write_comparison(runs, dir);
+      std::cout << harmoloc::sim_host::comparison_text(runs, (dir / "index.html").string());
+      std::cout.flush();
+      if (!std::cout) return fail("cannot write to standard output");
+    } catch (const std::exception& e) {
+      return fail(e.what());
+    }
+    return 0;
+  }
 
   try {
     harmoloc::sim_host::Report report = harmoloc::sim_host::load_report(inputs);

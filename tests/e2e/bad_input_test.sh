@@ -170,5 +170,8 @@ expect_error "train: malformed labels" "bad_labels.tum:1" "$BIN/harmoloc-train" 
 printf '5.0 1 1 0 0 0 0 1\n' > "$out/far_labels.tum"
 expect_error "train: labels that match no frame" "outside the run" "$BIN/harmoloc-train" --dataset "$out/good" --labels "$out/far_labels.tum" --out "$out/x.hmap"
 expect_error "report: missing truth" "harmoloc-report" "$BIN/harmoloc-report" --truth "$out/nope.tum" --estimate "$out/t.tum" --out "$out/r"
+expect_error "report: no estimate" "--estimate is required" "$BIN/harmoloc-report" --truth "$out/t.tum" --out "$out/r"
+expect_error "report: one run to compare" "at least two runs" "$BIN/harmoloc-report" --truth "$out/t.tum" --compare "a=$out/t.tum" --out "$out/r"
+expect_error "report: compare a missing run" "nope.tum: no such file" "$BIN/harmoloc-report" --truth "$out/t.tum" --compare "a=$out/t.tum" "b=$out/nope.tum" --out "$out/r"
 
 echo "OK: $cases bad inputs rejected with one line and exit status 2"

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Opens the run report in a real browser (Debian's chromium, headless): the page and each plot it
-# shows must load and render with no console message, and the screenshot must not be blank.
+# Opens the run report (every input, the area log too) and a comparison of two runs
+# (--compare) in a real browser (Debian's chromium, headless): each page and each plot it shows
+# must load and render with no console message, and the screenshots must not be blank.
 # The page has no script of its own, so a harness page beside it loads every image the page
 # names and logs an error for one that fails (a missing file or an SVG that is not well-formed
 # XML), which the browser's log then shows. Exits 77 (ctest: skipped) only when chromium is not
@@ -14,21 +15,45 @@ fi
 out="$(cd "$WORK" && pwd)/browser"  # absolute: it goes into file:// URLs
 rm -rf "$out"
 mkdir -p "$out"
-"$BIN/harmoloc" --dataset "$WORK/test" --map "$WORK/tiny.hmap" --trajectory "$out/est.tum" \
-  --fixes "$out/fixes.tum" --link "$out/link.bin" --stats "$out/stats.json" --quiet
-"$BIN/harmoloc-report" --truth "$WORK/test/groundtruth.tum" --estimate "$out/est.tum" \
-  --fixes "$out/fixes.tum" --stats "$out/stats.json" --link "$out/link.bin" --out "$out/report" \
-  --skip-initial 3 --title "browser check" > /dev/null
+run="$out/run"  # a run folder as --compare takes it: trajectory.tum and stats.json
+mkdir -p "$run"
+"$BIN/harmoloc" --dataset "$WORK/test" --map "$WORK/tiny.hmap" --trajectory "$run/trajectory.tum" \
+  --fixes "$out/fixes.tum" --link "$out/link.bin" --stats "$run/stats.json" \
+  --record-areas "$out/areas.csv" --quiet
+head -3 "$out/areas.csv" | tail -1 | grep -q ',distrusted_mask$' ||
+  fail "the area log has no distrusted_mask column: $(head -3 "$out/areas.csv" | tail -1)"
+"$BIN/harmoloc-report" --truth "$WORK/test/groundtruth.tum" --estimate "$run/trajectory.tum" \
+  --fixes "$out/fixes.tum" --stats "$run/stats.json" --link "$out/link.bin" \
+  --areas "$out/areas.csv" --out "$out/report" --skip-initial 3 --title "browser check" > /dev/null
+# Two runs on one page: the fused estimate (run folder, with stats) against the raw fixes.
+"$BIN/harmoloc-report" --truth "$WORK/test/groundtruth.tum" --compare "fused=$run" \
+  "fixes only=$out/fixes.tum" --skip-initial 3 --out "$out/compare" > "$out/compare.txt"
+grep -q "^fused " "$out/compare.txt" || { cat "$out/compare.txt"; fail "no fused row in the comparison"; }
 
-images=$(python3 - "$out/report/index.html" << 'EOF'
+# The images a page shows; each listed file must be among them.
+page_images() {
+  python3 - "$1" << 'EOF'
 import re, sys
 print(" ".join(re.findall(r'<img src="([^"]+)"', open(sys.argv[1], encoding="utf-8").read())))
 EOF
-)
-for f in trajectory.svg error.svg error_xy.svg timing.svg stages.svg health.svg sigma.svg; do
-  case " $images " in *" $f "*) ;; *) fail "the page does not show $f (it shows: $images)" ;; esac
-done
-python3 - "$out/report/check.html" $images << 'EOF'
+}
+expect_images() {
+  local page=$1
+  shift
+  local images
+  images=$(page_images "$page")
+  for f in "$@"; do
+    case " $images " in *" $f "*) ;; *) fail "$page does not show $f (it shows: $images)" ;; esac
+  done
+}
+expect_images "$out/report/index.html" trajectory.svg error.svg error_xy.svg timing.svg stages.svg \
+  health.svg sigma.svg areas.svg
+expect_images "$out/compare/index.html" compare_error.svg compare_trajectory.svg
+
+# A harness page beside a report that loads every image the report's page names.
+write_harness() {
+  # shellcheck disable=SC2046  # one argument per image
+  python3 - "$1/check.html" $(page_images "$1/index.html") << 'EOF'
 import json, sys
 srcs = sys.argv[2:]
 page = """<!DOCTYPE html><html><head><meta charset="utf-8"></head><body><script>
@@ -44,6 +69,9 @@ for (const src of srcs) {
 """ % json.dumps(srcs)
 open(sys.argv[1], "w", encoding="utf-8").write(page)
 EOF
+}
+write_harness "$out/report"
+write_harness "$out/compare"
 
 # --no-sandbox: CI runs as root, where chromium's sandbox refuses to start. A profile of its own
 # keeps the run independent of HOME (and out of it). The virtual time budget lets every image
@@ -59,6 +87,8 @@ shoot() {
 }
 shoot "file://$out/report/index.html" "$out/page.png" "$out/page.log"
 shoot "file://$out/report/check.html" "$out/check.png" "$out/check.log"
+shoot "file://$out/compare/index.html" "$out/compare.png" "$out/compare.log"
+shoot "file://$out/compare/check.html" "$out/compare_check.png" "$out/compare_check.log"
 
 # The harness must be able to fail: a missing image is reported.
 cp "$out/report/check.html" "$out/report/check_broken.html"
@@ -70,7 +100,8 @@ grep -q "image failed to load: no-such-plot.svg" "$out/broken.log" ||
   { cat "$out/broken.log"; fail "the harness did not report a missing image"; }
 
 # Not blank: the screenshot of the page is a PNG with many distinct colours (plots, text).
-python3 - "$out/page.png" << 'EOF' || fail "the page's screenshot looks blank"
+for png in "$out/page.png" "$out/compare.png"; do
+  python3 - "$png" << 'EOF' || fail "the screenshot $png looks blank"
 import struct, sys, zlib
 data = open(sys.argv[1], "rb").read()
 assert data[:8] == b"\x89PNG\r\n\x1a\n", "not a PNG"
@@ -87,4 +118,5 @@ distinct = len(set(raw[i:i + 2] for i in range(0, min(len(raw), 4_000_000), 7)))
 print(f"screenshot {width}x{height}, {distinct} distinct samples")
 sys.exit(0 if distinct > 50 else 1)
 EOF
-echo "report renders in $("$browser" --version 2> /dev/null | tr -d '\n') with no console message"
+done
+echo "report and comparison render in $("$browser" --version 2> /dev/null | tr -d '\n') with no console message"

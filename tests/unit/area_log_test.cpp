@@ -22,13 +22,14 @@ namespace {
 
 const std::vector<std::string> kNames{"red", "green", "blue", "yellow", "magenta", "cyan"};
 
-std::string write_log(const ht::TempDir& dir, const std::vector<ha::AreaVector>& frames) {
+std::string write_log(const ht::TempDir& dir, const std::vector<ha::AreaVector>& frames,
+                      const std::vector<std::uint32_t>& distrusted = {}) {
   const std::string path = dir.path("areas.csv");
   hd::AreaLogWriter w;
   EXPECT_TRUE(w.open(path, 320, 240, ht::board_windows(), kNames));
   std::uint64_t t = 1767225600000000000ULL;
-  for (const auto& a : frames) {
-    w.write(t, a);
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    w.write(t, frames[i], i < distrusted.size() ? distrusted[i] : 0U);
     t += 33333333;
   }
   EXPECT_TRUE(w.close());
@@ -57,6 +58,35 @@ TEST(AreaLog, RoundTrip) {
     EXPECT_EQ(log.areas[i].count, 6U);
     for (std::size_t k = 0; k < 6; ++k) EXPECT_EQ(log.areas[i].pixels[k], frames[i].pixels[k]);
   }
+}
+
+// The trailing distrusted_mask column: written and read back; a log from before the column
+// (no distrusted_mask in the header) still reads, with no distrust information.
+TEST(AreaLog, DistrustedMaskRoundTripAndOldLogsStillRead) {
+  ht::TempDir dir;
+  std::vector<ha::AreaVector> frames(3);
+  for (auto& a : frames) {
+    a.count = 6;
+    for (std::size_t k = 0; k < 6; ++k) a.pixels[k] = static_cast<std::uint32_t>(10 + k);
+  }
+  // Bits beyond the six boards are not written.
+  const hd::AreaLog log = hd::read_area_log(write_log(dir, frames, {0U, 0b100101U, 0x40U | 2U}));
+  EXPECT_TRUE(log.has_distrust);
+  EXPECT_EQ(log.board_names, kNames);
+  EXPECT_EQ(log.distrusted_mask, (std::vector<std::uint32_t>{0U, 0b100101U, 2U}));
+  EXPECT_EQ(log.areas[1].pixels[5], 15U);
+
+  const std::string old = dir.path("old.csv");
+  ht::write_text(old,
+                 "# harmoloc area log v1: pixels of each board per frame\n"
+                 "# width_px=320 height_px=240 thresholds_crc32=0x0000abcd\n"
+                 "timestamp_ns,red,green\n100,1,2\n200,3,4\n");
+  const hd::AreaLog before = hd::read_area_log(old);
+  EXPECT_FALSE(before.has_distrust);
+  EXPECT_TRUE(before.distrusted_mask.empty());
+  EXPECT_EQ(before.board_names, (std::vector<std::string>{"red", "green"}));
+  ASSERT_EQ(before.areas.size(), 2U);
+  EXPECT_EQ(before.areas[1].pixels[1], 4U);
 }
 
 TEST(AreaLog, FingerprintFollowsEveryThresholdField) {
@@ -113,6 +143,13 @@ TEST(AreaLog, BadFilesFailWithOneLine) {
       {head + "100,1,76801\n", "board 2"},
       {head + "1e3,1,2\n", "timestamp"},
       {head + "99999999999999999999999,1,2\n", "timestamp"},
+      {"# harmoloc area log v1\n# width_px=320 height_px=240 thresholds_crc32=0x1\n"
+       "timestamp_ns,distrusted_mask\n",
+       "board columns"},
+      {head.substr(0, head.size() - 1) + ",distrusted_mask\n100,1,2\n", "distrusted_mask"},
+      {head.substr(0, head.size() - 1) + ",distrusted_mask\n100,1,2,4\n", "distrusted_mask"},
+      {head.substr(0, head.size() - 1) + ",distrusted_mask\n100,1,2,x\n", "distrusted_mask"},
+      {head.substr(0, head.size() - 1) + ",distrusted_mask\n100,1,2,3,0\n", "more columns"},
   };
   for (const auto& [text, what] : cases) {
     ht::write_text(p, text);

@@ -16,6 +16,8 @@ namespace harmoloc::dataset {
 namespace {
 
 constexpr const char* kMagic = "# harmoloc area log v1";
+// The optional last column (added after v1's first release; a log without it still reads).
+constexpr const char* kDistrustColumn = "distrusted_mask";
 
 [[noreturn]] void fail(const std::string& path, std::size_t line, const std::string& what) {
   throw std::runtime_error(path + ":" + std::to_string(line) + ": " + what);
@@ -110,6 +112,10 @@ AreaLog read_area_log(const std::string& path) {
       if (col.empty()) fail(path, n, "empty board name in the column header");
       log.board_names.push_back(col);
     }
+    if (!log.board_names.empty() && log.board_names.back() == kDistrustColumn) {
+      log.board_names.pop_back();
+      log.has_distrust = true;
+    }
     if (log.board_names.empty() || log.board_names.size() > algorithms::kMaxBoards) {
       fail(path, n, "needs 1 to " + std::to_string(algorithms::kMaxBoards) + " board columns");
     }
@@ -133,6 +139,14 @@ AreaLog read_area_log(const std::string& path) {
         fail(path, n, "board " + std::to_string(k + 1) + ": not a pixel count within the frame");
       }
       a.pixels[k] = static_cast<std::uint32_t>(v);
+    }
+    if (log.has_distrust) {
+      std::uint64_t mask = 0;
+      if (!std::getline(s, field, ',') || !parse_u64(field, mask) ||
+          mask >= (std::uint64_t{1} << a.count)) {
+        fail(path, n, "distrusted_mask: not a bit mask of the boards");
+      }
+      log.distrusted_mask.push_back(static_cast<std::uint32_t>(mask));
     }
     if (std::getline(s, field, ',')) fail(path, n, "more columns than boards");
     log.timestamp_ns.push_back(t);
@@ -159,17 +173,24 @@ bool AreaLogWriter::open(const std::string& path, std::uint32_t width_px, std::u
       std::fprintf(f, ",board%zu", k + 1);
     }
   }
-  std::fputc('\n', f);
+  std::fprintf(f, ",%s\n", kDistrustColumn);
   return std::ferror(f) == 0;
 }
 
-void AreaLogWriter::write(std::uint64_t t_ns, const algorithms::AreaVector& areas) {
+void AreaLogWriter::write(std::uint64_t t_ns, const algorithms::AreaVector& areas,
+                          std::uint32_t distrusted_mask) {
   if (!out_.is_open()) return;
   char line[256];
   int n = std::snprintf(line, sizeof line, "%" PRIu64, t_ns);
   for (std::size_t k = 0; k < boards_ && n > 0 && static_cast<std::size_t>(n) < sizeof line; ++k) {
     n += std::snprintf(line + n, sizeof line - static_cast<std::size_t>(n), ",%" PRIu32,
                        k < areas.count ? areas.pixels[k] : 0U);
+  }
+  if (n > 0 && static_cast<std::size_t>(n) < sizeof line) {
+    const std::uint32_t boards_bits =
+        boards_ >= 32 ? 0xFFFFFFFFU : (std::uint32_t{1} << boards_) - 1U;
+    n += std::snprintf(line + n, sizeof line - static_cast<std::size_t>(n), ",%" PRIu32,
+                       distrusted_mask & boards_bits);
   }
   if (n <= 0 || static_cast<std::size_t>(n) + 1 >= sizeof line) return;
   line[n++] = '\n';

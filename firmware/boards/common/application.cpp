@@ -146,7 +146,7 @@ void Application::run(BoardLoop& loop, bool progress_line) {
       trajectory_.write(out.data_time_ns, out.pose);
     }
     const firmware::FixOutput& fix = cycle_->last_fix();
-    if (fix.present) areas_.write(out.data_time_ns, fix.areas);
+    if (fix.present) areas_.write(out.data_time_ns, fix.areas, fix.distrusted_mask);
     recording_.after_cycle(*cycle_);
     if (fix.present && fix.fix.known_place)
       fixes_.write(out.data_time_ns, algorithms::Pose2{fix.fix.x_m, fix.fix.y_m, 0.0});

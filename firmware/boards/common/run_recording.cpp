@@ -91,7 +91,7 @@ void RunRecording::after_cycle(const firmware::LocalizationCycle& cycle) {
   if (!started_) return;
   const firmware::PoseOutput& out = cycle.pose();
   const firmware::FixOutput& fix = cycle.last_fix();
-  if (fix.present) areas_.write(out.data_time_ns, fix.areas);
+  if (fix.present) areas_.write(out.data_time_ns, fix.areas, fix.distrusted_mask);
   if (with_pose_ && out.valid) pose_.write(out.data_time_ns, out.pose);
 }
 

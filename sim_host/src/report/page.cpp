@@ -8,6 +8,7 @@
 
 #include "format.hpp"
 #include "harmoloc/sim_host/svg.hpp"
+#include "page_style.hpp"
 
 namespace harmoloc::sim_host {
 
@@ -18,25 +19,6 @@ using report_text::seconds;
 using svg::escape;
 
 namespace {
-
-const char* const kCss = R"(
-body { font-family: "DejaVu Sans", Helvetica, Arial, sans-serif; color: #222; margin: 2em auto;
-       max-width: 940px; padding: 0 1em; line-height: 1.4; }
-h1 { font-size: 1.7em; margin-bottom: 0.1em; }
-h2 { font-size: 1.25em; margin-top: 1.8em; border-bottom: 1px solid #ddd; padding-bottom: 0.2em; }
-p.subtitle { color: #555; margin-top: 0; font-size: 1.1em; }
-table { border-collapse: collapse; margin: 0.6em 0; font-size: 0.95em; }
-th, td { padding: 0.25em 0.8em; border-bottom: 1px solid #e4e4e4; text-align: right; }
-th { background: #f4f4f4; }
-td:first-child, th:first-child { text-align: left; }
-td.over { color: #c62828; font-weight: bold; }
-.files td { text-align: left; font-family: "DejaVu Sans Mono", monospace; font-size: 0.9em; }
-figure { margin: 1.2em 0; }
-figure img { max-width: 100%; border: 1px solid #e4e4e4; }
-figcaption { color: #555; font-size: 0.9em; }
-.note { color: #555; font-size: 0.9em; }
-.sections { display: flex; flex-wrap: wrap; gap: 0 2em; align-items: flex-start; }
-)";
 
 void html_row(std::string& out, const std::string& label, const std::vector<std::string>& cells,
               const std::vector<bool>& over = {}) {
@@ -133,6 +115,33 @@ void link_table(std::string& out, const Report& report) {
          "</p>\n";
 }
 
+// What the area log adds: each board's area and how long the filter distrusted it.
+void area_table(std::string& out, const Report& report) {
+  const bool distrust = report.areas->has_distrust;
+  out +=
+      "<h2>Boards (from the area log)</h2>\n<table class=\"areas\">\n<tr><th>board</th>"
+      "<th>frames</th><th>mean area (% of frame)</th><th>min</th><th>max</th>";
+  if (distrust) out += "<th>distrusted</th>";
+  out += "</tr>\n";
+  const double span_s = report.truth.back().t_s - report.truth.front().t_s;
+  for (const BoardAreaSummary& b : board_area_summary(report)) {
+    std::vector<std::string> cells = {std::to_string(b.frames), cell(b.mean_percent, 2),
+                                      cell(b.min_percent, 2), cell(b.max_percent, 2)};
+    if (distrust) {
+      cells.push_back(format("%.1f s (%.1f%%)", b.distrusted_s,
+                             span_s > 0.0 ? 100.0 * b.distrusted_s / span_s : 0.0));
+    }
+    html_row(out, b.name, cells);
+  }
+  out += "</table>\n<p class=\"note\">" +
+         escape(distrust ? "Over the ground truth's time span. A board is distrusted while the "
+                           "filter's motion index for it is below one half; it is then left out "
+                           "of the fix."
+                         : "Over the ground truth's time span. This area log has no "
+                           "distrusted_mask column (an older firmware wrote it).") +
+         "</p>\n";
+}
+
 }  // namespace
 
 std::string index_html(const Report& report, const std::vector<std::string>& images) {
@@ -140,7 +149,7 @@ std::string index_html(const Report& report, const std::vector<std::string>& ima
   out +=
       "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
       "<title>harmoloc run report</title>\n<style>";
-  out += kCss;
+  out += kPageCss;
   out += "</style>\n</head>\n<body>\n<h1>harmoloc run report</h1>\n";
   if (!report.inputs.title.empty()) {
     out += "<p class=\"subtitle\">" + escape(report.inputs.title) + "</p>\n";
@@ -204,6 +213,7 @@ std::string index_html(const Report& report, const std::vector<std::string>& ima
   out += "<p class=\"note\">" + escape(note) + "</p>\n";
   relative_error_table(out, report);
   if (report.link) link_table(out, report);
+  if (report.areas) area_table(out, report);
 
   if (report.stats) {
     const RunStats& s = *report.stats;
@@ -261,6 +271,10 @@ std::string index_html(const Report& report, const std::vector<std::string>& ima
       caption = "The pose on the link: its x and y errors against the ±2 sigma it claims.";
     } else if (image == "health.svg") {
       caption = "Health over time (from the link's STATUSTEXTs) and the quality of each pose.";
+    } else if (image == "areas.svg") {
+      caption =
+          "Each board's area (percent of the frame) over time, the periods the filter "
+          "distrusted it shaded.";
     }
     out += "<figure><img src=\"" + escape(image) + "\" alt=\"" + escape(caption) +
            "\"><figcaption>" + escape(caption) + "</figcaption></figure>\n";
@@ -285,6 +299,7 @@ std::string index_html(const Report& report, const std::vector<std::string>& ima
   }
   if (!report.inputs.stats_path.empty()) html_row(out, "stats", {report.inputs.stats_path});
   if (!report.inputs.link_path.empty()) html_row(out, "link", {report.inputs.link_path});
+  if (!report.inputs.areas_path.empty()) html_row(out, "area log", {report.inputs.areas_path});
   out +=
       "</table>\n<p class=\"note\">Written by harmoloc-report. The numbers are also in "
       "<a href=\"summary.json\">summary.json</a> and <a href=\"summary.txt\">summary.txt</a>."

@@ -91,7 +91,7 @@ Report build_report(ReportInputs inputs, std::vector<dataset::StampedPose> truth
 
 Report load_report(const ReportInputs& inputs) {
   for (const std::string* path : {&inputs.truth_path, &inputs.estimate_path, &inputs.fixes_path,
-                                  &inputs.stats_path, &inputs.link_path}) {
+                                  &inputs.stats_path, &inputs.link_path, &inputs.areas_path}) {
     std::error_code ec;
     if (!path->empty() && std::filesystem::is_directory(*path, ec)) {
       throw ReportError(*path + ": is a directory, expected a file");
@@ -103,8 +103,10 @@ Report load_report(const ReportInputs& inputs) {
   if (!inputs.fixes_path.empty()) fixes = dataset::read_tum(inputs.fixes_path);
   std::optional<RunStats> stats;
   if (!inputs.stats_path.empty()) stats = read_stats(inputs.stats_path);
-  return build_report(inputs, std::move(truth), std::move(estimate), std::move(fixes),
-                      std::move(stats));
+  Report report = build_report(inputs, std::move(truth), std::move(estimate), std::move(fixes),
+                               std::move(stats));
+  if (!inputs.areas_path.empty()) report.areas = dataset::read_area_log(inputs.areas_path);
+  return report;
 }
 
 std::vector<std::string> write_report(const Report& report, const std::filesystem::path& dir) {
@@ -124,6 +126,8 @@ std::vector<std::string> write_report(const Report& report, const std::filesyste
     std::error_code ignored;
     std::filesystem::remove(dir / name, ignored);  // a stale plot of an earlier run
   };
+  drop("compare_error.svg");  // a comparison written to this folder before
+  drop("compare_trajectory.svg");
   put("trajectory.svg", trajectory_svg(report));
   images.push_back("trajectory.svg");
   put("error.svg", error_svg(report));
@@ -138,6 +142,12 @@ std::vector<std::string> write_report(const Report& report, const std::filesyste
   } else {
     drop("sigma.svg");
     drop("health.svg");
+  }
+  if (report.areas) {
+    put("areas.svg", areas_svg(report));
+    images.push_back("areas.svg");
+  } else {
+    drop("areas.svg");
   }
   if (report.stats && report.stats->cycle_histogram) {
     put("timing.svg", timing_svg(*report.stats));

@@ -203,6 +203,14 @@ std::string summary_text(const Report& report, const std::string& index_path) {
                  100.0 * static_cast<double>(c.inside_y) / static_cast<double>(c.poses), c.poses);
     }
   }
+  if (report.areas && report.areas->has_distrust) {
+    std::string list;
+    for (const BoardAreaSummary& b : board_area_summary(report)) {
+      if (!list.empty()) list += ", ";
+      list += format("%s %.1f s", b.name.c_str(), b.distrusted_s);
+    }
+    out += "distrusted     " + list + "\n";
+  }
   if (!index_path.empty()) out += "report         " + index_path + "\n";
   return out;
 }
@@ -215,7 +223,8 @@ std::string summary_json(const Report& report) {
       {"estimate", report.inputs.estimate_path},
       {"fixes", report.inputs.fixes_path.empty() ? Json(nullptr) : Json(report.inputs.fixes_path)},
       {"stats", report.inputs.stats_path.empty() ? Json(nullptr) : Json(report.inputs.stats_path)},
-      {"link", report.inputs.link_path.empty() ? Json(nullptr) : Json(report.inputs.link_path)}};
+      {"link", report.inputs.link_path.empty() ? Json(nullptr) : Json(report.inputs.link_path)},
+      {"areas", report.inputs.areas_path.empty() ? Json(nullptr) : Json(report.inputs.areas_path)}};
   j["skip_initial_s"] = report.inputs.skip_initial_s;
   j["units"] = "lengths in cm, MSE in cm2, angles in degrees, times in microseconds";
   Json estimate;
@@ -260,6 +269,23 @@ std::string summary_json(const Report& report) {
     link["within_2sigma_x_percent"] = share(c.inside_x);
     link["within_2sigma_y_percent"] = share(c.inside_y);
     j["link"] = link;
+  }
+  if (report.areas) {
+    Json areas;
+    areas["frames"] = report.areas->areas.size();
+    areas["has_distrust"] = report.areas->has_distrust;
+    Json boards = Json::array();
+    for (const BoardAreaSummary& b : board_area_summary(report)) {
+      boards.push_back(
+          {{"name", b.name},
+           {"frames", b.frames},
+           {"mean_percent", b.mean_percent},
+           {"min_percent", b.min_percent},
+           {"max_percent", b.max_percent},
+           {"distrusted_s", report.areas->has_distrust ? Json(b.distrusted_s) : Json(nullptr)}});
+    }
+    areas["boards"] = boards;
+    j["areas"] = areas;
   }
   if (report.stats) {
     const RunStats& s = *report.stats;

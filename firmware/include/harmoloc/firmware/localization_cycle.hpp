@@ -48,6 +48,10 @@ struct FixOutput {
   algorithms::HarmonicFix fix;
   algorithms::AreaVector areas;  ///< what the fix was computed from (recorded for training)
   bool present = false;          ///< a frame was localised this cycle
+  /// Boards the filter distrusted in this frame's update (motion index below 1/2; bit b: board
+  /// b), as the area log records them. 0 when the frame's boards were not weighed one by one
+  /// (no forward map, filter not yet initialised, an implausible frame).
+  std::uint32_t distrusted_mask = 0;
 };
 
 struct CycleCounters {

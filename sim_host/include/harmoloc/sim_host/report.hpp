@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "harmoloc/dataset/area_log.hpp"
 #include "harmoloc/dataset/tum.hpp"
 #include "harmoloc/sim_host/link_log.hpp"
 #include "harmoloc/sim_host/relative_error.hpp"
@@ -24,6 +25,7 @@ struct ReportInputs {
   std::string fixes_path;  ///< Empty: no harmonic fixes.
   std::string stats_path;  ///< Empty: no timing.
   std::string link_path;   ///< Empty: no health timeline and no 2-sigma plot.
+  std::string areas_path;  ///< Empty: no board areas (an area log, `harmoloc --record-areas`).
   double skip_initial_s = 0.0;
 };
 
@@ -40,6 +42,8 @@ struct Report {
   /// The link recording (`harmoloc --link FILE`): health and spread over time. Set by the
   /// caller from read_link_log(inputs.link_path) (link_log.hpp, library harmoloc_report_link).
   std::optional<LinkLog> link;
+  /// The area log (dataset/area_log.hpp): each board's area and distrust per frame.
+  std::optional<dataset::AreaLog> areas;
   /// The fused estimate's Relative Pose Error (relative_error.hpp) over 1 m and over 1 s, on
   /// the poses estimate_all scores and, with a skip, on those estimate_converged scores.
   RelativeErrors rpe_1m;
@@ -55,6 +59,30 @@ struct SigmaConsistency {
   std::size_t inside_y = 0;
 };
 SigmaConsistency sigma_consistency(const Report& report);
+
+/// A stretch of time [start_s, end_s), seconds on the data clock (as the TUM files).
+struct TimeSpan {
+  double start_s = 0.0;
+  double end_s = 0.0;
+};
+
+/// The periods the filter distrusted board @p board in an area log: each run of frames with the
+/// board's bit set, from its first frame to the frame after it (the log's last frame: plus the
+/// interval before it). Empty when the log has no distrusted_mask column.
+std::vector<TimeSpan> distrusted_spans(const dataset::AreaLog& log, std::size_t board);
+
+/// One board's area over the ground truth's time span (percent of the frame) and the time the
+/// filter distrusted it there.
+struct BoardAreaSummary {
+  std::string name;
+  std::size_t frames = 0;  ///< Frames of the log within the truth's span.
+  double mean_percent = 0.0;
+  double min_percent = 0.0;
+  double max_percent = 0.0;
+  double distrusted_s = 0.0;  ///< Within the truth's span; 0 without the distrust column.
+};
+/// One entry per board of report.areas (empty without it).
+std::vector<BoardAreaSummary> board_area_summary(const Report& report);
 
 /// Scores the loaded trajectories (and keeps @p stats). Throws ReportError when the estimate (or
 /// the fixes) has no pose in the truth's time span, or the skip leaves none, or truth has fewer
@@ -82,6 +110,8 @@ std::string stages_svg(const RunStats& stats);
 std::string xy_error_svg(const Report& report);  ///< x and y error components over time.
 std::string health_svg(const Report& report);    ///< Requires report.link.
 std::string sigma_svg(const Report& report);     ///< Requires report.link.
+/// Each board's area (percent of the frame) over time, distrusted periods shaded.
+std::string areas_svg(const Report& report);  ///< Requires report.areas.
 
 /// The self-contained HTML page; @p images are the SVG file names (relative to the page).
 std::string index_html(const Report& report, const std::vector<std::string>& images);

@@ -25,6 +25,11 @@ struct AreaLog {
   std::vector<std::string> board_names;
   std::vector<std::uint64_t> timestamp_ns;
   std::vector<algorithms::AreaVector> areas;
+  /// The trailing `distrusted_mask` column (bit b: board b was distrusted by the filter in that
+  /// frame). Logs written before the column existed have none: has_distrust false and the
+  /// vector empty; otherwise one entry per frame.
+  bool has_distrust = false;
+  std::vector<std::uint32_t> distrusted_mask;
 };
 
 /// Reads and checks an area log. Throws std::runtime_error with one line (file:line: what).
@@ -38,8 +43,10 @@ class AreaLogWriter {
   bool open(const std::string& path, std::uint32_t width_px, std::uint32_t height_px,
             const algorithms::ThresholdSet& thresholds,
             const std::vector<std::string>& board_names);
-  /// Appends one frame's areas; does nothing when no file is open.
-  void write(std::uint64_t t_ns, const algorithms::AreaVector& areas);
+  /// Appends one frame's areas and the boards the filter distrusted in it (bit b: board b);
+  /// does nothing when no file is open.
+  void write(std::uint64_t t_ns, const algorithms::AreaVector& areas,
+             std::uint32_t distrusted_mask = 0);
   /// Flushes and closes; false if any write failed.
   bool close() { return out_.close(); }
   const BufferedOutput& output() const { return out_; }
