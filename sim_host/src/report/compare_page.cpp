@@ -10,6 +10,8 @@
 
 namespace harmoloc::sim_host {
 
+using report_text::write_file;
+
 using report_text::cell;
 using report_text::format;
 using report_text::seconds;
@@ -58,14 +60,6 @@ Json numbers_json(const RunNumbers& n) {
           {"rpe_1m_rmse_cm", number_or_null(n.rpe_1m_rmse_cm)},
           {"rpe_1s_rmse_cm", number_or_null(n.rpe_1s_rmse_cm)},
           {"cycle_p99_us", number_or_null(n.cycle_p99_us)}};
-}
-
-void write_file(const std::filesystem::path& path, const std::string& content) {
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  if (!out) throw std::runtime_error(path.string() + ": cannot write");
-  out << content;
-  out.close();
-  if (!out) throw std::runtime_error(path.string() + ": write failed");
 }
 
 }  // namespace

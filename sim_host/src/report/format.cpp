@@ -3,6 +3,8 @@
 #include <cmath>
 #include <cstdarg>
 #include <cstdio>
+#include <fstream>
+#include <stdexcept>
 
 namespace harmoloc::sim_host::report_text {
 
@@ -50,6 +52,14 @@ std::string budget(double us) {
 
 std::string seconds(double s) {
   return format("%g s", s);
+}
+
+void write_file(const std::filesystem::path& path, const std::string& content) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  if (!out) throw std::runtime_error(path.string() + ": cannot write");
+  out << content;
+  out.close();
+  if (!out) throw std::runtime_error(path.string() + ": write failed");
 }
 
 }  // namespace harmoloc::sim_host::report_text

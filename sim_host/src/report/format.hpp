@@ -2,6 +2,7 @@
 /// @file Text formatting shared by the report's summaries, plots and page, so that a number reads
 /// the same wherever it appears (the terminal, the JSON's neighbours, the SVGs, the HTML).
 
+#include <filesystem>
 #include <string>
 
 namespace harmoloc::sim_host::report_text {
@@ -22,5 +23,9 @@ std::string cell(double value, int decimals);
 std::string budget(double us);
 
 std::string seconds(double s);
+
+/// Writes @p content to @p path whole; std::runtime_error("PATH: cannot write" or "PATH: write
+/// failed") otherwise.
+void write_file(const std::filesystem::path& path, const std::string& content);
 
 }  // namespace harmoloc::sim_host::report_text

@@ -9,19 +9,9 @@
 
 namespace harmoloc::sim_host {
 
+using report_text::write_file;
+
 using report_text::format;
-
-namespace {
-
-void write_file(const std::filesystem::path& path, const std::string& content) {
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  if (!out) throw std::runtime_error(path.string() + ": cannot write");
-  out << content;
-  out.close();
-  if (!out) throw std::runtime_error(path.string() + ": write failed");
-}
-
-}  // namespace
 
 Report build_report(ReportInputs inputs, std::vector<dataset::StampedPose> truth,
                     std::vector<dataset::StampedPose> estimate,
