@@ -36,7 +36,8 @@ add_executable(firmware_test
   ${HARMOLOC_UNIT_DIR}/latency_window_test.cpp
   ${HARMOLOC_UNIT_DIR}/map_loader_test.cpp
   ${HARMOLOC_UNIT_DIR}/device_config_test.cpp
-  ${HARMOLOC_UNIT_DIR}/health_log_test.cpp)
+  ${HARMOLOC_UNIT_DIR}/health_log_test.cpp
+  ${HARMOLOC_UNIT_DIR}/stats_dumper_test.cpp)
 target_link_libraries(firmware_test PRIVATE harmoloc_firmware harmoloc_config harmoloc_algorithms
   harmoloc_board_common harmoloc_drivers_common harmoloc::nettle GTest::gtest_main harmoloc_warnings)
 if(CMAKE_CROSSCOMPILING)
