@@ -81,10 +81,12 @@ struct Rig {
     h.area_scale = 100.0F / (kWidth * kHeight);
     h.sigma_x = h.sigma_y = 1.0F;
     h.max_nearest_distance = 5.0F;
-    cycle = std::make_unique<hf::LocalizationCycle>(hf::default_config(), *map, camera, encoders,
+    cycle = std::make_unique<hf::LocalizationCycle>(config, *map, camera, encoders,
                                                     link, clock);
     for (int i = 0; i < 7; ++i) cycle->run_once();
   }
+  // The cycle keeps references to the config and the map: both live as long as it does.
+  hf::FirmwareConfig config = hf::default_config();
   std::unique_ptr<ha::MapFile> map = std::make_unique<ha::MapFile>();
   NoCamera camera;
   NoEncoders encoders;

@@ -111,6 +111,11 @@ class LocalizationCycle {
                     hal::Camera& camera, hal::WheelEncoders& encoders, hal::PoseLink& link,
                     const hal::Clock& clock,
                     hal::PixelFormat pixel_format = hal::PixelFormat::kRgb24);
+  /// The cycle keeps a reference to @p config: a temporary would dangle after construction.
+  LocalizationCycle(const FirmwareConfig&& config, const algorithms::MapFile& map,
+                    hal::Camera& camera, hal::WheelEncoders& encoders, hal::PoseLink& link,
+                    const hal::Clock& clock,
+                    hal::PixelFormat pixel_format = hal::PixelFormat::kRgb24) = delete;
 
   /// Runs one cycle. The data clock follows the frames; a cycle without a frame advances it
   /// by one period. The camera is given until one period after the cycle's start.
