@@ -1,0 +1,73 @@
+// Where a re-seed puts the particles: around a fix, between a place and a fix, or over the
+// whole mapped region.
+#include "harmoloc/firmware/localization_cycle.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace harmoloc::firmware {
+
+using algorithms::Pose2;
+
+bool LocalizationCycle::route_heading_known() const {
+  return use_boards_ && map_.forward.has_heading;
+}
+
+algorithms::Pose2 LocalizationCycle::route_pose(double x_m, double y_m) const {
+  const double yaw = route_heading_known()
+                         ? static_cast<double>(algorithms::route_heading(map_.forward, x_m, y_m))
+                         : 0.0;
+  return Pose2{x_m, y_m, yaw};
+}
+
+double LocalizationCycle::reseed_yaw_sigma_rad() const {
+  return config_.kidnap.yaw_sigma_deg * algorithms::kPi / 180.0;
+}
+
+void LocalizationCycle::reseed_around(double x_m, double y_m) {
+  const double sigma_m = filter_.initialized() ? reseed_sigma_m_ : init_sigma_m_;
+  filter_.initialize(route_pose(x_m, y_m), sigma_m, reseed_yaw_sigma_rad(), !route_heading_known());
+  after_reseed();
+}
+
+void LocalizationCycle::after_reseed() {
+  if (gap_ == EncoderGap::kDiffused) gap_ = EncoderGap::kReseeded;
+  kidnap_.reset();
+  // What the boards' motion indices learnt was learnt against the old, wrong estimate.
+  reliability_.reset(board_params_);
+  fix_check_.reset();
+  ++reset_counter_;
+}
+
+void LocalizationCycle::reseed_between(double place_x_m, double place_y_m, double fix_x_m,
+                                       double fix_y_m) {
+  // The boards' place and the fix's place: where the boards hardly change (across a route the
+  // training never left) the boards' best place can be centimetres off while the fix is not, and
+  // elsewhere the other way round. The cloud starts on both and the next frames choose. A cloud
+  // started on the wrong one alone converges all the same, but by selecting the particles whose
+  // heading carried them towards the truth: a heading bias that the odometry then turns into
+  // position error for seconds.
+  if (std::hypot(place_x_m - fix_x_m, place_y_m - fix_y_m) <= reseed_sigma_m_) {
+    reseed_around(place_x_m, place_y_m);
+    return;
+  }
+  filter_.initialize_between(route_pose(place_x_m, place_y_m), route_pose(fix_x_m, fix_y_m),
+                             reseed_sigma_m_, reseed_yaw_sigma_rad(), !route_heading_known());
+  after_reseed();
+}
+
+void LocalizationCycle::reseed_globally() {
+  const algorithms::ForwardMap& f = map_.forward;
+  if (config_.kidnap.reseed == ReseedStrategy::kUniform && f.present()) {
+    const auto x0 = static_cast<double>(f.origin_x_m), y0 = static_cast<double>(f.origin_y_m);
+    const auto cell = static_cast<double>(f.cell_m);
+    filter_.initialize_uniform(x0, y0, x0 + cell * (f.columns - 1U), y0 + cell * (f.rows - 1U));
+  } else {
+    const algorithms::HarmonicModel& m = map_.model;
+    filter_.initialize_around_points(m.target_x_m.data(), m.target_y_m.data(), m.sample_count,
+                                     reseed_sigma_m_);
+  }
+  after_reseed();
+}
+
+}  // namespace harmoloc::firmware

@@ -1,0 +1,169 @@
+// What the cycle derives at start-up from its config and map (no allocation after it), and
+// the names of its stages and health states.
+#include "harmoloc/firmware/localization_cycle.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+
+#include "harmoloc/algorithms/odometry.hpp"
+#include "harmoloc/algorithms/segmentation.hpp"
+
+namespace harmoloc::firmware {
+
+using algorithms::Pose2;
+
+const char* stage_name(Stage stage) {
+  static constexpr const char* kNames[kStageCount] = {"acquire", "segment", "localize", "encoders",
+                                                      "predict", "update",  "publish",  "cycle"};
+  return kNames[static_cast<std::size_t>(stage)];
+}
+
+const char* health_name(Health health) {
+  switch (health) {
+    case Health::kNotInitialized:
+      return "not_initialized";
+    case Health::kNominal:
+      return "nominal";
+    case Health::kOdometryOnly:
+      return "odometry_only";
+    case Health::kVisionOnly:
+      return "vision_only";
+    case Health::kInvalid:
+      return "invalid";
+  }
+  return "unknown";
+}
+
+algorithms::DiffDriveGeometry effective_geometry(const FirmwareConfig& config,
+                                                 const algorithms::MapCalibration& calibration) {
+  if (!config.use_map_odometry_calibration || !calibration.odometry_present) return config.geometry;
+  return algorithms::calibrated(
+      config.geometry, algorithms::OdometryScale{static_cast<double>(calibration.left_wheel_scale),
+                                                 static_cast<double>(calibration.right_wheel_scale),
+                                                 static_cast<double>(calibration.track_scale)});
+}
+
+std::string odometry_summary(const FirmwareConfig& config,
+                             const algorithms::MapCalibration& calibration) {
+  if (!calibration.odometry_present) return {};
+  char line[200];
+  std::snprintf(line, sizeof line,
+                "odometry %s the map's calibration: left wheel x %.4f, right x %.4f, track x %.4f",
+                config.use_map_odometry_calibration ? "with"
+                                                    : "without (odometry.map_calibration "
+                                                      "= false)",
+                static_cast<double>(calibration.left_wheel_scale),
+                static_cast<double>(calibration.right_wheel_scale),
+                static_cast<double>(calibration.track_scale));
+  return line;
+}
+
+LocalizationCycle::LocalizationCycle(const FirmwareConfig& config, const algorithms::MapFile& map,
+                                     hal::Camera& camera, hal::WheelEncoders& encoders,
+                                     hal::PoseLink& link, const hal::Clock& clock,
+                                     hal::PixelFormat pixel_format)
+    : config_(config),
+      map_(map),
+      camera_(camera),
+      encoders_(encoders),
+      link_(link),
+      clock_(clock),
+      classifier_(map.thresholds),
+      mavlink_(config.link.system_id, config.link.component_id),
+      receiver_(config.link, &signer_),
+      use_boards_(config.observation.model == ObservationModel::kBoards && map.forward.present()),
+      period_ns_(static_cast<std::uint64_t>(std::llround(1e9 / config.cycle.rate_hz))),
+      budget_ns_(static_cast<std::uint64_t>(std::llround(config.cycle.budget_ms * 1e6))) {
+  filter_.configure(config.filter.particles, config.filter.seed, config.filter.noise);
+  kidnap_params_ = derived_kidnap_params(config.kidnap.detector, map.calibration);
+  geometry_ = effective_geometry(config, map.calibration);
+  board_params_ = config.observation.boards;
+  // The fix's own error per axis on the training run (0 without a calibration).
+  const double fix_rmse = map.calibration.present
+                              ? std::hypot(static_cast<double>(map.calibration.fix_rmse_x_m),
+                                           static_cast<double>(map.calibration.fix_rmse_y_m)) /
+                                    std::sqrt(2.0)
+                              : 0.0;
+  if (config.observation.fix_board_check && map.calibration.present)
+    fix_check_params_ =
+        algorithms::fix_check_params(static_cast<double>(map.calibration.fix_rmse_x_m),
+                                     static_cast<double>(map.calibration.fix_rmse_y_m));
+  if (config.observation.fix_term && fix_rmse > 0.0)
+    fix_term_sigma_m_ = std::max(fix_rmse, 0.005) * std::sqrt(board_params_.tempering);
+  // Where a re-seed puts the particles: around a fix, as far as the fix's own error reaches
+  // (twice it; 5 cm and 4 cm for maps without a calibration). Configured values win.
+  init_sigma_m_ = config.filter.init_position_sigma_m >= 0.0 ? config.filter.init_position_sigma_m
+                  : fix_rmse > 0.0                           ? std::clamp(2.0 * fix_rmse, 0.02, 1.0)
+                                                             : 0.05;
+  reseed_sigma_m_ = config.kidnap.position_sigma_m >= 0.0 ? config.kidnap.position_sigma_m
+                    : fix_rmse > 0.0                      ? std::clamp(2.0 * fix_rmse, 0.02, 1.0)
+                                                          : 0.04;
+  if (map.calibration.present && board_params_.position_spread_m == 0.0)
+    board_params_.position_spread_m = static_cast<double>(map.calibration.pass_spread_m);
+  reliability_.reset(board_params_);
+  if (use_boards_) board_maxima_ = algorithms::board_maxima(map.forward);
+  if (config.link.has_signing_key) {
+    mavlink::SigningOptions options;
+    options.max_ahead = static_cast<std::uint64_t>(config.link.signing_max_ahead_s *
+                                                   mavlink::kSigningUnitsPerSecond);
+    options.peer_clock = config.link.signing_peer_clock;
+    options.persistent = !config.link.signing_state_file.empty();
+    signer_.configure(config.link.signing_key, config.link.link_id, options);
+  }
+  mavlink_.set_signer(&signer_);
+  colour_table_storage_.reset(new std::uint8_t[algorithms::MaskTable::kStorageBytes]);
+  if (pixel_format == hal::PixelFormat::kYuyv)
+    yuyv_table_.build(classifier_, colour_table_storage_.get());
+  else
+    colour_table_.build(classifier_, colour_table_storage_.get());
+  // The mapped region: the box around the training positions and the forward map's cells.
+  const algorithms::HarmonicModel& m = map.model;
+  double x0 = 0.0, x1 = 0.0, y0 = 0.0, y1 = 0.0;
+  for (std::size_t i = 0; i < m.sample_count; ++i) {
+    const auto x = static_cast<double>(m.target_x_m[i]), y = static_cast<double>(m.target_y_m[i]);
+    x0 = i == 0 ? x : std::min(x0, x);
+    x1 = i == 0 ? x : std::max(x1, x);
+    y0 = i == 0 ? y : std::min(y0, y);
+    y1 = i == 0 ? y : std::max(y1, y);
+  }
+  if (map.forward.present()) {
+    const algorithms::ForwardMap& f = map.forward;
+    const auto fx0 = static_cast<double>(f.origin_x_m), fy0 = static_cast<double>(f.origin_y_m);
+    const auto cell = static_cast<double>(f.cell_m);
+    x0 = std::min(x0, fx0);
+    y0 = std::min(y0, fy0);
+    x1 = std::max(x1, fx0 + cell * (f.columns - 1U));
+    y1 = std::max(y1, fy0 + cell * (f.rows - 1U));
+  }
+  const double margin = config.filter.map_margin_m;
+  region_min_x_m_ = x0 - margin;
+  region_max_x_m_ = x1 + margin;
+  region_min_y_m_ = y0 - margin;
+  region_max_y_m_ = y1 + margin;
+}
+
+algorithms::KidnapParams derived_kidnap_params(const algorithms::KidnapParams& configured,
+                                               const algorithms::MapCalibration& calibration) {
+  algorithms::KidnapParams p = configured;
+  // The harmonic fix's own error on frames of other passes, measured by the trainer. Without a
+  // calibration (maps before version 4) the values of those versions' defaults.
+  const double fix_rmse_m = calibration.present
+                                ? std::hypot(static_cast<double>(calibration.fix_rmse_x_m),
+                                             static_cast<double>(calibration.fix_rmse_y_m))
+                                : -1.0;
+  // Far: well beyond what the fix's own error explains (6 sigma), at most 1 m, and at least
+  // 25 cm, a step the tracking follows by itself. The cross-validated error does not see a
+  // lighting drift, which biases the fix and the boards alike: on a three-board scene that bias
+  // (15 cm) passed a 10 cm floor, and a false kidnap moved a right estimate 14 cm away.
+  if (p.fix_distance_m < 0.0)
+    p.fix_distance_m = fix_rmse_m > 0.0 ? std::clamp(6.0 * fix_rmse_m, 0.25, 1.0) : 0.25;
+  // Consistent: two fixes of the same place a frame apart differ by their error (4 sigma) plus
+  // what the robot drives in a frame.
+  if (p.consistency_m < 0.0)
+    p.consistency_m = fix_rmse_m > 0.0 ? std::clamp(4.0 * fix_rmse_m + 0.03, 0.05, 0.5) : 0.15;
+  return p;
+}
+
+}  // namespace harmoloc::firmware
