@@ -8,6 +8,7 @@
 
 #include <Eigen/Sparse>
 
+#include "column_selection.hpp"
 #include "harmoloc/algorithms/harmonic_training.hpp"
 
 namespace harmoloc::algorithms {
@@ -309,13 +310,7 @@ ModelSelection select_neighbour_model(const Eigen::MatrixXd& features,
                                       const Eigen::MatrixXd& labels_xy,
                                       const SelectionOptions& options) {
   ModelSelection out;
-  std::vector<int> columns;
-  for (Eigen::Index c = 0; c < features.cols(); ++c) {
-    // A board that never changes carries no position and only dilutes the distances.
-    if (features.col(c).maxCoeff() > features.col(c).minCoeff())
-      columns.push_back(static_cast<int>(c));
-  }
-  if (columns.empty()) throw std::runtime_error("no board's area changes along the run");
+  std::vector<int> columns = detail::changing_columns(features);
   // Boards are screened with one graph (the middle neighbour count, the first gamma) and every
   // sigma; the full grid runs once, on the chosen boards. The graph parameters matter little
   // next to the boards (measured), and this keeps training within its time budget.
@@ -327,28 +322,13 @@ ModelSelection select_neighbour_model(const Eigen::MatrixXd& features,
   };
   auto current = evaluate(columns);
   out.steps.push_back(SelectionStep{columns, current.first.cv_mse, current.second.cv_mse, -1});
-  while (options.select_features && columns.size() > 1) {
-    double best_score = std::numeric_limits<double>::infinity();
-    std::size_t best_drop = 0;
-    std::pair<NeighbourAxisChoice, NeighbourAxisChoice> best_choice;
-    for (std::size_t d = 0; d < columns.size(); ++d) {
-      std::vector<int> trial = columns;
-      trial.erase(trial.begin() + static_cast<std::ptrdiff_t>(d));
-      const auto c = evaluate(trial);
-      const double score = c.first.cv_mse + c.second.cv_mse;
-      if (score < best_score) {
-        best_score = score;
-        best_drop = d;
-        best_choice = c;
-      }
-    }
-    const double now = current.first.cv_mse + current.second.cv_mse;
-    if (!(best_score < now * (1.0 - options.min_improvement))) break;
-    const int dropped = columns[best_drop];
-    columns.erase(columns.begin() + static_cast<std::ptrdiff_t>(best_drop));
-    current = best_choice;
-    out.steps.push_back(
-        SelectionStep{columns, current.first.cv_mse, current.second.cv_mse, dropped});
+  if (options.select_features) {
+    current = detail::eliminate_columns(
+        columns, current, options.min_improvement, evaluate,
+        [&](const std::vector<int>& left, const auto& choice, int dropped) {
+          out.steps.push_back(
+              SelectionStep{left, choice.first.cv_mse, choice.second.cv_mse, dropped});
+        });
   }
   out.columns = columns;
   current = cross_validate_neighbour_model(features, labelled, labels_xy, columns, options);

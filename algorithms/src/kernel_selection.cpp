@@ -5,6 +5,7 @@
 #include <limits>
 #include <stdexcept>
 
+#include "column_selection.hpp"
 #include "harmoloc/algorithms/harmonic_localizer.hpp"
 #include "harmoloc/algorithms/harmonic_training.hpp"
 
@@ -189,37 +190,20 @@ void other_pass_nearest(const PlacedSamples& samples, const PlacedSamples& queri
 KernelSelection select_kernel_model(const PlacedSamples& samples, const PlacedSamples& queries,
                                     const KernelSelectionOptions& options) {
   KernelSelection out;
-  std::vector<int> columns;
-  for (Eigen::Index c = 0; c < samples.features.cols(); ++c) {
-    if (samples.features.col(c).maxCoeff() > samples.features.col(c).minCoeff())
-      columns.push_back(static_cast<int>(c));
-  }
-  if (columns.empty()) throw std::runtime_error("no board's area changes along the run");
+  std::vector<int> columns = detail::changing_columns(samples.features);
   auto current = cross_validate_kernel(samples, queries, columns, options);
   out.steps.push_back(
       KernelSelectionStep{columns, current.first.cv_mse, current.second.cv_mse, -1});
-  while (options.select_features && columns.size() > 1) {
-    double best_score = std::numeric_limits<double>::infinity();
-    std::size_t best_drop = 0;
-    std::pair<KernelAxis, KernelAxis> best_choice;
-    for (std::size_t d = 0; d < columns.size(); ++d) {
-      std::vector<int> trial = columns;
-      trial.erase(trial.begin() + static_cast<std::ptrdiff_t>(d));
-      const auto c = cross_validate_kernel(samples, queries, trial, options);
-      const double score = c.first.cv_mse + c.second.cv_mse;
-      if (score < best_score) {
-        best_score = score;
-        best_drop = d;
-        best_choice = c;
-      }
-    }
-    const double now = current.first.cv_mse + current.second.cv_mse;
-    if (!(best_score < now * (1.0 - options.min_improvement))) break;
-    const int dropped = columns[best_drop];
-    columns.erase(columns.begin() + static_cast<std::ptrdiff_t>(best_drop));
-    current = best_choice;
-    out.steps.push_back(
-        KernelSelectionStep{columns, current.first.cv_mse, current.second.cv_mse, dropped});
+  if (options.select_features) {
+    auto evaluate = [&](const std::vector<int>& cols) {
+      return cross_validate_kernel(samples, queries, cols, options);
+    };
+    current = detail::eliminate_columns(
+        columns, current, options.min_improvement, evaluate,
+        [&](const std::vector<int>& left, const auto& choice, int dropped) {
+          out.steps.push_back(
+              KernelSelectionStep{left, choice.first.cv_mse, choice.second.cv_mse, dropped});
+        });
   }
   out.columns = columns;
   out.x = current.first;

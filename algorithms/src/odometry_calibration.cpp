@@ -9,29 +9,6 @@ namespace harmoloc::algorithms {
 
 namespace {
 
-// Cumulative ticks at @p t (linear between samples, held beyond the ends).
-void ticks_at(const std::vector<OdometrySample>& odo, double t, double& left, double& right) {
-  if (t <= odo.front().t_s) {
-    left = static_cast<double>(odo.front().left_ticks);
-    right = static_cast<double>(odo.front().right_ticks);
-    return;
-  }
-  if (t >= odo.back().t_s) {
-    left = static_cast<double>(odo.back().left_ticks);
-    right = static_cast<double>(odo.back().right_ticks);
-    return;
-  }
-  const auto it = std::upper_bound(odo.begin(), odo.end(), t,
-                                   [](double v, const OdometrySample& s) { return v < s.t_s; });
-  const OdometrySample& b = *it;
-  const OdometrySample& a = *(it - 1);
-  const double span = b.t_s - a.t_s;
-  const double u = span > 0.0 ? (t - a.t_s) / span : 0.0;
-  left = static_cast<double>(a.left_ticks) + u * static_cast<double>(b.left_ticks - a.left_ticks);
-  right =
-      static_cast<double>(a.right_ticks) + u * static_cast<double>(b.right_ticks - a.right_ticks);
-}
-
 // The run as tick increments between nodes (every encoder sample and every label time), and
 // which node each label falls on.
 struct Chain {

@@ -8,14 +8,6 @@
 
 namespace harmoloc::algorithms {
 
-namespace {
-
-struct Node {
-  double t_s;
-  double left, right;  // cumulative ticks, interpolated
-};
-
-// Cumulative ticks at @p t (linear between samples, held beyond the ends).
 void ticks_at(const std::vector<OdometrySample>& odo, double t, double& left, double& right) {
   if (t <= odo.front().t_s) {
     left = static_cast<double>(odo.front().left_ticks);
@@ -37,6 +29,13 @@ void ticks_at(const std::vector<OdometrySample>& odo, double t, double& left, do
   right =
       static_cast<double>(a.right_ticks) + u * static_cast<double>(b.right_ticks - a.right_ticks);
 }
+
+namespace {
+
+struct Node {
+  double t_s;
+  double left, right;  // cumulative ticks, interpolated
+};
 
 double angle_near(double angle, double reference) {
   return reference + wrap_angle_rad(angle - reference);

@@ -5,7 +5,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "harmoloc/drivers/input_file.hpp"
+#include "recording_text.hpp"
 
 namespace harmoloc::dataset {
 
@@ -122,12 +122,7 @@ bool parse_candump_line(const std::string& line, CanFrame& frame, std::string& r
 }
 
 std::vector<CanFrame> read_candump_log(const std::string& path) {
-  std::string content;
-  if (const std::string e =
-          drivers::read_regular_file(path, drivers::input_limits::kRecordingBytes, content);
-      !e.empty()) {
-    throw std::runtime_error(path + ": " + e);
-  }
+  const std::string content = detail::read_recording_text(path);
   std::istringstream in(content);
   std::vector<CanFrame> frames;
   std::string line, reason;

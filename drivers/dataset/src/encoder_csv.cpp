@@ -5,7 +5,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "harmoloc/drivers/input_file.hpp"
+#include "recording_text.hpp"
 
 namespace harmoloc::dataset {
 
@@ -81,12 +81,7 @@ bool parse_encoder_csv_line(const char* line, std::size_t size, std::uint8_t cou
 }
 
 std::vector<EncoderSample> read_encoder_csv(const std::string& path, std::uint8_t counter_bits) {
-  std::string text;
-  if (const std::string e =
-          drivers::read_regular_file(path, drivers::input_limits::kRecordingBytes, text);
-      !e.empty()) {
-    throw std::runtime_error(path + ": " + e);
-  }
+  const std::string text = detail::read_recording_text(path);
   const auto at = [&path](std::size_t line_no, const std::string& why) {
     return std::runtime_error(path + ":" + std::to_string(line_no) + ": " + why);
   };

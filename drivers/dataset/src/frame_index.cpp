@@ -6,17 +6,12 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "harmoloc/drivers/input_file.hpp"
+#include "recording_text.hpp"
 
 namespace harmoloc::dataset {
 
 std::vector<FrameEntry> read_frame_index(const std::string& path) {
-  std::string content;
-  if (const std::string e =
-          drivers::read_regular_file(path, drivers::input_limits::kRecordingBytes, content);
-      !e.empty()) {
-    throw std::runtime_error(path + ": " + e);
-  }
+  const std::string content = detail::read_recording_text(path);
   std::istringstream in(content);
   std::vector<FrameEntry> frames;
   std::string line;

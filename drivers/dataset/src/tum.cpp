@@ -5,7 +5,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "harmoloc/drivers/input_file.hpp"
+#include "recording_text.hpp"
 
 namespace harmoloc::dataset {
 
@@ -16,12 +16,7 @@ double yaw_from_quaternion(double qx, double qy, double qz, double qw) {
 }
 
 std::vector<StampedPose> read_tum(const std::string& path) {
-  std::string content;
-  if (const std::string e =
-          drivers::read_regular_file(path, drivers::input_limits::kRecordingBytes, content);
-      !e.empty()) {
-    throw std::runtime_error(path + ": " + e);
-  }
+  const std::string content = detail::read_recording_text(path);
   std::istringstream in(content);
   std::vector<StampedPose> out;
   std::string line;

@@ -27,6 +27,10 @@ struct OdometrySample {
   std::int64_t right_ticks = 0;
 };
 
+/// Cumulative ticks of @p odometry (time-ordered, not empty) at @p t_s: linear between samples,
+/// held beyond the ends.
+void ticks_at(const std::vector<OdometrySample>& odometry, double t_s, double& left, double& right);
+
 /// A labelled pose from an external reference.
 struct PlacementLabel {
   double t_s = 0.0;
