@@ -50,17 +50,11 @@ std::string sigma_svg(const Report& report) {
   for (const auto& [t, w] : band.half_widths) widths.push_back(w);
   const double limit_cm = symmetric_limit(std::max(largest_cm, percentile(widths, 50.0)), 0.5);
 
-  const double width = 860.0, left = 80.0, right = 30.0;
-  const Area top{left, 84.0, width - left - right, 200.0};
-  const Area bottom{left, top.bottom() + 50.0, width - left - right, 200.0};
+  const auto [width, top, bottom] = stacked_panels();
   Canvas svg(width, bottom.bottom() + 95.0);
-  svg.text(width / 2.0, 26.0, "Claimed spread (2 sigma) against the actual error", "middle", 17.0,
-           kTextColour, " font-weight=\"bold\"");
-  const std::vector<LegendItem> legend = {
-      {LegendItem::Kind::kLine, kEstimateColour, "error of the pose on the link"},
-      {LegendItem::Kind::kBox, "#c7dcef", "± 2 sigma (ODOMETRY covariance)"}};
-  const double legend_w = draw_legend(svg, 0, 0, legend, false);
-  draw_legend(svg, (width - legend_w) / 2.0, 56.0, legend);
+  draw_figure_heading(svg, "Claimed spread (2 sigma) against the actual error",
+                      {{LegendItem::Kind::kLine, kEstimateColour, "error of the pose on the link"},
+                       {LegendItem::Kind::kBox, "#c7dcef", "± 2 sigma (ODOMETRY covariance)"}});
 
   const SigmaConsistency c = sigma_consistency(report);
   const auto share = [&](std::size_t inside) {

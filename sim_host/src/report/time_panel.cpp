@@ -11,6 +11,21 @@ double symmetric_limit(double largest, double floor) {
   return std::ceil(v * 1.05 / step - 1e-9) * step;
 }
 
+StackedPanels stacked_panels() {
+  StackedPanels p;
+  const double left = 80.0, right = 30.0;
+  p.top = Area{left, 84.0, p.width - left - right, 200.0};
+  p.bottom = Area{left, p.top.bottom() + 50.0, p.width - left - right, 200.0};
+  return p;
+}
+
+void draw_figure_heading(Canvas& svg, const std::string& title,
+                         const std::vector<LegendItem>& legend) {
+  svg.text(svg.width() / 2.0, 26.0, title, "middle", 17.0, kTextColour, " font-weight=\"bold\"");
+  const double legend_w = draw_legend(svg, 0, 0, legend, false);
+  draw_legend(svg, (svg.width() - legend_w) / 2.0, 56.0, legend);
+}
+
 void draw_time_panel(Canvas& svg, const TimePanel& panel, const std::vector<TimeSeries>& series,
                      const TimeBand* band) {
   const Area& a = panel.area;

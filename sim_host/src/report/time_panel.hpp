@@ -38,6 +38,18 @@ struct TimePanel {
 /// A round symmetric limit that holds @p largest (>= @p floor) with a little room.
 double symmetric_limit(double largest, double floor);
 
+/// The layout both two-panel figures share: x above y, under a bold title and a centred legend.
+struct StackedPanels {
+  double width = 860.0;
+  Area top;
+  Area bottom;
+};
+StackedPanels stacked_panels();
+
+/// The figure's title and its legend, centred above the top panel.
+void draw_figure_heading(Canvas& svg, const std::string& title,
+                         const std::vector<LegendItem>& legend);
+
 void draw_time_panel(Canvas& svg, const TimePanel& panel, const std::vector<TimeSeries>& series,
                      const TimeBand* band = nullptr);
 

@@ -31,19 +31,14 @@ std::string xy_error_svg(const Report& report) {
   }
   const double limit_cm = symmetric_limit(largest_cm, 0.5);
 
-  const double width = 860.0, left = 80.0, right = 30.0;
-  const Area top{left, 84.0, width - left - right, 200.0};
-  const Area bottom{left, top.bottom() + 50.0, width - left - right, 200.0};
+  const auto [width, top, bottom] = stacked_panels();
   Canvas svg(width, bottom.bottom() + 80.0);
-  svg.text(width / 2.0, 26.0, "Error components over time (estimate - truth)", "middle", 17.0,
-           kTextColour, " font-weight=\"bold\"");
   std::vector<LegendItem> legend = {{LegendItem::Kind::kLine, kEstimateColour, "fused estimate"}};
   if (fixes) legend.push_back({LegendItem::Kind::kDot, kFixColour, "harmonic fixes"});
   if (report.inputs.skip_initial_s > 0.0) {
     legend.push_back({LegendItem::Kind::kBox, "#eeeeee", "excluded (convergence)"});
   }
-  const double legend_w = draw_legend(svg, 0, 0, legend, false);
-  draw_legend(svg, (width - legend_w) / 2.0, 56.0, legend);
+  draw_figure_heading(svg, "Error components over time (estimate - truth)", legend);
 
   for (const bool x_axis : {true, false}) {
     TimePanel panel;
