@@ -9,7 +9,8 @@ set(HARMOLOC_MAINTAINER "harmoloc maintainers <harmoloc@example.org>"
   CACHE STRING "Maintainer field of the Debian packages (name <email>)")
 # A cross build cannot run its own programs (and the firmware links libcamera, which hangs under
 # qemu-user): its manual pages come from a native build of the same board, whose programs have
-# the same command lines. ./run package builds one and passes its bin/ here.
+# the same command lines: the cross presets point here at build/linux/bin, which the build
+# preset linux-help makes (./run package).
 set(HARMOLOC_HELP_BIN_DIR "" CACHE PATH
   "Cross builds: bin/ of a native build of the same board, whose --help makes the manual pages")
 
