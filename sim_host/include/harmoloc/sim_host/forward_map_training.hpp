@@ -55,7 +55,7 @@ ForwardMapReport train_forward_map(const std::vector<std::vector<float>>& featur
                                    const algorithms::HarmonicModel& model, std::size_t board_count,
                                    const ForwardMapOptions& options, algorithms::ForwardMap& out);
 
-/// A frame with the pose the odometry placed it at (trainer.cpp).
+/// A frame with the pose the odometry placed it at (trainer_on_areas.cpp).
 struct PlacedFrame {
   std::size_t index = 0;  ///< into the run's frames
   double t_s = 0.0;

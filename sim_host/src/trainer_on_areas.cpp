@@ -1,0 +1,285 @@
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <memory>
+#include <stdexcept>
+
+#include "harmoloc/algorithms/kernel_selection.hpp"
+#include "harmoloc/algorithms/route_placement.hpp"
+#include "harmoloc/sim_host/trainer.hpp"
+#include "trainer_parts.hpp"
+
+namespace harmoloc::sim_host {
+
+namespace trainer_detail {
+
+double ms_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+double quantile(std::vector<double> v, double q) {
+  std::sort(v.begin(), v.end());
+  return v[std::min(v.size() - 1, static_cast<std::size_t>(q * static_cast<double>(v.size())))];
+}
+
+}  // namespace trainer_detail
+
+namespace {
+
+double rms(const std::vector<double>& v) {
+  double s = 0.0;
+  for (double x : v) s += x * x;
+  return v.empty() ? 0.0 : std::sqrt(s / static_cast<double>(v.size()));
+}
+
+}  // namespace
+
+using trainer_detail::check_labels;
+using trainer_detail::ms_since;
+using trainer_detail::place_frames;
+using trainer_detail::quantile;
+using trainer_detail::train_from_labels;
+
+TrainReport train_on_areas(const AreaSeries& run, const std::vector<dataset::StampedPose>& labels,
+                           const TrainOptions& opt, algorithms::MapFile& map) {
+  check_labels(labels);
+  TrainReport report;
+  report.segment_ms = run.segment_ms;
+  report.frames = run.areas.size();
+  if (labels.empty()) throw std::runtime_error("no labels");
+  if (run.areas.empty()) throw std::runtime_error("the run has no frames");
+  const std::size_t boards = opt.thresholds.count;
+  const float area_scale = 100.0F / static_cast<float>(run.image_width_px * run.image_height_px);
+  std::vector<std::vector<float>> all(run.areas.size(), std::vector<float>(boards, 0.0F));
+  for (std::size_t i = 0; i < run.areas.size(); ++i) {
+    for (std::size_t b = 0; b < boards; ++b)
+      all[i][b] = static_cast<float>(run.areas[i].pixels[b]) * area_scale;
+  }
+  const bool with_odometry =
+      opt.use_odometry && !run.odometry.empty() && opt.method == TrainMethod::kNeighbourGraph;
+  if (!with_odometry) {
+    train_from_labels(run, labels, opt, map, report);
+    if (opt.forward_map) {
+      const auto t_forward = std::chrono::steady_clock::now();
+      report.forward = train_forward_map(all, run.timestamp_ns, labels, map.model, boards,
+                                         opt.forward, map.forward);
+      report.has_forward_map = true;
+      report.forward_ms = ms_since(t_forward);
+    }
+    return report;
+  }
+
+  const auto t_train = std::chrono::steady_clock::now();
+  PlacementReport& pr = report.placement;
+  const algorithms::PlacementResult placed = place_frames(run, labels, opt, pr);
+  // The stretch the labels cover, and how far beyond it the odometry may carry a frame.
+  std::vector<PlacedFrame> frames;
+  pr.poses = placed.poses;
+  for (std::uint64_t t : run.timestamp_ns)
+    pr.times_s.push_back(static_cast<double>(t / 1000000000ULL) +
+                         static_cast<double>(t % 1000000000ULL) * 1e-9);
+  pr.placed.assign(run.areas.size(), false);
+  for (std::size_t i = 0; i < run.areas.size(); ++i) {
+    bool seen = false;
+    for (std::size_t b = 0; b < boards; ++b) seen = seen || run.areas[i].pixels[b] > 0;
+    if (!seen) {
+      ++report.empty_frames;
+      continue;
+    }
+    if (placed.support_m[i] > opt.max_extrapolation_m) {
+      ++pr.beyond_labels;
+      continue;
+    }
+    pr.placed[i] = true;
+    frames.push_back(
+        PlacedFrame{i, static_cast<double>(run.timestamp_ns[i] - run.timestamp_ns[0]) * 1e-9,
+                    placed.travel_m[i], placed.poses[i]});
+  }
+  pr.frames = frames.size();
+  if (frames.size() < 16)
+    throw std::runtime_error("only " + std::to_string(frames.size()) +
+                             " frames with a board in view lie within the labelled stretch");
+
+  // The harmonic map over every placed frame: samples and held-out queries evenly spread.
+  std::vector<int> candidates = opt.boards;
+  if (candidates.empty()) {
+    for (std::size_t k = 0; k < boards; ++k) candidates.push_back(static_cast<int>(k));
+  }
+  for (int b : candidates) {
+    if (b < 0 || static_cast<std::size_t>(b) >= boards) {
+      throw std::runtime_error("board " + std::to_string(b + 1) + " is not among the " +
+                               std::to_string(boards) + " configured boards");
+    }
+  }
+  const auto pick = [](std::size_t total, std::size_t want) {
+    std::vector<std::size_t> out;
+    want = std::min(want, total);
+    for (std::size_t k = 0; k < want; ++k) out.push_back((k * total + total / 2) / want);
+    return out;
+  };
+  const auto fill = [&](const std::vector<std::size_t>& which) {
+    algorithms::PlacedSamples s;
+    s.features.resize(static_cast<Eigen::Index>(which.size()),
+                      static_cast<Eigen::Index>(candidates.size()));
+    s.xy.resize(static_cast<Eigen::Index>(which.size()), 2);
+    for (std::size_t r = 0; r < which.size(); ++r) {
+      const PlacedFrame& f = frames[which[r]];
+      for (std::size_t c = 0; c < candidates.size(); ++c) {
+        s.features(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) =
+            static_cast<double>(all[f.index][static_cast<std::size_t>(candidates[c])]);
+      }
+      s.xy(static_cast<Eigen::Index>(r), 0) = f.pose.x_m;
+      s.xy(static_cast<Eigen::Index>(r), 1) = f.pose.y_m;
+      s.travel_m.push_back(f.travel_m);
+    }
+    return s;
+  };
+  const std::vector<std::size_t> sample_rows = pick(
+      frames.size(),
+      static_cast<std::size_t>(std::clamp(
+          opt.max_placed_samples, 16, static_cast<int>(algorithms::HarmonicModel::kMaxSamples))));
+  const algorithms::PlacedSamples samples = fill(sample_rows);
+  const algorithms::PlacedSamples queries =
+      fill(pick(frames.size(), static_cast<std::size_t>(std::max(opt.max_cv_queries, 16))));
+  algorithms::KernelSelectionOptions ko;
+  ko.same_pass_m = opt.same_pass_m;
+  ko.select_features = opt.select_boards && opt.boards.empty();
+  if (!opt.local_linear) ko.local_linear_ridges.clear();
+  algorithms::KernelSelection sel = algorithms::select_kernel_model(samples, queries, ko);
+
+  // The same with each board's feature in units of its noise (the forward map measures it
+  // against other passes): a large board's few percent of noise then no longer drowns a small
+  // board's informative change. Kept where cross-validation prefers it.
+  std::vector<double> scale(candidates.size(), 1.0);
+  const auto forward = std::make_unique<algorithms::ForwardMap>();
+  bool have_forward = false;
+  ForwardMapReport forward_report;
+  double forward_ms = 0.0;
+  if (opt.forward_map) {
+    const auto t_forward = std::chrono::steady_clock::now();
+    forward_report = train_forward_map_placed(all, frames, boards, opt.forward, *forward);
+    forward_ms = ms_since(t_forward);
+    have_forward = true;
+  }
+  if (have_forward && opt.noise_weighted_kernel) {
+    const ForwardMapReport& noise = forward_report;
+    double largest = 0.0;
+    for (std::size_t c = 0; c < candidates.size(); ++c) {
+      const double sigma = noise.sigma[static_cast<std::size_t>(candidates[c])];
+      scale[c] = sigma > 0.0 ? 1.0 / sigma : 0.0;
+      largest = std::max(largest, scale[c]);
+    }
+    if (largest > 0.0) {
+      for (double& v : scale) v = v > 0.0 ? v / largest : 1.0;  // kernel weights scale^2 <= 1
+      const auto scaled = [&](algorithms::PlacedSamples s) {
+        for (std::size_t c = 0; c < candidates.size(); ++c)
+          s.features.col(static_cast<Eigen::Index>(c)) *= scale[c];
+        return s;
+      };
+      algorithms::KernelSelection weighted =
+          algorithms::select_kernel_model(scaled(samples), scaled(queries), ko);
+      if (weighted.x.cv_mse + weighted.y.cv_mse < sel.x.cv_mse + sel.y.cv_mse) {
+        sel = std::move(weighted);
+        report.noise_weighted = true;
+      }
+    }
+  }
+  if (!report.noise_weighted) std::fill(scale.begin(), scale.end(), 1.0);
+
+  // Every board whose area changes is a feature; the ones the selection dropped stay in the
+  // map with weight 0 in the kernel, so that the known-place test still compares them.
+  std::vector<int> features_in_map;
+  for (Eigen::Index k = 0; k < samples.features.cols(); ++k) {
+    if (samples.features.col(k).maxCoeff() <= samples.features.col(k).minCoeff())
+      report.constant_boards.push_back(candidates[static_cast<std::size_t>(k)]);
+    else
+      features_in_map.push_back(static_cast<int>(k));
+  }
+  for (const auto& step : sel.steps) {
+    BoardStep b;
+    for (int c : step.columns) b.boards.push_back(candidates[static_cast<std::size_t>(c)]);
+    b.dropped = step.dropped >= 0 ? candidates[static_cast<std::size_t>(step.dropped)] : -1;
+    b.cv_rmse_x_m = std::sqrt(step.cv_mse_x);
+    b.cv_rmse_y_m = std::sqrt(step.cv_mse_y);
+    report.board_steps.push_back(b);
+  }
+  for (int c : sel.columns) report.boards.push_back(candidates[static_cast<std::size_t>(c)]);
+  report.x = AxisReport{sel.x.sigma, 0.0, std::sqrt(sel.x.cv_mse), 0};
+  report.y = AxisReport{sel.y.sigma, 0.0, std::sqrt(sel.y.cv_mse), 0};
+  report.local_linear_ridge = sel.local_linear_ridge;
+  report.kernel_average_cv_rmse_x_m = std::sqrt(sel.kernel_average_cv_mse_x);
+  report.kernel_average_cv_rmse_y_m = std::sqrt(sel.kernel_average_cv_mse_y);
+  pr.cv_rmse_placed_x_m = rms(sel.error_x_m);
+  pr.cv_rmse_placed_y_m = rms(sel.error_y_m);
+  pr.harmonic_from_placed = true;
+  report.labelled = labels.size();
+  report.unlabelled = sample_rows.size();
+
+  // Known-place bounds from how far each held-out frame lies from the nearest sample of
+  // another pass, over every feature: what a frame of a new run over the same place looks like.
+  std::vector<double> nearest_distance, nearest_dissimilarity;
+  algorithms::other_pass_nearest(samples, queries, features_in_map, opt.same_pass_m,
+                                 nearest_distance, nearest_dissimilarity);
+  if (nearest_distance.empty())
+    throw std::runtime_error(
+        "no frame of the run has another pass over the same place to compare "
+        "with: drive the route at least forth and back (or twice round)");
+  report.known_place_bound = std::max(4.0 * quantile(nearest_distance, 0.99), 1e-3);
+  report.dissimilarity_bound =
+      std::min(1.0, std::max(opt.known_place_margin * quantile(nearest_dissimilarity, 0.99), 0.01));
+  report.train_ms = ms_since(t_train);
+
+  map = algorithms::MapFile{};
+  map.image_width_px = run.image_width_px;
+  map.image_height_px = run.image_height_px;
+  map.thresholds = opt.thresholds;
+  auto& model = map.model;
+  model.sample_count = static_cast<std::uint32_t>(sample_rows.size());
+  model.feature_count = static_cast<std::uint32_t>(features_in_map.size());
+  for (std::size_t k = 0; k < features_in_map.size(); ++k) {
+    const int c = features_in_map[k];
+    model.board_index[k] = static_cast<std::uint8_t>(candidates[static_cast<std::size_t>(c)]);
+    const bool chosen = std::find(sel.columns.begin(), sel.columns.end(), c) != sel.columns.end();
+    model.feature_weight[k] = chosen ? static_cast<float>(scale[static_cast<std::size_t>(c)] *
+                                                          scale[static_cast<std::size_t>(c)])
+                                     : 0.0F;
+  }
+  model.area_scale = area_scale;
+  model.sigma_x = static_cast<float>(report.x.sigma);
+  model.sigma_y = static_cast<float>(report.y.sigma);
+  model.gamma_x = 0.0F;
+  model.gamma_y = 0.0F;
+  model.local_linear_ridge = static_cast<float>(sel.local_linear_ridge);
+  model.max_nearest_distance = static_cast<float>(report.known_place_bound);
+  model.max_dissimilarity = static_cast<float>(report.dissimilarity_bound);
+  for (std::size_t i = 0; i < sample_rows.size(); ++i) {
+    for (std::size_t k = 0; k < features_in_map.size(); ++k) {
+      model.sample(i)[k] =
+          static_cast<float>(samples.features(static_cast<Eigen::Index>(i), features_in_map[k]));
+    }
+    model.target_x_m[i] = static_cast<float>(samples.xy(static_cast<Eigen::Index>(i), 0));
+    model.target_y_m[i] = static_cast<float>(samples.xy(static_cast<Eigen::Index>(i), 1));
+  }
+
+  map.calibration.present = true;
+  map.calibration.fix_rmse_x_m = static_cast<float>(pr.cv_rmse_placed_x_m);
+  map.calibration.fix_rmse_y_m = static_cast<float>(pr.cv_rmse_placed_y_m);
+  if (report.placement.odometry.used) {
+    const algorithms::OdometryScale& s = report.placement.odometry.scale;
+    map.calibration.odometry_present = true;
+    map.calibration.left_wheel_scale = static_cast<float>(s.left);
+    map.calibration.right_wheel_scale = static_cast<float>(s.right);
+    map.calibration.track_scale = static_cast<float>(s.track);
+  }
+
+  if (have_forward) {
+    map.forward = *forward;
+    report.forward = forward_report;
+    map.calibration.pass_spread_m = static_cast<float>(report.forward.pass_spread_m);
+    report.has_forward_map = true;
+    report.forward_ms = forward_ms;
+  }
+  return report;
+}
+
+}  // namespace harmoloc::sim_host

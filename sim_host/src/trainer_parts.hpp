@@ -1,0 +1,33 @@
+#pragma once
+/// @file What the pieces of the map trainer share (private to sim_host/src/): training from the
+/// labelled frames alone (trainer_from_labels.cpp), the frames placed by odometry between the
+/// labels (trainer_placement.cpp), the labels' checks (trainer_checks.cpp), and small helpers
+/// (trainer_on_areas.cpp). The public side is harmoloc/sim_host/trainer.hpp.
+
+#include <chrono>
+#include <vector>
+
+#include "harmoloc/algorithms/map_codec.hpp"
+#include "harmoloc/algorithms/route_placement.hpp"
+#include "harmoloc/dataset/tum.hpp"
+#include "harmoloc/sim_host/trainer.hpp"
+
+namespace harmoloc::sim_host::trainer_detail {
+
+// trainer_on_areas.cpp
+double ms_since(std::chrono::steady_clock::time_point t0);
+double quantile(std::vector<double> v, double q);
+
+// trainer_from_labels.cpp
+void train_from_labels(const AreaSeries& run, const std::vector<dataset::StampedPose>& labels,
+                       const TrainOptions& opt, algorithms::MapFile& map, TrainReport& report);
+
+// trainer_placement.cpp
+algorithms::PlacementResult place_frames(const AreaSeries& run,
+                                         const std::vector<dataset::StampedPose>& labels,
+                                         const TrainOptions& opt, PlacementReport& report);
+
+// trainer_checks.cpp
+void check_labels(const std::vector<dataset::StampedPose>& labels);
+
+}  // namespace harmoloc::sim_host::trainer_detail
