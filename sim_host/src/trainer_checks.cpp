@@ -48,6 +48,20 @@ void check_labels(const std::vector<dataset::StampedPose>& labels) {
   }
 }
 
+std::vector<int> candidate_boards(const std::vector<int>& chosen, std::size_t boards) {
+  std::vector<int> candidates = chosen;
+  if (candidates.empty()) {
+    for (std::size_t k = 0; k < boards; ++k) candidates.push_back(static_cast<int>(k));
+  }
+  for (int b : candidates) {
+    if (b < 0 || static_cast<std::size_t>(b) >= boards) {
+      throw std::runtime_error("board " + std::to_string(b + 1) + " is not among the " +
+                               std::to_string(boards) + " configured boards");
+    }
+  }
+  return candidates;
+}
+
 }  // namespace trainer_detail
 
 void check_trained_map(const TrainReport& report, const std::vector<dataset::StampedPose>& labels,

@@ -115,16 +115,7 @@ void train_from_labels(const AreaSeries& run, const std::vector<dataset::Stamped
   report.unlabelled = unlabelled_frames.size();
 
   // Candidate feature boards.
-  std::vector<int> candidates = opt.boards;
-  if (candidates.empty()) {
-    for (std::size_t k = 0; k < boards; ++k) candidates.push_back(static_cast<int>(k));
-  }
-  for (int b : candidates) {
-    if (b < 0 || static_cast<std::size_t>(b) >= boards) {
-      throw std::runtime_error("board " + std::to_string(b + 1) + " is not among the " +
-                               std::to_string(boards) + " configured boards");
-    }
-  }
+  const std::vector<int> candidates = candidate_boards(opt.boards, boards);
   // Area normalisation: percent of the frame, so sigma and the bounds do not depend on the
   // resolution the robot records at.
   const float area_scale = 100.0F / static_cast<float>(run.image_width_px * run.image_height_px);

@@ -101,16 +101,7 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<dataset::Sta
                              " frames with a board in view lie within the labelled stretch");
 
   // The harmonic map over every placed frame: samples and held-out queries evenly spread.
-  std::vector<int> candidates = opt.boards;
-  if (candidates.empty()) {
-    for (std::size_t k = 0; k < boards; ++k) candidates.push_back(static_cast<int>(k));
-  }
-  for (int b : candidates) {
-    if (b < 0 || static_cast<std::size_t>(b) >= boards) {
-      throw std::runtime_error("board " + std::to_string(b + 1) + " is not among the " +
-                               std::to_string(boards) + " configured boards");
-    }
-  }
+  const std::vector<int> candidates = trainer_detail::candidate_boards(opt.boards, boards);
   const auto pick = [](std::size_t total, std::size_t want) {
     std::vector<std::size_t> out;
     want = std::min(want, total);

@@ -29,5 +29,8 @@ algorithms::PlacementResult place_frames(const AreaSeries& run,
 
 // trainer_checks.cpp
 void check_labels(const std::vector<dataset::StampedPose>& labels);
+// The boards a map may use: those the user chose (0-based), or all @p boards; throws on a board
+// that is not configured.
+std::vector<int> candidate_boards(const std::vector<int>& chosen, std::size_t boards);
 
 }  // namespace harmoloc::sim_host::trainer_detail
