@@ -81,8 +81,7 @@ struct Rig {
     h.area_scale = 100.0F / (kWidth * kHeight);
     h.sigma_x = h.sigma_y = 1.0F;
     h.max_nearest_distance = 5.0F;
-    cycle = std::make_unique<hf::LocalizationCycle>(config, *map, camera, encoders,
-                                                    link, clock);
+    cycle = std::make_unique<hf::LocalizationCycle>(config, *map, camera, encoders, link, clock);
     for (int i = 0; i < 7; ++i) cycle->run_once();
   }
   // The cycle keeps references to the config and the map: both live as long as it does.
@@ -104,6 +103,32 @@ bool request(hb::StatsDumper& dumper, const Rig& rig) {
     std::this_thread::yield();
   }
   return false;
+}
+
+// A dumper started on @p path, asked once for a rig's stats and stopped: what it counted and
+// what it said on stderr.
+struct OneRequest {
+  std::string start_error;
+  bool requested = false;
+  std::uint64_t written = 0;
+  std::uint64_t failed = 0;
+  std::string said;
+};
+
+OneRequest request_once(const std::string& path) {
+  OneRequest r;
+  Rig rig;
+  hb::StatsDumper dumper;
+  r.start_error = dumper.start(path, true);
+  if (!r.start_error.empty()) return r;
+  // Captured before the request: the writer may say it at once.
+  testing::internal::CaptureStderr();
+  r.requested = request(dumper, rig);
+  dumper.stop();
+  r.said = testing::internal::GetCapturedStderr();
+  r.written = dumper.written();
+  r.failed = dumper.failed();
+  return r;
 }
 
 }  // namespace
@@ -128,19 +153,13 @@ TEST(StatsDumper, WritesTheWholeFileWhileRunning) {
 TEST(StatsDumper, AFolderThatIsNotThereIsCountedAsAFailure) {
   SKIP_UNDER_QEMU_USER();
   harmoloc::test::TempDir dir;
-  Rig rig;
-  hb::StatsDumper dumper;
-  ASSERT_EQ(dumper.start(dir.path("missing/stats.json"), true), "");
-  // Captured before the request: the writer may say it at once.
-  testing::internal::CaptureStderr();
-  const bool requested = request(dumper, rig);
-  dumper.stop();
-  const std::string said = testing::internal::GetCapturedStderr();
-  ASSERT_TRUE(requested);
-  EXPECT_EQ(dumper.written(), 0U);
-  EXPECT_EQ(dumper.failed(), 1U);
-  EXPECT_NE(said.find("harmoloc: stats on request: "), std::string::npos) << said;
-  EXPECT_NE(said.find("missing/stats.json"), std::string::npos) << said;
+  const OneRequest r = request_once(dir.path("missing/stats.json"));
+  ASSERT_EQ(r.start_error, "");
+  ASSERT_TRUE(r.requested);
+  EXPECT_EQ(r.written, 0U);
+  EXPECT_EQ(r.failed, 1U);
+  EXPECT_NE(r.said.find("harmoloc: stats on request: "), std::string::npos) << r.said;
+  EXPECT_NE(r.said.find("missing/stats.json"), std::string::npos) << r.said;
 }
 
 TEST(StatsDumper, AFileThatCannotBeReplacedLeavesNoTemporaryBehind) {
@@ -148,18 +167,12 @@ TEST(StatsDumper, AFileThatCannotBeReplacedLeavesNoTemporaryBehind) {
   harmoloc::test::TempDir dir;
   // The path is a folder with something in it: the temporary file is written, the rename fails.
   dir.mkdir("stats.json/inside");
-  Rig rig;
-  hb::StatsDumper dumper;
-  ASSERT_EQ(dumper.start(dir.path("stats.json"), true), "");
-  // Captured before the request: the writer may say it at once.
-  testing::internal::CaptureStderr();
-  const bool requested = request(dumper, rig);
-  dumper.stop();
-  const std::string said = testing::internal::GetCapturedStderr();
-  ASSERT_TRUE(requested);
-  EXPECT_EQ(dumper.written(), 0U);
-  EXPECT_EQ(dumper.failed(), 1U);
-  EXPECT_NE(said.find("cannot replace"), std::string::npos) << said;
+  const OneRequest r = request_once(dir.path("stats.json"));
+  ASSERT_EQ(r.start_error, "");
+  ASSERT_TRUE(r.requested);
+  EXPECT_EQ(r.written, 0U);
+  EXPECT_EQ(r.failed, 1U);
+  EXPECT_NE(r.said.find("cannot replace"), std::string::npos) << r.said;
   EXPECT_FALSE(std::filesystem::exists(dir.path("stats.json.tmp")));
   EXPECT_TRUE(std::filesystem::is_directory(dir.path("stats.json/inside")));
 }
