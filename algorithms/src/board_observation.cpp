@@ -167,6 +167,13 @@ BoardAssessment BoardReliability::assess(const ForwardMap& map, const BoardFeatu
       params.route_sigma_m > 0.0
           ? static_cast<float>(0.5 / (params.route_sigma_m * params.route_sigma_m))
           : 0.0F;
+  constexpr double kRadPerDeg = 3.14159265358979323846 / 180.0;
+  update.heading_free_rad = static_cast<float>(params.route_heading_free_deg * kRadPerDeg);
+  const double heading_sigma_rad = params.route_heading_sigma_deg * kRadPerDeg;
+  update.heading_inv_two_var =
+      map.has_heading && heading_sigma_rad > 0.0
+          ? static_cast<float>(0.5 / (heading_sigma_rad * heading_sigma_rad))
+          : 0.0F;
   return a;
 }
 

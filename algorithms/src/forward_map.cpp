@@ -106,12 +106,21 @@ float route_distance(const ForwardMap& map, const GridPoint& point) {
 
 float route_heading(const ForwardMap& map, double x_m, double y_m) {
   if (!map.has_heading || !map.present()) return 0.0F;
-  const GridPoint p = locate(map, x_m, y_m);
-  int best = 0;
-  for (int k = 1; k < 4; ++k) {
-    if (p.weight[k] > p.weight[best]) best = k;
+  float heading_rad = 0.0F;
+  route_heading(map, locate(map, x_m, y_m), heading_rad);
+  return heading_rad;
+}
+
+bool route_heading(const ForwardMap& map, const GridPoint& point, float& heading_rad) {
+  if (!map.has_heading) return false;
+  int best = -1;
+  for (int k = 0; k < 4; ++k) {
+    if (point.index[k] == ForwardMap::kVoidCell) continue;
+    if (best < 0 || point.weight[k] > point.weight[best]) best = k;
   }
-  return map.heading_rad[p.index[best]];
+  if (best < 0) return false;
+  heading_rad = map.heading_rad[point.index[best]];
+  return true;
 }
 
 }  // namespace harmoloc::algorithms

@@ -134,6 +134,16 @@ double ParticleFilter::update_boards(const BoardUpdate& u) {
     const float off_route = route_distance(map, at) - u.route_free_m;
     if (off_route > 0.0F)
       likelihood *= static_cast<double>(std::exp(-off_route * off_route * u.route_inv_two_var));
+    float heading_rad = 0.0F;
+    if (u.heading_inv_two_var > 0.0F && route_heading(map, at, heading_rad)) {
+      // Both angles lie in [-pi, pi] (particles are kept wrapped), so one turn puts it back.
+      double d = particles_[i].yaw_rad - static_cast<double>(heading_rad);
+      d = d > kPi ? d - 2.0 * kPi : (d < -kPi ? d + 2.0 * kPi : d);
+      const float off_heading = static_cast<float>(std::fabs(d)) - u.heading_free_rad;
+      if (off_heading > 0.0F)
+        likelihood *=
+            static_cast<double>(std::exp(-off_heading * off_heading * u.heading_inv_two_var));
+    }
     weights_[i] *= likelihood;
     sum += weights_[i];
   }

@@ -172,11 +172,12 @@ void read_observation(const Checker& check, const toml::table& root, Observation
   const toml::table* t = check.section(root, "observation");
   if (t == nullptr) return;
   const std::string w = "observation.";
-  check.only(*t, w,
-             {"model", "fix_term", "fix_board_check", "robust", "sigma_scale", "tempering",
-              "outlier_floor", "dcs_phi", "consensus_chi2", "consensus_fraction",
-              "motion_index_rate", "motion_index_min", "motion_index_max", "route_free_m",
-              "route_sigma_m", "implausible_ratio"});
+  check.only(
+      *t, w,
+      {"model", "fix_term", "fix_board_check", "robust", "sigma_scale", "tempering",
+       "outlier_floor", "dcs_phi", "consensus_chi2", "consensus_fraction", "motion_index_rate",
+       "motion_index_min", "motion_index_max", "route_free_m", "route_sigma_m",
+       "route_heading_free_deg", "route_heading_sigma_deg", "implausible_ratio"});
   const std::string model = check.text(*t, "model", w, "boards");
   if (model == "boards")
     o.model = ObservationModel::kBoards;
@@ -201,6 +202,10 @@ void read_observation(const Checker& check, const toml::table& root, Observation
     check.fail(t, "observation.motion_index_min must not exceed motion_index_max");
   b.route_free_m = check.number(*t, "route_free_m", w, b.route_free_m, 0.0, 10.0);
   b.route_sigma_m = check.number(*t, "route_sigma_m", w, b.route_sigma_m, 0.0, 10.0);
+  b.route_heading_free_deg =
+      check.number(*t, "route_heading_free_deg", w, b.route_heading_free_deg, 0.0, 180.0);
+  b.route_heading_sigma_deg =
+      check.number(*t, "route_heading_sigma_deg", w, b.route_heading_sigma_deg, 0.0, 180.0);
   b.implausible_ratio = check.number(*t, "implausible_ratio", w, b.implausible_ratio, 0.0, 1000.0);
   if (b.implausible_ratio > 0.0 && b.implausible_ratio < 1.0)
     check.fail(t->get("implausible_ratio"),

@@ -253,6 +253,7 @@ TEST(BoardObservation, NonRobustIsGuoAndLisPlainProduct) {
 TEST(ParticleFilterBoards, TheTruePlaceOutweighsOthersAndTheSumIsTheMatch) {
   const auto map = make_forward_map();
   ha::BoardModelParams params;
+  params.route_heading_sigma_deg = 0.0;  // random headings: the heading term has its own test
   params.tempering = 1.0;
   ha::BoardReliability reliability;
   reliability.reset(params);
@@ -294,6 +295,7 @@ TEST(ParticleFilterBoards, TheTruePlaceOutweighsOthersAndTheSumIsTheMatch) {
 TEST(ParticleFilterBoards, TemperingIsAPowerOfTheLikelihood) {
   const auto map = make_forward_map();
   ha::BoardModelParams params;
+  params.route_heading_sigma_deg = 0.0;  // random headings: the heading term has its own test
   ha::BoardReliability reliability;
   reliability.reset(params);
   ha::BoardUpdate u;
@@ -323,6 +325,7 @@ TEST(ParticleFilterBoards, TemperingIsAPowerOfTheLikelihood) {
 TEST(ParticleFilterBoards, ParticlesFarFromTheRouteAreUnlikely) {
   const auto map = make_forward_map();
   ha::BoardModelParams params;
+  params.route_heading_sigma_deg = 0.0;  // random headings: the heading term has its own test
   params.tempering = 1.0;
   ha::BoardReliability reliability;
   reliability.reset(params);
@@ -346,6 +349,54 @@ TEST(ParticleFilterBoards, ParticlesFarFromTheRouteAreUnlikely) {
   const double per_on = on / static_cast<double>(n_on);
   const double per_off = off / static_cast<double>(pf.size() - n_on);
   EXPECT_NEAR(per_off / per_on, ratio, ratio * 1e-3);
+}
+
+// The heading term: a particle turned from the training run's heading at its cell by more than
+// route_heading_free_deg is weighed down by a Gaussian beyond it, through the wrap at +-pi too;
+// sigma 0 turns it off, and a map without a heading has none.
+TEST(ParticleFilterBoards, ParticlesTurnedFromTheRoutesHeadingAreUnlikely) {
+  auto map = make_forward_map();
+  const auto weight_ratio = [&](const ha::BoardModelParams& params, double heading_rad,
+                                double yaw_a_rad, double yaw_b_rad) {
+    for (std::size_t c = 0; c < map->stored_cells(); ++c)
+      map->heading_rad[c] = static_cast<float>(heading_rad);
+    ha::BoardReliability reliability;
+    reliability.reset(params);
+    ha::BoardUpdate u;
+    reliability.assess(*map, observe(1.5, 0.75), ha::Pose2{1.5, 0.75, 0.0}, params, u);
+    for (std::size_t b = 0; b < u.boards; ++b) u.use[b] = false;  // the heading term alone
+    ha::ParticleFilter pf;
+    pf.configure(100, 3, ha::MotionNoise{});
+    pf.initialize_between(ha::Pose2{1.5, 0.75, yaw_a_rad}, ha::Pose2{1.5, 0.75, yaw_b_rad}, 0.0,
+                          0.0, false);
+    pf.update_boards(u);
+    double a = 0.0, b = 0.0;
+    std::size_t na = 0;
+    for (std::size_t i = 0; i < pf.size(); ++i) {
+      const bool is_a = std::fabs(pf.particle(i).yaw_rad - yaw_a_rad) < 1e-9;
+      (is_a ? a : b) += pf.weight(i);
+      na += is_a ? 1U : 0U;
+    }
+    EXPECT_GT(na, 0U);
+    EXPECT_LT(na, pf.size());
+    return (b / static_cast<double>(pf.size() - na)) / (a / static_cast<double>(na));
+  };
+  ha::BoardModelParams params;
+  const double deg = std::acos(-1.0) / 180.0;
+  const double excess = (30.0 - params.route_heading_free_deg) * deg;
+  const double sigma = params.route_heading_sigma_deg * deg;
+  const double expected = std::exp(-excess * excess / (2 * sigma * sigma));
+  // 2 degrees off costs nothing, 30 degrees off costs the Gaussian beyond the free 5.
+  EXPECT_NEAR(weight_ratio(params, 1.0, 1.0 + 2 * deg, 1.0 + 30 * deg), expected, expected * 1e-3);
+  EXPECT_NEAR(weight_ratio(params, 1.0, 1.0 - 2 * deg, 1.0 - 30 * deg), expected, expected * 1e-3);
+  // Across the wrap: the route faces 178 degrees, -178 is 4 degrees from it.
+  EXPECT_NEAR(weight_ratio(params, 178 * deg, -178 * deg, 178 * deg), 1.0, 1e-6);
+  EXPECT_NEAR(weight_ratio(params, 178 * deg, 178 * deg, -152 * deg), expected, expected * 1e-3);
+  ha::BoardModelParams off = params;
+  off.route_heading_sigma_deg = 0.0;
+  EXPECT_NEAR(weight_ratio(off, 1.0, 1.0, 1.0 + 90 * deg), 1.0, 1e-6);
+  map->has_heading = false;
+  EXPECT_NEAR(weight_ratio(params, 1.0, 1.0, 1.0 + 90 * deg), 1.0, 1e-6);
 }
 
 // The demonstration of the whole model in one frame: with one board hidden, the robust model

@@ -61,7 +61,14 @@ struct BoardModelParams {
   double motion_index_max = 0.98;
   double route_free_m = 0.03;   ///< distance from the training run that costs nothing
   double route_sigma_m = 0.03;  ///< beyond it, a Gaussian fall-off of this width
-  bool robust = true;           ///< false: Guo & Li's plain product of Gaussians (w = 1, s = 1)
+  /// The same for the heading, where the map holds the training run's (ForwardMap::has_heading):
+  /// the map knows the boards' areas only as seen along the route, so a particle turned away
+  /// from the route's heading is as unlikely as one beside the route. Without it the heading is
+  /// seen only through the route term, once a wrong heading has carried a particle off the
+  /// route, and a heading error that builds up slowly is never taken back.
+  double route_heading_free_deg = 5.0;   ///< heading difference that costs nothing
+  double route_heading_sigma_deg = 5.0;  ///< beyond it, a Gaussian fall-off (0: no heading term)
+  bool robust = true;  ///< false: Guo & Li's plain product of Gaussians (w = 1, s = 1)
   /// How far from the estimate a board's area may be explained when the boards are assessed
   /// (consensus, motion index, scaling): the spread between passes of the training run over
   /// one place, from the map's calibration (0: at the estimate only). Where a board's area
@@ -87,6 +94,8 @@ struct BoardUpdate {
   double inv_tempering = 1.0;                   ///< exponent of the boards' joint likelihood
   float route_free_m = 0.0F;
   float route_inv_two_var = 0.0F;
+  float heading_free_rad = 0.0F;
+  float heading_inv_two_var = 0.0F;  ///< 0: no heading term
 };
 
 /// How the boards relate to the filter's estimate this frame.

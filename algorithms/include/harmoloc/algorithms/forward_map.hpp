@@ -126,5 +126,8 @@ float route_distance(const ForwardMap& map, const GridPoint& point);
 
 /// The training run's heading at the cell nearest (@p x_m, @p y_m); 0 when !map.has_heading.
 float route_heading(const ForwardMap& map, double x_m, double y_m);
+/// The same at @p point: the heading of its heaviest stored corner; false (and @p heading_rad
+/// untouched) when the map has no heading or no corner of @p point is stored.
+bool route_heading(const ForwardMap& map, const GridPoint& point, float& heading_rad);
 
 }  // namespace harmoloc::algorithms
