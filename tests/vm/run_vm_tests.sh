@@ -158,7 +158,7 @@ if [ ! -f "$IPA/.done" ]; then
   dpkg-deb -x "$(fetch "libcamera-ipa:$DEB_ARCH")" "$IPA"
   touch "$IPA/.done"
 fi
-say "kernel $KVER, gpio-sim, vimc and v4l2loopback modules ready ($(elapsed "$T0") s)"
+say "kernel $KVER, gpio-sim, vimc$([ "$LOOP" = 1 ] && echo " and v4l2loopback") modules ready ($(elapsed "$T0") s)"
 
 # ---- the Linux board, native x86_64 (build/linux) ----------------------------------------------
 T1=$(date +%s.%N)
