@@ -19,6 +19,52 @@ finish() {
 }
 trap finish EXIT
 
+# The whole loop (HARMOLOC_VM_MODE=loop-record or loop-localize on the kernel command line; a boot
+# of its own, started twice by run_vm_tests.sh): a simulated run played by vm_feeder into
+# v4l2loopback (/dev/video20) and onto vcan0, the Linux board's harmoloc on those devices. The
+# disk /dev/vda brings a tar in (the dataset, and the map when localizing) and takes one out
+# (/tmp/out: the recording or the trajectory, the stats, the feeder's lines).
+if [ "${HARMOLOC_VM_MODE:-}" = loop-record ] || [ "${HARMOLOC_VM_MODE:-}" = loop-localize ]; then
+  for m in vcan can-raw virtio_pci virtio_blk; do modprobe "$m" || say "modprobe $m failed"; done
+  modprobe v4l2loopback exclusive_caps=1 video_nr=20 card_label=harmoloc-loop || say "modprobe v4l2loopback failed"
+  ip link add dev vcan0 type vcan && ip link set up vcan0 || say "vcan0 could not be set up"
+  for _ in $(seq 50); do [ -b /dev/vda ] && break; sleep 0.1; done
+  mkdir -p /tmp/in /tmp/out
+  tar -xf /dev/vda -C /tmp/in || say "no input tar on /dev/vda"
+  K=${HARMOLOC_VM_SLOWDOWN:-1}
+  say "loop: $(ls /tmp/in | tr '\n' ' ') slowdown $K, devices $(ls /dev/video* 2> /dev/null | tr '\n' ' ')"
+  echo "VMTEST-BEGIN $HARMOLOC_VM_MODE"
+  /vm/vm_feeder /tmp/in/run /dev/video20 vcan0 "$K" /tmp/go > /tmp/out/feeder.out 2>&1 &
+  feeder=$!
+  for _ in $(seq 300); do grep -q 'FEEDER ready' /tmp/out/feeder.out && break; sleep 0.1; done
+  /vm/notify_listener /tmp/notify 900 > /tmp/notify.log &
+  listener=$!
+  if [ "$HARMOLOC_VM_MODE" = loop-record ]; then
+    out="--record /tmp/out/rec"
+  else
+    out="--map /tmp/in/map.hmap --trajectory /tmp/out/trajectory.tum"
+  fi
+  T_START=$(cut -d' ' -f1 /proc/uptime)
+  # shellcheck disable=SC2086
+  NOTIFY_SOCKET=/tmp/notify /vm/harmoloc --config /vm/e2e/loop.toml $out --link /dev/null \
+    --stats /tmp/out/stats.json > /tmp/out/harmoloc.out 2> /tmp/out/harmoloc.err &
+  firmware=$!
+  for _ in $(seq 600); do grep -q 'READY=1' /tmp/notify.log 2> /dev/null && break; sleep 0.1; done
+  touch /tmp/go
+  wait "$feeder"
+  echo "feeder rc=$?" >> /tmp/out/feeder.out
+  sleep 1
+  kill -TERM "$firmware"
+  wait "$firmware"
+  rc=$?
+  kill "$listener" 2> /dev/null
+  cat /tmp/out/feeder.out /tmp/out/harmoloc.err
+  echo "VMTEST-END $HARMOLOC_VM_MODE rc=$rc seconds=$(echo "$(cut -d' ' -f1 /proc/uptime) $T_START" | awk '{print $1 - $2}')"
+  tar -cf /dev/vda -C /tmp out && sync
+  say "uptime $(cut -d' ' -f1 /proc/uptime) s at the end"
+  exit 0
+fi
+
 for m in configfs vivid vcan can-raw gpio-sim vimc $(echo "${HARMOLOC_VM_MODULES:-}" | tr , ' '); do
   modprobe "$m" || say "modprobe $m failed"
 done

@@ -137,6 +137,20 @@ if [ ! -f "$VIMC/vimc.ko" ]; then
   make -s -C "$KHEADERS" M="$VIMC" "${KMAKE[@]}" modules > "$VIMC/build.log" 2>&1 ||
     { tail -20 "$VIMC/build.log" >&2; cannot "vimc did not build (see $VIMC/build.log)"; }
 fi
+# v4l2loopback (a V4L2 device fed with our own frames, for the whole-loop run): Debian's
+# v4l2loopback-dkms is source only; built out of tree the same way, unpatched.
+# The whole loop runs on x86_64 only (HARMOLOC_VM_LOOP=0 skips it there).
+LOOP=$([ "$ARCH" = x86_64 ] && echo "${HARMOLOC_VM_LOOP:-1}" || echo 0)
+V4L2LB=$CACHE/v4l2loopback-$KVER
+if [ "$LOOP" = 1 ] && [ ! -f "$V4L2LB/v4l2loopback.ko" ]; then
+  say "building v4l2loopback out of tree against linux-headers-$KVER (v4l2loopback-dkms source)"
+  rm -rf "$V4L2LB"; mkdir -p "$V4L2LB/deb"
+  dpkg-deb -x "$(fetch v4l2loopback-dkms)" "$V4L2LB/deb"
+  cp "$V4L2LB"/deb/usr/src/v4l2loopback-*/v4l2loopback.c "$V4L2LB"/deb/usr/src/v4l2loopback-*/v4l2loopback_formats.h "$V4L2LB/"
+  printf 'obj-m := v4l2loopback.o\n' > "$V4L2LB/Kbuild"
+  make -s -C "$KHEADERS" M="$V4L2LB" "${KMAKE[@]}" modules > "$V4L2LB/build.log" 2>&1 ||
+    { tail -20 "$V4L2LB/build.log" >&2; cannot "v4l2loopback did not build (see $V4L2LB/build.log)"; }
+fi
 # libcamera's IPA modules (the vimc pipeline needs ipa_vimc), unpacked from Debian's libcamera-ipa.
 IPA=$CACHE/libcamera-ipa-$DEB_ARCH
 if [ ! -f "$IPA/.done" ]; then
@@ -144,14 +158,14 @@ if [ ! -f "$IPA/.done" ]; then
   dpkg-deb -x "$(fetch "libcamera-ipa:$DEB_ARCH")" "$IPA"
   touch "$IPA/.done"
 fi
-say "kernel $KVER, gpio-sim and vimc modules ready ($(elapsed "$T0") s)"
+say "kernel $KVER, gpio-sim, vimc$([ "$LOOP" = 1 ] && echo " and v4l2loopback") modules ready ($(elapsed "$T0") s)"
 
 # ---- the Linux board, native x86_64 (build/linux) ----------------------------------------------
 T1=$(date +%s.%N)
 PRESET=$([ "$ARCH" = x86_64 ] && echo linux || echo aarch64)
 say "building the Linux board for $ARCH (build/$(basename "$LINUX_BUILD")): harmoloc, vm_drivers_test"
 cmake --preset "$PRESET" > /dev/null
-cmake --build --preset "$PRESET" -j "$(nproc)" --target harmoloc vm_drivers_test vm_libcamera_test notify_listener > "$CACHE/build-$ARCH.log" 2>&1 ||
+cmake --build --preset "$PRESET" -j "$(nproc)" --target harmoloc vm_drivers_test vm_libcamera_test notify_listener $([ "$LOOP" = 1 ] && echo vm_feeder) > "$CACHE/build-$ARCH.log" 2>&1 ||
   { tail -30 "$CACHE/build-$ARCH.log" >&2; echo "FAIL: the Linux board did not build" >&2; exit 1; }
 say "Linux board built ($(elapsed "$T1") s)"
 
@@ -181,6 +195,7 @@ done
 cp tests/vm/init.sh "$IRD/init"; chmod +x "$IRD/init"
 cp "$LINUX_BUILD/bin/harmoloc" "$LINUX_BUILD/bin/vm_drivers_test" "$LINUX_BUILD/bin/vm_libcamera_test" \
   "$LINUX_BUILD/bin/notify_listener" "$CANPLAYER" "$IRD/vm/"
+[ "$LOOP" = 1 ] && cp "$LINUX_BUILD/bin/vm_feeder" "$IRD/vm/"
 # libcamera's IPA modules, their proxies and configuration, where libcamera looks for them.
 cp -a "$IPA/usr" "$IRD/"
 ln -sf /vm/canplayer "$IRD/usr/bin/canplayer"
@@ -204,6 +219,28 @@ device = "@LINK_DEV@"
 baud = 115200
 EOF
 sed -i "s|@LINK_DEV@|$LINK_DEV|" "$IRD/vm/e2e/harmoloc.toml"
+# The whole loop's firmware config: the loopback as the camera, vcan0 as the encoder bus; the
+# cycle's rate and time-outs slowed by the same factor as the feeder plays the run.
+LOOP_K=${HARMOLOC_VM_LOOP_SLOWDOWN:-2}
+python3 - "$LOOP_K" > "$IRD/vm/e2e/loop.toml" <<'PY'
+import sys
+k = float(sys.argv[1])
+print(f"""[cycle]
+rate_hz = {30 / k:g}
+camera_timeout_ms = {250 * k:g}
+encoder_timeout_ms = {250 * k:g}
+[camera]
+driver = "v4l2"
+device = "/dev/video20"
+width = 320
+height = 180
+format = "auto"
+[encoders]
+driver = "can"
+[can]
+interface = "vcan0"
+""")
+PY
 printf '[camera]\ndevice = "/dev/video7"\nwidth = 320\nheight = 180\n[can]\ninterface = "vcan0"\n' > "$IRD/vm/e2e/bad_camera.toml"
 # Shared libraries of the programs: the NEEDED closure (readelf, so it works for either
 # architecture) found in the architecture's library folders, and the dynamic loader.
@@ -234,7 +271,8 @@ cp -L "$INTERP" "$IRD$INTERP"
 # plain .ko), plus gpio-sim.
 MODS=$IRD/lib/modules/$KVER
 mkdir -p "$MODS/extra"
-for m in configfs vivid vcan can-raw $EXTRA_MODULES $(modinfo -F depends "$VIMC/vimc.ko" | tr , ' '); do
+for m in configfs vivid vcan can-raw virtio_pci virtio_blk $EXTRA_MODULES $(modinfo -F depends "$VIMC/vimc.ko" | tr , ' ') \
+  $([ "$LOOP" = 1 ] && modinfo -F depends "$V4L2LB/v4l2loopback.ko" | tr , ' '); do
   modprobe -d "$KDIR/root" -S "$KVER" --show-depends "$m" 2> /dev/null | awk '$1 == "insmod" {print $2}'
 done | sort -u | while read -r ko; do
   rel=${ko#"$KDIR/root/lib/modules/$KVER/"}
@@ -245,10 +283,15 @@ done | sort -u | while read -r ko; do
   esac
 done
 cp "$GSIM/gpio-sim.ko" "$VIMC/vimc.ko" "$MODS/extra/"
+[ "$LOOP" = 1 ] && cp "$V4L2LB/v4l2loopback.ko" "$MODS/extra/"
 cp "$KDIR/root/lib/modules/$KVER"/modules.{order,builtin,builtin.modinfo} "$MODS/" 2> /dev/null || true
 depmod -b "$IRD" "$KVER"
 (cd "$IRD" && find . | cpio -o -H newc --quiet | gzip -1 > "$WORK/initramfs.cpio.gz")
 say "initramfs $(du -h "$WORK/initramfs.cpio.gz" | cut -f1) ($(elapsed "$T2") s)"
+
+# HARMOLOC_VM_LOOP_ONLY=1 skips this boot and its checks (the whole loop alone, below).
+VM_S=skipped
+if [ "${HARMOLOC_VM_LOOP_ONLY:-0}" != 1 ]; then
 
 # ---- the command the host sends down the line: SET_POSE (unsigned, from a ground station) ------
 cat > "$WORK/commands.json" <<'EOF'
@@ -376,6 +419,91 @@ if [ -s "$WORK/link.bin" ]; then
   # Negative control: a flipped byte must be caught.
   python3 -c "import sys; d=bytearray(open(sys.argv[1],'rb').read()); d[len(d)//2]^=0x40; open(sys.argv[2],'wb').write(d)" "$WORK/link.bin" "$WORK/link-bad.bin"
   if node tests/mavlink/decode_link.js "$WORK/link-bad.bin" > /dev/null 2>&1; then fail "a corrupted copy of the link passed the decoder"; fi
+fi
+
+fi  # HARMOLOC_VM_LOOP_ONLY
+
+# ---- the whole loop: a simulated run through the kernel's drivers, trained and localized --------
+# Boot 1 (HARMOLOC_VM_MODE=loop-record): vm_feeder plays the simulated run ($E2E/train: frames
+# into v4l2loopback's /dev/video20, its candump log onto vcan0, one clock, slowed by LOOP_K) while
+# the Linux board records it (harmoloc --record). The recording comes out on a virtio disk (a
+# tar), the map is trained from it on the host (labels moved onto the VM's clock). Boot 2
+# (loop-localize): the same run played again, the Linux board localizes with that map. Its
+# position RMS error against the ground truth must be within 1 cm of a host replay's of the same
+# run with the same map, or within 1.5 times it.
+if [ "$LOOP" = 1 ]; then
+  T4=$(date +%s.%N)
+  L=$WORK/loop
+  mkdir -p "$L/in/run"
+  cp -r "$E2E/train/." "$L/in/run/"
+  # loop_boot MODE: the tar of $L/in on the disk in, the tar the VM wrote back unpacked in $L/MODE.
+  loop_boot() {
+    local mode=$1 img=$L/$1.img
+    (cd "$L/in" && tar -cf "$img" .)
+    truncate -s 512M "$img"
+    timeout -s KILL "${HARMOLOC_VM_TIMEOUT_S:-900}" "$QEMU" -accel tcg -cpu "$LOOP_CPU" -smp 1 -m 1024 -nographic -no-reboot \
+      -serial "file:$L/$mode.console.log" -drive "file=$img,format=raw,if=virtio" \
+      -kernel "$VMLINUZ" -initrd "$WORK/initramfs.cpio.gz" \
+      -append "console=$CONSOLE_DEV quiet loglevel=3 panic=-1 HARMOLOC_VM_MODE=$mode HARMOLOC_VM_SLOWDOWN=$LOOP_K" \
+      -monitor none > "$L/$mode.qemu.out" 2>&1 || true
+    tr -d '\r' < "$L/$mode.console.log" > "$L/$mode.console.txt"
+    rm -rf "$L/$mode"; mkdir -p "$L/$mode"
+    tar -xf "$img" -C "$L/$mode" 2> /dev/null || true
+    rm -f "$img"
+  }
+  # Without AVX2: under this QEMU's TCG (7.2) with -cpu max the Linux board's AVX2 segmentation
+  # counted other areas than the host's on the same frames (docs/testbench.md).
+  LOOP_CPU=${HARMOLOC_VM_LOOP_CPU:-max,-avx2}
+  loop_feeder_line() { grep -m1 '^FEEDER start_mono_ns' "$L/$1/out/feeder.out" 2> /dev/null || true; }
+  loop_summary() {
+    echo "$(grep -m1 "^VMTEST-END $1" "$L/$1.console.txt" || echo "no VMTEST-END $1") | $(grep -m1 '^FEEDER done' "$L/$1/out/feeder.out" 2> /dev/null || echo 'no feeder summary')"
+  }
+  say "whole loop, boot 1: the simulated run through v4l2loopback and vcan0 (slowdown $LOOP_K), recorded"
+  loop_boot loop-record
+  say "loop-record: $(loop_summary loop-record) ($(elapsed "$T4") s so far)"
+  REC=$L/loop-record/out/rec
+  FEED1=$(loop_feeder_line loop-record)
+  LOOP_OK=1
+  if [ -z "$FEED1" ] || [ ! -s "$REC/frames.csv" ]; then
+    fail "whole loop: no recording came out of the VM ($(loop_summary loop-record)); console in $L/loop-record.console.txt"
+    LOOP_OK=0
+  else
+    python3 tests/vm/loop_clock.py to-vm "$FEED1" "$E2E/train/labels.tum" "$L/labels-vm.tum" "$REC/encoders.csv"
+    if "$HOST_BIN/harmoloc-train" --dataset "$REC" --labels "$L/labels-vm.tum" --out "$L/in/map.hmap" > "$L/train.log" 2>&1; then
+      say "map trained on the VM's recording: $(grep -c . "$REC/frames.csv") frame lines"
+    else
+      tail -5 "$L/train.log" >&2; fail "whole loop: harmoloc-train refused the VM's recording"; LOOP_OK=0
+    fi
+  fi
+  if [ "$LOOP_OK" = 1 ]; then
+    say "whole loop, boot 2: the same run again, localized with that map"
+    loop_boot loop-localize
+    say "loop-localize: $(loop_summary loop-localize) ($(elapsed "$T4") s so far)"
+    FEED2=$(loop_feeder_line loop-localize)
+    "$HOST_BIN/harmoloc" --dataset "$E2E/train" --map "$L/in/map.hmap" --trajectory "$L/host.tum" > "$L/host.log" 2>&1 ||
+      { tail -3 "$L/host.log" >&2; fail "whole loop: the host replay failed"; }
+    if [ -n "$FEED2" ] && [ -s "$L/loop-localize/out/trajectory.tum" ] && [ -s "$L/host.tum" ]; then
+      python3 tests/vm/loop_clock.py to-sim "$FEED2" "$L/loop-localize/out/trajectory.tum" "$L/vm.tum" "$E2E/train/groundtruth.tum"
+      python3 tests/vm/loop_check.py "$E2E/train/groundtruth.tum" "$L/host.tum" "$L/vm.tum" \
+        "$(loop_summary loop-record)" "$(loop_summary loop-localize)" >&2 ||
+        fail "whole loop: the VM's pose is not as good as the host replay's (trajectories in $L)"
+      # Negative control: the same VM trajectory read 0.5 s late on the dataset's clock must fail.
+      python3 - "$FEED2" > "$L/feeder-shifted.txt" <<'PY'
+import re, sys
+k = float(re.search(r'slowdown=(\S+)', sys.argv[1]).group(1))
+print(re.sub(r'start_mono_ns=(\d+)', lambda m: f"start_mono_ns={int(m.group(1)) - round(5e8 * k)}", sys.argv[1]))
+PY
+      python3 tests/vm/loop_clock.py to-sim "$(cat "$L/feeder-shifted.txt")" "$L/loop-localize/out/trajectory.tum" "$L/vm-shifted.tum" "$E2E/train/groundtruth.tum" 2> /dev/null
+      if python3 tests/vm/loop_check.py "$E2E/train/groundtruth.tum" "$L/host.tum" "$L/vm-shifted.tum" > "$L/check-shifted.txt" 2>&1; then
+        fail "whole loop: a VM trajectory 0.5 s off passed the check: $(tail -1 "$L/check-shifted.txt")"
+      else
+        say "negative control (the VM's trajectory 0.5 s off) fails as it must: $(grep 'RMS' "$L/check-shifted.txt")"
+      fi
+    else
+      fail "whole loop: no trajectory came out of the VM ($(loop_summary loop-localize)); console in $L/loop-localize.console.txt"
+    fi
+  fi
+  say "whole loop: $(elapsed "$T4") s (two boots, training, host replay)"
 fi
 
 TOTAL=$(elapsed "$T0")
