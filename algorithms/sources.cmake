@@ -8,7 +8,9 @@ set(HARMOLOC_ALGORITHMS_SOURCES
   src/crc32.cpp
   src/harmonic_localizer.cpp
   src/harmonic_model.cpp
-  src/map_codec.cpp
+  src/map_codec_read.cpp
+  src/map_codec_read_forward.cpp
+  src/map_codec_write.cpp
   src/odometry.cpp
   src/board_observation.cpp
   src/forward_map.cpp

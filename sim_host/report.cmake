@@ -6,7 +6,7 @@
 # toolkit (svg*.cpp) serves both the report's plots and line_chart.cpp.
 set(HARMOLOC_REPORT_SOURCES format.cpp svg.cpp svg_ticks.cpp svg_plot.cpp
   trajectory_evaluation.cpp run_stats.cpp report.cpp summary.cpp trajectory_plot.cpp
-  error_plot.cpp timing_plot.cpp stages_plot.cpp page.cpp relative_error.cpp health_label.cpp
+  trajectory_view.cpp error_plot.cpp timing_plot.cpp stages_plot.cpp page.cpp relative_error.cpp health_label.cpp
   time_panel.cpp xy_error_plot.cpp sigma_plot.cpp health_plot.cpp histogram_edges.cpp
   area_spans.cpp areas_plot.cpp compare_runs.cpp compare_plots.cpp compare_page.cpp)
 list(TRANSFORM HARMOLOC_REPORT_SOURCES PREPEND ${CMAKE_CURRENT_SOURCE_DIR}/src/report/)

@@ -6,215 +6,19 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "route_kidnap_planner.hpp"
+#include "route_parts.hpp"
+
 namespace harmoloc::sim_host {
 
 using algorithms::kPi;
 using algorithms::Pose2;
 using algorithms::wrap_angle_rad;
+using namespace route_detail;
 
 namespace {
 
-struct Polyline {
-  std::vector<double> x, y, s;  // s: cumulative arc length
-  bool closed = false;          // a loop: arc lengths wrap round
-  double length() const { return s.back(); }
-  void at(double si, double& px, double& py, double& tx, double& ty) const {
-    if (closed && (si < 0.0 || si > length())) {
-      si = std::fmod(si, length());
-      if (si < 0.0) si += length();
-    }
-    si = std::clamp(si, 0.0, length());
-    const auto it = std::upper_bound(s.begin(), s.end(), si);
-    std::size_t k = static_cast<std::size_t>(std::max<std::ptrdiff_t>(1, it - s.begin()));
-    if (k >= s.size()) k = s.size() - 1;
-    const double seg = s[k] - s[k - 1];
-    const double u = seg > 0.0 ? (si - s[k - 1]) / seg : 0.0;
-    px = x[k - 1] + u * (x[k] - x[k - 1]);
-    py = y[k - 1] + u * (y[k] - y[k - 1]);
-    tx = (x[k] - x[k - 1]) / seg;
-    ty = (y[k] - y[k - 1]) / seg;
-  }
-};
-
-// Catmull-Rom through the waypoints, densely sampled (@p steps points a segment): end points
-// repeated, or closed (back to the first waypoint, neighbours taken round the loop).
-Polyline make_path(const std::vector<std::array<double, 2>>& w, bool closed, int steps = 400) {
-  if (w.size() < 2) throw std::runtime_error("a route needs at least 2 waypoints");
-  if (closed && w.size() < 3) throw std::runtime_error("a loop needs at least 3 waypoints");
-  Polyline p;
-  p.closed = closed;
-  const std::size_t n = w.size();
-  const auto count = static_cast<std::ptrdiff_t>(n);
-  auto pt = [&](std::ptrdiff_t i) {
-    if (closed) return w[static_cast<std::size_t>(((i % count) + count) % count)];
-    return w[static_cast<std::size_t>(std::clamp<std::ptrdiff_t>(i, 0, count - 1))];
-  };
-  const int kSteps = steps;
-  const std::size_t segments = closed ? n : n - 1;
-  for (std::size_t i = 0; i < segments; ++i) {
-    const auto p0 = pt(static_cast<std::ptrdiff_t>(i) - 1), p1 = pt(static_cast<std::ptrdiff_t>(i)),
-               p2 = pt(static_cast<std::ptrdiff_t>(i) + 1),
-               p3 = pt(static_cast<std::ptrdiff_t>(i) + 2);
-    for (int k = (i == 0 ? 0 : 1); k <= kSteps; ++k) {
-      const double t = static_cast<double>(k) / kSteps, t2 = t * t, t3 = t2 * t;
-      double c[2];
-      for (int d = 0; d < 2; ++d) {
-        c[d] = 0.5 * (2 * p1[d] + (-p0[d] + p2[d]) * t +
-                      (2 * p0[d] - 5 * p1[d] + 4 * p2[d] - p3[d]) * t2 +
-                      (-p0[d] + 3 * p1[d] - 3 * p2[d] + p3[d]) * t3);
-      }
-      p.x.push_back(c[0]);
-      p.y.push_back(c[1]);
-    }
-  }
-  p.s.assign(p.x.size(), 0.0);
-  for (std::size_t k = 1; k < p.x.size(); ++k)
-    p.s[k] = p.s[k - 1] + std::hypot(p.x[k] - p.x[k - 1], p.y[k] - p.y[k - 1]);
-  return p;
-}
-
-// Distance covered after time t on a leg of length L with a trapezoidal speed profile.
-double leg_distance(double t, double length, double v, double a, double& duration) {
-  double t_acc = v / a;
-  double d_acc = 0.5 * a * t_acc * t_acc;
-  if (2.0 * d_acc > length) {  // triangle: never reaches cruise speed
-    t_acc = std::sqrt(length / a);
-    d_acc = 0.5 * length;
-    v = a * t_acc;
-  }
-  const double t_cruise = (length - 2.0 * d_acc) / v;
-  duration = 2.0 * t_acc + t_cruise;
-  if (t <= 0.0) return 0.0;
-  if (t < t_acc) return 0.5 * a * t * t;
-  if (t < t_acc + t_cruise) return d_acc + v * (t - t_acc);
-  if (t < duration) {
-    const double r = duration - t;
-    return length - 0.5 * a * r * r;
-  }
-  return length;
-}
-
 constexpr double kLegMargin_s = 0.1;  // "driving": this far inside a leg
-
-// Chooses where a kidnapped robot is put down. Places are route clock phases within a lap, on a
-// grid of at most kMaxPhases points (10 ms apart on short laps). A shuttle's lap is forth and
-// back with its pauses; a loop's is once round at cruising speed (the phases of its cruise).
-class KidnapPlanner {
- public:
-  /// The position at phase @p phase_s (route clock within a lap).
-  using PlaceFn = std::function<void(double phase_s, double& x_m, double& y_m)>;
-  /// The route clock to put the robot down at for phase @p phase_s at run time @p t_s (negative:
-  /// none in this run).
-  using TauFn = std::function<double(double phase_s, double t_s)>;
-  /// The phase a route clock falls on (0 after the route's end).
-  using PhaseFn = std::function<double(double route_t_s)>;
-  using DrivingFn = std::function<bool(double phase_s)>;
-
-  // Works out, for each phase a kidnap may start from and each number of kidnaps still to come,
-  // whether a target exists from which all of them can keep the minimum distance. Positions here
-  // are the route's own (@p nominal, without the wander), so the distance must hold with a margin
-  // of twice the wander's bound on both ends.
-  void plan(double lap_s, const DrivingFn& driving, const KidnapSpec& spec, double wander_bound_m,
-            const PlaceFn& nominal) {
-    spec_ = spec;
-    lap_s_ = lap_s;
-    phases_ = std::min<std::size_t>(kMaxPhases,
-                                    static_cast<std::size_t>(std::ceil(lap_s / kPhaseStep_s)));
-    dphi_ = lap_s / static_cast<double>(phases_);
-    driving_.assign(phases_, 0);
-    std::vector<double> x(phases_), y(phases_);
-    std::vector<std::size_t> next(phases_);
-    for (std::size_t j = 0; j < phases_; ++j) {
-      const double phi = static_cast<double>(j) * dphi_;
-      driving_[j] = driving(phi) ? 1 : 0;
-      nominal(phi, x[j], y[j]);
-      next[j] = index_of(std::fmod(phi + spec.interval_s, lap_s));
-    }
-    const double far_m = spec.min_distance_m + 2.0 * wander_bound_m + kGridMargin_m;
-    const auto step = [&](const std::vector<char>* later) {
-      std::vector<std::size_t> targets;
-      for (std::size_t j = 0; j < phases_; ++j) {
-        if (driving_[j] && (later == nullptr || (*later)[next[j]])) targets.push_back(j);
-      }
-      std::vector<char> ok(phases_, 0);
-      for (std::size_t j = 0; j < phases_; ++j) {
-        for (const std::size_t t : targets) {
-          if (std::hypot(x[t] - x[j], y[t] - y[j]) >= far_m) {
-            ok[j] = 1;
-            break;
-          }
-        }
-      }
-      return ok;
-    };
-    ok_.clear();
-    ok_.push_back(step(nullptr));
-    // The sets shrink with every level; they settle within a few levels on real routes. Beyond
-    // kMaxLookahead levels the last is used (a later kidnap may then find no place: an error).
-    for (int r = 1; r < spec.count && r < kMaxLookahead; ++r) {
-      std::vector<char> ok = step(&ok_.back());
-      if (ok == ok_.back()) break;  // a fixed point: the same for any more kidnaps
-      ok_.push_back(std::move(ok));
-    }
-  }
-
-  // The route time to put the robot down at, for kidnap @p k (0-based) at run time @p t_s; the
-  // next kidnap comes @p next_gap_s later (negative: none). @p place gives the exact position
-  // (with the wander) a route time would put the robot at now.
-  double choose(std::size_t k, double t_s, double next_gap_s, const Pose2& from,
-                algorithms::Pcg32& rng, const PlaceFn& place, const TauFn& tau_for,
-                const PhaseFn& phase_of) const {
-    const std::size_t later = static_cast<std::size_t>(spec_.count) - 1 - k;
-    std::vector<double> good, far;
-    for (std::size_t j = 0; j < phases_; ++j) {
-      if (!driving_[j]) continue;
-      const double phi = static_cast<double>(j) * dphi_;
-      double x = 0.0, y = 0.0;
-      place(phi, x, y);
-      if (std::hypot(x - from.x_m, y - from.y_m) < spec_.min_distance_m) continue;
-      const double tau = tau_for(phi, t_s);
-      if (tau < 0.0) continue;
-      far.push_back(tau);
-      if (later > 0) {
-        const std::size_t next = index_of(phase_of(tau + next_gap_s));
-        if (!ok_[std::min(later - 1, ok_.size() - 1)][next]) continue;
-      }
-      good.push_back(tau);
-    }
-    // Without a place that keeps every later kidnap possible, any far enough place will do (a
-    // later kidnap may then fail with the error below).
-    const std::vector<double>& pick = good.empty() ? far : good;
-    if (pick.empty()) {
-      std::ostringstream msg;
-      msg << "kidnap " << k + 1 << " at " << t_s << " s: no place where the robot drives on the "
-          << "route is " << spec_.min_distance_m << " m or more from (" << from.x_m << ", "
-          << from.y_m << "); move kidnaps.first_s or kidnaps.interval_s, or lower "
-          << "kidnaps.min_distance_m";
-      throw std::runtime_error(msg.str());
-    }
-    const auto i =
-        std::min(pick.size() - 1,
-                 static_cast<std::size_t>(rng.uniform() * static_cast<double>(pick.size())));
-    return pick[i];
-  }
-
- private:
-  static constexpr std::size_t kMaxPhases = 4000;
-  static constexpr int kMaxLookahead = 64;
-  static constexpr double kPhaseStep_s = 0.01;
-  static constexpr double kGridMargin_m = 0.005;
-
-  std::size_t index_of(double phase_s) const {
-    return static_cast<std::size_t>(std::llround(phase_s / dphi_)) % phases_;
-  }
-
-  KidnapSpec spec_;
-  double lap_s_ = 0.0;
-  double dphi_ = 0.0;
-  std::size_t phases_ = 0;
-  std::vector<char> driving_;
-  std::vector<std::vector<char>> ok_;  // ok_[r][phase]: a kidnap from there, r more after it
-};
 
 }  // namespace
 
@@ -461,20 +265,6 @@ std::vector<MotionSample> simulate_motion(const Scenario& scenario, double step_
   return out;
 }
 
-std::vector<std::array<double, 2>> route_curve(const RouteSpec& route, double step_m) {
-  const Polyline path = make_path(route.waypoints_m, route.shape == RouteShape::kLoop);
-  const double length = path.length();
-  const auto n = std::max<std::size_t>(2, static_cast<std::size_t>(std::ceil(length / step_m)) + 1);
-  std::vector<std::array<double, 2>> out;
-  out.reserve(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    double x, y, tx, ty;
-    path.at(length * static_cast<double>(i) / static_cast<double>(n - 1), x, y, tx, ty);
-    out.push_back({x, y});
-  }
-  return out;
-}
-
 double run_duration_s(const Scenario& scenario) {
   const RouteSpec& r = scenario.route;
   const bool loop = r.shape == RouteShape::kLoop;
@@ -482,52 +272,6 @@ double run_duration_s(const Scenario& scenario) {
   double leg_s = 0.0;
   leg_distance(0.0, loop ? r.laps * length : length, r.speed_mps, r.acceleration_mps2, leg_s);
   return loop ? leg_s + 2.0 * r.pause_s : r.laps * 2.0 * (r.pause_s + leg_s) + r.pause_s;
-}
-
-double route_length_m(const RouteSpec& route) {
-  return make_path(route.waypoints_m, route.shape == RouteShape::kLoop).length();
-}
-
-bool route_crosses_itself(const RouteSpec& route, std::string* why) {
-  constexpr double kClearance_m = 0.05;
-  const bool loop = route.shape == RouteShape::kLoop;
-  const Polyline path = make_path(route.waypoints_m, loop, 40);
-  const std::size_t n = path.x.size();
-  const double length = path.length();
-  // Two points closer than the clearance whose distance along the curve is more than a few times
-  // it (so not neighbours), or segments that intersect.
-  const auto along = [&](std::size_t i, std::size_t j) {
-    const double d = std::fabs(path.s[i] - path.s[j]);
-    return loop ? std::min(d, length - d) : d;
-  };
-  const auto cross = [](double ax, double ay, double bx, double by, double cx, double cy, double dx,
-                        double dy) {
-    const auto orient = [](double px, double py, double qx, double qy, double rx, double ry) {
-      return (qx - px) * (ry - py) - (qy - py) * (rx - px);
-    };
-    const double o1 = orient(ax, ay, bx, by, cx, cy), o2 = orient(ax, ay, bx, by, dx, dy);
-    const double o3 = orient(cx, cy, dx, dy, ax, ay), o4 = orient(cx, cy, dx, dy, bx, by);
-    return ((o1 > 0) != (o2 > 0)) && ((o3 > 0) != (o4 > 0));
-  };
-  for (std::size_t i = 0; i + 1 < n; ++i) {
-    for (std::size_t j = i + 2; j + 1 < n; ++j) {
-      if (along(i, j) < 4.0 * kClearance_m || along(i + 1, j) < 4.0 * kClearance_m ||
-          along(i, j + 1) < 4.0 * kClearance_m)
-        continue;
-      const bool close = std::hypot(path.x[i] - path.x[j], path.y[i] - path.y[j]) < kClearance_m;
-      if (close || cross(path.x[i], path.y[i], path.x[i + 1], path.y[i + 1], path.x[j], path.y[j],
-                         path.x[j + 1], path.y[j + 1])) {
-        if (why != nullptr) {
-          std::ostringstream m;
-          m << "the " << (loop ? "loop" : "route") << " crosses or touches itself near ("
-            << path.x[i] << ", " << path.y[i] << ")";
-          *why = m.str();
-        }
-        return true;
-      }
-    }
-  }
-  return false;
 }
 
 }  // namespace harmoloc::sim_host

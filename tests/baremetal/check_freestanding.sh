@@ -16,7 +16,7 @@ lib=$2
 keep=${3:-}
 nm=${cxx%g++}nm
 cpu=(-mcpu=cortex-m7 -mthumb -mfpu=fpv5-d16 -mfloat-abi=hard)
-# Host-side code that shares a file with the kernels; it allocates (heap_guard.encode_map).
+# Host-side code in the kernel library; it allocates (heap_guard.encode_map).
 host_only='encode_map'
 
 work=$(mktemp -d "${TMPDIR:-/tmp}/harmoloc-freestanding-XXXXXX")

@@ -23,7 +23,8 @@ int main() {
   return 0;
 }
 #elif defined(HEAP_PROBE_encode_map)
-// The map encoder shares map_codec.cpp with the decoder the target uses; it fills a std::vector.
+// The map encoder is in the kernel library with the decoder the target uses; it fills a
+// std::vector.
 harmoloc::algorithms::MapFile g_map;
 int main() {
   static std::vector<std::uint8_t> bytes;

@@ -1,6 +1,6 @@
 // What the bare-metal programs provide in place of libstdc++'s exception machinery.
 //
-// map_codec.cpp holds the decoder (used on the target) and the host-side encoder, whose
+// The kernel library holds the map decoder (used on the target) and the host-side encoder, whose
 // std::vector refers to std::__throw_length_error. The linker resolves that reference from
 // libstdc++ before --gc-sections drops the unused encoder, and libstdc++'s definition brings the
 // whole exception runtime, including an emergency pool that calls malloc at start-up. Defined

@@ -77,46 +77,11 @@ std::string comparison_error_svg(const std::vector<ComparedRun>& runs) {
 
 std::string comparison_trajectory_svg(const std::vector<ComparedRun>& runs) {
   const Report& first = runs.front().report;
-  constexpr double kInf = std::numeric_limits<double>::infinity();
-  double x0 = kInf, y0 = kInf, x1 = -kInf, y1 = -kInf;
-  for (const dataset::StampedPose& p : first.truth) {
-    x0 = std::min(x0, p.pose.x_m);
-    x1 = std::max(x1, p.pose.x_m);
-    y0 = std::min(y0, p.pose.y_m);
-    y1 = std::max(y1, p.pose.y_m);
-  }
-  // The truth's box, grown to take in the estimates unless they run far away (then clipped).
-  const double grow = 0.5 * std::max({x1 - x0, y1 - y0, 0.2}) + 0.5;
-  const double lx0 = x0 - grow, lx1 = x1 + grow, ly0 = y0 - grow, ly1 = y1 + grow;
-  for (const ComparedRun& r : runs) {
-    for (const dataset::StampedPose& p : r.report.estimate) {
-      if (p.pose.x_m < lx0 || p.pose.x_m > lx1 || p.pose.y_m < ly0 || p.pose.y_m > ly1) continue;
-      x0 = std::min(x0, p.pose.x_m);
-      x1 = std::max(x1, p.pose.x_m);
-      y0 = std::min(y0, p.pose.y_m);
-      y1 = std::max(y1, p.pose.y_m);
-    }
-  }
-  double span = std::max({x1 - x0, y1 - y0, 0.2});
-  const double pad = 0.04 * span;
-  x0 -= pad;
-  x1 += pad;
-  y0 -= pad;
-  y1 += pad;
-  span = std::max(x1 - x0, y1 - y0);
-  const auto widen = [&](double& a, double& b) {
-    if (b - a >= 0.3 * span) return;
-    const double c = 0.5 * (a + b);
-    a = c - 0.15 * span;
-    b = c + 0.15 * span;
-  };
-  widen(x0, x1);
-  widen(y0, y1);
-  const double step = nice_step(span, 8);
-  x0 = std::floor(x0 / step - 1e-9) * step;
-  y0 = std::floor(y0 / step - 1e-9) * step;
-  x1 = std::ceil(x1 / step + 1e-9) * step;
-  y1 = std::ceil(y1 / step + 1e-9) * step;
+  // The truth's box with every run's estimate (trajectory_view).
+  std::vector<const std::vector<dataset::StampedPose>*> estimates;
+  for (const ComparedRun& r : runs) estimates.push_back(&r.report.estimate);
+  const TrajectoryView view = trajectory_view(first.truth, estimates);
+  const double x0 = view.x0, y0 = view.y0, x1 = view.x1, y1 = view.y1, step = view.step;
   const double scale = std::min(760.0 / (x1 - x0), 560.0 / (y1 - y0));
   const double plot_w = (x1 - x0) * scale, plot_h = (y1 - y0) * scale;
   const double canvas_w = std::max(640.0, plot_w + 110.0);

@@ -3,7 +3,11 @@
 /// (one colour for each thing plotted, so that the fused estimate is blue and the harmonic fixes
 /// orange in every plot). Private to the plot files, hence the using-declarations.
 
+#include <cstddef>
+#include <vector>
+
 #include "format.hpp"
+#include "harmoloc/dataset/tum.hpp"
 #include "harmoloc/sim_host/svg.hpp"
 #include "harmoloc/sim_host/svg_plot.hpp"
 #include "harmoloc/sim_host/svg_ticks.hpp"
@@ -37,5 +41,18 @@ using svg::Scale;
 using svg::text_width;
 using svg::Tick;
 using svg::ticks_in;
+
+/// The view of a trajectory plot in the map frame (trajectory_view.cpp): the truth's box, grown
+/// to take in @p others unless they run far away, padded, at least 0.3 of the long side on the
+/// short one, and on a grid of @p step; @p outside counts the poses left out.
+struct TrajectoryView {
+  double x0, y0, x1, y1;
+  double step;
+  std::size_t outside;
+  double width() const { return x1 - x0; }
+  double height() const { return y1 - y0; }
+};
+TrajectoryView trajectory_view(const std::vector<dataset::StampedPose>& truth,
+                               const std::vector<const std::vector<dataset::StampedPose>*>& others);
 
 }  // namespace harmoloc::sim_host

@@ -1,0 +1,150 @@
+#include "harmoloc/algorithms/map_codec.hpp"
+
+#include <array>
+#include <cmath>
+
+#include "map_codec_parts.hpp"
+
+namespace harmoloc::algorithms::map_codec_detail {
+
+namespace {
+
+// The values of one stored cell: every board's expected feature, then (in a second pass) the
+// route distance and the heading. Versions 3 and 4 store them for the cells row by row, version
+// 5 for the stored tiles' cells in storage order; both read through @p cell_at.
+template <typename CellAt>
+MapError decode_cells(Reader& r, ForwardMap& f, std::size_t cells, CellAt cell_at) {
+  const std::size_t boards = f.board_count;
+  const std::size_t values = cells * (boards + 1U + (f.has_heading ? 1U : 0U));
+  if (!r.need(values * 4U, "forward map"))
+    return MapError{"truncated: the forward map is shorter than its size says", r.pos()};
+  for (std::size_t c = 0; c < cells; ++c) {
+    float* e = f.expected.data() + cell_at(c) * kMaxBoards;
+    for (std::size_t b = 0; b < boards; ++b) {
+      r.f32(e[b], "forward map");
+      if (!finite_in(e[b], 0.0F, 1.0e6F))
+        return MapError{"forward map expected feature not finite and >= 0", r.pos()};
+    }
+  }
+  for (std::size_t c = 0; c < cells; ++c) {
+    float& d = f.route_distance_m[cell_at(c)];
+    r.f32(d, "forward map");
+    if (!finite_in(d, 0.0F, 1.0e4F))
+      return MapError{"forward map route distance not finite and >= 0", r.pos()};
+  }
+  if (f.has_heading) {
+    for (std::size_t c = 0; c < cells; ++c) {
+      float& h = f.heading_rad[cell_at(c)];
+      r.f32(h, "forward map");
+      if (!finite_in(h, -4.0F, 4.0F))
+        return MapError{"forward map heading not within -pi..pi", r.pos()};
+    }
+  }
+  return MapError{};
+}
+
+}  // namespace
+
+// The forward map section (version 3; tiled from version 5).
+MapError decode_forward(Reader& r, std::uint32_t version, std::uint32_t boards, ForwardMap& f) {
+  std::uint32_t columns = 0, rows = 0;
+  f.columns = f.rows = 0;
+  if (!r.u32(columns, "forward map size") || !r.u32(rows, "forward map size"))
+    return MapError{"truncated: no room for the forward map's size", r.pos()};
+  if (columns == 0 && rows == 0) return MapError{};
+  // Versions 3 and 4 store every cell of a grid of at most 4096; version 5 the tiles near the
+  // training run of a grid of at most this build's tile grid.
+  const bool tiled = version >= 5;
+  if (tiled ? (columns == 0 || rows == 0 || columns > ForwardMap::kMaxDimension ||
+               rows > ForwardMap::kMaxDimension ||
+               static_cast<std::size_t>(tiles_along(columns)) * tiles_along(rows) >
+                   ForwardMap::kMaxTileGrid)
+            : (columns == 0 || rows == 0 || columns > 256 || rows > 256 ||
+               static_cast<std::size_t>(columns) * rows > 4096)) {
+    return MapError{tiled ? "forward map grid out of range (its tile grid exceeds this firmware's)"
+                          : "forward map grid out of range (at most 256 x 256 and 4096 cells)",
+                    r.pos()};
+  }
+  std::uint32_t board_count = 0;
+  float origin_x = 0.0F, origin_y = 0.0F, cell = 0.0F;
+  if (!r.f32(origin_x, "forward map origin") || !r.f32(origin_y, "forward map origin") ||
+      !r.f32(cell, "forward map cell size") || !r.u32(board_count, "forward map boards")) {
+    return MapError{"truncated: the forward map's header is cut short", r.pos()};
+  }
+  if (!(std::fabs(origin_x) <= 1.0e4F) || !(std::fabs(origin_y) <= 1.0e4F) ||
+      !finite_in(cell, 1.0e-3F, 10.0F)) {
+    return MapError{"forward map origin or cell size out of range", r.pos()};
+  }
+  if (board_count != boards)
+    return MapError{"forward map board count differs from the thresholds'", r.pos()};
+  std::array<float, kMaxBoards> sigma{};
+  bool any = false;
+  for (std::size_t b = 0; b < board_count; ++b) {
+    if (!r.f32(sigma[b], "forward map sigma"))
+      return MapError{"truncated: the forward map's sigmas are cut short", r.pos()};
+    if (!finite_in(sigma[b], 0.0F, 1.0e3F))
+      return MapError{"forward map sigma not finite and in 0..1000", r.pos()};
+    any = any || sigma[b] > 0.0F;
+  }
+  if (!any) return MapError{"forward map models no board (every sigma is 0)", r.pos()};
+  std::uint8_t flag = 0, pad[3] = {0, 0, 0};
+  if (!r.u8(flag, "forward map flags") || !r.u8(pad[0], "forward map flags") ||
+      !r.u8(pad[1], "forward map flags") || !r.u8(pad[2], "forward map flags")) {
+    return MapError{"truncated: the forward map's flags are cut short", r.pos()};
+  }
+  if (flag > 1U || pad[0] != 0 || pad[1] != 0 || pad[2] != 0)
+    return MapError{"forward map flags: unknown bits set", r.pos()};
+
+  // The layout: every tile (versions 3 and 4), or the stored tiles' bitmap (version 5).
+  const std::size_t positions = static_cast<std::size_t>(tiles_along(columns)) * tiles_along(rows);
+  std::array<std::uint8_t, ForwardMap::kMaxTileGrid> stored{};
+  if (tiled) {
+    std::uint32_t tile_count = 0;
+    if (!r.u32(tile_count, "forward map tile count"))
+      return MapError{"truncated: the forward map's tile count is missing", r.pos()};
+    if (tile_count == 0 || tile_count > ForwardMap::kMaxTiles)
+      return MapError{"forward map tile count out of range (more than this firmware holds)",
+                      r.pos()};
+    const std::size_t mask_bytes = (positions + 7U) / 8U;
+    if (!r.need(mask_bytes, "forward map tiles"))
+      return MapError{"truncated: the forward map's tile bitmap is cut short", r.pos()};
+    std::size_t count = 0;
+    for (std::size_t i = 0; i < mask_bytes; ++i) {
+      std::uint8_t bits = 0;
+      r.u8(bits, "forward map tiles");
+      for (std::size_t k = 0; k < 8; ++k) {
+        const bool set = ((bits >> k) & 1U) != 0U;
+        if (!set) continue;
+        if (8U * i + k >= positions)
+          return MapError{"forward map tile bitmap: bits set beyond the tile grid", r.pos()};
+        stored[8U * i + k] = 1;
+        ++count;
+      }
+    }
+    if (count != tile_count)
+      return MapError{"forward map tile bitmap does not hold the tile count", r.pos()};
+  } else {
+    stored.fill(1);
+  }
+  if (!lay_out_grid(f, columns, rows, stored.data()))
+    return MapError{"forward map needs more tiles than this firmware holds", r.pos()};
+  f.origin_x_m = origin_x;
+  f.origin_y_m = origin_y;
+  f.cell_m = cell;
+  f.board_count = board_count;
+  f.sigma = sigma;
+  f.has_heading = flag == 1U;
+  const MapError e =
+      tiled ? decode_cells(r, f, f.stored_cells(), [](std::size_t c) { return c; })
+            : decode_cells(r, f, static_cast<std::size_t>(columns) * rows, [&f](std::size_t c) {
+                return f.index(static_cast<std::uint32_t>(c % f.columns),
+                               static_cast<std::uint32_t>(c / f.columns));
+              });
+  if (e) {
+    f.columns = f.rows = 0;
+    return e;
+  }
+  return MapError{};
+}
+
+}  // namespace harmoloc::algorithms::map_codec_detail

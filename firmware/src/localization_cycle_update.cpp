@@ -1,0 +1,164 @@
+// The update stage: the particle filter's update from the fix or the boards' weights, and the
+// kidnap test.
+#include "harmoloc/firmware/localization_cycle.hpp"
+
+#include <array>
+#include <cmath>
+
+namespace harmoloc::firmware {
+
+void LocalizationCycle::update(const algorithms::AreaVector& areas, const Features& features,
+                               bool fresh_sample) {
+  kidnap_verdict_ = algorithms::KidnapVerdict::kNone;
+  // A frame no place on the map can look like (noise, a blinded sensor) is not a view.
+  const bool implausible =
+      fix_.present && use_boards_ &&
+      algorithms::frame_implausible(map_.forward, board_maxima_,
+                                    algorithms::board_features(map_.model.area_scale, areas),
+                                    config_.observation.boards.implausible_ratio);
+  if (implausible) ++counters_.implausible_frames;
+  if (fix_.present && !implausible) {
+    if (fix_.fix.known_place) {
+      ++counters_.fixes_used;
+      last_known_fix_ = fix_.fix;
+    } else {
+      ++counters_.unknown_place;
+    }
+    bool vision = false;
+    if (!filter_.initialized()) {
+      if (fix_.fix.known_place) {
+        reseed_around(fix_.fix.x_m, fix_.fix.y_m);
+        vision = true;
+      }
+    } else if (use_boards_) {
+      vision = update_with_boards(areas, features);
+    } else if (fix_.fix.known_place) {
+      filter_.update_position(fix_.fix.x_m, fix_.fix.y_m, config_.filter.fix_sigma_m,
+                              config_.filter.outlier_probability);
+      if (filter_.resample_if_needed(config_.filter.resample_threshold)) ++counters_.resamples;
+      vision = true;
+    }
+    if (vision) {
+      last_fix_ns_ = data_time_ns_;
+      ever_fix_ = true;
+    }
+  }
+  if (filter_.initialized()) {
+    const algorithms::PoseEstimate e = filter_.estimate();
+    pose_.pose = e.mean;
+    pose_.covariance = e.covariance;
+    pose_.valid = true;
+    // Where the robot was at the latest encoder sample: a gap's travel starts there.
+    if (fresh_sample) {
+      gap_anchor_ = e.mean;
+      have_anchor_ = true;
+    }
+  }
+  pose_.data_time_ns = data_time_ns_;
+  pose_.health = published_health();
+  ++counters_.cycles_in_health[static_cast<std::size_t>(pose_.health)];
+}
+
+bool LocalizationCycle::update_with_boards(
+    const algorithms::AreaVector& areas,
+    const std::array<float, algorithms::HarmonicModel::kMaxFeatures>& features) {
+  const algorithms::BoardModelParams& params = board_params_;
+  const algorithms::Pose2 estimate = filter_.mean_position();
+  const algorithms::BoardFeatures observed =
+      algorithms::board_features(map_.model.area_scale, areas);
+  assessment_ = reliability_.assess(map_.forward, observed, estimate, params, board_update_);
+  if (!assessment_.consensus) ++counters_.no_consensus;
+
+  // The global fix without the boards that are not to be trusted now: those the motion index
+  // has written off, and, while the others agree with the estimate, those that do not.
+  algorithms::FeatureMask use{};
+  for (std::size_t k = 0; k < map_.model.feature_count; ++k) {
+    const std::size_t b = map_.model.board_index[k];
+    const bool outlier =
+        assessment_.consensus && static_cast<double>(assessment_.chi2[b]) >= params.consensus_chi2;
+    use[k] = !reliability_.distrusted(b) && !outlier;
+  }
+  std::size_t modelled = 0, distrusted = 0;
+  std::uint32_t distrusted_mask = 0;  // bit b: board b written off
+  for (std::size_t b = 0; b < board_update_.boards; ++b) {
+    if (!board_update_.use[b]) continue;
+    ++modelled;
+    if (!reliability_.distrusted(b)) continue;
+    ++distrusted;
+    distrusted_mask |= 1U << b;
+  }
+  counters_.distrusted_boards += distrusted;
+  fix_.distrusted_mask = distrusted_mask;
+  robust_fix_ =
+      fix_check_.fix(map_.model, features, use, estimate.x_m, estimate.y_m, fix_check_params_);
+  counters_.fix_board_suspicions = fix_check_.suspicions();
+
+  const double match = filter_.update_boards(board_update_);
+  // The fix (without the distrusted boards) as a second view of the same frame: where the
+  // forward map is coarse or its boards noisy, the boards' terms are flat along the route, and
+  // the fix still knows where the robot is. Its width is the fix's own error on the training run
+  // (the map's calibration), widened as the boards' terms are tempered; an outlier floor keeps a
+  // wrong fix from dragging the cloud.
+  if (fix_term_sigma_m_ > 0.0 && robust_fix_.known_place) {
+    filter_.update_position(robust_fix_.x_m, robust_fix_.y_m, fix_term_sigma_m_,
+                            config_.filter.outlier_probability);
+  }
+  if (filter_.resample_if_needed(config_.filter.resample_threshold)) ++counters_.resamples;
+  // The kidnap test takes the fix of every board: leaving out the boards that disagree with the
+  // estimate would pull the fix towards the estimate exactly when the estimate is wrong. A
+  // moved or hidden board cannot fake a kidnap with it: the boards must also prefer the fix's
+  // place (board_preference, where a board showing less than expected does not count).
+  const algorithms::HarmonicFix& evidence_fix = fix_.fix;
+
+  if (config_.kidnap.enabled) {
+    algorithms::KidnapInput in;
+    in.match = match;
+    in.consensus = assessment_.consensus;
+    in.fix_known = evidence_fix.known_place;
+    in.fix_x_m = evidence_fix.x_m;
+    in.fix_y_m = evidence_fix.y_m;
+    // Also for a fix that is not a known place: without a known fix, "lost" needs the boards to
+    // prefer the fix's place as well (algorithms/kidnap_detector.hpp).
+    const bool fix_finite = std::isfinite(evidence_fix.x_m) && std::isfinite(evidence_fix.y_m);
+    in.fix_distance_m =
+        fix_finite ? std::hypot(evidence_fix.x_m - estimate.x_m, evidence_fix.y_m - estimate.y_m)
+                   : 0.0;
+    if (fix_finite && in.fix_distance_m >= kidnap_params_.fix_distance_m) {
+      // Without the boards the filter has written off (moved, or hidden by someone walking
+      // away), unless it has written off most of them: then the estimate is the suspect.
+      const std::uint32_t leave_out = 2 * distrusted <= modelled ? distrusted_mask : 0U;
+      // The boards' best place near the fix (as far from it as the kidnap distance, and as
+      // far from the estimate), not the fix's own place alone: where few boards are in view the
+      // fix can be off by more than its training error while the boards tell the place apart.
+      // That place is the evidence: its consistency is checked and the cloud re-seeded there.
+      const double reach = kidnap_params_.fix_distance_m;
+      const algorithms::PlacePreference best = algorithms::board_preference_near(
+          map_.forward, observed, evidence_fix.x_m, evidence_fix.y_m, reach, estimate.x_m,
+          estimate.y_m, reach, params, leave_out);
+      in.preference = best.nats;
+      in.place_x_m = best.x_m;
+      in.place_y_m = best.y_m;
+    }
+    in.contradiction = assessment_.exceeding > 0;
+    kidnap_input_ = in;
+    kidnap_verdict_ = kidnap_.step(in, kidnap_params_);
+    const algorithms::KidnapCounters& k = kidnap_.counters();
+    counters_.kidnap_triggers = k.triggers;
+    counters_.kidnaps = k.kidnaps;
+    counters_.lost = k.lost;
+    if (kidnap_verdict_ == algorithms::KidnapVerdict::kKidnapped) {
+      if (config_.kidnap.reseed == ReseedStrategy::kAroundFix && evidence_fix.known_place)
+        reseed_between(kidnap_.evidence_x_m(), kidnap_.evidence_y_m(), kidnap_.evidence_fix_x_m(),
+                       kidnap_.evidence_fix_y_m());
+      else
+        reseed_globally();
+      pending_text_ = "harmoloc: kidnap detected, relocalized";
+    } else if (kidnap_verdict_ == algorithms::KidnapVerdict::kLost) {
+      reseed_globally();
+      pending_text_ = "harmoloc: lost (boards disagree, no fix), relocalizing over the map";
+    }
+  }
+  return assessment_.consensus || robust_fix_.known_place;
+}
+
+}  // namespace harmoloc::firmware

@@ -1,0 +1,353 @@
+#include "harmoloc/sim_host/forward_map_training.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include "forward_map_training_parts.hpp"
+#include "harmoloc/algorithms/harmonic_localizer.hpp"
+
+namespace harmoloc::sim_host::forward_map_training_detail {
+
+namespace {
+
+// Whether @p p is of the same pass as a frame at (@p t_s, @p travel_m), for validation.
+bool same_pass(const Positioned& p, double t_s, double travel_m, double exclude_s,
+               double exclude_m) {
+  if (travel_m >= 0.0 && p.travel_m >= 0.0) return std::fabs(p.travel_m - travel_m) < exclude_m;
+  return std::fabs(p.t_s - t_s) < exclude_s;
+}
+
+// The frames in square buckets, for the nearest frame and the frames within a radius of a
+// place without a pass over every frame (a map of 40000 cells over a run of 4000 frames).
+class FrameIndex {
+ public:
+  FrameIndex(const std::vector<Positioned>& frames, double bucket_m)
+      : frames_(frames), bucket_m_(bucket_m) {
+    x0_ = y0_ = std::numeric_limits<double>::infinity();
+    double x1 = -x0_, y1 = -y0_;
+    for (const Positioned& p : frames) {
+      x0_ = std::min(x0_, p.x_m);
+      y0_ = std::min(y0_, p.y_m);
+      x1 = std::max(x1, p.x_m);
+      y1 = std::max(y1, p.y_m);
+    }
+    columns_ = static_cast<long>(std::floor((x1 - x0_) / bucket_m_)) + 1;
+    rows_ = static_cast<long>(std::floor((y1 - y0_) / bucket_m_)) + 1;
+    first_.assign(static_cast<std::size_t>(columns_ * rows_) + 1U, 0);
+    std::vector<std::size_t> bucket_of(frames.size());
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+      bucket_of[i] = bucket(column(frames[i].x_m), row(frames[i].y_m));
+      ++first_[bucket_of[i] + 1U];
+    }
+    for (std::size_t b = 1; b < first_.size(); ++b) first_[b] += first_[b - 1];
+    order_.resize(frames.size());
+    std::vector<std::size_t> fill(first_.begin(), first_.end() - 1);
+    for (std::size_t i = 0; i < frames.size(); ++i) order_[fill[bucket_of[i]]++] = i;
+  }
+
+  /// Squared distance from (x, y) to the nearest frame @p keep accepts (infinity: none).
+  template <typename Keep>
+  double nearest_d2(double x, double y, Keep keep) const {
+    const long c0 = column(x), r0 = row(y);
+    const long reach = std::max({c0, columns_ - 1 - c0, r0, rows_ - 1 - r0});
+    double best = std::numeric_limits<double>::infinity();
+    for (long ring = 0; ring <= reach; ++ring) {
+      // Every frame not yet seen lies at least (ring - 1) buckets away.
+      const double near = std::max(0.0, static_cast<double>(ring - 1)) * bucket_m_;
+      if (near * near > best) break;
+      for (long r = r0 - ring; r <= r0 + ring; ++r) {
+        if (r < 0 || r >= rows_) continue;
+        const bool edge = r == r0 - ring || r == r0 + ring;
+        for (long c = c0 - ring; c <= c0 + ring; c += edge ? 1 : 2 * ring) {
+          if (c >= 0 && c < columns_) {
+            const std::size_t b = bucket(c, r);
+            for (std::size_t k = first_[b]; k < first_[b + 1]; ++k) {
+              const Positioned& p = frames_[order_[k]];
+              if (!keep(p)) continue;
+              best = std::min(best, (p.x_m - x) * (p.x_m - x) + (p.y_m - y) * (p.y_m - y));
+            }
+          }
+          if (ring == 0) break;
+        }
+      }
+    }
+    return best;
+  }
+
+  /// Calls @p f for every frame within @p radius_m of (x, y) (and perhaps a few beyond).
+  template <typename F>
+  void within(double x, double y, double radius_m, F f) const {
+    const long c0 = std::max(0L, column(x - radius_m)),
+               c1 = std::min(columns_ - 1, column(x + radius_m));
+    const long r0 = std::max(0L, row(y - radius_m)), r1 = std::min(rows_ - 1, row(y + radius_m));
+    for (long r = r0; r <= r1; ++r) {
+      for (long c = c0; c <= c1; ++c) {
+        const std::size_t b = bucket(c, r);
+        for (std::size_t k = first_[b]; k < first_[b + 1]; ++k) f(frames_[order_[k]]);
+      }
+    }
+  }
+
+ private:
+  long column(double x) const {
+    const double u = std::floor((x - x0_) / bucket_m_);
+    return static_cast<long>(std::clamp(u, -1.0e6, 1.0e6));
+  }
+  long row(double y) const {
+    const double u = std::floor((y - y0_) / bucket_m_);
+    return static_cast<long>(std::clamp(u, -1.0e6, 1.0e6));
+  }
+  std::size_t bucket(long c, long r) const {
+    return static_cast<std::size_t>(std::clamp(r, 0L, rows_ - 1) * columns_ +
+                                    std::clamp(c, 0L, columns_ - 1));
+  }
+
+  const std::vector<Positioned>& frames_;
+  double bucket_m_;
+  double x0_, y0_;
+  long columns_ = 1, rows_ = 1;
+  std::vector<std::size_t> first_;  // frames of bucket b: order_[first_[b] .. first_[b + 1])
+  std::vector<std::size_t> order_;
+};
+
+// Kernel-weighted mean of the frames' features at (x, y); weights relative to the nearest
+// frame, so that a place far from every frame takes its nearest frames' values. Frames of the
+// same pass as (@p t_s, @p travel_m) are left out when an exclusion is given (validation
+// against other passes). Returns false when no frame is left.
+bool kernel_mean(const FrameIndex& index, double x, double y, double bandwidth_m,
+                 std::size_t boards, double t_s, double travel_m, double exclude_s,
+                 double exclude_m, double* out) {
+  const bool exclude = exclude_s > 0.0 || exclude_m > 0.0;
+  const auto keep = [&](const Positioned& p) {
+    return !exclude || !same_pass(p, t_s, travel_m, exclude_s, exclude_m);
+  };
+  const double d2_min = index.nearest_d2(x, y, keep);
+  if (!std::isfinite(d2_min)) return false;
+  // Weights below e^-30 of the nearest frame's do not count.
+  constexpr double kCut = 30.0;
+  const double inv = 0.5 / (bandwidth_m * bandwidth_m);
+  double sum_w = 0.0;
+  for (std::size_t b = 0; b < boards; ++b) out[b] = 0.0;
+  index.within(x, y, std::sqrt(d2_min + kCut / inv), [&](const Positioned& p) {
+    if (!keep(p)) return;
+    const double e = ((p.x_m - x) * (p.x_m - x) + (p.y_m - y) * (p.y_m - y) - d2_min) * inv;
+    if (e > kCut) return;
+    const double w = std::exp(-e);
+    sum_w += w;
+    for (std::size_t b = 0; b < boards; ++b) out[b] += w * static_cast<double>((*p.features)[b]);
+  });
+  for (std::size_t b = 0; b < boards; ++b) out[b] /= sum_w;
+  return true;
+}
+
+}  // namespace
+
+ForwardMapReport fit_grid(std::vector<Positioned>& frames, std::size_t board_count,
+                          const ForwardMapOptions& opt, algorithms::ForwardMap& out,
+                          ForwardMapReport report) {
+  if (frames.size() < 8) {
+    throw std::runtime_error("forward map: only " + std::to_string(frames.size()) +
+                             " frames could be positioned (at least 8 needed)");
+  }
+
+  // Which boards change at all: a board never seen (or always the same) is not modelled.
+  std::vector<bool> modelled(board_count, false);
+  for (std::size_t b = 0; b < board_count; ++b) {
+    float lo = std::numeric_limits<float>::infinity(), hi = -lo;
+    for (const Positioned& p : frames) {
+      lo = std::min(lo, (*p.features)[b]);
+      hi = std::max(hi, (*p.features)[b]);
+    }
+    modelled[b] = hi > lo;
+  }
+
+  // Kernel width: the candidate whose prediction of each frame from other passes fits best.
+  std::vector<double> mean(board_count);
+  double best = std::numeric_limits<double>::infinity();
+  std::vector<double> best_sq;
+  // Frames with another pass close by in position: within twice the median distance from a
+  // frame to the nearest frame of another pass. Elsewhere (the turn at the end of a route driven
+  // once each way) leaving the own pass out leaves nothing near, and the residual would measure
+  // extrapolation, not the noise a new run over the same place shows.
+  std::vector<char> comparable(frames.size(), 0);
+  const FrameIndex index(frames, 0.05);
+  {
+    std::vector<double> nearest(frames.size(), std::numeric_limits<double>::infinity());
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+      const Positioned& p = frames[i];
+      nearest[i] = std::sqrt(index.nearest_d2(p.x_m, p.y_m, [&](const Positioned& q) {
+        return !same_pass(q, p.t_s, p.travel_m, opt.exclude_same_pass_s, opt.exclude_same_pass_m);
+      }));
+    }
+    std::vector<double> finite;
+    for (double d : nearest) {
+      if (std::isfinite(d)) finite.push_back(d);
+    }
+    if (!finite.empty()) {
+      auto mid = finite.begin() + static_cast<std::ptrdiff_t>(finite.size() / 2);
+      std::nth_element(finite.begin(), mid, finite.end());
+      report.pass_spread_m = *mid;
+      const double bound = std::max(2.0 * *mid, 0.01);
+      for (std::size_t i = 0; i < frames.size(); ++i) comparable[i] = nearest[i] <= bound ? 1 : 0;
+    }
+  }
+  for (double h : opt.bandwidths_m) {
+    std::vector<double> sq(board_count, 0.0);
+    std::size_t n = 0;
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+      const Positioned& p = frames[i];
+      if (!comparable[i]) continue;
+      if (!kernel_mean(index, p.x_m, p.y_m, h, board_count, p.t_s, p.travel_m,
+                       opt.exclude_same_pass_s, opt.exclude_same_pass_m, mean.data())) {
+        continue;
+      }
+      ++n;
+      for (std::size_t b = 0; b < board_count; ++b) {
+        const double r = static_cast<double>((*p.features)[b]) - mean[b];
+        sq[b] += r * r;
+      }
+    }
+    if (n == 0) continue;
+    double total = 0.0;
+    std::size_t used = 0;
+    for (std::size_t b = 0; b < board_count; ++b) {
+      sq[b] /= static_cast<double>(n);
+      if (modelled[b]) {
+        total += sq[b];
+        ++used;
+      }
+    }
+    total = used > 0 ? total / static_cast<double>(used) : 0.0;
+    if (total < best) {
+      best = total;
+      report.bandwidth_m = h;
+      best_sq = sq;
+    }
+  }
+  if (best_sq.empty()) {
+    // A single pass: no other pass to validate against; the smallest width, noise from itself.
+    report.bandwidth_m = opt.bandwidths_m.front();
+    best_sq.assign(board_count, 0.0);
+    for (const Positioned& p : frames) {
+      kernel_mean(index, p.x_m, p.y_m, report.bandwidth_m, board_count, p.t_s, -1.0, 0.0, 0.0,
+                  mean.data());
+      for (std::size_t b = 0; b < board_count; ++b) {
+        const double r = static_cast<double>((*p.features)[b]) - mean[b];
+        best_sq[b] += r * r / static_cast<double>(frames.size());
+      }
+    }
+    best = 0.0;
+    for (std::size_t b = 0; b < board_count; ++b) best += best_sq[b];
+    best /= static_cast<double>(board_count);
+  }
+  report.validation_rmse = std::sqrt(best);
+
+  // The grid over the training positions, its tiles stored where a training position lies
+  // within the margin: the finest cell that fits the capacity.
+  double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
+  for (const Positioned& p : frames) {
+    x0 = std::min(x0, p.x_m);
+    y0 = std::min(y0, p.y_m);
+    x1 = std::max(x1, p.x_m);
+    y1 = std::max(y1, p.y_m);
+  }
+  x0 -= opt.margin_m;
+  y0 -= opt.margin_m;
+  x1 += opt.margin_m;
+  y1 += opt.margin_m;
+  const std::size_t max_tiles =
+      opt.max_tiles > 0 ? std::min(opt.max_tiles, ForwardMap::kMaxTiles) : ForwardMap::kMaxTiles;
+  constexpr std::uint32_t kSide = ForwardMap::kTileSide;
+  double cell = opt.min_cell_m;
+  std::uint32_t columns = 0, rows = 0;
+  std::vector<std::uint8_t> stored;
+  for (;; cell *= 1.05) {
+    const auto cells_along = [&](double extent) {
+      return static_cast<std::size_t>(std::ceil(extent / cell)) + 1U;
+    };
+    const std::size_t nc = cells_along(x1 - x0), nr = cells_along(y1 - y0);
+    if (nc > ForwardMap::kMaxDimension || nr > ForwardMap::kMaxDimension) continue;
+    columns = static_cast<std::uint32_t>(nc);
+    rows = static_cast<std::uint32_t>(nr);
+    const std::uint32_t tc = algorithms::tiles_along(columns), tr = algorithms::tiles_along(rows);
+    if (static_cast<std::size_t>(tc) * tr > ForwardMap::kMaxTileGrid) continue;
+    // The cells a lookup within the margin of a frame reads (a bilinear lookup reads the next
+    // cell too), and the tiles that hold them.
+    stored.assign(static_cast<std::size_t>(tc) * tr, 0);
+    std::size_t count = 0;
+    for (const Positioned& p : frames) {
+      const auto first = [&](double v, double origin) {
+        return static_cast<long>(std::floor((v - opt.margin_m - origin) / cell));
+      };
+      const auto last = [&](double v, double origin) {
+        return static_cast<long>(std::floor((v + opt.margin_m - origin) / cell)) + 1;
+      };
+      const long c_lo = std::max(0L, first(p.x_m, x0)) / kSide;
+      const long c_hi = std::min(static_cast<long>(columns) - 1, last(p.x_m, x0)) / kSide;
+      const long r_lo = std::max(0L, first(p.y_m, y0)) / kSide;
+      const long r_hi = std::min(static_cast<long>(rows) - 1, last(p.y_m, y0)) / kSide;
+      for (long r = r_lo; r <= r_hi; ++r) {
+        for (long c = c_lo; c <= c_hi; ++c) {
+          std::uint8_t& t = stored[static_cast<std::size_t>(r) * tc + static_cast<std::size_t>(c)];
+          count += t == 0 ? 1 : 0;
+          t = 1;
+        }
+      }
+    }
+    if (count <= max_tiles) break;
+  }
+  out = ForwardMap{};
+  if (!algorithms::lay_out_grid(out, columns, rows, stored.data()))
+    throw std::runtime_error("forward map: the grid does not fit (internal error)");
+  out.origin_x_m = static_cast<float>(x0);
+  out.origin_y_m = static_cast<float>(y0);
+  out.cell_m = static_cast<float>(cell);
+  out.board_count = static_cast<std::uint32_t>(board_count);
+  report.cells = out.stored_cells();
+  report.sigma.assign(board_count, 0.0);
+  for (std::size_t b = 0; b < board_count; ++b) {
+    if (!modelled[b]) continue;
+    // A floor: a board whose frames agree perfectly must still not make the filter certain.
+    double peak = 0.0;
+    for (const Positioned& p : frames) peak = std::max(peak, static_cast<double>((*p.features)[b]));
+    report.sigma[b] = std::max(std::sqrt(best_sq[b]), std::max(1e-3 * peak, 1e-4));
+    out.sigma[b] = static_cast<float>(report.sigma[b]);
+  }
+  out.has_heading = report.has_heading;
+  const auto any = [](const Positioned&) { return true; };
+  for (std::uint32_t r = 0; r < out.rows; ++r) {
+    for (std::uint32_t c = 0; c < out.columns; ++c) {
+      const std::size_t at = out.index(c, r);
+      if (at == ForwardMap::kVoidCell) continue;
+      const double x = x0 + c * cell, y = y0 + r * cell;
+      kernel_mean(index, x, y, report.bandwidth_m, board_count, 0.0, -1.0, 0.0, 0.0, mean.data());
+      float* e = out.expected.data() + at * algorithms::kMaxBoards;
+      for (std::size_t b = 0; b < board_count; ++b)
+        e[b] = modelled[b] ? static_cast<float>(mean[b]) : 0.0F;
+      const double d2 = index.nearest_d2(x, y, any);
+      out.route_distance_m[at] = static_cast<float>(std::sqrt(d2));
+      // The heading of the nearest frame that has one.
+      if (report.has_heading) {
+        const auto with_yaw = [](const Positioned& p) { return p.has_yaw; };
+        const double yaw_reach = std::sqrt(index.nearest_d2(x, y, with_yaw)) + 1e-6;
+        double yaw_d2 = std::numeric_limits<double>::infinity();
+        float yaw = 0.0F;
+        if (std::isfinite(yaw_reach)) {
+          index.within(x, y, yaw_reach, [&](const Positioned& p) {
+            const double d = (p.x_m - x) * (p.x_m - x) + (p.y_m - y) * (p.y_m - y);
+            if (p.has_yaw && d < yaw_d2) {
+              yaw_d2 = d;
+              yaw = static_cast<float>(p.yaw_rad);
+            }
+          });
+        }
+        out.heading_rad[at] = yaw;
+      }
+    }
+  }
+  return report;
+}
+
+}  // namespace harmoloc::sim_host::forward_map_training_detail

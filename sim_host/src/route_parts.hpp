@@ -1,0 +1,42 @@
+#pragma once
+/// @file What the pieces of the route (route*.cpp) share: the sampled curve through the waypoints
+/// and the trapezoidal speed profile of a leg. Private to sim_host/src.
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstddef>
+#include <vector>
+
+namespace harmoloc::sim_host::route_detail {
+
+struct Polyline {
+  std::vector<double> x, y, s;  // s: cumulative arc length
+  bool closed = false;          // a loop: arc lengths wrap round
+  double length() const { return s.back(); }
+  void at(double si, double& px, double& py, double& tx, double& ty) const {
+    if (closed && (si < 0.0 || si > length())) {
+      si = std::fmod(si, length());
+      if (si < 0.0) si += length();
+    }
+    si = std::clamp(si, 0.0, length());
+    const auto it = std::upper_bound(s.begin(), s.end(), si);
+    std::size_t k = static_cast<std::size_t>(std::max<std::ptrdiff_t>(1, it - s.begin()));
+    if (k >= s.size()) k = s.size() - 1;
+    const double seg = s[k] - s[k - 1];
+    const double u = seg > 0.0 ? (si - s[k - 1]) / seg : 0.0;
+    px = x[k - 1] + u * (x[k] - x[k - 1]);
+    py = y[k - 1] + u * (y[k] - y[k - 1]);
+    tx = (x[k] - x[k - 1]) / seg;
+    ty = (y[k] - y[k - 1]) / seg;
+  }
+};
+
+// Catmull-Rom through the waypoints, densely sampled (@p steps points a segment): end points
+// repeated, or closed (back to the first waypoint, neighbours taken round the loop).
+Polyline make_path(const std::vector<std::array<double, 2>>& w, bool closed, int steps = 400);
+
+// Distance covered after time t on a leg of length L with a trapezoidal speed profile.
+double leg_distance(double t, double length, double v, double a, double& duration);
+
+}  // namespace harmoloc::sim_host::route_detail

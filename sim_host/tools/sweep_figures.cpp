@@ -1,0 +1,97 @@
+// harmoloc-sweep's figures: how each is read off a scene, and their distributions over scenes.
+#include <algorithm>
+#include <cmath>
+
+#include "sweep_parts.hpp"
+
+namespace sweep_detail {
+
+std::vector<Figure> figures() {
+  return {
+      {"fix_mse_x", "harmonic localizer alone, MSE x", "cm^2",
+       [](const SceneResult& r) { return cm2(r.fix_mse_x_m2); }, 10.0, 25.0},
+      {"fix_mse_y", "harmonic localizer alone, MSE y", "cm^2",
+       [](const SceneResult& r) { return cm2(r.fix_mse_y_m2); }, 10.0, 25.0},
+      {"fix_known", "fixes flagged a known place", "%",
+       [](const SceneResult& r) {
+         return r.fix_known_fraction < 0.0 ? -1.0 : 100.0 * r.fix_known_fraction;
+       },
+       -1.0, -1.0, true},
+      {"fused_rmse", "fused position RMSE (after first fix + 2 s)", "cm",
+       [](const SceneResult& r) { return cm(r.fused_rmse_m); }, 2.0, 4.0},
+      {"fused_heading", "fused heading RMSE", "deg",
+       [](const SceneResult& r) { return r.fused_heading_rmse_deg; }},
+      {"startup", "start-up: from the first fix until under 5 cm (held 1 s)", "s",
+       [](const SceneResult& r) { return r.startup_s; }, -1.0, 2.0},
+      {"converge", "time from the first fix until under 5 cm for good", "s",
+       [](const SceneResult& r) { return r.converge_s; }},
+      {"fused_max", "fused max error after first fix + 2 s", "cm",
+       [](const SceneResult& r) { return cm(r.fused_max_m); }, -1.0, 10.0},
+      {"kidnap_recovered", "kidnaps back under 10 cm within 1 s", "%",
+       [](const SceneResult& r) {
+         return r.kidnaps == 0 ? -1.0
+                               : 100.0 * static_cast<double>(r.kidnaps_recovered_1s) /
+                                     static_cast<double>(r.kidnaps);
+       },
+       -1.0, -1.0, true},
+      {"false_alarms", "false kidnap alarms per 10 minutes", "",
+       [](const SceneResult& r) {
+         return r.long_minutes <= 0.0
+                    ? -1.0
+                    : static_cast<double>(r.long_false_alarms) * 10.0 / r.long_minutes;
+       },
+       -1.0, 0.0},
+      {"dynamic_max", "dynamic run (person, moved board): max error", "cm",
+       [](const SceneResult& r) { return cm(r.dynamic_max_m); }, -1.0, 10.0},
+      {"long_max", "long nominal run: max error", "cm",
+       [](const SceneResult& r) { return cm(r.long_max_m); }, -1.0, 10.0},
+      {"placement", "training frames placed by odometry, RMSE", "mm",
+       [](const SceneResult& r) {
+         return r.placement_rmse_m < 0.0 ? -1.0 : 1000.0 * r.placement_rmse_m;
+       }},
+      {"train_ms", "training time (area log in memory)", "ms",
+       [](const SceneResult& r) { return r.train_ms; }},
+  };
+}
+
+Totals totals_of(const std::vector<SceneResult>& results) {
+  Totals t;
+  for (const SceneResult& r : results) {
+    t.kidnaps += r.kidnaps;
+    t.recovered += r.kidnaps_recovered_1s;
+    t.alarms += r.long_false_alarms;
+    t.minutes += r.long_minutes;
+    t.failed += r.error.empty() ? 0 : 1;
+  }
+  return t;
+}
+
+Distribution distribution(const std::vector<SceneResult>& results, const Figure& f) {
+  std::vector<std::pair<double, std::uint64_t>> v;
+  for (const SceneResult& r : results) {
+    if (!r.error.empty()) continue;
+    const double x = f.value(r);
+    if (x >= 0.0 && std::isfinite(x)) v.emplace_back(x, r.seed);
+  }
+  Distribution d;
+  d.n = v.size();
+  if (v.empty()) return d;
+  // "Worse" is larger, or smaller for higher-is-better figures.
+  std::sort(v.begin(), v.end(), [&](const auto& a, const auto& b) {
+    return f.higher_is_better ? a.first > b.first : a.first < b.first;
+  });
+  const auto at = [&](double q) {
+    const double pos = q * static_cast<double>(v.size() - 1);
+    const auto lo = static_cast<std::size_t>(std::floor(pos));
+    const auto hi = std::min(v.size() - 1, lo + 1);
+    return v[lo].first + (pos - static_cast<double>(lo)) * (v[hi].first - v[lo].first);
+  };
+  d.median = at(0.5);
+  d.p90 = at(0.9);
+  d.worst = v.back().first;
+  for (std::size_t i = 0; i < 3 && i < v.size(); ++i)
+    d.worst_seeds.push_back(v[v.size() - 1 - i].second);
+  return d;
+}
+
+}  // namespace sweep_detail

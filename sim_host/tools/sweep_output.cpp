@@ -1,0 +1,181 @@
+// harmoloc-sweep's outputs: sweep.json's records and index.html with its strip plots.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+
+#include "harmoloc/sim_host/svg.hpp"
+#include "harmoloc/sim_host/svg_plot.hpp"
+#include "harmoloc/sim_host/svg_ticks.hpp"
+#include "sweep_parts.hpp"
+
+namespace svg = harmoloc::sim_host::svg;
+
+namespace sweep_detail {
+
+nlohmann::json to_json(const SceneResult& r) {
+  nlohmann::json j;
+  j["seed"] = r.seed;
+  j["scene"] = r.summary;
+  if (!r.error.empty()) j["error"] = r.error;
+  j["train_ms"] = r.train_ms;
+  j["train_frames"] = r.train_frames;
+  j["placement_rmse_m"] = r.placement_rmse_m;
+  j["placement_heading_rmse_deg"] = r.placement_heading_rmse_deg;
+  j["cv_rmse_x_m"] = r.cv_rmse_x_m;
+  j["cv_rmse_y_m"] = r.cv_rmse_y_m;
+  j["boards_used"] = r.boards_used;
+  j["fix_mse_x_m2"] = r.fix_mse_x_m2;
+  j["fix_mse_y_m2"] = r.fix_mse_y_m2;
+  j["fix_known_fraction"] = r.fix_known_fraction;
+  j["fix_known_mse_x_m2"] = r.fix_known_mse_x_m2;
+  j["fix_known_mse_y_m2"] = r.fix_known_mse_y_m2;
+  j["first_fix_s"] = r.first_fix_s;
+  j["startup_s"] = r.startup_s;
+  j["converge_s"] = r.converge_s;
+  j["fused_rmse_m"] = r.fused_rmse_m;
+  j["fused_heading_rmse_deg"] = r.fused_heading_rmse_deg;
+  j["fused_max_m"] = r.fused_max_m;
+  j["kidnaps"] = r.kidnaps;
+  j["kidnaps_detected"] = r.kidnaps_detected;
+  j["kidnaps_recovered_1s"] = r.kidnaps_recovered_1s;
+  j["kidnap_mean_recovery_s"] = r.kidnap_mean_recovery_s;
+  j["kidnap_misses_t_s"] = r.kidnap_misses_t_s;
+  j["dynamic_max_m"] = r.dynamic_max_m;
+  j["dynamic_rmse_m"] = r.dynamic_rmse_m;
+  j["long_minutes"] = r.long_minutes;
+  j["long_false_alarms"] = r.long_false_alarms;
+  j["long_max_m"] = r.long_max_m;
+  j["long_rmse_m"] = r.long_rmse_m;
+  j["seconds"] = r.seconds;
+  return j;
+}
+
+std::string fmt(double v, int decimals) {
+  if (v < 0.0 || !std::isfinite(v)) return "-";
+  char b[64];
+  std::snprintf(b, sizeof b, "%.*f", decimals, v);
+  return b;
+}
+
+namespace {
+
+// A strip plot: one dot per scene on a horizontal axis, the median marked, the targets dashed,
+// the worst scene labelled by seed; the default scene as a ring. Hover a dot for its seed.
+std::string strip_svg(const Figure& f, const std::vector<SceneResult>& results,
+                      const SceneResult* reference) {
+  const Distribution d = distribution(results, f);
+  std::vector<std::pair<double, std::uint64_t>> v;
+  for (const SceneResult& r : results) {
+    const double x = r.error.empty() ? f.value(r) : -1.0;
+    if (x >= 0.0 && std::isfinite(x)) v.emplace_back(x, r.seed);
+  }
+  const double ref = reference != nullptr ? f.value(*reference) : -1.0;
+  double hi = 0.0;
+  for (const auto& p : v) hi = std::max(hi, p.first);
+  hi = std::max({hi, f.target_worst, f.target_median, ref});
+  if (f.unit == "%") hi = 100.0;
+  if (!(hi > 0.0) || !std::isfinite(hi)) hi = 1.0;
+  // The axis from 0 to a whole number of round steps.
+  const double step = svg::nice_step(hi, 4);
+  hi = std::ceil(hi / step - 1e-9) * step;
+  const double width = 640.0;
+  const svg::Area area{20.0, 22.0, width - 40.0, 38.0};
+  const svg::Scale sx{0.0, hi, area.left, area.right()};
+  constexpr const char* kDot = "#0066cc";
+  constexpr const char* kWorst = "#cc0000";
+  svg::Canvas c(width, 92.0);
+  c.text(area.left, 14.0, f.title + (f.unit.empty() ? "" : " (" + f.unit + ")"), "start", 11.0,
+         svg::kTextColour, " font-weight=\"bold\"");
+  c.line(area.left, area.bottom(), area.right(), area.bottom(), "#888888", 1.0);
+  for (const svg::Tick& t : svg::make_ticks(sx, step)) {
+    c.line(t.px, area.bottom(), t.px, area.bottom() + 4.0, "#888888", 1.0);
+    c.text(t.px, area.bottom() + 16.0, t.label, "middle", 11.0, svg::kMutedColour);
+  }
+  const auto vline = [&](double x, const char* colour, const char* label, bool dashed) {
+    c.line(sx(x), area.top, sx(x), area.bottom(), colour, 1.0,
+           dashed ? " stroke-dasharray=\"4,3\"" : "");
+    // The label right of the line, or left of it where it would run off the plot.
+    const bool fits = sx(x) + 3.0 + svg::text_width(label, 11.0) <= width;
+    c.text(fits ? sx(x) + 3.0 : sx(x) - 3.0, area.top + 8.0, label, fits ? "start" : "end", 11.0,
+           colour);
+  };
+  if (f.target_worst >= 0.0) vline(f.target_worst, kWorst, "target (worst)", true);
+  if (f.target_median > 0.0) vline(f.target_median, "#ee8800", "target (median)", true);
+  if (d.n > 0) vline(d.median, kDot, "median", false);
+  const auto with_tooltip = [&c](const std::string& tip, const auto& draw) {
+    c.raw("<g><title>" + svg::escape(tip) + "</title>\n");
+    draw();
+    c.raw("</g>\n");
+  };
+  std::size_t i = 0;
+  for (const auto& [x, seed] : v) {
+    const double jitter = static_cast<double>((i++ * 7) % 11) - 5.0;
+    with_tooltip("seed " + std::to_string(seed) + ": " + fmt(x), [&] {
+      c.circle(sx(x), area.bottom() - 12.0 + jitter, 3.0, kDot, " fill-opacity=\"0.6\"");
+    });
+  }
+  if (d.n > 0 && !d.worst_seeds.empty()) {
+    c.text(std::min(sx(d.worst), width - 60.0), area.bottom() - 22.0,
+           "seed " + std::to_string(d.worst_seeds.front()), "start", 11.0, kWorst);
+  }
+  if (ref >= 0.0) {
+    with_tooltip("default scene: " + fmt(ref), [&] {
+      c.circle(sx(ref), area.bottom() - 12.0, 5.0, "none",
+               " stroke=\"#008800\" stroke-width=\"2\"");
+    });
+  }
+  return svg::inline_svg(c.finish());
+}
+
+}  // namespace
+
+void write_html(const std::string& path, const std::vector<SceneResult>& results,
+                const SceneResult* reference, const std::string& command) {
+  std::ofstream o(path);
+  o << "<!doctype html><html><head><meta charset='utf-8'><title>harmoloc sweep</title>"
+    << "<style>body{font-family:sans-serif;max-width:1000px;margin:2em auto}"
+    << "table{border-collapse:collapse}td,th{border:1px solid #ccc;padding:3px 6px;"
+    << "text-align:right}th{background:#eee}td.l{text-align:left}.bad{color:#c00;"
+    << "font-weight:bold}</style></head><body>";
+  o << "<h1>harmoloc sweep over random scenes</h1><p>" << svg::escape(command) << "</p>";
+  std::size_t failed = 0;
+  for (const SceneResult& r : results) failed += r.error.empty() ? 0 : 1;
+  o << "<p>" << results.size() << " scenes, " << failed
+    << " failed. Each dot is a scene; the green ring is the project's own default scene "
+       "(desk-shuttle). Hover a dot for its seed.</p>";
+  o << "<table><tr><th class='l'>figure</th><th>scenes</th><th>median</th><th>90th pct</th>"
+    << "<th>worst</th><th class='l'>worst seeds</th><th>default scene</th><th>target</th></tr>";
+  for (const Figure& f : figures()) {
+    const Distribution d = distribution(results, f);
+    std::string seeds;
+    for (std::uint64_t s : d.worst_seeds) seeds += (seeds.empty() ? "" : ", ") + std::to_string(s);
+    std::string target;
+    if (f.target_median >= 0.0) target += "median &le; " + fmt(f.target_median, 1);
+    if (f.target_worst >= 0.0)
+      target += std::string(target.empty() ? "" : ", ") + "worst &le; " + fmt(f.target_worst, 1);
+    const bool bad = (f.target_worst >= 0.0 && d.n > 0 && d.worst > f.target_worst) ||
+                     (f.target_median >= 0.0 && d.n > 0 && d.median > f.target_median);
+    o << "<tr><td class='l'>" << svg::escape(f.title + (f.unit.empty() ? "" : " (" + f.unit + ")"))
+      << "</td><td>" << d.n << "</td><td>" << fmt(d.median) << "</td><td>" << fmt(d.p90)
+      << "</td><td" << (bad ? " class='bad'" : "") << ">" << fmt(d.worst) << "</td><td class='l'>"
+      << seeds << "</td><td>" << (reference != nullptr ? fmt(f.value(*reference)) : "-")
+      << "</td><td class='l'>" << target << "</td></tr>";
+  }
+  o << "</table>";
+  for (const Figure& f : figures()) o << "<div>" << strip_svg(f, results, reference) << "</div>";
+  o << "<h2>Scenes</h2><table><tr><th>seed</th><th class='l'>scene</th><th>fix MSE x/y (cm^2)</th>"
+    << "<th>fused RMSE (cm)</th><th>start-up (s)</th><th>kidnaps in 1 s</th>"
+    << "<th>false alarms</th><th>dynamic max (cm)</th><th class='l'>error</th></tr>";
+  for (const SceneResult& r : results) {
+    o << "<tr><td>" << r.seed << "</td><td class='l'>" << svg::escape(r.summary) << "</td><td>"
+      << fmt(cm2(r.fix_mse_x_m2), 1) << " / " << fmt(cm2(r.fix_mse_y_m2), 1) << "</td><td>"
+      << fmt(cm(r.fused_rmse_m)) << "</td><td>" << fmt(r.startup_s) << "</td><td>"
+      << r.kidnaps_recovered_1s << "/" << r.kidnaps << "</td><td>" << r.long_false_alarms
+      << "</td><td>" << fmt(cm(r.dynamic_max_m), 1) << "</td><td class='l'>" << svg::escape(r.error)
+      << "</td></tr>";
+  }
+  o << "</table></body></html>\n";
+}
+
+}  // namespace sweep_detail
