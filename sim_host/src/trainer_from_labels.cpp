@@ -174,14 +174,7 @@ void train_from_labels(const AreaSeries& run, const std::vector<dataset::Stamped
       if (all_features.col(k).maxCoeff() <= all_features.col(k).minCoeff())
         report.constant_boards.push_back(candidates[static_cast<std::size_t>(k)]);
     }
-    for (const auto& step : sel.steps) {
-      BoardStep b;
-      for (int c : step.columns) b.boards.push_back(candidates[static_cast<std::size_t>(c)]);
-      b.dropped = step.dropped >= 0 ? candidates[static_cast<std::size_t>(step.dropped)] : -1;
-      b.cv_rmse_x_m = std::sqrt(step.cv_mse_x);
-      b.cv_rmse_y_m = std::sqrt(step.cv_mse_y);
-      report.board_steps.push_back(b);
-    }
+    report_board_steps(sel.steps, candidates, report.board_steps);
     Eigen::MatrixXd chosen(static_cast<Eigen::Index>(m), static_cast<Eigen::Index>(columns.size()));
     for (std::size_t c = 0; c < columns.size(); ++c)
       chosen.col(static_cast<Eigen::Index>(c)) = all_features.col(columns[c]);

@@ -38,6 +38,7 @@ using trainer_detail::check_labels;
 using trainer_detail::ms_since;
 using trainer_detail::place_frames;
 using trainer_detail::quantile;
+using trainer_detail::report_board_steps;
 using trainer_detail::train_from_labels;
 
 TrainReport train_on_areas(const AreaSeries& run, const std::vector<dataset::StampedPose>& labels,
@@ -186,14 +187,7 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<dataset::Sta
     else
       features_in_map.push_back(static_cast<int>(k));
   }
-  for (const auto& step : sel.steps) {
-    BoardStep b;
-    for (int c : step.columns) b.boards.push_back(candidates[static_cast<std::size_t>(c)]);
-    b.dropped = step.dropped >= 0 ? candidates[static_cast<std::size_t>(step.dropped)] : -1;
-    b.cv_rmse_x_m = std::sqrt(step.cv_mse_x);
-    b.cv_rmse_y_m = std::sqrt(step.cv_mse_y);
-    report.board_steps.push_back(b);
-  }
+  report_board_steps(sel.steps, candidates, report.board_steps);
   for (int c : sel.columns) report.boards.push_back(candidates[static_cast<std::size_t>(c)]);
   report.x = AxisReport{sel.x.sigma, 0.0, std::sqrt(sel.x.cv_mse), 0};
   report.y = AxisReport{sel.y.sigma, 0.0, std::sqrt(sel.y.cv_mse), 0};

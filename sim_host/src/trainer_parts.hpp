@@ -5,6 +5,8 @@
 /// (trainer_on_areas.cpp). The public side is harmoloc/sim_host/trainer.hpp.
 
 #include <chrono>
+#include <cmath>
+#include <cstddef>
 #include <vector>
 
 #include "harmoloc/algorithms/map_codec.hpp"
@@ -32,5 +34,20 @@ void check_labels(const std::vector<dataset::StampedPose>& labels);
 // The boards a map may use: those the user chose (0-based), or all @p boards; throws on a board
 // that is not configured.
 std::vector<int> candidate_boards(const std::vector<int>& chosen, std::size_t boards);
+
+// The report's account of a board selection, step by step, in board numbers: either selection
+// (the harmonic map's from the labels, the kernel map's on placed frames) has the same steps.
+template <typename Step>
+void report_board_steps(const std::vector<Step>& steps, const std::vector<int>& candidates,
+                        std::vector<BoardStep>& out) {
+  for (const Step& step : steps) {
+    BoardStep b;
+    for (int c : step.columns) b.boards.push_back(candidates[static_cast<std::size_t>(c)]);
+    b.dropped = step.dropped >= 0 ? candidates[static_cast<std::size_t>(step.dropped)] : -1;
+    b.cv_rmse_x_m = std::sqrt(step.cv_mse_x);
+    b.cv_rmse_y_m = std::sqrt(step.cv_mse_y);
+    out.push_back(b);
+  }
+}
 
 }  // namespace harmoloc::sim_host::trainer_detail
