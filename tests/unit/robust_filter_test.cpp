@@ -109,6 +109,23 @@ TEST(ForwardMap, RouteHeadingOfTheNearestCell) {
   EXPECT_EQ(ha::route_heading(*map, 1.3, 0.8), 0.0F);
 }
 
+// A corner whose tile is not stored reads as the void cell, which has no heading: the heading is
+// the heaviest stored corner's, and none when no corner is stored.
+TEST(ForwardMap, RouteHeadingSkipsCornersThatAreNotStored) {
+  auto map = make_forward_map();
+  for (std::uint32_t r = 0; r < map->rows; ++r)
+    for (std::uint32_t c = 0; c < map->columns; ++c) map->heading_rad[map->index(c, r)] = 0.7F;
+  // Columns 8..15 (the second column of tiles) become unstored.
+  for (std::uint32_t tr = 0; tr * ha::ForwardMap::kTileSide < map->rows; ++tr)
+    map->tile_slot[tr * map->tile_columns + 1] = ha::ForwardMap::kNoTile;
+  // Between columns 7 (stored) and 8 (void), nearer 8: the void corners weigh most.
+  const double x = 1.0 + 0.05 * 7.8, y = 0.5 + 0.05 * 2.0;
+  EXPECT_NEAR(ha::route_heading(*map, x, y), 0.7F, 1e-6F);
+  float heading = -1.0F;
+  EXPECT_FALSE(ha::route_heading(*map, ha::locate(*map, 1.0 + 0.05 * 10.5, y), heading));
+  EXPECT_EQ(heading, -1.0F);
+}
+
 TEST(BoardObservation, FeaturesAreScaledAreas) {
   ha::AreaVector a;
   a.count = 3;
