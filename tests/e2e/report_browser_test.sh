@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Opens the run report (every input, the area log too) and a comparison of two runs
-# (--compare) in a real browser (Debian's chromium, headless): each page and each plot it shows
+# Opens the run report (every input, the area log too), a comparison of two runs (--compare)
+# and harmoloc-colours' preview of a recording (masks over frames, areas along the run) in a
+# real browser (Debian's chromium, headless): each page and each plot it shows
 # must load and render with no console message, and the screenshots must not be blank.
 # The page has no script of its own, so a harness page beside it loads every image the page
 # names and logs an error for one that fails (a missing file or an SVG that is not well-formed
@@ -29,6 +30,10 @@ head -3 "$out/areas.csv" | tail -1 | grep -q ',distrusted_mask$' ||
 "$BIN/harmoloc-report" --truth "$WORK/test/groundtruth.tum" --compare "fused=$run" \
   "fixes only=$out/fixes.tum" --skip-initial 3 --out "$out/compare" > "$out/compare.txt"
 grep -q "^fused " "$out/compare.txt" || { cat "$out/compare.txt"; fail "no fused row in the comparison"; }
+# The colour tool's preview of the training run (automatic windows).
+"$BIN/harmoloc-colours" --dataset "$WORK/train" --out "$out/colours.toml" \
+  --preview "$out/colours" --quiet 2> "$out/colours.txt" ||
+  { cat "$out/colours.txt"; fail "harmoloc-colours failed on the training run"; }
 
 # The images a page shows; each listed file must be among them.
 page_images() {
@@ -49,6 +54,7 @@ expect_images() {
 expect_images "$out/report/index.html" trajectory.svg error.svg error_xy.svg timing.svg stages.svg \
   health.svg sigma.svg areas.svg
 expect_images "$out/compare/index.html" compare_error.svg compare_trajectory.svg
+[ -n "$(page_images "$out/colours/index.html")" ] || fail "the colours preview shows no image"
 
 # A harness page beside a report that loads every image the report's page names.
 write_harness() {
@@ -72,6 +78,7 @@ EOF
 }
 write_harness "$out/report"
 write_harness "$out/compare"
+write_harness "$out/colours"
 
 # --no-sandbox: CI runs as root, where chromium's sandbox refuses to start. A profile of its own
 # keeps the run independent of HOME (and out of it). The virtual time budget lets every image
@@ -89,6 +96,8 @@ shoot "file://$out/report/index.html" "$out/page.png" "$out/page.log"
 shoot "file://$out/report/check.html" "$out/check.png" "$out/check.log"
 shoot "file://$out/compare/index.html" "$out/compare.png" "$out/compare.log"
 shoot "file://$out/compare/check.html" "$out/compare_check.png" "$out/compare_check.log"
+shoot "file://$out/colours/index.html" "$out/colours.png" "$out/colours.log"
+shoot "file://$out/colours/check.html" "$out/colours_check.png" "$out/colours_check.log"
 
 # The harness must be able to fail: a missing image is reported.
 cp "$out/report/check.html" "$out/report/check_broken.html"
@@ -100,7 +109,7 @@ grep -q "image failed to load: no-such-plot.svg" "$out/broken.log" ||
   { cat "$out/broken.log"; fail "the harness did not report a missing image"; }
 
 # Not blank: the screenshot of the page is a PNG with many distinct colours (plots, text).
-for png in "$out/page.png" "$out/compare.png"; do
+for png in "$out/page.png" "$out/compare.png" "$out/colours.png"; do
   python3 - "$png" << 'EOF' || fail "the screenshot $png looks blank"
 import struct, sys, zlib
 data = open(sys.argv[1], "rb").read()
@@ -119,4 +128,4 @@ print(f"screenshot {width}x{height}, {distinct} distinct samples")
 sys.exit(0 if distinct > 50 else 1)
 EOF
 done
-echo "report and comparison render in $("$browser" --version 2> /dev/null | tr -d '\n') with no console message"
+echo "report, comparison and colours preview render in $("$browser" --version 2> /dev/null | tr -d '\n') with no console message"
