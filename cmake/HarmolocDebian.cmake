@@ -10,9 +10,23 @@ set(HARMOLOC_MAINTAINER "harmoloc maintainers <harmoloc@example.org>"
 # A cross build cannot run its own programs (and the firmware links libcamera, which hangs under
 # qemu-user): its manual pages come from a native build of the same board, whose programs have
 # the same command lines: the cross presets point here at build/linux/bin, which the build
-# preset linux-help makes (./run package).
+# preset linux-help makes (./run package), and the arm64 tools at build/host/bin.
 set(HARMOLOC_HELP_BIN_DIR "" CACHE PATH
   "Cross builds: bin/ of a native build of the same board, whose --help makes the manual pages")
+
+# Debian architecture of the target into OUT: from the toolchain's multiarch triplet, else the
+# build machine's own.
+function(harmoloc_deb_arch out)
+  if(CMAKE_LIBRARY_ARCHITECTURE STREQUAL "aarch64-linux-gnu")
+    set(arch arm64)
+  elseif(CMAKE_LIBRARY_ARCHITECTURE STREQUAL "arm-linux-gnueabihf")
+    set(arch armhf)
+  else()
+    execute_process(COMMAND dpkg --print-architecture OUTPUT_VARIABLE arch
+      OUTPUT_STRIP_TRAILING_WHITESPACE)
+  endif()
+  set(${out} ${arch} PARENT_SCOPE)
+endfunction()
 
 # The changelog and copyright of PACKAGE; the changelog compressed reproducibly (gzip -n).
 function(harmoloc_debian_docs package)

@@ -32,16 +32,7 @@ harmoloc_man_pages(
   harmoloc-budget "per-stage cycle time against the compute budget, from harmoloc's stats"
   harmoloc-monitor "show harmoloc's MAVLink pose stream and send it commands")
 
-# Debian architecture of the target: from the toolchain's multiarch triplet, else the build
-# machine's own.
-if(CMAKE_LIBRARY_ARCHITECTURE STREQUAL "aarch64-linux-gnu")
-  set(HARMOLOC_DEB_ARCH arm64)
-elseif(CMAKE_LIBRARY_ARCHITECTURE STREQUAL "arm-linux-gnueabihf")
-  set(HARMOLOC_DEB_ARCH armhf)
-else()
-  execute_process(COMMAND dpkg --print-architecture OUTPUT_VARIABLE HARMOLOC_DEB_ARCH
-    OUTPUT_STRIP_TRAILING_WHITESPACE)
-endif()
+harmoloc_deb_arch(HARMOLOC_DEB_ARCH)
 
 set(CPACK_GENERATOR DEB)
 set(CPACK_PACKAGE_NAME harmoloc)

@@ -1,9 +1,10 @@
 # The Debian package of the host tools, harmoloc-tools (docs/deploy.md, "The laptop's tools"):
 # what a robot owner runs beside the robot: the simulator, the colour tool, the trainer, the
 # report, the sweep, the stats budget, the link monitor and the host board's replay
-# (`harmoloc --dataset`). Built
-# from the host build; `./run package` puts it beside the firmware packages and
-# tests/packaging/check_tools_package.sh checks it.
+# (`harmoloc --dataset`). Built from the host build for this machine, and cross-built for arm64
+# (preset tools-aarch64) so that a robot with an arm64 computer can train its own map;
+# `./run package` puts both beside the firmware packages and
+# tests/packaging/check_tools_package.sh checks them.
 include(HarmolocDebian)
 
 set(HARMOLOC_HOST_TOOLS harmoloc harmoloc-sim harmoloc-train harmoloc-report harmoloc-accuracy
@@ -39,8 +40,7 @@ install(FILES
   DESTINATION ${doc})
 harmoloc_debian_docs(harmoloc-tools)
 
-execute_process(COMMAND dpkg --print-architecture OUTPUT_VARIABLE HARMOLOC_DEB_ARCH
-  OUTPUT_STRIP_TRAILING_WHITESPACE)
+harmoloc_deb_arch(HARMOLOC_DEB_ARCH)
 set(CPACK_GENERATOR DEB)
 set(CPACK_PACKAGE_NAME harmoloc-tools)
 set(CPACK_PACKAGE_VERSION ${PROJECT_VERSION})
