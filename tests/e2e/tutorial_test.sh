@@ -48,8 +48,7 @@ cp room/labels.tum labels.tum
   --trajectory pose.tum --stats stats.json --quiet > run.txt || fail "the run with the map failed"
 "$BIN/harmoloc-report" --truth room-later/groundtruth.tum --estimate pose.tum --stats stats.json \
   --skip-initial 3 --out report > /dev/null
-rmse=$(python3 -c "import json,sys; print(json.load(open(sys.argv[1]))['estimate']['all']['rmse_position_cm'])" \
-  report/summary.json)
+rmse=$(json_number report/summary.json estimate.all.rmse_position_cm)
 echo "tutorial on random scene $seed: $found boards found, fused RMSE $rmse cm on the later run"
 less_than "$rmse" 3 "fused RMSE (cm) with the map the tutorial made"
 rm -rf room room-later run  # about 1 GB of frames; the rest stays to look at
