@@ -18,11 +18,7 @@ source "$root/tests/packaging/package_checks.sh"
 require_package "$deb"
 name=$(basename "$deb" .deb)
 arch=${name##*_}
-case $arch in
-  arm64) triplet=aarch64-linux-gnu qemu=qemu-aarch64 elf="ARM aarch64" ;;
-  armhf) triplet=arm-linux-gnueabihf qemu=qemu-arm elf="ARM, EABI5" ;;
-  *) echo "FAIL unknown architecture $arch in $deb"; echo "0 passed, 1 failed"; exit 1 ;;
-esac
+foreign_arch "$arch"
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 echo "package $deb ($(stat -c %s "$deb") bytes)"

@@ -21,10 +21,9 @@ arch=${2:-$(dpkg --print-architecture)}
 run=()  # how to run the package's programs on this machine
 multiarch=$(gcc -print-multiarch)
 if [ "$arch" != "$(dpkg --print-architecture)" ]; then
-  case $arch in
-    arm64) multiarch=aarch64-linux-gnu; run=(qemu-aarch64 -L /usr/aarch64-linux-gnu) ;;
-    *) echo "FAIL no way to run $arch programs here"; echo "0 passed, 1 failed"; exit 1 ;;
-  esac
+  foreign_arch "$arch"
+  multiarch=$triplet
+  run=("$qemu" -L "/usr/$triplet")
 fi
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT

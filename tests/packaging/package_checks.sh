@@ -1,5 +1,5 @@
 # What the two package checks share (sourced by check_package.sh and check_tools_package.sh):
-# the pass/fail counting, and what both packages are checked for beyond their contents:
+# the pass/fail counting, how a foreign architecture's programs run (foreign_arch ARCH), and what both packages are checked for beyond their contents:
 #   debian_checks DEB PACKAGE UNPACKED_ROOT CONTENTS_LIST
 # - every program in /usr/bin has its manual page (help2man, from the program's --help), and the
 #   page names the program's options;
@@ -16,6 +16,17 @@ check() {  # check DESCRIPTION COMMAND...
 # The package file must exist; else one failure and the end.
 require_package() {
   [ -f "$1" ] || { echo "FAIL no package $1"; echo "0 passed, 1 failed"; exit 1; }
+}
+
+# How this machine runs a foreign Debian architecture's programs: sets triplet (the multiarch
+# folder and the binutils prefix), qemu (the qemu-user program) and elf (what `file` says).
+# Unknown architectures: one failure and the end.
+foreign_arch() {
+  case $1 in
+    arm64) triplet=aarch64-linux-gnu qemu=qemu-aarch64 elf="ARM aarch64" ;;
+    armhf) triplet=arm-linux-gnueabihf qemu=qemu-arm elf="ARM, EABI5" ;;
+    *) echo "FAIL no way to run $1 programs here"; echo "0 passed, 1 failed"; exit 1 ;;
+  esac
 }
 
 debian_checks() {
