@@ -7,7 +7,9 @@ namespace harmoloc::algorithms {
 
 void ParticleFilter::configure(std::size_t particle_count, std::uint64_t seed,
                                const MotionNoise& noise) {
-  count_ = std::clamp<std::size_t>(particle_count, 1, kMaxParticles);
+  capacity_ = std::clamp<std::size_t>(particle_count, 1, kMaxParticles);
+  count_ = capacity_;
+  kld_ = KldSampling{};
   noise_ = noise;
   rng_.reseed(seed);
   initialized_ = false;
@@ -20,6 +22,7 @@ void ParticleFilter::initialize(const Pose2& centre, double position_sigma_m, do
 
 void ParticleFilter::initialize_between(const Pose2& a, const Pose2& b, double position_sigma_m,
                                         double yaw_sigma_rad, bool uniform_yaw) {
+  start_seed();
   const double w = 1.0 / static_cast<double>(count_);
   for (std::size_t i = 0; i < count_; ++i) {
     const Pose2& centre = (i % 2 == 0) ? a : b;
@@ -36,6 +39,7 @@ void ParticleFilter::initialize_between(const Pose2& a, const Pose2& b, double p
 void ParticleFilter::initialize_around_points(const float* x_m, const float* y_m, std::size_t count,
                                               double position_sigma_m) {
   if (count == 0) return;
+  start_seed();
   const double w = 1.0 / static_cast<double>(count_);
   for (std::size_t i = 0; i < count_; ++i) {
     const auto k =
@@ -50,6 +54,7 @@ void ParticleFilter::initialize_around_points(const float* x_m, const float* y_m
 }
 
 void ParticleFilter::initialize_uniform(double x0_m, double y0_m, double x1_m, double y1_m) {
+  start_seed();
   const double w = 1.0 / static_cast<double>(count_);
   for (std::size_t i = 0; i < count_; ++i) {
     Particle& p = particles_[i];
@@ -161,21 +166,77 @@ void ParticleFilter::normalize(double sum) {
   for (std::size_t i = 0; i < count_; ++i) weights_[i] *= inv;
 }
 
+void ParticleFilter::start_seed() {
+  count_ = capacity_;
+}
+
+double KldSampling::required(std::size_t bins) const {
+  if (bins <= 1) return 1.0;
+  // Fox 2003, eq. 12 (the Wilson-Hilferty approximation of the chi-square quantile).
+  const double k = static_cast<double>(bins - 1);
+  const double a = 2.0 / (9.0 * k);
+  const double c = 1.0 - a + std::sqrt(a) * z_upper;
+  return k / (2.0 * epsilon) * c * c * c;
+}
+
+std::size_t ParticleFilter::occupied_bins(double start) {
+  const double inv_xy = 1.0 / kld_.bin_xy_m, inv_yaw = 1.0 / kld_.bin_yaw_rad;
+  const double step = 1.0 / static_cast<double>(count_);
+  const double first = start * step;
+  double cumulative = weights_[0];
+  std::size_t i = 0, occupied = 0;
+  std::uint64_t last = 0;
+  for (std::size_t m = 0; m < count_; ++m) {
+    const double u = first + static_cast<double>(m) * step;
+    while (u > cumulative && i + 1 < count_) cumulative += weights_[++i];
+    // 21 bits per axis, offset so that no key is 0 (the empty slot).
+    const auto axis = [](double v) {
+      return static_cast<std::uint64_t>(static_cast<std::int64_t>(std::floor(v)) + (1 << 20)) &
+             0x1FFFFFU;
+    };
+    const Particle& p = particles_[i];
+    const std::uint64_t key = (axis(p.x_m * inv_xy) << 42U) | (axis(p.y_m * inv_xy) << 21U) |
+                              axis((p.yaw_rad + kPi) * inv_yaw) | (1ULL << 63U);
+    if (key == last) continue;  // systematic draws repeat a particle back to back
+    last = key;
+    auto slot = static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ULL) >> 51U);  // 13 bits
+    // At most count_ keys in 2 x kMaxParticles slots: an empty slot is always found.
+    while (bins_[slot] != 0U && bins_[slot] != key) slot = (slot + 1) % kBinSlots;
+    if (bins_[slot] == 0U) {
+      bins_[slot] = key;
+      used_slots_[occupied++] = static_cast<std::uint16_t>(slot);
+    }
+  }
+  for (std::size_t k = 0; k < occupied; ++k) bins_[used_slots_[k]] = 0U;  // empty for next time
+  return occupied;
+}
+
 bool ParticleFilter::resample_if_needed(double threshold_fraction) {
   double sum_sq = 0.0;
   for (std::size_t i = 0; i < count_; ++i) sum_sq += weights_[i] * weights_[i];
   const double n_eff = 1.0 / sum_sq;
   if (n_eff >= threshold_fraction * static_cast<double>(count_)) return false;
 
-  const double step = 1.0 / static_cast<double>(count_);
-  const double start = rng_.uniform() * step;
+  const double start = rng_.uniform();
+  std::size_t next_count = count_;
+  if (kld_.enabled) {
+    const double wanted = kld_.required(occupied_bins(start));
+    const double low = static_cast<double>(std::min(kld_.min_particles, capacity_));
+    next_count = static_cast<std::size_t>(
+        std::clamp(std::ceil(wanted), low, static_cast<double>(capacity_)));
+  }
+  // (start * step + m * step, not (start + m) * step: the same rounding as before KLD-sampling,
+  // so that a filter without it gives the same poses bit for bit.)
+  const double step = 1.0 / static_cast<double>(next_count);
+  const double first = start * step;
   double cumulative = weights_[0];
   std::size_t i = 0;
-  for (std::size_t m = 0; m < count_; ++m) {
-    const double u = start + static_cast<double>(m) * step;
+  for (std::size_t m = 0; m < next_count; ++m) {
+    const double u = first + static_cast<double>(m) * step;
     while (u > cumulative && i + 1 < count_) cumulative += weights_[++i];
     scratch_[m] = particles_[i];
   }
+  count_ = next_count;
   for (std::size_t m = 0; m < count_; ++m) {
     particles_[m] = scratch_[m];
     weights_[m] = step;

@@ -130,7 +130,8 @@ void read_filter(const Checker& check, const toml::table& root, FirmwareConfig& 
     check.only(
         *t, "filter.",
         {"particles", "seed", "alpha", "fix_sigma_m", "outlier_probability", "resample_threshold",
-         "init_position_sigma_m", "vision_only_speed_mps", "map_margin_m"});
+         "init_position_sigma_m", "vision_only_speed_mps", "map_margin_m", "kld",
+         "kld_min_particles", "kld_epsilon", "kld_bin_m", "kld_bin_deg"});
     auto& f = c.filter;
     f.particles = static_cast<std::size_t>(
         check.integer(*t, "particles", "filter.", static_cast<std::int64_t>(f.particles), 16,
@@ -164,6 +165,16 @@ void read_filter(const Checker& check, const toml::table& root, FirmwareConfig& 
     f.vision_only_speed_mps =
         check.number(*t, "vision_only_speed_mps", "filter.", f.vision_only_speed_mps, 0.0, 10.0);
     f.map_margin_m = check.number(*t, "map_margin_m", "filter.", f.map_margin_m, 0.0, 100.0);
+    algorithms::KldSampling& k = f.kld;
+    k.enabled = flag(check, *t, "kld", "filter.", k.enabled);
+    k.min_particles = static_cast<std::size_t>(check.integer(
+        *t, "kld_min_particles", "filter.", static_cast<std::int64_t>(k.min_particles), 16,
+        static_cast<std::int64_t>(algorithms::ParticleFilter::kMaxParticles)));
+    k.epsilon = check.number(*t, "kld_epsilon", "filter.", k.epsilon, 0.001, 1.0);
+    k.bin_xy_m = check.number(*t, "kld_bin_m", "filter.", k.bin_xy_m, 0.005, 1.0);
+    const double bin_deg = check.number(*t, "kld_bin_deg", "filter.",
+                                        k.bin_yaw_rad * 180.0 / algorithms::kPi, 1.0, 90.0);
+    k.bin_yaw_rad = bin_deg * algorithms::kPi / 180.0;
   }
 }
 

@@ -77,6 +77,7 @@ LocalizationCycle::LocalizationCycle(const FirmwareConfig& config, const algorit
       period_ns_(static_cast<std::uint64_t>(std::llround(1e9 / config.cycle.rate_hz))),
       budget_ns_(static_cast<std::uint64_t>(std::llround(config.cycle.budget_ms * 1e6))) {
   filter_.configure(config.filter.particles, config.filter.seed, config.filter.noise);
+  filter_.set_kld_sampling(config.filter.kld);
   kidnap_params_ = derived_kidnap_params(config.kidnap.detector, map.calibration);
   geometry_ = effective_geometry(config, map.calibration);
   board_params_ = config.observation.boards;

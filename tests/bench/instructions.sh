@@ -16,6 +16,7 @@ kernels=(
   "harmonic 204" "harmonic 1024" "harmonic 4096"
   "filter 256" "filter 1024" "filter 4096"
   "filter_boards 256" "filter_boards 1024" "filter_boards 4096"
+  "filter_boards_kld 1024" "filter_boards_kld 4096"
   "cycle 320x240" "cycle 640x480" "cycle_yuyv 640x480"
 )
 # Kernels whose count depends on the CPU's best segmentation path.
@@ -50,6 +51,7 @@ echo "  segmentation, scalar colour table / OpenCV (RGB)   $(ratio 'seg_table_sc
 echo "  segmentation, scalar YUYV table / OpenCV (YUYV)    $(ratio 'seg_yuyv_table_scalar 640x480' 'seg_yuyv_opencv 640x480')"
 echo "  segmentation, HSV arithmetic / OpenCV (RGB)        $(ratio 'seg_rgb 640x480' 'seg_rgb_opencv 640x480')"
 echo "  filter step, per-board update / harmonic-fix update (1024 particles) $(ratio 'filter_boards 1024' 'filter 1024')"
+echo "  filter step, KLD-sampling in steady tracking / fixed count (1024 particles) $(ratio 'filter_boards_kld 1024' 'filter_boards 1024')"
 echo "  whole cycle / OpenCV segmentation alone (RGB)      $(ratio 'cycle 640x480' 'seg_rgb_opencv 640x480')"
 echo "  whole cycle / OpenCV segmentation alone (YUYV)     $(ratio 'cycle_yuyv 640x480' 'seg_yuyv_opencv 640x480')"
 

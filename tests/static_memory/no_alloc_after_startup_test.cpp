@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cstdlib>
 #include <filesystem>
@@ -136,6 +137,7 @@ struct PassResult {
   std::uint64_t kidnaps = 0;  ///< re-seeds by the kidnap test (the set-pose commands put the
                               ///< cloud far from where the boards say the robot is)
   bool uses_boards = false;
+  std::size_t fewest_particles = 0, most_particles = 0;  ///< over the run's cycles
 };
 
 // kRecording: the run is recorded as `harmoloc --record` does (every board): frame copies into
@@ -151,7 +153,8 @@ enum class Fault {
   kNoEncoders,
   kRecording,
   kStatsOnRequest,
-  kLiveClock
+  kLiveClock,
+  kKldSampling
 };
 
 // A monotonic clock an hour ahead of the recording's first frame: a live board's clock, as far
@@ -241,6 +244,7 @@ PassResult run_pass(const std::string& dataset, Fault fault) {
   firmware::FirmwareConfig config = firmware::default_config();
   config.geometry = meta.geometry;
   config.can_layout = meta.encoder_layout;
+  config.filter.kld.enabled = fault == Fault::kKldSampling;
   host::FileCamera file_camera(dataset, meta);
   // Frames 100..200 go missing: odometry only for a while, then back to nominal.
   StallingCamera camera(file_camera, fault == Fault::kCameraStallMidRun ? 100 : 0,
@@ -300,6 +304,7 @@ PassResult run_pass(const std::string& dataset, Fault fault) {
   bool stats_wanted = false;
 
   PassResult r;
+  r.fewest_particles = cycle->particle_count();
   firmware::forbid_eigen_heap();  // as the board mains do after start-up
   g_allocations = 0;
   g_cycle_thread = pthread_self();
@@ -307,6 +312,8 @@ PassResult run_pass(const std::string& dataset, Fault fault) {
   g_armed = true;
   while (cycle->run_once() == firmware::CycleResult::kRan) {
     ++r.cycles;
+    r.fewest_particles = std::min(r.fewest_particles, cycle->particle_count());
+    r.most_particles = std::max(r.most_particles, cycle->particle_count());
     const firmware::PoseOutput& pose = cycle->pose();
     if (pose.valid) trajectory.write(pose.data_time_ns, pose.pose);
     recording.after_cycle(*cycle);
@@ -432,7 +439,8 @@ TEST(StaticMemory, NoAllocationAfterStartUp) {
                          {"test", Fault::kNoEncoders},
                          {"test", Fault::kRecording},
                          {"test", Fault::kStatsOnRequest},
-                         {"test", Fault::kLiveClock}};
+                         {"test", Fault::kLiveClock},
+                         {"test", Fault::kKldSampling}};
   std::uint64_t total = 0, kidnaps = 0;
   std::array<std::uint64_t, 5> health{};
   for (const Pass& pass : passes) {
@@ -444,6 +452,16 @@ TEST(StaticMemory, NoAllocationAfterStartUp) {
     kidnaps += r.kidnaps;
     EXPECT_TRUE(r.uses_boards) << "the map has a forward model: the per-board update must run";
     for (std::size_t h = 0; h < health.size(); ++h) health[h] += r.health[h];
+    const std::size_t capacity = firmware::default_config().filter.particles;
+    if (pass.fault == Fault::kKldSampling) {
+      // The count adapted (fewer particles once converged), and re-seeds took every one again.
+      EXPECT_LT(r.fewest_particles, capacity / 2);
+      EXPECT_EQ(r.most_particles, capacity);
+      std::printf("KLD-sampling: %zu to %zu particles\n", r.fewest_particles, r.most_particles);
+    } else {
+      EXPECT_EQ(r.fewest_particles, capacity);
+      EXPECT_EQ(r.most_particles, capacity);
+    }
   }
   EXPECT_GE(total, 2000U);
   // Every health state the firmware can be in was exercised.

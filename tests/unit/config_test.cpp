@@ -104,6 +104,11 @@ resample_threshold = 0.6
 init_position_sigma_m = 0.2
 vision_only_speed_mps = 0.5
 map_margin_m = 2.5
+kld = true
+kld_min_particles = 64
+kld_epsilon = 0.1
+kld_bin_m = 0.1
+kld_bin_deg = 15
 
 [link]
 system_id = 7
@@ -161,6 +166,11 @@ heartbeat_hz = 2
   EXPECT_DOUBLE_EQ(c.filter.init_position_sigma_m, 0.2);
   EXPECT_DOUBLE_EQ(c.filter.vision_only_speed_mps, 0.5);
   EXPECT_DOUBLE_EQ(c.filter.map_margin_m, 2.5);
+  EXPECT_TRUE(c.filter.kld.enabled);
+  EXPECT_EQ(c.filter.kld.min_particles, 64U);
+  EXPECT_DOUBLE_EQ(c.filter.kld.epsilon, 0.1);
+  EXPECT_DOUBLE_EQ(c.filter.kld.bin_xy_m, 0.1);
+  EXPECT_NEAR(c.filter.kld.bin_yaw_rad, 15.0 * 3.14159265358979323846 / 180.0, 1e-12);
 
   EXPECT_EQ(c.link.system_id, 7);
   EXPECT_EQ(c.link.component_id, 100);
@@ -406,6 +416,11 @@ TEST(Config, ObservationAndKidnapValuesAreChecked) {
       {"[kidnap]\nwindow_frames = 2\nevidence_frames = 3\n", "evidence_frames"},
       {"[kidnap]\nchange_threshold = 1.5\n", "kidnap.change_threshold"},
       {"[kidnap]\nlost_frames = 0\n", "kidnap.lost_frames"},
+      {"[filter]\nkld = \"yes\"\n", "filter.kld must be true or false"},
+      {"[filter]\nkld_min_particles = 8\n", "filter.kld_min_particles"},
+      {"[filter]\nkld_epsilon = 0\n", "filter.kld_epsilon"},
+      {"[filter]\nkld_bin_m = 2\n", "filter.kld_bin_m"},
+      {"[filter]\nkld_bin_deg = 0.5\n", "filter.kld_bin_deg"},
   };
   for (const auto& [text, want] : bad) {
     const std::string path = dir.write("bad.toml", text);

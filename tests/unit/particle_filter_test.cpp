@@ -317,3 +317,109 @@ TEST(ParticleFilter, ConvergesOnAKnownTrajectoryFromUniformHeading) {
   EXPECT_LT(std::sqrt(e.covariance(0, 0) + e.covariance(1, 1)), 0.06);
   EXPECT_LT(std::sqrt(e.covariance(2, 2)), 0.1);
 }
+
+// KLD-sampling (Fox 2003): the count it asks for, written out from the paper's eq. 12.
+TEST(ParticleFilterKld, RequiredCountIsFoxsBound) {
+  ha::KldSampling kld;
+  EXPECT_EQ(kld.required(0), 1.0);
+  EXPECT_EQ(kld.required(1), 1.0);
+  // k = 100 bins, epsilon 0.05, z 2.326: 99 / 0.1 * (1 - 2/891 + sqrt(2/891) * 2.326)^3.
+  const double a = 2.0 / 891.0;
+  EXPECT_NEAR(kld.required(100), 990.0 * std::pow(1.0 - a + std::sqrt(a) * 2.326, 3.0), 1e-9);
+  EXPECT_NEAR(kld.required(100), 1346.5, 0.5);
+  double before = 0.0;
+  for (std::size_t k = 2; k < 5000; k += 37) {
+    EXPECT_GT(kld.required(k), before) << k;
+    before = kld.required(k);
+  }
+}
+
+namespace {
+
+ha::KldSampling kld_on() {
+  ha::KldSampling kld;
+  kld.enabled = true;
+  kld.min_particles = 100;
+  return kld;
+}
+
+// Weights the cloud by a sharp fix at (x, y) and resamples (always: the weights are uneven).
+bool weigh_and_resample(ha::ParticleFilter& pf, double x, double y, double sigma_m) {
+  pf.update_position(x, y, sigma_m, 0.0);
+  return pf.resample_if_needed(1.0);
+}
+
+}  // namespace
+
+TEST(ParticleFilterKld, ConvergedCloudShrinksToTheMinimumAndStaysOnTheFix) {
+  auto pf = make_filter(2048, 7);
+  pf->set_kld_sampling(kld_on());
+  pf->initialize(ha::Pose2{1.025, 2.025, 0.3}, 0.004, 0.01, false);  // inside one 5 cm bin
+  ASSERT_TRUE(weigh_and_resample(*pf, 1.025, 2.025, 0.01));
+  EXPECT_EQ(pf->size(), 100U);
+  EXPECT_EQ(pf->capacity(), 2048U);
+  double sum = 0.0;
+  for (std::size_t i = 0; i < pf->size(); ++i) sum += pf->weight(i);
+  EXPECT_NEAR(sum, 1.0, 1e-12);
+  const ha::PoseEstimate e = pf->estimate();
+  EXPECT_NEAR(e.mean.x_m, 1.025, 0.003);
+  EXPECT_NEAR(e.mean.y_m, 2.025, 0.003);
+  // Astride bin borders (four bins): Fox's bound for k = 4, above the minimum.
+  pf->initialize(ha::Pose2{1.0, 2.0, 0.3}, 0.004, 0.01, false);
+  ASSERT_TRUE(weigh_and_resample(*pf, 1.0, 2.0, 0.01));
+  EXPECT_EQ(pf->size(), static_cast<std::size_t>(std::ceil(kld_on().required(4))));
+  expect_estimate_matches_reference(*pf);
+}
+
+TEST(ParticleFilterKld, LostCloudKeepsTheCapacityAndEveryReseedStartsFull) {
+  auto pf = make_filter(2048, 7);
+  pf->set_kld_sampling(kld_on());
+  pf->initialize_uniform(0.0, 0.0, 4.0, 4.0);  // thousands of bins
+  ASSERT_TRUE(weigh_and_resample(*pf, 2.0, 2.0, 1.0));
+  EXPECT_EQ(pf->size(), 2048U);
+  // Converge, then re-seed: the new cloud has every particle again.
+  pf->initialize(ha::Pose2{1.025, 1.025, 0.0}, 0.004, 0.01, false);
+  ASSERT_TRUE(weigh_and_resample(*pf, 1.025, 1.025, 0.01));
+  ASSERT_EQ(pf->size(), 100U);
+  pf->initialize(ha::Pose2{3.0, 3.0, 0.0}, 0.5, 1.0, true);
+  EXPECT_EQ(pf->size(), 2048U);
+  // A cloud that spreads again (odometry lost) grows back at the next resampling.
+  pf->initialize(ha::Pose2{1.025, 1.025, 0.0}, 0.004, 0.01, false);
+  ASSERT_TRUE(weigh_and_resample(*pf, 1.025, 1.025, 0.01));
+  ASSERT_EQ(pf->size(), 100U);
+  pf->diffuse(0.5, 1.0);
+  ASSERT_TRUE(weigh_and_resample(*pf, 1.0, 1.0, 2.0));
+  EXPECT_GT(pf->size(), 100U);
+}
+
+TEST(ParticleFilterKld, TheCountGrowsWithTheBinsTheCloudOccupies) {
+  std::size_t before = 0;
+  for (const double spread_m : {0.01, 0.04, 0.1}) {
+    auto pf = make_filter(4096, 11);
+    pf->set_kld_sampling(kld_on());
+    pf->initialize(ha::Pose2{0.0, 0.0, 0.0}, spread_m, 0.05, false);
+    ASSERT_TRUE(weigh_and_resample(*pf, 0.0, 0.0, 10.0 * spread_m));
+    EXPECT_GT(pf->size(), before) << spread_m;
+    before = pf->size();
+  }
+  EXPECT_LT(before, 4096U);
+}
+
+// With a minimum at the capacity the count never changes, and the draw is the one without it.
+TEST(ParticleFilterKld, AtTheCapacityTheSameParticlesBitForBit) {
+  auto a = make_filter(512, 3);
+  auto b = make_filter(512, 3);
+  ha::KldSampling full = kld_on();
+  full.min_particles = 512;
+  b->set_kld_sampling(full);
+  for (auto* pf : {a.get(), b.get()}) {
+    pf->initialize(ha::Pose2{0.0, 0.0, 0.0}, 0.004, 0.01, false);
+    weigh_and_resample(*pf, 0.001, 0.0, 0.01);
+  }
+  ASSERT_EQ(a->size(), 512U);
+  ASSERT_EQ(b->size(), 512U);
+  for (std::size_t i = 0; i < 512; ++i) {
+    EXPECT_TRUE(same_bits(a->particle(i).x_m, b->particle(i).x_m)) << i;
+    EXPECT_TRUE(same_bits(a->weight(i), b->weight(i))) << i;
+  }
+}

@@ -28,6 +28,25 @@ struct MotionNoise {
   double min_yaw_sigma_rad = 0.0005;
 };
 
+/// Adaptive particle count (KLD-sampling, Fox 2003, as AMCL users know it): at each resampling
+/// the cloud gets as many particles as bound the Kullback-Leibler divergence between the
+/// particles and the posterior they sample by @p epsilon with probability 1 - delta (@p z_upper
+/// is the standard normal's upper 1 - delta quantile), counting the poses' bins of
+/// @p bin_xy_m x @p bin_xy_m x @p bin_yaw_rad the resampled cloud occupies; never fewer than
+/// @p min_particles, never more than the configured count (the capacity, reserved at
+/// configure()). Many particles when lost, few when converged.
+struct KldSampling {
+  bool enabled = false;
+  std::size_t min_particles = 128;
+  double bin_xy_m = 0.05;
+  double bin_yaw_rad = 0.17453292519943295;  // 10 degrees
+  double epsilon = 0.05;
+  double z_upper = 2.326;  // delta = 0.01
+
+  /// The particle count KLD-sampling asks for with @p bins occupied bins (before the bounds).
+  double required(std::size_t bins) const;
+};
+
 struct PoseEstimate {
   Pose2 mean;
   PoseCovariance covariance;
@@ -38,8 +57,11 @@ class ParticleFilter {
  public:
   static constexpr std::size_t kMaxParticles = 4096;
 
-  /// @p particle_count must be 1..kMaxParticles (clamped).
+  /// @p particle_count must be 1..kMaxParticles (clamped): the capacity; every (re)seed starts
+  /// with that many, and without KLD-sampling the count never changes.
   void configure(std::size_t particle_count, std::uint64_t seed, const MotionNoise& noise);
+  /// Turns the adaptive particle count on or off (off after configure()).
+  void set_kld_sampling(const KldSampling& kld) { kld_ = kld; }
 
   /// Spreads the particles around @p centre: Gaussian in x and y, and in yaw unless
   /// @p uniform_yaw, in which case yaw is uniform over the circle.
@@ -83,13 +105,15 @@ class ParticleFilter {
   double update_boards(const BoardUpdate& update);
 
   /// Low-variance (systematic) resampling when the effective sample size falls below
-  /// @p threshold_fraction of the particle count. Returns true if it resampled.
+  /// @p threshold_fraction of the particle count. Returns true if it resampled. With
+  /// KLD-sampling on, the new count is chosen from the bins the resampled cloud occupies.
   bool resample_if_needed(double threshold_fraction);
 
   PoseEstimate estimate() const;
   /// The weighted mean position only (no heading, no covariance: no trigonometry).
   Pose2 mean_position() const;
   std::size_t size() const { return count_; }
+  std::size_t capacity() const { return capacity_; }
 
   struct Particle {
     double x_m;
@@ -103,11 +127,24 @@ class ParticleFilter {
   /// Divides the weights by @p sum; a sum that is 0 or not finite (every particle ruled out)
   /// makes them uniform instead, so that no single frame can wipe out the cloud.
   void normalize(double sum);
+  /// Every particle back, equally weighted (the start of every seed).
+  void start_seed();
+  /// The number of distinct KLD bins among the particles that systematic resampling at the
+  /// present count would draw (@p start: the draw's offset, 0..1).
+  std::size_t occupied_bins(double start);
+
+  /// Open-addressed set of bin keys (0: empty), twice the capacity so that it never fills.
+  static constexpr std::size_t kBinSlots = 2 * kMaxParticles;
+  static_assert(kBinSlots == 8192, "occupied_bins() hashes to 13 bits");
 
   std::array<Particle, kMaxParticles> particles_{};
   std::array<Particle, kMaxParticles> scratch_{};
   std::array<double, kMaxParticles> weights_{};
+  std::array<std::uint64_t, kBinSlots> bins_{};
+  std::array<std::uint16_t, kMaxParticles> used_slots_{};  ///< the bins_ slots to empty again
   std::size_t count_ = 0;
+  std::size_t capacity_ = 0;
+  KldSampling kld_{};
   MotionNoise noise_{};
   Pcg32 rng_{};
   bool initialized_ = false;

@@ -35,7 +35,9 @@ struct CycleConfig {
 };
 
 struct FilterConfig {
-  std::size_t particles = 1024;
+  std::size_t particles = 1024;  ///< the capacity; with KLD-sampling the most it uses
+  /// Adaptive particle count within `particles` (off by default until a sweep backs it).
+  algorithms::KldSampling kld;
   std::uint64_t seed = 1;
   algorithms::MotionNoise noise;
   /// Standard deviation given to each harmonic fix. Far above the localizer's own error (5-9 cm):

@@ -127,6 +127,9 @@ class LocalizationCycle {
   const PoseOutput& pose() const { return pose_; }
   /// Whether the particles are weighed board by board (a forward map and that model chosen).
   bool uses_boards() const { return use_boards_; }
+  /// The particles the filter uses now (the capacity, `filter.particles`, unless KLD-sampling
+  /// has adapted it).
+  std::size_t particle_count() const { return filter_.size(); }
   /// Motion index of board @p b (probability that it is static and visible).
   double board_static_probability(std::size_t b) const {
     return reliability_.static_probability(b);
