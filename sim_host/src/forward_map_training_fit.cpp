@@ -12,6 +12,9 @@ namespace harmoloc::sim_host::forward_map_training_detail {
 
 namespace {
 
+// Frames within 25 degrees of the nearest one's heading count as the same way along the route.
+const double kSamePassCos = std::cos(25.0 * 3.14159265358979323846 / 180.0);
+
 // Whether @p p is of the same pass as a frame at (@p t_s, @p travel_m), for validation.
 bool same_pass(const Positioned& p, double t_s, double travel_m, double exclude_s,
                double exclude_m) {
@@ -328,20 +331,36 @@ ForwardMapReport fit_grid(std::vector<Positioned>& frames, std::size_t board_cou
         e[b] = modelled[b] ? static_cast<float>(mean[b]) : 0.0F;
       const double d2 = index.nearest_d2(x, y, any);
       out.route_distance_m[at] = static_cast<float>(std::sqrt(d2));
-      // The heading of the nearest frame that has one.
+      // The heading of the frames near the cell that run the way the nearest one does: their
+      // circular mean, kernel-weighted, so one frame's wobble is not the cell's heading, and
+      // where a route crosses itself the other pass is left out rather than averaged in.
       if (report.has_heading) {
         const auto with_yaw = [](const Positioned& p) { return p.has_yaw; };
         const double yaw_reach = std::sqrt(index.nearest_d2(x, y, with_yaw)) + 1e-6;
         double yaw_d2 = std::numeric_limits<double>::infinity();
+        double anchor = 0.0;
         float yaw = 0.0F;
         if (std::isfinite(yaw_reach)) {
           index.within(x, y, yaw_reach, [&](const Positioned& p) {
             const double d = (p.x_m - x) * (p.x_m - x) + (p.y_m - y) * (p.y_m - y);
             if (p.has_yaw && d < yaw_d2) {
               yaw_d2 = d;
-              yaw = static_cast<float>(p.yaw_rad);
+              anchor = p.yaw_rad;
             }
           });
+          const double h = report.bandwidth_m;
+          const double reach = yaw_reach + 2.0 * h;
+          double sin_sum = 0.0, cos_sum = 0.0;
+          index.within(x, y, reach, [&](const Positioned& p) {
+            if (!p.has_yaw) return;
+            if (std::cos(p.yaw_rad - anchor) < kSamePassCos) return;
+            const double d = (p.x_m - x) * (p.x_m - x) + (p.y_m - y) * (p.y_m - y);
+            const double w = std::exp(-(d - yaw_d2) / (2.0 * h * h));
+            sin_sum += w * std::sin(p.yaw_rad);
+            cos_sum += w * std::cos(p.yaw_rad);
+          });
+          yaw = static_cast<float>(
+              sin_sum * sin_sum + cos_sum * cos_sum > 0.0 ? std::atan2(sin_sum, cos_sum) : anchor);
         }
         out.heading_rad[at] = yaw;
       }

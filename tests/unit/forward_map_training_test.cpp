@@ -87,3 +87,53 @@ TEST(ForwardMapTraining, FewerTilesCoarsenTheCells) {
   EXPECT_GT(fine->tile_count, 64U);
   EXPECT_GT(coarse->cell_m, 1.5F * fine->cell_m);
 }
+
+namespace {
+
+// A straight pass along x at y = 0.5 (heading 0, or @p turn_rad for the second pass, which runs
+// along y through the middle of the first), each frame's heading off by +-@p wobble_rad in turn.
+PlacedRun crossing_run(double wobble_rad, double turn_rad) {
+  PlacedRun run;
+  const double step = 0.005;
+  double travel = 0.0;
+  for (std::size_t pass = 0; pass < 2; ++pass) {
+    for (std::size_t i = 0; i <= 400; ++i) {
+      const double s = static_cast<double>(i) * step;
+      const double x = pass == 0 ? 0.5 + s : 1.5, y = pass == 0 ? 0.5 : s - 0.5;
+      run.features.push_back({static_cast<float>(1.0 + 0.1 * x), static_cast<float>(2.0 + y)});
+      hs::PlacedFrame f;
+      f.index = run.features.size() - 1;
+      f.t_s = static_cast<double>(f.index) / 30.0;
+      f.travel_m = travel;
+      const double wobble = (i % 2 == 0 ? 1.0 : -1.0) * wobble_rad;
+      f.pose = ha::Pose2{x, y, (pass == 0 ? 0.0 : turn_rad) + wobble};
+      run.placed.push_back(f);
+      travel += step;
+    }
+  }
+  return run;
+}
+
+}  // namespace
+
+// The heading stored per cell is the mean of the frames that run the way the nearest one does:
+// one frame's wobble does not become the cell's heading, and where the route crosses itself
+// the cell keeps one pass's heading instead of a mean of both.
+TEST(ForwardMapTraining, CellHeadingIsTheMeanOfItsOwnPass) {
+  const double deg = 3.14159265358979323846 / 180.0;
+  const PlacedRun run = crossing_run(3.0 * deg, 90.0 * deg);
+  auto map = std::make_unique<ha::ForwardMap>();
+  hs::train_forward_map_placed(run.features, run.placed, 2, hs::ForwardMapOptions{}, *map);
+  ASSERT_TRUE(map->has_heading);
+  for (const double x : {0.8, 1.1, 2.2}) {  // along the first pass, away from the crossing
+    for (const double off : {0.0, 0.003, 0.05}) {
+      EXPECT_NEAR(ha::route_heading(*map, x, 0.5 + off), 0.0, 0.5 * deg) << x << " " << off;
+    }
+  }
+  for (const double y : {-0.2, 0.2, 1.2}) {  // along the second
+    EXPECT_NEAR(ha::route_heading(*map, 1.5, y), 90.0 * deg, 0.5 * deg) << y;
+  }
+  // At the crossing: one of the two, not 45 degrees.
+  const double at = ha::route_heading(*map, 1.5, 0.5);
+  EXPECT_LT(std::min(std::fabs(at), std::fabs(at - 90.0 * deg)), 3.5 * deg) << at / deg;
+}
