@@ -81,7 +81,7 @@ PlacePreference board_preference_near(const ForwardMap& map, const BoardFeatures
       if (dx * dx + dy * dy > radius_m * radius_m || (i == 0 && j == 0)) continue;
       const double x = ax_m + dx, y = ay_m + dy;
       if (std::hypot(x - bx_m, y - by_m) < min_distance_m) continue;
-      if (route_distance(map, locate(map, x, y)) > on_route_m) continue;
+      if (static_cast<double>(route_distance(map, locate(map, x, y))) > on_route_m) continue;
       const double nats = board_preference(map, observed, x, y, bx_m, by_m, params, leave_out);
       if (nats > best.nats) best = PlacePreference{nats, x, y};
     }
