@@ -189,9 +189,12 @@ std::size_t ParticleFilter::occupied_bins(double start) {
   for (std::size_t m = 0; m < count_; ++m) {
     const double u = first + static_cast<double>(m) * step;
     while (u > cumulative && i + 1 < count_) cumulative += weights_[++i];
-    // 21 bits per axis, offset so that no key is 0 (the empty slot).
+    // 21 bits per axis, offset so that no key is 0 (the empty slot). Bounded before the
+    // conversion, so that a particle far out (or not a number) only shares an edge bin.
     const auto axis = [](double v) {
-      return static_cast<std::uint64_t>(static_cast<std::int64_t>(std::floor(v)) + (1 << 20)) &
+      const double bounded = v > -1.0e6 ? (v < 1.0e6 ? v : 1.0e6) : -1.0e6;
+      return static_cast<std::uint64_t>(static_cast<std::int64_t>(std::floor(bounded)) +
+                                        (1 << 20)) &
              0x1FFFFFU;
     };
     const Particle& p = particles_[i];

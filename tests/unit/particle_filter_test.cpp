@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <map>
 #include <memory>
 #include <tuple>
@@ -422,4 +423,16 @@ TEST(ParticleFilterKld, AtTheCapacityTheSameParticlesBitForBit) {
     EXPECT_TRUE(same_bits(a->particle(i).x_m, b->particle(i).x_m)) << i;
     EXPECT_TRUE(same_bits(a->weight(i), b->weight(i))) << i;
   }
+}
+
+// A particle far out or not a number (it should never be one) does not stop the count.
+TEST(ParticleFilterKld, ParticlesFarOutOrNotANumberShareAnEdgeBin) {
+  auto pf = make_filter(256, 5);
+  pf->set_kld_sampling(kld_on());
+  pf->initialize(ha::Pose2{0.0, 0.0, 0.0}, 0.004, 0.01, false);
+  pf->shift(1.0e300, std::numeric_limits<double>::quiet_NaN(), 0.0);
+  pf->update_position(0.0, 0.0, 0.01, 0.0);  // every weight ruled out: uniform again
+  EXPECT_TRUE(pf->resample_if_needed(1.1));  // forced
+  EXPECT_GE(pf->size(), 100U);
+  EXPECT_LE(pf->size(), 256U);
 }
