@@ -181,26 +181,20 @@ double KldSampling::required(std::size_t bins) const {
 
 std::size_t ParticleFilter::occupied_bins(double start) {
   const double inv_xy = 1.0 / kld_.bin_xy_m, inv_yaw = 1.0 / kld_.bin_yaw_rad;
-  const double step = 1.0 / static_cast<double>(count_);
-  const double first = start * step;
-  double cumulative = weights_[0];
-  std::size_t i = 0, occupied = 0;
+  // 21 bits per axis, offset so that no key is 0 (the empty slot). Bounded before the
+  // conversion, so that a particle far out (or not a number) only shares an edge bin.
+  const auto axis = [](double v) {
+    const double bounded = v > -1.0e6 ? (v < 1.0e6 ? v : 1.0e6) : -1.0e6;
+    return static_cast<std::uint64_t>(static_cast<std::int64_t>(std::floor(bounded)) + (1 << 20)) &
+           0x1FFFFFU;
+  };
+  std::size_t occupied = 0;
   std::uint64_t last = 0;
-  for (std::size_t m = 0; m < count_; ++m) {
-    const double u = first + static_cast<double>(m) * step;
-    while (u > cumulative && i + 1 < count_) cumulative += weights_[++i];
-    // 21 bits per axis, offset so that no key is 0 (the empty slot). Bounded before the
-    // conversion, so that a particle far out (or not a number) only shares an edge bin.
-    const auto axis = [](double v) {
-      const double bounded = v > -1.0e6 ? (v < 1.0e6 ? v : 1.0e6) : -1.0e6;
-      return static_cast<std::uint64_t>(static_cast<std::int64_t>(std::floor(bounded)) +
-                                        (1 << 20)) &
-             0x1FFFFFU;
-    };
+  systematic_draw(count_, start, [&](std::size_t, std::size_t i) {
     const Particle& p = particles_[i];
     const std::uint64_t key = (axis(p.x_m * inv_xy) << 42U) | (axis(p.y_m * inv_xy) << 21U) |
                               axis((p.yaw_rad + kPi) * inv_yaw) | (1ULL << 63U);
-    if (key == last) continue;  // systematic draws repeat a particle back to back
+    if (key == last) return;  // systematic draws repeat a particle back to back
     last = key;
     auto slot = static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ULL) >> 51U);  // 13 bits
     // At most count_ keys in 2 x kMaxParticles slots: an empty slot is always found.
@@ -209,7 +203,7 @@ std::size_t ParticleFilter::occupied_bins(double start) {
       bins_[slot] = key;
       used_slots_[occupied++] = static_cast<std::uint16_t>(slot);
     }
-  }
+  });
   for (std::size_t k = 0; k < occupied; ++k) bins_[used_slots_[k]] = 0U;  // empty for next time
   return occupied;
 }
@@ -228,21 +222,13 @@ bool ParticleFilter::resample_if_needed(double threshold_fraction) {
     next_count = static_cast<std::size_t>(
         std::clamp(std::ceil(wanted), low, static_cast<double>(capacity_)));
   }
-  // (start * step + m * step, not (start + m) * step: the same rounding as before KLD-sampling,
-  // so that a filter without it gives the same poses bit for bit.)
-  const double step = 1.0 / static_cast<double>(next_count);
-  const double first = start * step;
-  double cumulative = weights_[0];
-  std::size_t i = 0;
-  for (std::size_t m = 0; m < next_count; ++m) {
-    const double u = first + static_cast<double>(m) * step;
-    while (u > cumulative && i + 1 < count_) cumulative += weights_[++i];
-    scratch_[m] = particles_[i];
-  }
+  systematic_draw(next_count, start,
+                  [&](std::size_t m, std::size_t i) { scratch_[m] = particles_[i]; });
   count_ = next_count;
+  const double weight = 1.0 / static_cast<double>(count_);
   for (std::size_t m = 0; m < count_; ++m) {
     particles_[m] = scratch_[m];
-    weights_[m] = step;
+    weights_[m] = weight;
   }
   return true;
 }

@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "forward_map_training_parts.hpp"
+#include "harmoloc/algorithms/geometry.hpp"
 #include "harmoloc/algorithms/harmonic_localizer.hpp"
 
 namespace harmoloc::sim_host::forward_map_training_detail {
@@ -13,7 +14,7 @@ namespace harmoloc::sim_host::forward_map_training_detail {
 namespace {
 
 // Frames within 25 degrees of the nearest one's heading count as the same way along the route.
-const double kSamePassCos = std::cos(25.0 * 3.14159265358979323846 / 180.0);
+const double kSamePassCos = std::cos(25.0 * algorithms::kPi / 180.0);
 
 // Whether @p p is of the same pass as a frame at (@p t_s, @p travel_m), for validation.
 bool same_pass(const Positioned& p, double t_s, double travel_m, double exclude_s,

@@ -129,6 +129,21 @@ class ParticleFilter {
   void normalize(double sum);
   /// Every particle back, equally weighted (the start of every seed).
   void start_seed();
+  /// Low-variance (systematic) draw of @p draws particles from the present weights, offset
+  /// @p start (0..1): calls @p take(m, i) for draw m of particle i.
+  template <typename Take>
+  void systematic_draw(std::size_t draws, double start, Take take) const {
+    // start * step + m * step, not (start + m) * step: the rounding the filter always had.
+    const double step = 1.0 / static_cast<double>(draws);
+    const double first = start * step;
+    double cumulative = weights_[0];
+    std::size_t i = 0;
+    for (std::size_t m = 0; m < draws; ++m) {
+      const double u = first + static_cast<double>(m) * step;
+      while (u > cumulative && i + 1 < count_) cumulative += weights_[++i];
+      take(m, i);
+    }
+  }
   /// The number of distinct KLD bins among the particles that systematic resampling at the
   /// present count would draw (@p start: the draw's offset, 0..1).
   std::size_t occupied_bins(double start);
