@@ -2,6 +2,7 @@
 // kidnap test.
 #include "harmoloc/firmware/localization_cycle.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 
@@ -48,6 +49,12 @@ void LocalizationCycle::update(const algorithms::AreaVector& areas, const Featur
     pose_.pose = e.mean;
     pose_.covariance = e.covariance;
     pose_.valid = true;
+    const std::uint64_t particles = filter_.size();
+    counters_.particles_min =
+        counters_.particle_cycles == 0 ? particles : std::min(counters_.particles_min, particles);
+    counters_.particles_max = std::max(counters_.particles_max, particles);
+    counters_.particles_sum += particles;
+    ++counters_.particle_cycles;
     // Where the robot was at the latest encoder sample: a gap's travel starts there.
     if (fresh_sample) {
       gap_anchor_ = e.mean;

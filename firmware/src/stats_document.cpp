@@ -212,6 +212,9 @@ void to_json(Json& j, const Document& d) {
   const Filter& f = d.filter;
   j["filter"] = Json{{"observation", f.observation},
                      {"resamples", f.resamples},
+                     {"particles_mean", f.particles_mean},
+                     {"particles_min", f.particles_min},
+                     {"particles_max", f.particles_max},
                      {"no_consensus", f.no_consensus},
                      {"distrusted_board_frames", f.distrusted_board_frames},
                      {"fix_board_suspicions", f.fix_board_suspicions},

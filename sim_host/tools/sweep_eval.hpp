@@ -56,6 +56,9 @@ struct SceneResult {
   double fused_rmse_m = -1.0;  ///< after first fix + settle_s
   double fused_heading_rmse_deg = -1.0;
   double fused_max_m = -1.0;  ///< after first fix + settle_s
+  /// Particles per cycle while the filter ran (the firmware's stats, filter.particles_mean): the
+  /// capacity unless KLD-sampling (filter.kld) is on.
+  double particles_mean = -1.0;
   // Kidnap run.
   std::size_t kidnaps = 0, kidnaps_detected = 0, kidnaps_recovered_1s = 0;
   double kidnap_mean_recovery_s = -1.0;

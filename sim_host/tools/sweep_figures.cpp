@@ -27,6 +27,8 @@ std::vector<Figure> figures() {
        [](const SceneResult& r) { return r.converge_s; }},
       {"fused_max", "fused max error after first fix + 2 s", "cm",
        [](const SceneResult& r) { return cm(r.fused_max_m); }, -1.0, 10.0},
+      {"particles", "particles per cycle, mean (nominal run)", "",
+       [](const SceneResult& r) { return r.particles_mean; }},
       {"kidnap_recovered", "kidnaps back under 10 cm within 1 s", "%",
        [](const SceneResult& r) {
          return r.kidnaps == 0 ? -1.0

@@ -36,6 +36,7 @@ nlohmann::json to_json(const SceneResult& r) {
   j["fused_rmse_m"] = r.fused_rmse_m;
   j["fused_heading_rmse_deg"] = r.fused_heading_rmse_deg;
   j["fused_max_m"] = r.fused_max_m;
+  j["particles_mean"] = r.particles_mean;
   j["kidnaps"] = r.kidnaps;
   j["kidnaps_detected"] = r.kidnaps_detected;
   j["kidnaps_recovered_1s"] = r.kidnaps_recovered_1s;

@@ -25,6 +25,25 @@ less_than "$heading" "$HEADING_BOUND_DEG" "fused heading RMSE (deg) after conver
 # is there. Whether the cycle fits the budget is the benchmarks' question (docs/performance.md).
 json_number "$out/stats.json" overruns > /dev/null || fail "the stats have no overrun count"
 for f in index.html trajectory.svg error.svg timing.svg; do test -s "$out/report/$f" || fail "report lacks $f"; done
+# The particle count in the stats: the whole capacity every cycle by default; with KLD-sampling
+# on, fewer once converged (the mean below the capacity), never below the configured minimum, and
+# the pose still within the bound.
+for k in particles_min particles_max; do
+  [ "$(json_number "$out/stats.json" filter.$k)" -eq 1024 ] || fail "filter.$k is not the default capacity 1024"
+done
+printf '[filter]\nkld = true\nkld_min_particles = 128\n' > "$out/kld.toml"
+"$BIN/harmoloc" --dataset "$WORK/test" --map "$WORK/tiny.hmap" --config "$out/kld.toml" --trajectory "$out/kld.tum" \
+  --stats "$out/kld.json" --quiet > /dev/null
+kld_mean=$(json_number "$out/kld.json" filter.particles_mean)
+kld_min=$(json_number "$out/kld.json" filter.particles_min)
+echo "KLD-sampling: $kld_mean particles a cycle on average, $kld_min at the fewest"
+less_than "$kld_mean" 700 "mean particle count with KLD-sampling"
+[ "$kld_min" -ge 128 ] || fail "KLD-sampling went below its minimum: $kld_min"
+[ "$(json_number "$out/kld.json" filter.particles_max)" -eq 1024 ] || fail "KLD-sampling never used the whole capacity"
+"$BIN/harmoloc-report" --truth "$WORK/test/groundtruth.tum" --estimate "$out/kld.tum" --out "$out/kld_report" --skip-initial 3 > /dev/null
+kld_rmse=$(python3 -c "import json,sys; d=json.load(open(sys.argv[1]))['estimate']; print(d.get('after_convergence', d['all'])['rmse_position_cm'])" "$out/kld_report/summary.json")
+echo "KLD-sampling: fused RMSE $kld_rmse cm"
+less_than "$kld_rmse" "$RMSE_BOUND_CM" "fused position RMSE (cm) with KLD-sampling"
 # The documented example config (every key at its default) gives the same result as no config.
 "$BIN/harmoloc" --dataset "$WORK/test" --map "$WORK/tiny.hmap" --config "$(dirname "$0")/../../docs/examples/harmoloc.toml" \
   --trajectory "$out/example_config.tum" --quiet > /dev/null

@@ -138,6 +138,7 @@ struct PassResult {
                               ///< cloud far from where the boards say the robot is)
   bool uses_boards = false;
   std::size_t fewest_particles = 0, most_particles = 0;  ///< over the run's cycles
+  firmware::CycleCounters counters;                      ///< the cycle's own, at the end
 };
 
 // kRecording: the run is recorded as `harmoloc --record` does (every board): frame copies into
@@ -347,6 +348,7 @@ PassResult run_pass(const std::string& dataset, Fault fault) {
   firmware::allow_eigen_heap();
   r.allocations = g_allocations;
   r.first_size = g_first_size;
+  r.counters = cycle->counters();
   const firmware::mavlink::InboundCounters in = cycle->inbound_counters();
   EXPECT_EQ(in.bytes_in, traffic.size());
   EXPECT_EQ(in.commands_accepted, 17U);  // 4 rounds: set pose, relocalize, 2 requests; a set pose
@@ -462,6 +464,16 @@ TEST(StaticMemory, NoAllocationAfterStartUp) {
       EXPECT_EQ(r.fewest_particles, capacity);
       EXPECT_EQ(r.most_particles, capacity);
     }
+    // The stats' particle figures (filter.particles_*) count the same cycles the filter ran.
+    const firmware::CycleCounters& c = r.counters;
+    ASSERT_GT(c.particle_cycles, 0U);
+    EXPECT_LE(c.particle_cycles, r.cycles);
+    EXPECT_EQ(c.particles_min, r.fewest_particles);
+    EXPECT_EQ(c.particles_max, r.most_particles);
+    EXPECT_GE(c.particles_sum, c.particle_cycles * c.particles_min);
+    EXPECT_LE(c.particles_sum, c.particle_cycles * c.particles_max);
+    if (pass.fault == Fault::kKldSampling)
+      EXPECT_LT(c.particles_sum, c.particle_cycles * capacity * 3 / 4) << "few cycles at fewer";
   }
   EXPECT_GE(total, 2000U);
   // Every health state the firmware can be in was exercised.

@@ -47,6 +47,9 @@ def main():
                 problems.append(f"seed {seed}: {key} not measured")
             elif (kind == "max" and v > bound) or (kind == "min" and v < bound):
                 problems.append(f"seed {seed}: {key} = {v:.6g}, bound {bound:.6g}")
+        # The firmware's own particle count (filter.particles_mean in its stats) was read.
+        if not r.get("particles_mean", -1.0) >= 1.0:
+            problems.append(f"seed {seed}: particles_mean not measured")
         kidnaps_all += r["kidnaps"]
         recovered_all += r["kidnaps_recovered_1s"]
         if r["kidnaps"] == 0 or r["kidnaps_recovered_1s"] < MIN_KIDNAP_FRACTION_EACH * r["kidnaps"]:

@@ -73,6 +73,12 @@ struct CycleCounters {
   std::uint64_t overruns = 0;
   std::uint64_t overrun_alarms = 0;  ///< times the overrun alarm was raised
   std::uint64_t resamples = 0;
+  /// The particle count over the cycles with an initialized filter: it changes only with
+  /// KLD-sampling (filter.kld), and is the capacity otherwise.
+  std::uint64_t particle_cycles = 0;
+  std::uint64_t particles_sum = 0;
+  std::uint64_t particles_min = 0;
+  std::uint64_t particles_max = 0;
   std::uint64_t no_consensus = 0;       ///< frames whose boards mostly disagreed with the estimate
   std::uint64_t distrusted_boards = 0;  ///< sum over frames of boards below motion index 1/2
   /// Times the fix's board check found a board dragging the fix (algorithms/fix_board_check.hpp).

@@ -102,6 +102,10 @@ struct Localizer {
 struct Filter {
   std::string observation;  ///< "boards" or "fix"
   std::uint64_t resamples = 0;
+  /// Particles per cycle while the filter ran (KLD-sampling varies it; else the capacity).
+  double particles_mean = 0.0;
+  std::uint64_t particles_min = 0;
+  std::uint64_t particles_max = 0;
   std::uint64_t no_consensus = 0;
   std::uint64_t distrusted_board_frames = 0;
   std::uint64_t fix_board_suspicions = 0;
