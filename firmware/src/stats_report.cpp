@@ -86,9 +86,7 @@ stats::Document stats_document(const StatsSnapshot& snapshot) {
       stats::Localizer{c.fixes_used, c.unknown_place, c.implausible_frames, c.off_map_cycles};
   d.filter = {snapshot.uses_boards ? "boards" : "fix",
               c.resamples,
-              c.particle_cycles == 0
-                  ? 0.0
-                  : static_cast<double>(c.particles_sum) / static_cast<double>(c.particle_cycles),
+              c.particles_mean(),
               c.particles_min,
               c.particles_max,
               c.no_consensus,

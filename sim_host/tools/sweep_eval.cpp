@@ -154,10 +154,7 @@ SceneResult evaluate_scene(const Scenario& scene, const algorithms::ThresholdSet
         r.fused_heading_rmse_deg = s.after.heading_rmse_deg;
         r.fused_max_m = s.after.max_m;
       }
-      if (run.counters.particle_cycles > 0) {
-        r.particles_mean = static_cast<double>(run.counters.particles_sum) /
-                           static_cast<double>(run.counters.particle_cycles);
-      }
+      if (run.counters.particle_cycles > 0) r.particles_mean = run.counters.particles_mean();
     }
     if (opt.kidnap && opt.kidnaps > 0) {
       step("kidnaps");

@@ -88,6 +88,13 @@ struct CycleCounters {
   std::uint64_t lost = 0;             ///< of those, re-seeded over the whole map (no fix)
   std::uint64_t link_dropped = 0;
   std::array<std::uint64_t, 5> cycles_in_health{};
+
+  /// Particles per cycle over the cycles with an initialized filter; 0 before the first.
+  double particles_mean() const {
+    return particle_cycles == 0
+               ? 0.0
+               : static_cast<double>(particles_sum) / static_cast<double>(particle_cycles);
+  }
 };
 
 enum class CycleResult : std::uint8_t { kRan, kEnded };
