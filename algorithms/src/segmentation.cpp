@@ -54,25 +54,55 @@ void BoardClassifier::build(const ThresholdSet& thresholds) {
 
 namespace {
 
-// Pixels are tallied by their board mask (256 possible) and only expanded to per-board counts
-// once per frame, so the per-pixel work does not grow with the number of boards.
-void counts_from_masks(const std::array<std::uint32_t, 256>& by_mask, std::size_t boards,
-                       AreaVector& areas) {
+// Pixels (and their columns) are tallied by their board mask (256 possible) and only expanded to
+// per-board figures once per frame, so the per-pixel work does not grow with the number of boards.
+using MaskCounts = std::array<std::uint32_t, 256>;
+using MaskColumns = std::array<std::uint64_t, 256>;
+
+void counts_from_masks(const MaskCounts& by_mask, const MaskColumns& columns_by_mask,
+                       std::size_t boards, AreaVector& areas) {
   areas.pixels.fill(0U);
+  areas.column_sum.fill(0U);
   areas.count = boards;
   for (std::size_t mask = 1; mask < 256; ++mask) {
     if (by_mask[mask] == 0) continue;
     for (std::size_t k = 0; k < boards; ++k) {
-      if ((mask >> k) & 1U) areas.pixels[k] += by_mask[mask];
+      if ((mask >> k) & 1U) {
+        areas.pixels[k] += by_mask[mask];
+        areas.column_sum[k] += columns_by_mask[mask];
+      }
     }
   }
 }
 
-[[maybe_unused]] void counts_from_totals(const detail::BoardTotals& totals, std::size_t boards,
+[[maybe_unused]] void counts_from_totals(const detail::BoardTotals& totals,
+                                         const detail::BoardTotals& column_sums, std::size_t boards,
                                          AreaVector& areas) {
   areas.pixels.fill(0U);
+  areas.column_sum.fill(0U);
   areas.count = boards;
-  for (std::size_t k = 0; k < boards; ++k) areas.pixels[k] = static_cast<std::uint32_t>(totals[k]);
+  for (std::size_t k = 0; k < boards; ++k) {
+    areas.pixels[k] = static_cast<std::uint32_t>(totals[k]);
+    areas.column_sum[k] = column_sums[k];
+  }
+}
+
+// The boards' pixels in the first and last column, which every path leaves to this one scalar
+// pass (2 pixels a row). @p class_of(row, x) is the class byte of pixel x of the row.
+template <typename ClassOf>
+void measure_sides(const detail::Image& im, std::size_t boards, ClassOf class_of,
+                   AreaVector& areas) {
+  areas.side_pixels.fill(0U);
+  areas.width_px = im.width_px;
+  if (im.width_px == 0) return;
+  const std::uint32_t last = im.width_px - 1U;
+  for (std::uint32_t y = 0; y < im.height_px; ++y) {
+    const std::uint8_t* row = im.row(y);
+    const std::uint32_t left = class_of(row, 0U);
+    const std::uint32_t right = last > 0U ? class_of(row, last) : 0U;
+    for (std::size_t k = 0; k < boards; ++k)
+      areas.side_pixels[k] += ((left >> k) & 1U) + ((right >> k) & 1U);
+  }
 }
 
 inline std::uint8_t clamp_u8(int v) {
@@ -191,20 +221,32 @@ template <typename Classifier>
 void segment_rgb24_with(const std::uint8_t* data, std::uint32_t width_px, std::uint32_t height_px,
                         std::uint32_t stride_bytes, const Classifier& classifier,
                         AreaVector& areas) {
-  std::array<std::uint32_t, 256> by_mask{};
+  MaskCounts by_mask{};
+  MaskColumns columns_by_mask{};
   for (std::uint32_t y = 0; y < height_px; ++y) {
     const std::uint8_t* p = data + static_cast<std::size_t>(y) * stride_bytes;
-    for (std::uint32_t x = 0; x < width_px; ++x, p += 3)
-      ++by_mask[classifier.classify(p[0], p[1], p[2])];
+    for (std::uint32_t x = 0; x < width_px; ++x, p += 3) {
+      const std::uint8_t m = classifier.classify(p[0], p[1], p[2]);
+      ++by_mask[m];
+      columns_by_mask[m] += x;
+    }
   }
-  counts_from_masks(by_mask, classifier.board_count(), areas);
+  counts_from_masks(by_mask, columns_by_mask, classifier.board_count(), areas);
+  measure_sides(
+      detail::Image{data, width_px, height_px, stride_bytes}, classifier.board_count(),
+      [&classifier](const std::uint8_t* row, std::uint32_t x) -> std::uint32_t {
+        const std::uint8_t* p = row + static_cast<std::size_t>(x) * 3U;
+        return classifier.classify(p[0], p[1], p[2]);
+      },
+      areas);
 }
 
 template <typename Classifier>
 void segment_yuyv_with(const std::uint8_t* data, std::uint32_t width_px, std::uint32_t height_px,
                        std::uint32_t stride_bytes, const Classifier& classifier,
                        AreaVector& areas) {
-  std::array<std::uint32_t, 256> by_mask{};
+  MaskCounts by_mask{};
+  MaskColumns columns_by_mask{};
   for (std::uint32_t y = 0; y < height_px; ++y) {
     const std::uint8_t* row = data + static_cast<std::size_t>(y) * stride_bytes;
     for (std::uint32_t x = 0; x < width_px; x += 2U) {
@@ -212,37 +254,63 @@ void segment_yuyv_with(const std::uint8_t* data, std::uint32_t width_px, std::ui
       const ChromaTerms c = chroma_terms(p[1], p[3]);
       for (std::uint32_t i = 0; i < 2U && x + i < width_px; ++i) {
         const Rgb8 rgb = decode_yuv(p[i * 2U], c);
-        ++by_mask[classifier.classify(rgb.r, rgb.g, rgb.b)];
+        const std::uint8_t m = classifier.classify(rgb.r, rgb.g, rgb.b);
+        ++by_mask[m];
+        columns_by_mask[m] += x + i;
       }
     }
   }
-  counts_from_masks(by_mask, classifier.board_count(), areas);
+  counts_from_masks(by_mask, columns_by_mask, classifier.board_count(), areas);
+  measure_sides(
+      detail::Image{data, width_px, height_px, stride_bytes}, classifier.board_count(),
+      [&classifier](const std::uint8_t* row, std::uint32_t x) -> std::uint32_t {
+        const std::uint8_t* p = row + 2U * static_cast<std::size_t>(x & ~1U);
+        const Rgb8 rgb = decode_yuv(p[(x & 1U) * 2U], chroma_terms(p[1], p[3]));
+        return classifier.classify(rgb.r, rgb.g, rgb.b);
+      },
+      areas);
 }
 
 // The scalar table paths classify a row a chunk at a time into a buffer of class bytes and only
 // then tally the chunk. Incrementing a counter chosen by the table load right away makes every
 // later table load wait on that store: on a frame of noise (a cache miss a pixel) that was 8
 // times slower (21 ms against 2.6 ms at 640x480 on the x86-64 host). Four histograms are used in
-// turn, so that runs of one class do not wait on each other's increments either.
+// turn, so that runs of one class do not wait on each other's increments either; each has its
+// column sums beside it.
 constexpr std::uint32_t kChunk = 256;
-using Histograms = std::array<std::array<std::uint32_t, 256>, 4>;
+struct Histograms {
+  std::array<MaskCounts, 4> counts;
+  std::array<MaskColumns, 4> columns;
+};
 
-void tally(const std::uint8_t* classes, std::uint32_t n, Histograms& h) {
+void tally(const std::uint8_t* classes, std::uint32_t n, std::uint32_t x0, Histograms& h) {
   const std::uint8_t* c = classes;
   const std::uint8_t* const end4 = classes + (n & ~3U);
-  for (; c != end4; c += 4) {
-    ++h[0][c[0]];
-    ++h[1][c[1]];
-    ++h[2][c[2]];
-    ++h[3][c[3]];
+  std::uint64_t x = x0;
+  for (; c != end4; c += 4, x += 4) {
+    ++h.counts[0][c[0]];
+    ++h.counts[1][c[1]];
+    ++h.counts[2][c[2]];
+    ++h.counts[3][c[3]];
+    h.columns[0][c[0]] += x;
+    h.columns[1][c[1]] += x + 1U;
+    h.columns[2][c[2]] += x + 2U;
+    h.columns[3][c[3]] += x + 3U;
   }
-  for (; c != classes + n; ++c) ++h[0][*c];
+  for (; c != classes + n; ++c, ++x) {
+    ++h.counts[0][*c];
+    h.columns[0][*c] += x;
+  }
 }
 
 void merge_histograms(const Histograms& h, std::size_t boards, AreaVector& areas) {
-  std::array<std::uint32_t, 256> by_mask{};
-  for (std::size_t m = 0; m < 256; ++m) by_mask[m] = h[0][m] + h[1][m] + h[2][m] + h[3][m];
-  counts_from_masks(by_mask, boards, areas);
+  MaskCounts by_mask{};
+  MaskColumns columns_by_mask{};
+  for (std::size_t m = 0; m < 256; ++m) {
+    by_mask[m] = h.counts[0][m] + h.counts[1][m] + h.counts[2][m] + h.counts[3][m];
+    columns_by_mask[m] = h.columns[0][m] + h.columns[1][m] + h.columns[2][m] + h.columns[3][m];
+  }
+  counts_from_masks(by_mask, columns_by_mask, boards, areas);
 }
 
 template <bool kYuyv>
@@ -256,42 +324,72 @@ void segment_scalar(const detail::Image& im, const std::uint8_t* table, Histogra
         detail::classify_yuyv_row(row, x, n, table, classes);
       else
         detail::classify_rgb24_row(row, im.width_px, x, n, table, classes);
-      tally(classes, n, h);
+      tally(classes, n, x, h);
     }
   }
 }
 
 enum class Format { kRgb24, kYuyv };
 
+// The class byte of pixel @p x of a row, read through the table as the paths read it.
+std::uint32_t table_class(Format format, const std::uint8_t* entries, const std::uint8_t* row,
+                          std::uint32_t x) {
+  if (format == Format::kRgb24)
+    return entries[detail::rgb_index3(row + static_cast<std::size_t>(x) * 3U)];
+  const std::uint32_t pair = detail::load_le32(row + static_cast<std::size_t>(x & ~1U) * 2U);
+  return entries[(x & 1U) != 0U ? detail::yuyv_index_odd(pair) : detail::yuyv_index_even(pair)];
+}
+
+void segment_by_path(Format format, const detail::Image& im, const MaskTable& table,
+                     AreaVector& areas);
+
 void segment_with_table(Format format, const detail::Image& im, const MaskTable& table,
                         AreaVector& areas) {
   const std::size_t boards = table.board_count();
   if (!table.ready() || boards == 0 || im.width_px == 0 || im.height_px == 0) {
     areas.pixels.fill(0U);
+    areas.column_sum.fill(0U);
+    areas.side_pixels.fill(0U);
+    areas.width_px = table.ready() ? im.width_px : 0U;
     areas.count = table.ready() ? boards : 0;
     return;
   }
+  segment_by_path(format, im, table, areas);
+  const std::uint8_t* entries = table.entries();
+  measure_sides(
+      im, boards,
+      [format, entries](const std::uint8_t* row, std::uint32_t x) {
+        return table_class(format, entries, row, x);
+      },
+      areas);
+}
+
+void segment_by_path(Format format, const detail::Image& im, const MaskTable& table,
+                     AreaVector& areas) {
+  const std::size_t boards = table.board_count();
   const std::uint8_t* entries = table.entries();
   switch (table.path()) {
 #if HARMOLOC_SEGMENT_AVX2
     case SegmentPath::kAvx2: {
       detail::BoardTotals totals{};
+      detail::BoardTotals column_sums{};
       if (format == Format::kRgb24)
-        detail::count_rgb24_avx2(im, entries, boards, totals);
+        detail::count_rgb24_avx2(im, entries, boards, totals, column_sums);
       else
-        detail::count_yuyv_avx2(im, entries, boards, totals);
-      counts_from_totals(totals, boards, areas);
+        detail::count_yuyv_avx2(im, entries, boards, totals, column_sums);
+      counts_from_totals(totals, column_sums, boards, areas);
       return;
     }
 #endif
 #if HARMOLOC_SEGMENT_NEON
     case SegmentPath::kNeon: {
       detail::BoardTotals totals{};
+      detail::BoardTotals column_sums{};
       if (format == Format::kRgb24)
-        detail::count_rgb24_neon(im, entries, boards, totals);
+        detail::count_rgb24_neon(im, entries, boards, totals, column_sums);
       else
-        detail::count_yuyv_neon(im, entries, boards, totals);
-      counts_from_totals(totals, boards, areas);
+        detail::count_yuyv_neon(im, entries, boards, totals, column_sums);
+      counts_from_totals(totals, column_sums, boards, areas);
       return;
     }
 #endif

@@ -1,22 +1,24 @@
 // The AVX2 segmentation path (x86-64, chosen at run time when the CPU has AVX2; the rest of the
 // build stays baseline x86-64). Per 32 pixels: the table indices built with two shuffles per 8
 // pixels, four vpgatherdd (8 table loads each), three blends into 32 class bytes, and the class
-// bits counted in 4-bit counters. Areas are identical to the scalar path (tested).
+// bits counted in 4-bit counters. A block with any board pixel also adds each board's columns,
+// from a movemask and five POPCNTs a board. Areas and columns are identical to the scalar path
+// (tested).
 #include "segmentation_kernels.hpp"
 
 #if HARMOLOC_SEGMENT_AVX2
 
 #include <immintrin.h>
 
-#define HARMOLOC_AVX2 __attribute__((target("avx2")))
-#define HARMOLOC_AVX2_INLINE __attribute__((target("avx2"), always_inline)) inline
+#define HARMOLOC_AVX2 __attribute__((target("avx2,popcnt")))
+#define HARMOLOC_AVX2_INLINE __attribute__((target("avx2,popcnt"), always_inline)) inline
 
 namespace harmoloc::algorithms::detail {
 
 bool cpu_has_avx2() {
   // Safe before static constructors ran; libgcc's check includes the OS saving YMM registers.
   __builtin_cpu_init();
-  return __builtin_cpu_supports("avx2") != 0;
+  return __builtin_cpu_supports("avx2") != 0 && __builtin_cpu_supports("popcnt") != 0;
 }
 
 namespace {
@@ -85,6 +87,50 @@ HARMOLOC_AVX2_INLINE __m256i gather_classes(const std::uint8_t* table, __m256i i
   return _mm256_blendv_epi8(even, odd, odd_bytes);
 }
 
+// Where the pixels of a block sit among its 32 class bytes. gather_classes puts pixel 8g + j
+// (gather g, dword j) in byte 4j + g; a row's tail, classified one by one, is in pixel order.
+enum class ByteOrder { kGathered, kPixels };
+
+// Adds the columns of each board's pixels among the 32 class bytes of the block at column @p x0.
+// Most blocks of a frame hold no board at all and cost one test. Bit k of every byte, shifted to
+// bit 7 (16-bit shifts: the bits pulled in from below come from the same byte), is movemasked
+// into a 32-bit set of bytes; the sum of their pixels' places in the block is taken bit by bit of
+// the byte number, one POPCNT for each of its five bits, weighted by what that bit is worth.
+template <int kBoards, ByteOrder kOrder>
+HARMOLOC_AVX2_INLINE void add_columns(__m256i classes, std::uint32_t x0,
+                                      std::uint64_t (&column_sums)[8]) {
+  if (_mm256_testz_si256(classes, classes)) return;
+  // log2 of the place worth of byte-number bits 0..4: 1, 2, 4, 8, 16 in pixel order; in gathered
+  // order bits 0-1 (g) are worth 8 and 16 and bits 2-4 (j) 1, 2 and 4.
+  constexpr bool kG = kOrder == ByteOrder::kGathered;
+  constexpr unsigned kShift[5] = {kG ? 3U : 0U, kG ? 4U : 1U, kG ? 0U : 2U, kG ? 1U : 3U,
+                                  kG ? 2U : 4U};
+  // The boards present in the block (the OR of its 32 bytes): a block at a board's edge holds one
+  // or two of them, so only those are gone through.
+  const __m128i half =
+      _mm_or_si128(_mm256_castsi256_si128(classes), _mm256_extracti128_si256(classes, 1));
+  auto folded = static_cast<std::uint64_t>(
+      _mm_cvtsi128_si64(_mm_or_si128(half, _mm_unpackhi_epi64(half, half))));
+  folded |= folded >> 32U;
+  folded |= folded >> 16U;
+  folded |= folded >> 8U;
+  auto present = static_cast<std::uint32_t>(folded & ((1U << kBoards) - 1U));
+  while (present != 0U) {
+    const int k = __builtin_ctz(present);
+    present &= present - 1U;
+    const auto set = static_cast<std::uint32_t>(
+        _mm256_movemask_epi8(_mm256_sll_epi16(classes, _mm_cvtsi32_si128(7 - k))));
+    const auto count = [set](std::uint32_t bits) {
+      return static_cast<std::uint32_t>(__builtin_popcount(set & bits));
+    };
+    const std::uint32_t places =
+        (count(0xAAAAAAAAU) << kShift[0]) + (count(0xCCCCCCCCU) << kShift[1]) +
+        (count(0xF0F0F0F0U) << kShift[2]) + (count(0xFF00FF00U) << kShift[3]) +
+        (count(0xFFFF0000U) << kShift[4]);
+    column_sums[k] += static_cast<std::uint64_t>(x0) * count(0xFFFFFFFFU) + places;
+  }
+}
+
 HARMOLOC_AVX2_INLINE __m256i load256(const std::uint8_t* p) {
   return _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p));
 }
@@ -142,7 +188,8 @@ struct YuyvLayout {
 };
 
 template <typename Layout, int kBoards>
-HARMOLOC_AVX2 void count_frame(const Image& im, const std::uint8_t* table, BoardTotals& totals) {
+HARMOLOC_AVX2 void count_frame(const Image& im, const std::uint8_t* table, BoardTotals& totals,
+                               BoardTotals& column_sums) {
   const Layout layout = Layout::make();
   const __m256i odd_bytes = _mm256_set1_epi16(static_cast<short>(0xFF00));
   const __m256i bits = _mm256_set1_epi8(0x11);
@@ -161,8 +208,11 @@ HARMOLOC_AVX2 void count_frame(const Image& im, const std::uint8_t* table, Board
       const std::uint8_t* block =
           row + static_cast<std::size_t>(x) * (Layout::kBytesPerBlock / kBlock);
       const std::uint8_t* const end = block + static_cast<std::size_t>(n) * Layout::kBytesPerBlock;
-      for (; block != end; block += Layout::kBytesPerBlock)
-        add(c, layout.classes(block, table, odd_bytes), bits);
+      for (std::uint32_t bx = x; block != end; block += Layout::kBytesPerBlock, bx += kBlock) {
+        const __m256i classes = layout.classes(block, table, odd_bytes);
+        add(c, classes, bits);
+        add_columns<kBoards, ByteOrder::kGathered>(classes, bx, column_sums);
+      }
       x += n * kBlock;
       pending += n;
       if (pending == kBlocksPerFlush) {
@@ -174,7 +224,9 @@ HARMOLOC_AVX2 void count_frame(const Image& im, const std::uint8_t* table, Board
       // The row's last pixels, classified one by one; the unused bytes stay 0, no board's class.
       alignas(32) std::uint8_t rest[kBlock] = {};
       Layout::tail(row, im.width_px, x, im.width_px - x, table, rest);
-      add(c, load256(rest), bits);
+      const __m256i classes = load256(rest);
+      add(c, classes, bits);
+      add_columns<kBoards, ByteOrder::kPixels>(classes, x, column_sums);
       if (++pending == kBlocksPerFlush) {
         flush(c, sums);
         pending = 0;
@@ -191,37 +243,37 @@ HARMOLOC_AVX2 void count_frame(const Image& im, const std::uint8_t* table, Board
 
 template <typename Layout>
 void count_boards(const Image& im, const std::uint8_t* table, std::size_t boards,
-                  BoardTotals& totals) {
+                  BoardTotals& totals, BoardTotals& column_sums) {
   switch (boards) {
     case 1:
-      return count_frame<Layout, 1>(im, table, totals);
+      return count_frame<Layout, 1>(im, table, totals, column_sums);
     case 2:
-      return count_frame<Layout, 2>(im, table, totals);
+      return count_frame<Layout, 2>(im, table, totals, column_sums);
     case 3:
-      return count_frame<Layout, 3>(im, table, totals);
+      return count_frame<Layout, 3>(im, table, totals, column_sums);
     case 4:
-      return count_frame<Layout, 4>(im, table, totals);
+      return count_frame<Layout, 4>(im, table, totals, column_sums);
     case 5:
-      return count_frame<Layout, 5>(im, table, totals);
+      return count_frame<Layout, 5>(im, table, totals, column_sums);
     case 6:
-      return count_frame<Layout, 6>(im, table, totals);
+      return count_frame<Layout, 6>(im, table, totals, column_sums);
     case 7:
-      return count_frame<Layout, 7>(im, table, totals);
+      return count_frame<Layout, 7>(im, table, totals, column_sums);
     default:
-      return count_frame<Layout, 8>(im, table, totals);
+      return count_frame<Layout, 8>(im, table, totals, column_sums);
   }
 }
 
 }  // namespace
 
 void count_rgb24_avx2(const Image& image, const std::uint8_t* table, std::size_t boards,
-                      BoardTotals& totals) {
-  count_boards<Rgb24Layout>(image, table, boards, totals);
+                      BoardTotals& totals, BoardTotals& column_sums) {
+  count_boards<Rgb24Layout>(image, table, boards, totals, column_sums);
 }
 
 void count_yuyv_avx2(const Image& image, const std::uint8_t* table, std::size_t boards,
-                     BoardTotals& totals) {
-  count_boards<YuyvLayout>(image, table, boards, totals);
+                     BoardTotals& totals, BoardTotals& column_sums) {
+  count_boards<YuyvLayout>(image, table, boards, totals, column_sums);
 }
 
 }  // namespace harmoloc::algorithms::detail

@@ -71,7 +71,15 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   for (std::size_t k = 0; k < kMaxBoards; ++k) {
     HARMOLOC_FUZZ_CHECK(areas.pixels[k] <= pixel_count, "more board pixels than pixels");
     if (k >= set.count) HARMOLOC_FUZZ_CHECK(areas.pixels[k] == 0, "area for a board not asked");
+    // Every pixel's column is below the width, and a side pixel is a board pixel.
+    const std::uint64_t last_column = width == 0 ? 0 : width - 1U;
+    HARMOLOC_FUZZ_CHECK(areas.column_sum[k] <= std::uint64_t{areas.pixels[k]} * last_column,
+                        "column sum past the frame's width");
+    HARMOLOC_FUZZ_CHECK(areas.side_pixels[k] <= areas.pixels[k] &&
+                            areas.side_pixels[k] <= 2U * std::uint64_t{height},
+                        "more side pixels than board pixels or sides");
   }
+  HARMOLOC_FUZZ_CHECK(areas.width_px == width, "columns counted in the wrong width");
 
   // The convenience overload (thresholds compiled on the stack) must agree.
   AreaVector again;
@@ -79,7 +87,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     segment_yuyv(frame, width, height, stride, set, again);
   else
     segment_rgb24(frame, width, height, stride, set, again);
-  HARMOLOC_FUZZ_CHECK(again.count == areas.count && again.pixels == areas.pixels,
+  HARMOLOC_FUZZ_CHECK(again.count == areas.count && again.pixels == areas.pixels &&
+                          again.column_sum == areas.column_sum &&
+                          again.side_pixels == areas.side_pixels,
                       "overloads disagree");
   return 0;
 }

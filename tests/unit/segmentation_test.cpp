@@ -443,13 +443,48 @@ TEST(SegmentRgb24, CountsRectanglesOfKnownSizeAndIgnoresRowPadding) {
   EXPECT_EQ(areas.pixels[3], 40U * 30U);
   for (std::size_t k = 4; k < ha::kMaxBoards; ++k) EXPECT_EQ(areas.pixels[k], 0U) << k;
 
+  // Columns: red 5 rows of x 3..12, 2 rows of x 30..31, one row of x 30..32; green 3 rows of
+  // x 20..26; blue the two corner pixels (x 0 and 39), both on a side; everything 30 rows of
+  // x 0..39, 60 pixels on the sides.
+  EXPECT_EQ(areas.width_px, 40U);
+  EXPECT_TRUE(areas.columns_measured());
+  EXPECT_EQ(areas.column_sum[0], 5U * 75U + 2U * 61U + 93U);
+  EXPECT_EQ(areas.column_sum[1], 3U * 161U);
+  EXPECT_EQ(areas.column_sum[2], 39U);
+  EXPECT_EQ(areas.column_sum[3], 30U * 780U);
+  EXPECT_DOUBLE_EQ(areas.centroid_column_px(3), 19.5);  // (width - 1) / 2
+  EXPECT_DOUBLE_EQ(areas.centroid_column_px(1), 23.0);
+  EXPECT_EQ(areas.side_pixels[0], 0U);
+  EXPECT_EQ(areas.side_pixels[1], 0U);
+  EXPECT_EQ(areas.side_pixels[2], 2U);
+  EXPECT_EQ(areas.side_pixels[3], 60U);
+  for (std::size_t k = 4; k < ha::kMaxBoards; ++k) {
+    EXPECT_EQ(areas.column_sum[k], 0U) << k;
+    EXPECT_EQ(areas.side_pixels[k], 0U) << k;
+  }
+
   // The classifier compiled once gives the same areas as the convenience overload.
   const ha::BoardClassifier classifier(set);
   ha::AreaVector again;
   again.pixels.fill(777U);
+  again.column_sum.fill(777U);
+  again.side_pixels.fill(777U);
   ha::segment_rgb24(img.data(), img.width(), img.height(), img.stride(), classifier, again);
   EXPECT_EQ(again.count, areas.count);
   EXPECT_EQ(again.pixels, areas.pixels);
+  EXPECT_EQ(again.column_sum, areas.column_sum);
+  EXPECT_EQ(again.side_pixels, areas.side_pixels);
+  EXPECT_EQ(again.width_px, areas.width_px);
+}
+
+TEST(SegmentRgb24, OneColumnFrameCountsItsPixelsOnceAsSidePixels) {
+  RgbImage img(1, 5, 3, Rgb{220, 30, 30}, Rgb{0, 0, 0});
+  ha::AreaVector areas;
+  ha::segment_rgb24(img.data(), 1, 5, 3, ht::board_windows(1), areas);
+  EXPECT_EQ(areas.pixels[0], 5U);
+  EXPECT_EQ(areas.column_sum[0], 0U);
+  EXPECT_EQ(areas.side_pixels[0], 5U);
+  EXPECT_EQ(areas.width_px, 1U);
 }
 
 TEST(SegmentRgb24, EmptyThresholdSetAndEmptyImage) {
@@ -759,6 +794,8 @@ std::uint64_t expect_paths_agree(const std::uint8_t* data, std::uint32_t w, std:
   for (ha::SegmentPath path : supported_paths()) {
     ha::AreaVector areas;
     areas.pixels.fill(12345U);  // stale values must be cleared
+    areas.column_sum.fill(12345U);
+    areas.side_pixels.fill(12345U);
     if (yuyv) {
       EXPECT_TRUE(tables.yuyv.set_path(path));
       ha::segment_yuyv(data, w, h, stride, tables.yuyv, areas);
@@ -770,6 +807,12 @@ std::uint64_t expect_paths_agree(const std::uint8_t* data, std::uint32_t w, std:
     EXPECT_EQ(areas.pixels, reference.pixels)
         << what << ", path " << ha::segment_path_name(path) << ", areas [0] " << areas.pixels[0]
         << " expected " << reference.pixels[0];
+    EXPECT_EQ(areas.column_sum, reference.column_sum)
+        << what << ", path " << ha::segment_path_name(path) << ", columns [0] "
+        << areas.column_sum[0] << " expected " << reference.column_sum[0];
+    EXPECT_EQ(areas.side_pixels, reference.side_pixels)
+        << what << ", path " << ha::segment_path_name(path);
+    EXPECT_EQ(areas.width_px, w) << what;
   }
   tables.rgb.set_path(ha::best_segment_path());
   tables.yuyv.set_path(ha::best_segment_path());
@@ -934,10 +977,16 @@ TEST(SegmentPaths, CountersDoNotOverflowOnLargeUniformFrames) {
           tables.rgb.set_path(path);
           ha::segment_rgb24(frame.data(), w, h, stride, tables.rgb, areas);
         }
+        // The column sums reach 20000 * 33 * 32 / 2 and 700 * 4096 * 4095 / 2 (5.9e9).
+        const std::uint64_t columns = std::uint64_t{h} * w * (w - 1U) / 2U;
         for (std::size_t k = 0; k < 8; ++k) {
           EXPECT_EQ(areas.pixels[k], w * h)
               << (yuyv ? "YUYV " : "RGB24 ") << w << "x" << h << " board " << k << ", path "
               << ha::segment_path_name(path);
+          EXPECT_EQ(areas.column_sum[k], columns)
+              << (yuyv ? "YUYV " : "RGB24 ") << w << "x" << h << " board " << k << ", path "
+              << ha::segment_path_name(path);
+          EXPECT_EQ(areas.side_pixels[k], 2U * h);
         }
       }
     }

@@ -30,10 +30,28 @@ struct ThresholdSet {
 bool operator==(const ColourThreshold& a, const ColourThreshold& b);
 bool operator==(const ThresholdSet& a, const ThresholdSet& b);
 
-/// Pixel counts per board.
+/// Pixel counts per board, and where in the frame's width each board's pixels lie.
 struct AreaVector {
   std::array<std::uint32_t, kMaxBoards> pixels{};
+  /// Sum of the column (0 = left) of every pixel of the board: column_sum / pixels is the
+  /// board's centroid column, its bearing in the camera once the lens is known. 64-bit, so no
+  /// frame size overflows it.
+  std::array<std::uint64_t, kMaxBoards> column_sum{};
+  /// Pixels of the board in the frame's first and last column: a blob that touches either side
+  /// is cut by the frame, and its centroid is pulled inwards.
+  std::array<std::uint32_t, kMaxBoards> side_pixels{};
+  /// The frame's width the columns count in; 0 when the columns were not measured (area logs
+  /// written before they were, areas made by hand).
+  std::uint32_t width_px = 0;
   std::size_t count = 0;
+
+  bool columns_measured() const { return width_px != 0; }
+  /// Board @p k's centroid column in pixels, (width - 1) / 2 at the image centre; meaningful only
+  /// when columns_measured() and pixels[k] > 0.
+  double centroid_column_px(std::size_t k) const {
+    return pixels[k] == 0 ? 0.0
+                          : static_cast<double>(column_sum[k]) / static_cast<double>(pixels[k]);
+  }
 };
 
 /// OpenCV's 8-bit HSV of one RGB pixel: H in 0..179 (2 degrees a step), S and V in 0..255.
