@@ -506,6 +506,24 @@ def mavlink_seeds(e2e):
 
 # --- large and deeply nested inputs (issue 16) ---------------------------------------------------
 
+def area_log_seeds(e2e):
+    head = ("# harmoloc area log v1: pixels of each board per frame\n"
+            "# width_px=320 height_px=240 thresholds_crc32=0x1c2d3e4f\n")
+    put("area_log", "v1.csv", head + "timestamp_ns,red,green\n100,1,2\n200,3,4\n")
+    put("area_log", "distrust.csv",
+        head + "timestamp_ns,red,green,distrusted_mask\n100,1,2,0\n200,3,4,2\n")
+    cols = ("timestamp_ns,red,green,distrusted_mask,column_sum_red,column_sum_green,"
+            "side_px_red,side_px_green\n")
+    put("area_log", "columns.csv",
+        head + cols + "100,10,20,0,1500,3190,0,2\n200,0,76800,1,0,12249600,0,480\n"
+        "300,5,5,0,-,-,-,-\n")
+    put("area_log", "bad-columns.csv", head + cols + "100,1,2,0,320,0,0,0\n100,1,2,0,-,1,0,0\n")
+    if e2e:
+        p = os.path.join(e2e, "areas.csv")
+        if os.path.exists(p):
+            put("area_log", "e2e-areas.csv", head_lines(p, 40))
+
+
 def large_structure_seeds(e2e):
     """The shapes of the adversarial probe: TOML nested past the 32-level bound (dotted keys,
     table headers, arrays, inline tables) and just within it, and long lines, in each TOML
@@ -560,7 +578,7 @@ def main():
         print("note: %s not found: only the hand-written seeds" % args.e2e, file=sys.stderr)
     for make in (map_seeds, config_seeds, metadata_seeds, frame_index_seeds, candump_seeds,
                  encoder_csv_seeds, tum_seeds, scenario_seeds, segment_seeds, mavlink_seeds,
-                 large_structure_seeds, signing_state_seeds):
+                 large_structure_seeds, signing_state_seeds, area_log_seeds):
         make(args.e2e)
     total = 0
     for d, _, files in os.walk(CORPUS):

@@ -19,12 +19,12 @@ HERE=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 ROOT=$(cd "$HERE/../.." && pwd)
 BUILD=${FUZZ_BUILD_DIR:-$ROOT/build/fuzz}
 TARGETS=(map_decode map_roundtrip config metadata frame_index ppm_header candump_line candump_log
-  tum scenario segment mavlink_inbound encoder_csv signing_state)
+  tum scenario segment mavlink_inbound encoder_csv signing_state area_log)
 
 dict_for() {
   case "$1" in
     config | metadata | scenario) echo "$HERE/dict/toml.dict" ;;
-    frame_index | ppm_header | candump_line | candump_log | tum | encoder_csv) echo "$HERE/dict/dataset_text.dict" ;;
+    frame_index | ppm_header | candump_line | candump_log | tum | encoder_csv | area_log) echo "$HERE/dict/dataset_text.dict" ;;
     signing_state) echo "$HERE/dict/signing_state.dict" ;;
     *) echo "" ;;
   esac

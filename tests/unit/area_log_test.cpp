@@ -89,6 +89,49 @@ TEST(AreaLog, DistrustedMaskRoundTripAndOldLogsStillRead) {
   EXPECT_EQ(before.areas[1].pixels[1], 4U);
 }
 
+// The columns after distrusted_mask: each board's column sum and side pixels, read back exactly;
+// a frame whose columns were not measured is written with '-' and reads back unmeasured; a log
+// from before the columns reads with no frame measured.
+TEST(AreaLog, ColumnSumsRoundTripAndOlderLogsReadUnmeasured) {
+  ht::TempDir dir;
+  std::vector<ha::AreaVector> frames(3);
+  for (std::size_t i = 0; i < 3; ++i) {
+    ha::AreaVector& a = frames[i];
+    a.count = 6;
+    for (std::size_t k = 0; k < 6; ++k) {
+      a.pixels[k] = static_cast<std::uint32_t>(1000 + 10 * i + k);
+      a.column_sum[k] = std::uint64_t{a.pixels[k]} * (40U + 37U * k) + i;
+      a.side_pixels[k] = static_cast<std::uint32_t>(k == 2 ? 480 : i);  // 480: both sides full
+    }
+    a.width_px = 320;
+  }
+  frames[1].width_px = 0;                     // not measured: written as '-'
+  frames[2].column_sum[4] = 76800ULL * 319U;  // the largest sum a full frame can have
+  frames[2].pixels[4] = 76800U;
+  const hd::AreaLog log = hd::read_area_log(write_log(dir, frames));
+  EXPECT_TRUE(log.has_columns);
+  ASSERT_EQ(log.areas.size(), 3U);
+  for (std::size_t i : {0U, 2U}) {
+    EXPECT_EQ(log.areas[i].width_px, 320U) << i;
+    EXPECT_EQ(log.areas[i].pixels, frames[i].pixels) << i;
+    EXPECT_EQ(log.areas[i].column_sum, frames[i].column_sum) << i;
+    EXPECT_EQ(log.areas[i].side_pixels, frames[i].side_pixels) << i;
+  }
+  EXPECT_FALSE(log.areas[1].columns_measured());
+  EXPECT_EQ(log.areas[1].pixels, frames[1].pixels);
+  EXPECT_EQ(log.areas[1].column_sum, (std::array<std::uint64_t, ha::kMaxBoards>{}));
+
+  const std::string before = dir.path("before.csv");
+  ht::write_text(before,
+                 "# harmoloc area log v1: pixels of each board per frame\n"
+                 "# width_px=320 height_px=240 thresholds_crc32=0x0000abcd\n"
+                 "timestamp_ns,red,green,distrusted_mask\n100,1,2,0\n");
+  const hd::AreaLog old = hd::read_area_log(before);
+  EXPECT_TRUE(old.has_distrust);
+  EXPECT_FALSE(old.has_columns);
+  EXPECT_FALSE(old.areas[0].columns_measured());
+}
+
 TEST(AreaLog, FingerprintFollowsEveryThresholdField) {
   const ha::ThresholdSet base = ht::board_windows();
   const std::uint32_t f = hd::thresholds_fingerprint(base);
@@ -125,6 +168,9 @@ TEST(AreaLog, BadFilesFailWithOneLine) {
       "# harmoloc area log v1: pixels of each board per frame\n"
       "# width_px=320 height_px=240 thresholds_crc32=0x0000abcd\n"
       "timestamp_ns,red,green\n";
+  const std::string with_columns =
+      head.substr(0, head.size() - 1) +
+      ",distrusted_mask,column_sum_red,column_sum_green,side_px_red,side_px_green\n";
   const std::vector<std::pair<std::string, std::string>> cases = {
       {"", "not an area log"},
       {"timestamp_ns,red\n1,2\n", "not an area log"},
@@ -150,6 +196,19 @@ TEST(AreaLog, BadFilesFailWithOneLine) {
       {head.substr(0, head.size() - 1) + ",distrusted_mask\n100,1,2,4\n", "distrusted_mask"},
       {head.substr(0, head.size() - 1) + ",distrusted_mask\n100,1,2,x\n", "distrusted_mask"},
       {head.substr(0, head.size() - 1) + ",distrusted_mask\n100,1,2,3,0\n", "more columns"},
+      {head.substr(0, head.size() - 1) + ",distrusted_mask,column_sum_red\n100,1,2,0,0\n",
+       "after distrusted_mask"},
+      {head.substr(0, head.size() - 1) +
+           ",distrusted_mask,column_sum_green,column_sum_red,side_px_red,side_px_green\n",
+       "after distrusted_mask"},
+      {with_columns + "100,1,2,0,0,639,0,0\n", "column_sum_green"},  // 2 pixels: 638 at most
+      {with_columns + "100,1,2,0,320,0,0,0\n", "column_sum_red"},    // 1 pixel: 319 at most
+      {with_columns + "100,1,2,0,0,638,2,0\n", "side_px_red"},       // 2 side pixels, 1 pixel
+      {with_columns + "100,1,2,0,0,0,0,481\n", "side_px_green"},
+      {with_columns + "100,1,2,0,-,-,-,0\n", "column_sum_red"},  // '-' is all or none
+      {with_columns + "100,1,2,0,0,0,0\n", "side_px_green"},
+      {with_columns + "100,1,2,0,0,0,0,0,0\n", "more columns"},
+      {with_columns + "100,1,2,0,-,-,-,-,-\n", "more columns"},
   };
   for (const auto& [text, what] : cases) {
     ht::write_text(p, text);

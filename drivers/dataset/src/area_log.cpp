@@ -16,8 +16,12 @@ namespace harmoloc::dataset {
 namespace {
 
 constexpr const char* kMagic = "# harmoloc area log v1";
-// The optional last column (added after v1's first release; a log without it still reads).
+// The optional column after the boards (added after v1's first release; a log without it still
+// reads), and the optional columns after it: each board's column sum, then its side pixels
+// (added later still; AreaVector::column_sum, side_pixels).
 constexpr const char* kDistrustColumn = "distrusted_mask";
+constexpr const char* kColumnSumPrefix = "column_sum_";
+constexpr const char* kSidePrefix = "side_px_";
 
 [[noreturn]] void fail(const std::string& path, std::size_t line, const std::string& what) {
   throw std::runtime_error(path + ":" + std::to_string(line) + ": " + what);
@@ -108,16 +112,30 @@ AreaLog read_area_log(const std::string& path) {
     std::string col;
     std::getline(s, col, ',');
     if (col != "timestamp_ns") fail(path, n, "first column must be timestamp_ns");
+    std::vector<std::string> after;  // the columns after distrusted_mask
     while (std::getline(s, col, ',')) {
       if (col.empty()) fail(path, n, "empty board name in the column header");
-      log.board_names.push_back(col);
-    }
-    if (!log.board_names.empty() && log.board_names.back() == kDistrustColumn) {
-      log.board_names.pop_back();
-      log.has_distrust = true;
+      if (log.has_distrust) {
+        after.push_back(col);
+      } else if (col == kDistrustColumn) {
+        log.has_distrust = true;
+      } else {
+        log.board_names.push_back(col);
+      }
     }
     if (log.board_names.empty() || log.board_names.size() > algorithms::kMaxBoards) {
       fail(path, n, "needs 1 to " + std::to_string(algorithms::kMaxBoards) + " board columns");
+    }
+    if (!after.empty()) {
+      std::vector<std::string> expected;
+      for (const std::string& b : log.board_names) expected.push_back(kColumnSumPrefix + b);
+      for (const std::string& b : log.board_names) expected.push_back(kSidePrefix + b);
+      if (after != expected) {
+        fail(path, n,
+             "after distrusted_mask: expected " + std::string(kColumnSumPrefix) +
+                 "<board> and then " + kSidePrefix + "<board> for every board, in order");
+      }
+      log.has_columns = true;
     }
   }
   const std::uint64_t max_area = wv * hv;
@@ -148,6 +166,36 @@ AreaLog read_area_log(const std::string& path) {
       }
       log.distrusted_mask.push_back(static_cast<std::uint32_t>(mask));
     }
+    if (log.has_columns) {
+      // A frame's column fields are all '-' (not measured) or all numbers: a pixel's column is
+      // below the width; a side pixel is one of the board's pixels, in the first or last column
+      // of a row.
+      std::vector<std::string> f;
+      while (f.size() <= 2U * a.count && std::getline(s, field, ',')) f.push_back(field);
+      if (f.size() > 2U * a.count) fail(path, n, "more columns than boards");
+      bool unmeasured = f.size() == 2U * a.count;
+      for (const std::string& v : f) unmeasured = unmeasured && v == "-";
+      for (std::size_t k = 0; !unmeasured && k < a.count; ++k) {
+        std::uint64_t v = 0;
+        if (k >= f.size() || !parse_u64(f[k], v) || v > std::uint64_t{a.pixels[k]} * (wv - 1U)) {
+          fail(path, n,
+               kColumnSumPrefix + log.board_names[k] +
+                   ": not a sum of columns of the board's pixels within the width");
+        }
+        a.column_sum[k] = v;
+      }
+      for (std::size_t k = 0; !unmeasured && k < a.count; ++k) {
+        std::uint64_t v = 0;
+        if (a.count + k >= f.size() || !parse_u64(f[a.count + k], v) || v > a.pixels[k] ||
+            v > 2U * hv) {
+          fail(path, n,
+               kSidePrefix + log.board_names[k] +
+                   ": more side pixels than the board's pixels or the frame's two sides hold");
+        }
+        a.side_pixels[k] = static_cast<std::uint32_t>(v);
+      }
+      if (!unmeasured) a.width_px = log.image_width_px;
+    }
     if (std::getline(s, field, ',')) fail(path, n, "more columns than boards");
     log.timestamp_ns.push_back(t);
     log.areas.push_back(a);
@@ -173,14 +221,25 @@ bool AreaLogWriter::open(const std::string& path, std::uint32_t width_px, std::u
       std::fprintf(f, ",board%zu", k + 1);
     }
   }
-  std::fprintf(f, ",%s\n", kDistrustColumn);
+  std::fprintf(f, ",%s", kDistrustColumn);
+  for (const char* prefix : {kColumnSumPrefix, kSidePrefix}) {
+    for (std::size_t k = 0; k < boards_; ++k) {
+      if (k < board_names.size() && !board_names[k].empty()) {
+        std::fprintf(f, ",%s%s", prefix, board_names[k].c_str());
+      } else {
+        std::fprintf(f, ",%sboard%zu", prefix, k + 1);
+      }
+    }
+  }
+  std::fputc('\n', f);
   return std::ferror(f) == 0;
 }
 
 void AreaLogWriter::write(std::uint64_t t_ns, const algorithms::AreaVector& areas,
                           std::uint32_t distrusted_mask) {
   if (!out_.is_open()) return;
-  char line[256];
+  // 20 digits of time, and per board (8 at most) 10 of pixels, 20 of column sum, 10 of sides.
+  char line[512];
   int n = std::snprintf(line, sizeof line, "%" PRIu64, t_ns);
   for (std::size_t k = 0; k < boards_ && n > 0 && static_cast<std::size_t>(n) < sizeof line; ++k) {
     n += std::snprintf(line + n, sizeof line - static_cast<std::size_t>(n), ",%" PRIu32,
@@ -191,6 +250,25 @@ void AreaLogWriter::write(std::uint64_t t_ns, const algorithms::AreaVector& area
         boards_ >= 32 ? 0xFFFFFFFFU : (std::uint32_t{1} << boards_) - 1U;
     n += std::snprintf(line + n, sizeof line - static_cast<std::size_t>(n), ",%" PRIu32,
                        distrusted_mask & boards_bits);
+  }
+  // Areas whose columns were not measured (width_px 0) write '-' in the column fields: a 0 would
+  // read back as a centroid in column 0.
+  const bool columns = areas.columns_measured();
+  for (std::size_t k = 0; k < boards_ && n > 0 && static_cast<std::size_t>(n) < sizeof line; ++k) {
+    if (!columns) {
+      n += std::snprintf(line + n, sizeof line - static_cast<std::size_t>(n), ",-");
+      continue;
+    }
+    n += std::snprintf(line + n, sizeof line - static_cast<std::size_t>(n), ",%" PRIu64,
+                       k < areas.count ? areas.column_sum[k] : std::uint64_t{0});
+  }
+  for (std::size_t k = 0; k < boards_ && n > 0 && static_cast<std::size_t>(n) < sizeof line; ++k) {
+    if (!columns) {
+      n += std::snprintf(line + n, sizeof line - static_cast<std::size_t>(n), ",-");
+      continue;
+    }
+    n += std::snprintf(line + n, sizeof line - static_cast<std::size_t>(n), ",%" PRIu32,
+                       k < areas.count ? areas.side_pixels[k] : 0U);
   }
   if (n <= 0 || static_cast<std::size_t>(n) + 1 >= sizeof line) return;
   line[n++] = '\n';

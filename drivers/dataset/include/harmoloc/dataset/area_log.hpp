@@ -30,6 +30,10 @@ struct AreaLog {
   /// vector empty; otherwise one entry per frame.
   bool has_distrust = false;
   std::vector<std::uint32_t> distrusted_mask;
+  /// The `column_sum_<board>` and `side_px_<board>` columns after it (each board's column sum and
+  /// side pixels, AreaVector::column_sum and side_pixels). Without them, or in a frame whose
+  /// fields are '-', the areas read with width_px 0: columns not measured.
+  bool has_columns = false;
 };
 
 /// Reads and checks an area log. Throws std::runtime_error with one line (file:line: what).
