@@ -28,4 +28,5 @@ set(HARMOLOC_TRAINING_SOURCES
   src/harmonic_selection.cpp
   src/route_placement.cpp
   src/odometry_calibration.cpp
-  src/kernel_selection.cpp)
+  src/kernel_selection.cpp
+  src/bearing_calibration.cpp)

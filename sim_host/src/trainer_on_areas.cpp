@@ -214,6 +214,17 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<dataset::Sta
       std::min(1.0, std::max(opt.known_place_margin * quantile(nearest_dissimilarity, 0.99), 0.01));
   report.train_ms = ms_since(t_train);
 
+  // Where the boards stand and the lens's column-to-angle law, from the placed frames' centroid
+  // columns (reported only, for now; not in the map).
+  const auto t_bearings = std::chrono::steady_clock::now();
+  std::vector<algorithms::BearingFrame> bearing_frames;
+  for (const PlacedFrame& f : frames) {
+    if (run.areas[f.index].columns_measured())
+      bearing_frames.push_back({placed.poses[f.index], run.areas[f.index]});
+  }
+  if (!bearing_frames.empty()) report.bearings = algorithms::calibrate_bearings(bearing_frames);
+  report.bearings_ms = ms_since(t_bearings);
+
   map = algorithms::MapFile{};
   map.image_width_px = run.image_width_px;
   map.image_height_px = run.image_height_px;

@@ -319,6 +319,24 @@ int main(int argc, char** argv) {
         }
         std::printf("board noise   %s (%% of frame, against other passes)\n", sig.c_str());
       }
+      if (r.bearings.ok) {
+        std::size_t placed = 0;
+        for (const auto& p : r.bearings.placements) placed += p.placed ? 1U : 0U;
+        std::printf(
+            "bearings      %zu of %zu boards placed from their centroid columns (%zu rays), "
+            "half field of view %.1f deg, residual %.2f deg RMS (%.0f ms; not yet used by the "
+            "map)\n",
+            placed, r.bearings.boards, r.bearings.rays,
+            r.bearings.half_fov_rad() * 180.0 / algorithms::kPi,
+            r.bearings.rms_residual_rad * 180.0 / algorithms::kPi, r.bearings_ms);
+        for (std::size_t k = 0; k < r.bearings.placements.size(); ++k) {
+          const auto& p = r.bearings.placements[k];
+          if (!p.placed) continue;
+          std::printf("              %s at (%.2f, %.2f) m, %zu rays, residual %.2f deg\n",
+                      k < names.names.size() ? names.names[k].c_str() : "?", p.x_m, p.y_m, p.frames,
+                      p.rms_residual_rad * 180.0 / algorithms::kPi);
+        }
+      }
       if (r.segment_ms > 0.0) {
         std::printf("time          segmentation %.0f ms, training %.1f ms, forward map %.0f ms\n",
                     r.segment_ms, r.train_ms, r.forward_ms);

@@ -84,6 +84,28 @@ std::string board_names(const TrainReport& r, const Scenario& scene) {
   return out;
 }
 
+// How far the boards placed from their centroid columns are from the scene's board centres.
+void bearing_figures(const TrainReport& tr, const Scenario& scene, SceneResult& r) {
+  r.bearings_ms = tr.bearings_ms;
+  if (!tr.bearings.ok) return;
+  std::vector<double> errors;
+  for (std::size_t k = 0; k < tr.bearings.placements.size() && k < scene.boards.size(); ++k) {
+    const algorithms::BoardPlacement& p = tr.bearings.placements[k];
+    if (!p.placed) continue;
+    errors.push_back(
+        std::hypot(p.x_m - scene.boards[k].centre_x_m, p.y_m - scene.boards[k].centre_y_m));
+  }
+  if (errors.empty()) return;
+  std::sort(errors.begin(), errors.end());
+  r.bearing_boards_placed = errors.size();
+  r.board_place_median_m = errors.size() % 2 == 1
+                               ? errors[errors.size() / 2]
+                               : 0.5 * (errors[errors.size() / 2 - 1] + errors[errors.size() / 2]);
+  r.board_place_max_m = errors.back();
+  r.bearing_residual_deg = tr.bearings.rms_residual_rad * 180.0 / algorithms::kPi;
+  r.bearing_half_fov_deg = tr.bearings.half_fov_rad() * 180.0 / algorithms::kPi;
+}
+
 void trace(const SweepOptions& opt, std::uint64_t seed, const char* part, const RunRecord& run) {
   if (opt.trace_dir.empty()) return;
   write_trace(run, opt.trace_dir + "/seed-" + std::to_string(seed) + "-" + part + ".csv");
@@ -114,6 +136,7 @@ SceneResult evaluate_scene(const Scenario& scene, const algorithms::ThresholdSet
     r.cv_rmse_x_m = tr.x.cv_rmse_m;
     r.cv_rmse_y_m = tr.y.cv_rmse_m;
     r.boards_used = board_names(tr, scene);
+    bearing_figures(tr, scene, r);
     const algorithms::MapFile& map = *trained.map;
     const firmware::FirmwareConfig config = config_for(thresholds, opt);
 

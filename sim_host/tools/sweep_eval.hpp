@@ -46,6 +46,13 @@ struct SceneResult {
   double placement_heading_rmse_deg = -1.0;
   double cv_rmse_x_m = -1.0, cv_rmse_y_m = -1.0;
   std::string boards_used;
+  // Boards placed from their centroid columns (TrainReport::bearings), against the scene's board
+  // centres; -1 when the calibration was not ok.
+  std::size_t bearing_boards_placed = 0;
+  double board_place_median_m = -1.0, board_place_max_m = -1.0;
+  double bearing_residual_deg = -1.0;
+  double bearing_half_fov_deg = -1.0;
+  double bearings_ms = 0.0;
   // Nominal test run.
   double fix_mse_x_m2 = -1.0, fix_mse_y_m2 = -1.0;  ///< every frame with a fix
   double fix_known_fraction = -1.0;                 ///< of those, flagged a known place

@@ -53,6 +53,12 @@ std::vector<Figure> figures() {
        }},
       {"train_ms", "training time (area log in memory)", "ms",
        [](const SceneResult& r) { return r.train_ms; }},
+      {"board_place", "boards placed from centroid columns, median error (not used yet)", "cm",
+       [](const SceneResult& r) { return cm(r.board_place_median_m); }},
+      {"board_place_max", "boards placed from centroid columns, worst board (not used yet)", "cm",
+       [](const SceneResult& r) { return cm(r.board_place_max_m); }},
+      {"bearing_residual", "bearing residual of the placed boards, RMS", "deg",
+       [](const SceneResult& r) { return r.bearing_residual_deg; }},
   };
 }
 

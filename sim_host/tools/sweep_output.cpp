@@ -25,6 +25,12 @@ nlohmann::json to_json(const SceneResult& r) {
   j["cv_rmse_x_m"] = r.cv_rmse_x_m;
   j["cv_rmse_y_m"] = r.cv_rmse_y_m;
   j["boards_used"] = r.boards_used;
+  j["bearing_boards_placed"] = r.bearing_boards_placed;
+  j["board_place_median_m"] = r.board_place_median_m;
+  j["board_place_max_m"] = r.board_place_max_m;
+  j["bearing_residual_deg"] = r.bearing_residual_deg;
+  j["bearing_half_fov_deg"] = r.bearing_half_fov_deg;
+  j["bearings_ms"] = r.bearings_ms;
   j["fix_mse_x_m2"] = r.fix_mse_x_m2;
   j["fix_mse_y_m2"] = r.fix_mse_y_m2;
   j["fix_known_fraction"] = r.fix_known_fraction;

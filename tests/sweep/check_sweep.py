@@ -47,6 +47,11 @@ def main():
                 problems.append(f"seed {seed}: {key} not measured")
             elif (kind == "max" and v > bound) or (kind == "min" and v < bound):
                 problems.append(f"seed {seed}: {key} = {v:.6g}, bound {bound:.6g}")
+        # The trainer's bearing calibration ran on the run's centroid columns (docs/bearings.md):
+        # at least two boards placed, their rays agreeing within 2 degrees RMS.
+        if r.get("bearing_boards_placed", 0) < 2 or not 0 <= r.get("bearing_residual_deg", -1) <= 2.0:
+            problems.append(f"seed {seed}: bearings: {r.get('bearing_boards_placed', 0)} boards "
+                            f"placed, residual {r.get('bearing_residual_deg', -1):.2f} deg")
         # The firmware's own particle count (filter.particles_mean in its stats) was read.
         if not r.get("particles_mean", -1.0) >= 1.0:
             problems.append(f"seed {seed}: particles_mean not measured")

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "harmoloc/algorithms/bearing_calibration.hpp"
 #include "harmoloc/algorithms/harmonic_selection.hpp"
 #include "harmoloc/algorithms/map_codec.hpp"
 #include "harmoloc/algorithms/odometry_calibration.hpp"
@@ -136,6 +137,12 @@ struct TrainReport {
   /// Whether the labels carry a heading (a non-zero yaw), which the placement then follows.
   bool labels_have_yaw = false;
   double forward_ms = 0;
+  /// The boards' places and the column-to-angle law, learnt from the placed frames' centroid
+  /// columns (algorithms/bearing_calibration.hpp; not yet in the map). Not ok when the run's
+  /// areas have no columns, the frames were not placed by odometry, or fewer than two boards
+  /// could be placed.
+  algorithms::BearingCalibration bearings;
+  double bearings_ms = 0;
 };
 
 /// The board areas of every frame of a run, in time order.
