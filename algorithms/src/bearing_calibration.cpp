@@ -8,7 +8,6 @@ namespace harmoloc::algorithms {
 
 namespace {
 
-
 struct Ray {
   double x_m, y_m, yaw_rad;
   double t;  ///< the centroid's column offset from the centre, in frame widths
@@ -125,11 +124,14 @@ BearingCalibration calibrate_bearings(const std::vector<BearingFrame>& frames,
       rays[k].push_back(Ray{f.pose.x_m, f.pose.y_m, f.pose.yaw_rad, t});
     }
   }
-  std::vector<std::vector<Ray>> usable(boards), sparse(boards);
+  // Boards with too few frames take no part (an empty ray list).
+  std::vector<std::vector<Ray>> sparse(boards);
   std::size_t candidates = 0;
   for (std::size_t k = 0; k < boards; ++k) {
-    if (rays[k].size() < options.min_frames) continue;
-    usable[k] = rays[k];
+    if (rays[k].size() < options.min_frames) {
+      rays[k].clear();
+      continue;
+    }
     sparse[k] = thin(rays[k], 200);
     ++candidates;
   }
@@ -172,14 +174,14 @@ BearingCalibration calibrate_bearings(const std::vector<BearingFrame>& frames,
   double sse = 0.0;
   std::size_t placed = 0;
   for (std::size_t k = 0; k < boards; ++k) {
-    if (usable[k].empty()) continue;
-    const Fit fit = triangulate(usable[k], law, options.min_ray_spread_rad);
+    if (rays[k].empty()) continue;
+    const Fit fit = triangulate(rays[k], law, options.min_ray_spread_rad);
     if (!fit.placed) continue;
     BoardPlacement& p = out.placements[k];
     p.placed = true;
     p.x_m = fit.x_m;
     p.y_m = fit.y_m;
-    p.frames = usable[k].size();
+    p.frames = rays[k].size();
     p.rms_residual_rad = std::sqrt(fit.sse / static_cast<double>(p.frames));
     sse += fit.sse;
     out.rays += p.frames;

@@ -100,6 +100,7 @@ void measure_sides(const detail::Image& im, std::size_t boards, ClassOf class_of
     const std::uint8_t* row = im.row(y);
     const std::uint32_t left = class_of(row, 0U);
     const std::uint32_t right = last > 0U ? class_of(row, last) : 0U;
+    if ((left | right) == 0U) continue;  // most rows: no board on either side
     for (std::size_t k = 0; k < boards; ++k)
       areas.side_pixels[k] += ((left >> k) & 1U) + ((right >> k) & 1U);
   }
@@ -341,30 +342,6 @@ std::uint32_t table_class(Format format, const std::uint8_t* entries, const std:
 }
 
 void segment_by_path(Format format, const detail::Image& im, const MaskTable& table,
-                     AreaVector& areas);
-
-void segment_with_table(Format format, const detail::Image& im, const MaskTable& table,
-                        AreaVector& areas) {
-  const std::size_t boards = table.board_count();
-  if (!table.ready() || boards == 0 || im.width_px == 0 || im.height_px == 0) {
-    areas.pixels.fill(0U);
-    areas.column_sum.fill(0U);
-    areas.side_pixels.fill(0U);
-    areas.width_px = table.ready() ? im.width_px : 0U;
-    areas.count = table.ready() ? boards : 0;
-    return;
-  }
-  segment_by_path(format, im, table, areas);
-  const std::uint8_t* entries = table.entries();
-  measure_sides(
-      im, boards,
-      [format, entries](const std::uint8_t* row, std::uint32_t x) {
-        return table_class(format, entries, row, x);
-      },
-      areas);
-}
-
-void segment_by_path(Format format, const detail::Image& im, const MaskTable& table,
                      AreaVector& areas) {
   const std::size_t boards = table.board_count();
   const std::uint8_t* entries = table.entries();
@@ -403,6 +380,27 @@ void segment_by_path(Format format, const detail::Image& im, const MaskTable& ta
       return;
     }
   }
+}
+
+void segment_with_table(Format format, const detail::Image& im, const MaskTable& table,
+                        AreaVector& areas) {
+  const std::size_t boards = table.board_count();
+  if (!table.ready() || boards == 0 || im.width_px == 0 || im.height_px == 0) {
+    areas.pixels.fill(0U);
+    areas.column_sum.fill(0U);
+    areas.side_pixels.fill(0U);
+    areas.width_px = table.ready() ? im.width_px : 0U;
+    areas.count = table.ready() ? boards : 0;
+    return;
+  }
+  segment_by_path(format, im, table, areas);
+  const std::uint8_t* entries = table.entries();
+  measure_sides(
+      im, boards,
+      [format, entries](const std::uint8_t* row, std::uint32_t x) {
+        return table_class(format, entries, row, x);
+      },
+      areas);
 }
 
 }  // namespace
