@@ -13,6 +13,15 @@ BoardFeatures board_features(float area_scale, const AreaVector& areas) {
   return f;
 }
 
+BoardFeatures board_features(const ForwardMap& map, float area_scale, const AreaVector& areas) {
+  BoardFeatures f = board_features(area_scale, areas);
+  if (!map.has_bearings) return f;
+  for (std::size_t b = 0; b < f.count; ++b) {
+    if (board_image_angle(map, areas, b, f.angle_rad[b])) f.angle_mask |= 1U << b;
+  }
+  return f;
+}
+
 std::array<float, kMaxBoards> board_maxima(const ForwardMap& map) {
   std::array<float, kMaxBoards> m{};
   const std::size_t boards = std::min<std::size_t>(map.board_count, kMaxBoards);
@@ -119,6 +128,7 @@ BoardAssessment BoardReliability::assess(const ForwardMap& map, const BoardFeatu
   }
 
   std::array<double, kMaxBoards> inv_var{};
+  update.bearing_mask = 0;
   for (std::size_t b = 0; b < update.boards; ++b) {
     update.observed[b] = observed.value[b];
     update.use[b] = map.sigma[b] > 0.0F;
@@ -160,6 +170,14 @@ BoardAssessment BoardReliability::assess(const ForwardMap& map, const BoardFeatu
     update.gain[b] = static_cast<float>(w);
     update.floor[b] = static_cast<float>(params.robust ? (1.0 - w) * c : 0.0);
     update.inv_two_var[b] = static_cast<float>(0.5 * s * s * inv_var[b]);
+    const double bearing_sigma = static_cast<double>(map.bearing_sigma_rad[b]);
+    if (params.bearings && map.has_bearings && bearing_sigma > 0.0 &&
+        ((observed.angle_mask >> b) & 1U) != 0U) {
+      const double width = params.sigma_scale * bearing_sigma;
+      update.bearing_mask |= 1U << b;
+      update.angle_rad[b] = observed.angle_rad[b];
+      update.bearing_inv_two_var[b] = static_cast<float>(0.5 * s * s / (width * width));
+    }
   }
   update.inv_tempering = 1.0 / params.tempering;
   update.route_free_m = static_cast<float>(params.route_free_m);

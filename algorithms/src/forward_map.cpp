@@ -7,6 +7,8 @@ namespace harmoloc::algorithms {
 
 namespace {
 
+constexpr float kPiF = 3.14159265358979F;
+
 // Cell coordinate along one axis: the lower corner index and the fraction towards the next,
 // clamped to the grid; @p outside_m gets how far beyond the border the position lies.
 void axis(double position_m, float origin_m, float cell_m, std::uint32_t cells,
@@ -60,6 +62,16 @@ bool lay_out_grid(ForwardMap& map, std::uint32_t columns, std::uint32_t rows,
   std::fill_n(map.route_distance_m.begin(), cells, 0.0F);
   std::fill_n(map.heading_rad.begin(), cells, 0.0F);
   std::fill_n(map.expected.begin() + ForwardMap::kVoidCell * kMaxBoards, kMaxBoards, 0.0F);
+  map.has_bearings = false;
+  map.bearing_a1_rad = map.bearing_a3_rad = 0.0F;
+  map.bearing_sigma_rad.fill(0.0F);
+  if (ForwardMap::kBearingStorage) {
+    std::fill_n(map.bearing_rad.begin(), cells * kMaxBoards, ForwardMap::kNoBearing);
+    std::fill_n(map.bearing_rad.begin() + ForwardMap::kVoidCell * kMaxBoards, kMaxBoards,
+                ForwardMap::kNoBearing);
+  } else {
+    map.bearing_rad.fill(ForwardMap::kNoBearing);
+  }
   map.route_distance_m[ForwardMap::kVoidCell] = ForwardMap::kVoidRouteDistance_m;
   map.heading_rad[ForwardMap::kVoidCell] = 0.0F;
   return true;
@@ -95,6 +107,41 @@ void expected_features(const ForwardMap& map, const GridPoint& point, float* out
     out[b] = point.weight[0] * corner[0][b] + point.weight[1] * corner[1][b] +
              point.weight[2] * corner[2][b] + point.weight[3] * corner[3][b];
   }
+}
+
+bool board_image_angle(const ForwardMap& map, const AreaVector& areas, std::size_t b,
+                       float& angle_rad) {
+  if (!map.has_bearings || b >= areas.count || !areas.columns_measured()) return false;
+  const std::uint32_t pixels = areas.pixels[b];
+  if (pixels < kBearingMinPixels || areas.side_pixels[b] != 0U) return false;
+  const double width = static_cast<double>(areas.width_px);
+  const double u = static_cast<double>(areas.column_sum[b]) / static_cast<double>(pixels);
+  const double t = (u - 0.5 * (width - 1.0)) / width;
+  angle_rad = static_cast<float>(t * (static_cast<double>(map.bearing_a1_rad) +
+                                      static_cast<double>(map.bearing_a3_rad) * t * t));
+  return true;
+}
+
+bool expected_bearing(const ForwardMap& map, const GridPoint& point, std::size_t b,
+                      float& bearing_rad) {
+  if (!ForwardMap::kBearingStorage || !map.has_bearings || b >= kMaxBoards) return false;
+  float reference = 0.0F, sum = 0.0F, weight = 0.0F;
+  bool any = false;
+  for (int k = 0; k < 4; ++k) {
+    const float v = map.bearing_rad[point.index[k] * kMaxBoards + b];
+    if (v == ForwardMap::kNoBearing || !(point.weight[k] > 0.0F)) continue;
+    if (!any) {
+      reference = v;
+      any = true;
+    }
+    float d = v - reference;  // both in [-pi, pi]: one turn at most
+    d = d > kPiF ? d - 2.0F * kPiF : (d < -kPiF ? d + 2.0F * kPiF : d);
+    sum += point.weight[k] * d;
+    weight += point.weight[k];
+  }
+  if (!any) return false;
+  bearing_rad = reference + sum / weight;
+  return true;
 }
 
 float route_distance(const ForwardMap& map, const GridPoint& point) {

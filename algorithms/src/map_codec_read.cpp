@@ -26,7 +26,7 @@ MapError decode_map(const std::uint8_t* data, std::size_t size, MapFile& map) {
   std::uint32_t version = 0;
   if (!r.u32(version, "version")) return r.error;
   if (version < 1 || version > kMapFormatVersion)
-    return MapError{"unsupported map format version (this firmware reads versions 1 to 5)", 8};
+    return MapError{"unsupported map format version (this firmware reads versions 1 to 6)", 8};
   if (crc32(data, body) != stored) return MapError{"checksum mismatch: the map is corrupt", body};
 
   std::uint32_t boards = 0;
@@ -122,6 +122,7 @@ MapError decode_map(const std::uint8_t* data, std::size_t size, MapFile& map) {
     }
   }
   map.forward.columns = map.forward.rows = 0;
+  map.forward.has_bearings = false;  // before version 6 (and without a forward map): none
   if (version >= 3) {
     if (const MapError e = decode_forward(r, version, boards, map.forward)) return e;
   }

@@ -43,12 +43,57 @@ MapError decode_cells(Reader& r, ForwardMap& f, std::size_t cells, CellAt cell_a
   return MapError{};
 }
 
+// The board bearings (version 6), after the cells' other values: the lens's column-to-angle law
+// angle(t) = a1 t + a3 t^3, each board's bearing spread, then every stored cell's bearing of
+// every board, in storage order (version 6 is tiled).
+MapError decode_bearings(Reader& r, ForwardMap& f) {
+  const std::size_t boards = f.board_count;
+  if (!r.need(8U + boards * 4U, "forward map bearings"))
+    return MapError{"truncated: the forward map's bearing law is cut short", r.pos()};
+  float a1 = 0.0F, a3 = 0.0F;
+  r.f32(a1, "forward map bearings");
+  if (!(a1 > 0.0F && a1 <= 4.0F))  // false for NaN (the trainer's grid reaches 3.2)
+    return MapError{"forward map bearing law: a1 not finite and in (0, 4] rad", r.pos()};
+  // a3 >= -a1 also keeps the law increasing over the frame (|t| <= 0.5): its slope
+  // a1 + 3 a3 t^2 is at least a1 / 4 there.
+  r.f32(a3, "forward map bearings");
+  if (!finite_in(a3, -a1, 3.0F * a1))
+    return MapError{"forward map bearing law: a3 not finite and in [-a1, 3 a1]", r.pos()};
+  std::array<float, kMaxBoards> sigma{};
+  bool any = false;
+  for (std::size_t b = 0; b < boards; ++b) {
+    r.f32(sigma[b], "forward map bearings");
+    if (!finite_in(sigma[b], 0.0F, 1.0F))
+      return MapError{"forward map bearing sigma not finite and in 0..1 rad", r.pos()};
+    any = any || sigma[b] > 0.0F;
+  }
+  if (!any)
+    return MapError{"forward map bearings model no board (every bearing sigma is 0)", r.pos()};
+  const std::size_t cells = f.stored_cells();
+  if (!r.need(cells * boards * 4U, "forward map bearings"))
+    return MapError{"truncated: the forward map's bearings are shorter than its size says",
+                    r.pos()};
+  for (std::size_t c = 0; c < cells; ++c) {
+    float* bearing = f.bearing_rad.data() + c * kMaxBoards;
+    for (std::size_t b = 0; b < boards; ++b) {
+      r.f32(bearing[b], "forward map bearings");
+      if (bearing[b] != ForwardMap::kNoBearing && !finite_in(bearing[b], -3.1416F, 3.1416F))
+        return MapError{"forward map bearing neither within -pi..pi nor 8 (none)", r.pos()};
+    }
+  }
+  f.bearing_a1_rad = a1;
+  f.bearing_a3_rad = a3;
+  f.bearing_sigma_rad = sigma;
+  return MapError{};
+}
+
 }  // namespace
 
-// The forward map section (version 3; tiled from version 5).
+// The forward map section (version 3; tiled from version 5, bearings from version 6).
 MapError decode_forward(Reader& r, std::uint32_t version, std::uint32_t boards, ForwardMap& f) {
   std::uint32_t columns = 0, rows = 0;
   f.columns = f.rows = 0;
+  f.has_bearings = false;
   if (!r.u32(columns, "forward map size") || !r.u32(rows, "forward map size"))
     return MapError{"truncated: no room for the forward map's size", r.pos()};
   if (columns == 0 && rows == 0) return MapError{};
@@ -92,8 +137,15 @@ MapError decode_forward(Reader& r, std::uint32_t version, std::uint32_t boards, 
       !r.u8(pad[1], "forward map flags") || !r.u8(pad[2], "forward map flags")) {
     return MapError{"truncated: the forward map's flags are cut short", r.pos()};
   }
-  if (flag > 1U || pad[0] != 0 || pad[1] != 0 || pad[2] != 0)
+  // Bit 0: headings; bit 1 (version 6 on): bearings.
+  const unsigned known = version >= 6 ? 3U : 1U;
+  if ((flag & ~known) != 0U || pad[0] != 0 || pad[1] != 0 || pad[2] != 0)
     return MapError{"forward map flags: unknown bits set", r.pos()};
+  if ((flag & 2U) != 0U && !ForwardMap::kBearingStorage)
+    return MapError{
+        "forward map holds bearings this build has no room for (train it with "
+        "--no-bearings)",
+        r.pos()};
 
   // The layout: every tile (versions 3 and 4), or the stored tiles' bitmap (version 5).
   const std::size_t positions = static_cast<std::size_t>(tiles_along(columns)) * tiles_along(rows);
@@ -133,13 +185,17 @@ MapError decode_forward(Reader& r, std::uint32_t version, std::uint32_t boards, 
   f.cell_m = cell;
   f.board_count = board_count;
   f.sigma = sigma;
-  f.has_heading = flag == 1U;
-  const MapError e =
+  f.has_heading = (flag & 1U) != 0U;
+  MapError e =
       tiled ? decode_cells(r, f, f.stored_cells(), [](std::size_t c) { return c; })
             : decode_cells(r, f, static_cast<std::size_t>(columns) * rows, [&f](std::size_t c) {
                 return f.index(static_cast<std::uint32_t>(c % f.columns),
                                static_cast<std::uint32_t>(c / f.columns));
               });
+  if (!e && (flag & 2U) != 0U) {
+    e = decode_bearings(r, f);
+    f.has_bearings = !e;
+  }
   if (e) {
     f.columns = f.rows = 0;
     return e;

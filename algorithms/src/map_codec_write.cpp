@@ -73,7 +73,8 @@ std::vector<std::uint8_t> encode_map(const MapFile& map) {
     w.f32(f.cell_m);
     w.u32(f.board_count);
     for (std::size_t b = 0; b < f.board_count; ++b) w.f32(f.sigma[b]);
-    w.u8(f.has_heading ? 1U : 0U);
+    // Bit 0: headings follow the route distances; bit 1 (version 6): the board bearings follow.
+    w.u8(static_cast<std::uint8_t>((f.has_heading ? 1U : 0U) | (f.has_bearings ? 2U : 0U)));
     w.u8(0);
     w.u8(0);
     w.u8(0);
@@ -96,6 +97,15 @@ std::vector<std::uint8_t> encode_map(const MapFile& map) {
     for (std::size_t c = 0; c < cells; ++c) w.f32(f.route_distance_m[c]);
     if (f.has_heading) {
       for (std::size_t c = 0; c < cells; ++c) w.f32(f.heading_rad[c]);
+    }
+    // Version 6: the bearing law, each board's bearing spread, then every stored cell's bearings.
+    if (f.has_bearings) {
+      w.f32(f.bearing_a1_rad);
+      w.f32(f.bearing_a3_rad);
+      for (std::size_t b = 0; b < f.board_count; ++b) w.f32(f.bearing_sigma_rad[b]);
+      for (std::size_t c = 0; c < cells; ++c) {
+        for (std::size_t b = 0; b < f.board_count; ++b) w.f32(f.bearing_rad[c * kMaxBoards + b]);
+      }
     }
   }
   // Version 4: the calibration, as (id, value) entries.

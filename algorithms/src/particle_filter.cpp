@@ -128,6 +128,22 @@ double ParticleFilter::update_boards(const BoardUpdate& u) {
       likelihood *=
           static_cast<double>(u.gain[b] * std::exp(-e * e * u.inv_two_var[b]) + u.floor[b]);
     }
+    // Bearings: the particle sees board b at world bearing yaw - angle; the map says where the
+    // training run saw it from here.
+    for (std::uint32_t mask = u.bearing_mask; mask != 0U; mask &= mask - 1U) {
+      const auto b = static_cast<std::size_t>(__builtin_ctz(mask));
+      float bearing = 0.0F;
+      if (!expected_bearing(map, at, b, bearing)) continue;
+      double d = particles_[i].yaw_rad - static_cast<double>(u.angle_rad[b]) -
+                 static_cast<double>(bearing);
+      // yaw and bearing lie in [-pi, pi] and the law's angle within a half turn, so two turns
+      // at most bring d back (and a value that is not finite stays bounded in work).
+      for (int turn = 0; turn < 2; ++turn)
+        d = d > kPi ? d - 2.0 * kPi : (d < -kPi ? d + 2.0 * kPi : d);
+      const auto r = static_cast<float>(d);
+      likelihood *=
+          static_cast<double>(u.gain[b] * std::exp(-r * r * u.bearing_inv_two_var[b]) + u.floor[b]);
+    }
     // The match is the observation model's own (untempered): tempering compresses exactly the
     // change the kidnap test looks for.
     match += weights_[i] * likelihood;

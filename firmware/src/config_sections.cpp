@@ -188,7 +188,7 @@ void read_observation(const Checker& check, const toml::table& root, Observation
       {"model", "fix_term", "fix_board_check", "robust", "sigma_scale", "tempering",
        "outlier_floor", "dcs_phi", "consensus_chi2", "consensus_fraction", "motion_index_rate",
        "motion_index_min", "motion_index_max", "route_free_m", "route_sigma_m",
-       "route_heading_free_deg", "route_heading_sigma_deg", "implausible_ratio"});
+       "route_heading_free_deg", "route_heading_sigma_deg", "implausible_ratio", "bearings"});
   const std::string model = check.text(*t, "model", w, "boards");
   if (model == "boards")
     o.model = ObservationModel::kBoards;
@@ -200,6 +200,7 @@ void read_observation(const Checker& check, const toml::table& root, Observation
   o.fix_board_check = flag(check, *t, "fix_board_check", w, o.fix_board_check);
   auto& b = o.boards;
   b.robust = flag(check, *t, "robust", w, b.robust);
+  b.bearings = flag(check, *t, "bearings", w, b.bearings);
   b.sigma_scale = check.number(*t, "sigma_scale", w, b.sigma_scale, 0.1, 100.0);
   b.tempering = check.number(*t, "tempering", w, b.tempering, 1.0, 1e4);
   b.outlier_floor = check.number(*t, "outlier_floor", w, b.outlier_floor, 1e-9, 1.0);

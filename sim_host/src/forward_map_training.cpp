@@ -77,7 +77,8 @@ ForwardMapReport train_forward_map(const std::vector<std::vector<float>>& featur
 ForwardMapReport train_forward_map_placed(const std::vector<std::vector<float>>& features,
                                           const std::vector<PlacedFrame>& placed,
                                           std::size_t board_count, const ForwardMapOptions& opt,
-                                          algorithms::ForwardMap& out) {
+                                          algorithms::ForwardMap& out,
+                                          const BearingObservations* bearings) {
   ForwardMapReport report;
   if (board_count == 0 || board_count > kMaxBoards)
     throw std::runtime_error("forward map: board count out of range");
@@ -90,11 +91,17 @@ ForwardMapReport train_forward_map_placed(const std::vector<std::vector<float>>&
     if (!seen) continue;
     ++report.frames;
     ++report.by_odometry;
+    const float* bearing = nullptr;
+    if (bearings != nullptr && f.index < bearings->world_rad.size() &&
+        bearings->world_rad[f.index].size() >= board_count)
+      bearing = bearings->world_rad[f.index].data();
     frames.push_back(
-        Positioned{f.pose.x_m, f.pose.y_m, f.pose.yaw_rad, f.t_s, true, &v, f.travel_m});
+        Positioned{f.pose.x_m, f.pose.y_m, f.pose.yaw_rad, f.t_s, true, &v, f.travel_m, bearing});
   }
   report.has_heading = true;
-  return fit_grid(frames, board_count, opt, out, report);
+  const double law[2] = {bearings != nullptr ? bearings->a1_rad : 0.0,
+                         bearings != nullptr ? bearings->a3_rad : 0.0};
+  return fit_grid(frames, board_count, opt, out, report, bearings != nullptr ? law : nullptr);
 }
 
 }  // namespace harmoloc::sim_host

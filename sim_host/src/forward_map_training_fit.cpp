@@ -1,6 +1,7 @@
 #include "harmoloc/sim_host/forward_map_training.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -146,11 +147,188 @@ bool kernel_mean(const FrameIndex& index, double x, double y, double bandwidth_m
   return true;
 }
 
+// Board bearings around a place: per board, the kernel-weighted sums of the unit vectors of the
+// world bearings of the frames that saw it whole, and the kernel weight of all frames.
+struct BearingSums {
+  std::array<double, kMaxBoards> sin{}, cos{}, weight{};
+  double all = 0.0;
+};
+
+// Every frame's heading and bearings as unit vectors, computed once (the sums below visit each
+// frame many times).
+struct FrameVectors {
+  const Positioned* first = nullptr;
+  std::vector<double> heading;  // cos, sin per frame
+  std::vector<double> bearing;  // cos, sin per frame and board; NaN where none
+  std::size_t boards = 0;
+
+  FrameVectors(const std::vector<Positioned>& frames, std::size_t board_count)
+      : first(frames.data()),
+        heading(2 * frames.size()),
+        bearing(2 * frames.size() * board_count, std::numeric_limits<double>::quiet_NaN()),
+        boards(board_count) {
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+      const Positioned& p = frames[i];
+      heading[2 * i] = std::cos(p.yaw_rad);
+      heading[2 * i + 1] = std::sin(p.yaw_rad);
+      if (p.bearing_rad == nullptr) continue;
+      for (std::size_t b = 0; b < boards; ++b) {
+        const double v = static_cast<double>(p.bearing_rad[b]);
+        if (!std::isfinite(v)) continue;
+        bearing[2 * (i * boards + b)] = std::cos(v);
+        bearing[2 * (i * boards + b) + 1] = std::sin(v);
+      }
+    }
+  }
+  std::size_t of(const Positioned& p) const { return static_cast<std::size_t>(&p - first); }
+};
+
+// Over the frames within @p reach_m of (x, y) that run within 25 degrees of the heading whose
+// unit vector is (@p anchor_cos, @p anchor_sin) and that @p keep accepts, weighted
+// exp(-(d^2 - d2_min) / 2h^2).
+template <typename Keep>
+BearingSums bearing_sums(const FrameIndex& index, const FrameVectors& v, double x, double y,
+                         double anchor_cos, double anchor_sin, double d2_min, double reach_m,
+                         double h, Keep keep) {
+  BearingSums s;
+  const double inv = 0.5 / (h * h);
+  index.within(x, y, reach_m, [&](const Positioned& p) {
+    if (!p.has_yaw || p.bearing_rad == nullptr || !keep(p)) return;
+    const std::size_t i = v.of(p);
+    if (v.heading[2 * i] * anchor_cos + v.heading[2 * i + 1] * anchor_sin < kSamePassCos) return;
+    const double d = (p.x_m - x) * (p.x_m - x) + (p.y_m - y) * (p.y_m - y);
+    const double e = (d - d2_min) * inv;
+    if (e > 30.0) return;  // below e^-30 of the nearest frame's weight
+    const double w = std::exp(-e);
+    s.all += w;
+    const double* unit = v.bearing.data() + 2 * i * v.boards;
+    for (std::size_t b = 0; b < v.boards; ++b) {
+      if (std::isnan(unit[2 * b])) continue;
+      s.cos[b] += w * unit[2 * b];
+      s.sin[b] += w * unit[2 * b + 1];
+      s.weight[b] += w;
+    }
+  });
+  return s;
+}
+
+// The mean bearing of board b from @p s when most of the frames' weight saw it and their
+// bearings agree (the resultant of the unit vectors at least 0.95 of the weight, i.e. a spread
+// within about 18 degrees); false otherwise.
+bool mean_bearing(const BearingSums& s, std::size_t b, double& out) {
+  if (!(s.weight[b] > 0.0) || s.weight[b] < 0.5 * s.all) return false;
+  const double resultant = std::hypot(s.sin[b], s.cos[b]);
+  if (resultant < 0.95 * s.weight[b]) return false;
+  out = std::atan2(s.sin[b], s.cos[b]);
+  return true;
+}
+
+// Fills @p out's bearings: each board's spread between passes (frames predicted from the other
+// passes running the same way, as the areas' noise is measured: a robust spread, 1.4826 times
+// the median absolute residual, at least 0.1 degree; a board needs 20 such residuals), then
+// every stored cell's bearings with the same kernel.
+void fit_bearings(const std::vector<Positioned>& frames, const std::vector<char>& comparable,
+                  const FrameIndex& index, std::size_t boards, const ForwardMapOptions& opt,
+                  const double* law, double x0, double y0, double cell, ForwardMap& out,
+                  ForwardMapReport& report) {
+  const double h = report.bandwidth_m;
+  constexpr double kCut = 30.0;  // weights below e^-30 of the nearest frame's do not count
+  const FrameVectors vectors(frames, boards);
+  std::vector<std::vector<double>> residuals(boards);
+  const double near_m = std::max(2.0 * report.pass_spread_m, 0.01);
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    const Positioned& p = frames[i];
+    if (!comparable[i] || p.bearing_rad == nullptr) continue;
+    const double* heading = vectors.heading.data();
+    const auto other = [&](const Positioned& q) {
+      const std::size_t k = vectors.of(q);
+      return q.has_yaw && q.bearing_rad != nullptr &&
+             heading[2 * k] * heading[2 * i] + heading[2 * k + 1] * heading[2 * i + 1] >=
+                 kSamePassCos &&
+             !same_pass(q, p.t_s, p.travel_m, opt.exclude_same_pass_s, opt.exclude_same_pass_m);
+    };
+    // The nearest such frame, looked for only as far as another pass counts as near (the
+    // comparable bound): a search over the whole run for each frame would take minutes.
+    double d2_min = std::numeric_limits<double>::infinity();
+    index.within(p.x_m, p.y_m, near_m, [&](const Positioned& q) {
+      if (other(q))
+        d2_min =
+            std::min(d2_min, (q.x_m - p.x_m) * (q.x_m - p.x_m) + (q.y_m - p.y_m) * (q.y_m - p.y_m));
+    });
+    if (!(d2_min <= near_m * near_m)) continue;
+    const BearingSums s = bearing_sums(index, vectors, p.x_m, p.y_m, vectors.heading[2 * i],
+                                       vectors.heading[2 * i + 1], d2_min,
+                                       std::sqrt(d2_min + 2.0 * kCut * h * h), h, other);
+    for (std::size_t b = 0; b < boards; ++b) {
+      double mean = 0.0;
+      const double v = static_cast<double>(p.bearing_rad[b]);
+      if (!std::isfinite(v) || !mean_bearing(s, b, mean)) continue;
+      residuals[b].push_back(std::fabs(algorithms::wrap_angle_rad(v - mean)));
+    }
+  }
+  report.bearing_sigma_rad.assign(boards, 0.0);
+  bool any = false;
+  for (std::size_t b = 0; b < boards; ++b) {
+    std::vector<double>& r = residuals[b];
+    report.bearing_residuals += r.size();
+    if (r.size() < 20 || !(out.sigma[b] > 0.0F)) continue;
+    auto mid = r.begin() + static_cast<std::ptrdiff_t>(r.size() / 2);
+    std::nth_element(r.begin(), mid, r.end());
+    // At most 1 rad (the map format's bound): a board whose bearings spread that far tells
+    // nothing, and is left to its area.
+    const double spread = std::max(1.4826 * *mid, 0.1 * algorithms::kPi / 180.0);
+    if (spread > 1.0) continue;
+    report.bearing_sigma_rad[b] = spread;
+    out.bearing_sigma_rad[b] = static_cast<float>(report.bearing_sigma_rad[b]);
+    any = true;
+  }
+  if (!any) return;
+  out.has_bearings = true;
+  out.bearing_a1_rad = static_cast<float>(law[0]);
+  out.bearing_a3_rad = static_cast<float>(law[1]);
+  report.has_bearings = true;
+  const auto with_yaw = [](const Positioned& p) { return p.has_yaw && p.bearing_rad != nullptr; };
+  const auto every = [](const Positioned&) { return true; };
+  for (std::uint32_t r = 0; r < out.rows; ++r) {
+    for (std::uint32_t c = 0; c < out.columns; ++c) {
+      const std::size_t at = out.index(c, r);
+      if (at == ForwardMap::kVoidCell) continue;
+      const double x = x0 + c * cell, y = y0 + r * cell;
+      // The direction of the nearest frame, as for the cell's heading: where a route crosses
+      // itself or is driven both ways, the camera (ahead of the axle) sees the boards from
+      // elsewhere on the other pass.
+      std::size_t anchor = 0;
+      double d2_min = std::numeric_limits<double>::infinity();
+      const double reach = std::sqrt(index.nearest_d2(x, y, with_yaw)) + 1e-6;
+      if (!std::isfinite(reach)) continue;
+      index.within(x, y, reach, [&](const Positioned& p) {
+        const double d = (p.x_m - x) * (p.x_m - x) + (p.y_m - y) * (p.y_m - y);
+        if (with_yaw(p) && d < d2_min) {
+          d2_min = d;
+          anchor = vectors.of(p);
+        }
+      });
+      if (!std::isfinite(d2_min)) continue;
+      const BearingSums s = bearing_sums(index, vectors, x, y, vectors.heading[2 * anchor],
+                                         vectors.heading[2 * anchor + 1], d2_min,
+                                         std::sqrt(d2_min + 2.0 * kCut * h * h), h, every);
+      bool stored = false;
+      for (std::size_t b = 0; b < boards; ++b) {
+        double mean = 0.0;
+        if (!(out.bearing_sigma_rad[b] > 0.0F) || !mean_bearing(s, b, mean)) continue;
+        out.bearing_rad[at * kMaxBoards + b] = static_cast<float>(mean);
+        stored = true;
+      }
+      report.bearing_cells += stored ? 1U : 0U;
+    }
+  }
+}
+
 }  // namespace
 
 ForwardMapReport fit_grid(std::vector<Positioned>& frames, std::size_t board_count,
                           const ForwardMapOptions& opt, algorithms::ForwardMap& out,
-                          ForwardMapReport report) {
+                          ForwardMapReport report, const double* law) {
   if (frames.size() < 8) {
     throw std::runtime_error("forward map: only " + std::to_string(frames.size()) +
                              " frames could be positioned (at least 8 needed)");
@@ -367,6 +545,8 @@ ForwardMapReport fit_grid(std::vector<Positioned>& frames, std::size_t board_cou
       }
     }
   }
+  if (law != nullptr && report.has_heading)
+    fit_bearings(frames, comparable, index, board_count, opt, law, x0, y0, cell, out, report);
   return report;
 }
 

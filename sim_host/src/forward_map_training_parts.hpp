@@ -17,12 +17,15 @@ struct Positioned {
   bool has_yaw;
   const std::vector<float>* features;
   double travel_m;  // < 0: unknown (then passes are told apart by time)
+  // Per board, the world bearing the frame saw it at (NaN: none); nullptr: no bearings.
+  const float* bearing_rad = nullptr;
 };
 
 // forward_map_training_fit.cpp
 // Fits the grid to frames that already have a position (shared by both ways of placing them).
+// With @p law (a1, a3; nullptr: none) and frames' bearing_rad, also the boards' bearings.
 ForwardMapReport fit_grid(std::vector<Positioned>& frames, std::size_t board_count,
                           const ForwardMapOptions& opt, algorithms::ForwardMap& out,
-                          ForwardMapReport report);
+                          ForwardMapReport report, const double* law = nullptr);
 
 }  // namespace harmoloc::sim_host::forward_map_training_detail

@@ -1,6 +1,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <stdexcept>
 
@@ -147,9 +148,39 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<dataset::Sta
   bool have_forward = false;
   ForwardMapReport forward_report;
   double forward_ms = 0.0;
+  // Where the boards stand and the lens's column-to-angle law, from the placed frames' centroid
+  // columns; with the law, every frame's world bearing of each board for the forward map.
+  const auto t_bearings = std::chrono::steady_clock::now();
+  std::vector<algorithms::BearingFrame> bearing_frames;
+  for (const PlacedFrame& f : frames) {
+    if (run.areas[f.index].columns_measured())
+      bearing_frames.push_back({placed.poses[f.index], run.areas[f.index]});
+  }
+  if (!bearing_frames.empty()) report.bearings = algorithms::calibrate_bearings(bearing_frames);
+  report.bearings_ms = ms_since(t_bearings);
+  BearingObservations observations;
+  const bool with_bearings = opt.bearings && report.bearings.ok;
+  if (with_bearings) {
+    observations.a1_rad = report.bearings.a1_rad;
+    observations.a3_rad = report.bearings.a3_rad;
+    observations.world_rad.resize(run.areas.size());
+    for (const PlacedFrame& f : frames) {
+      const algorithms::AreaVector& a = run.areas[f.index];
+      std::vector<float>& out = observations.world_rad[f.index];
+      out.assign(boards, std::numeric_limits<float>::quiet_NaN());
+      if (!a.columns_measured()) continue;
+      for (std::size_t b = 0; b < boards && b < a.count; ++b) {
+        if (a.pixels[b] < algorithms::kBearingMinPixels || a.side_pixels[b] != 0U) continue;
+        const double u = static_cast<double>(a.column_sum[b]) / static_cast<double>(a.pixels[b]);
+        out[b] = static_cast<float>(
+            algorithms::wrap_angle_rad(f.pose.yaw_rad - report.bearings.angle_rad(u, a.width_px)));
+      }
+    }
+  }
   if (opt.forward_map) {
     const auto t_forward = std::chrono::steady_clock::now();
-    forward_report = train_forward_map_placed(all, frames, boards, opt.forward, *forward);
+    forward_report = train_forward_map_placed(all, frames, boards, opt.forward, *forward,
+                                              with_bearings ? &observations : nullptr);
     forward_ms = ms_since(t_forward);
     have_forward = true;
   }
@@ -213,17 +244,6 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<dataset::Sta
   report.dissimilarity_bound =
       std::min(1.0, std::max(opt.known_place_margin * quantile(nearest_dissimilarity, 0.99), 0.01));
   report.train_ms = ms_since(t_train);
-
-  // Where the boards stand and the lens's column-to-angle law, from the placed frames' centroid
-  // columns (reported only, for now; not in the map).
-  const auto t_bearings = std::chrono::steady_clock::now();
-  std::vector<algorithms::BearingFrame> bearing_frames;
-  for (const PlacedFrame& f : frames) {
-    if (run.areas[f.index].columns_measured())
-      bearing_frames.push_back({placed.poses[f.index], run.areas[f.index]});
-  }
-  if (!bearing_frames.empty()) report.bearings = algorithms::calibrate_bearings(bearing_frames);
-  report.bearings_ms = ms_since(t_bearings);
 
   map = algorithms::MapFile{};
   map.image_width_px = run.image_width_px;

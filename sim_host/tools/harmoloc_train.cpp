@@ -70,6 +70,10 @@ int main(int argc, char** argv) {
   app.add_flag("--no-odometry", no_odometry,
                "do not place the frames by the wheel odometry between the labels: Wu & Qin's\n"
                "labelled + unlabelled samples only (the forward map then interpolates labels)");
+  bool no_bearings = false;
+  app.add_flag("--no-bearings", no_bearings,
+               "do not store the boards' bearings (where each board is seen across the frame) in\n"
+               "the map: the filter then weighs by areas alone, as maps before version 6");
   app.add_option("--out", out, "map file to write")->required();
   app.add_option("--config", config_path,
                  "firmware config whose colour thresholds to use (default: built-in)");
@@ -119,6 +123,7 @@ int main(int argc, char** argv) {
     opt.can_layout = config.can_layout;
     opt.geometry = config.geometry;
     opt.use_odometry = !no_odometry;
+    opt.bearings = !no_bearings;
     opt.label_tolerance_ns = static_cast<std::uint64_t>(std::llround(label_tolerance_ms * 1e6));
     if (label_offset == "auto") {
       opt.label_offset_auto = true;
@@ -318,14 +323,31 @@ int main(int argc, char** argv) {
               fw.has_heading ? "from the labels" : "unknown (labels have none)");
         }
         std::printf("board noise   %s (%% of frame, against other passes)\n", sig.c_str());
+        if (fw.has_bearings) {
+          std::string spread;
+          for (std::size_t b = 0; b < fw.bearing_sigma_rad.size(); ++b) {
+            if (!(fw.bearing_sigma_rad[b] > 0.0)) continue;
+            char item[64];
+            std::snprintf(item, sizeof item, "%s%s %.2f", spread.empty() ? "" : ", ",
+                          b < names.names.size() ? names.names[b].c_str() : "?",
+                          fw.bearing_sigma_rad[b] * 180.0 / algorithms::kPi);
+            spread += item;
+          }
+          std::printf("bearing noise %s (deg, against other passes; %zu of %zu cells hold one)\n",
+                      spread.c_str(), fw.bearing_cells, grid.stored_cells());
+        } else {
+          std::printf("bearing noise none in the map (%s)\n",
+                      !opt.bearings   ? "--no-bearings"
+                      : r.bearings.ok ? "too few residuals against other passes"
+                                      : "the lens's law could not be learnt");
+        }
       }
       if (r.bearings.ok) {
         std::size_t placed = 0;
         for (const auto& p : r.bearings.placements) placed += p.placed ? 1U : 0U;
         std::printf(
             "bearings      %zu of %zu boards placed from their centroid columns (%zu rays), "
-            "half field of view %.1f deg, residual %.2f deg RMS (%.0f ms; not yet used by the "
-            "map)\n",
+            "half field of view %.1f deg, residual %.2f deg RMS (%.0f ms)\n",
             placed, r.bearings.boards, r.bearings.rays,
             r.bearings.half_fov_rad() * 180.0 / algorithms::kPi,
             r.bearings.rms_residual_rad * 180.0 / algorithms::kPi, r.bearings_ms);

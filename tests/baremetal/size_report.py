@@ -349,10 +349,11 @@ def main():
          forward + pf + max(info.get(k, 0) for k in info if k.startswith("stack.pf_")) + code),
         ("map + forward map + particle filter + classifier + query stack + code",
          model + forward + pf + cls + query_stack + code),
-        # The filter's arrays are sized by kMaxParticles; a co-processor build for the default
-        # 1024 particles would set it so (computed from sizeof: 56 bytes a particle).
+        # The filter's arrays are sized by kMaxParticles (particles, scratch, weights, and the
+        # KLD bin table and its slot list: 74 bytes a particle, all of sizeof but a few bytes);
+        # a co-processor build for the default 1024 particles would set it so.
         ("forward map + particle filter of capacity 1024 (computed) + stack + code",
-         forward + (pf - 56 * (4096 - 1024)) + pf_stack + code),
+         forward + (pf - (pf // 4096) * (4096 - 1024)) + pf_stack + code),
     ]
     for label, size in configs:
         w(f"| {label} | {size} ({kib(size)}) | {'yes' if size <= TCM_BYTES else 'no'} "

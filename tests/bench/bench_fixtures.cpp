@@ -99,7 +99,27 @@ void synthetic_map(std::size_t samples, std::uint32_t width_px, std::uint32_t he
         e[b] = 1.5F + std::sin(1.3F * x * static_cast<float>(b + 1)) * std::cos(0.7F * y);
       f.route_distance_m[f.index(c, r)] = std::fabs(x - 2.1F);
       f.heading_rad[f.index(c, r)] = 1.57F;
+      // Every board's bearing, as a version 6 map holds them: boards in a row 1 m beyond the
+      // region, ahead of a robot facing +y.
+      for (std::size_t b = 0; b < f.board_count; ++b)
+        f.bearing_rad[f.index(c, r) * algorithms::kMaxBoards + b] =
+            std::atan2(2.7F - y, 1.2F + 0.3F * static_cast<float>(b) - x);
     }
+  }
+  f.has_bearings = true;
+  f.bearing_a1_rad = 1.05F;  // a pinhole of about 60 degrees
+  f.bearing_a3_rad = -0.05F;
+  for (std::size_t b = 0; b < f.board_count; ++b) f.bearing_sigma_rad[b] = 0.007F;
+}
+
+void bench_observation(const algorithms::ForwardMap& map, algorithms::BoardFeatures& observed) {
+  observed.count = map.board_count;
+  observed.angle_mask = 0;
+  for (std::size_t b = 0; b < observed.count; ++b) {
+    observed.value[b] = 1.4F;
+    // What a robot at (2.1, 1.0) facing +y sees: every board whole (the bearing term's cost).
+    observed.angle_rad[b] = 1.5708F - std::atan2(1.7F, 1.2F + 0.3F * static_cast<float>(b) - 2.1F);
+    observed.angle_mask |= 1U << b;
   }
 }
 

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "harmoloc/algorithms/board_observation.hpp"
 #include "harmoloc/algorithms/map_codec.hpp"
 #include "harmoloc/firmware/config.hpp"
 #include "harmoloc/hal/camera.hpp"
@@ -31,6 +32,10 @@ algorithms::ThresholdSet board_thresholds(std::size_t boards = 6);
 /// (values in a plausible range).
 void synthetic_map(std::size_t samples, std::uint32_t width_px, std::uint32_t height_px,
                    algorithms::MapFile& map, std::size_t boards = 6);
+
+/// One frame's observation for the filter benchmarks on synthetic_map's forward map: every board
+/// with an area and a bearing (the default update's whole cost).
+void bench_observation(const algorithms::ForwardMap& map, algorithms::BoardFeatures& observed);
 
 /// Serves the frames (RGB24 or their YUYV versions) again and again, timestamps 1/30 s apart.
 class MemoryCamera final : public hal::Camera {

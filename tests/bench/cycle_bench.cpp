@@ -233,8 +233,7 @@ void BM_FilterStepBoards(benchmark::State& state) {
   algorithms::BoardReliability reliability;
   reliability.reset(params);
   algorithms::BoardFeatures observed;
-  observed.count = map.thresholds.count;
-  for (std::size_t b = 0; b < observed.count; ++b) observed.value[b] = 1.4F;
+  bench::bench_observation(map.forward, observed);
   algorithms::BoardUpdate update;
   for (auto _ : state) {
     filter.predict(algorithms::OdometryDelta{0.0033, 0.001});

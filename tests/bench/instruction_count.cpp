@@ -213,8 +213,7 @@ int main(int argc, char** argv) {
     static algorithms::BoardReliability reliability;
     reliability.reset(params);
     algorithms::BoardFeatures observed;
-    observed.count = g_map.thresholds.count;
-    for (std::size_t b = 0; b < observed.count; ++b) observed.value[b] = 1.4F;
+    bench::bench_observation(g_map.forward, observed);
     static algorithms::BoardUpdate update;
     measure([&] {
       filter.predict(algorithms::OdometryDelta{0.0033, 0.001});

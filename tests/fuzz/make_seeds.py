@@ -92,12 +92,14 @@ def encode_map_v3(width, height, thresholds, board_index, params, samples, forwa
 
 
 def encode_map_v5(width, height, thresholds, board_index, params, weights, samples, forward,
-                  calibration=()):
+                  calibration=(), bearings=None):
     """Version 5: feature weights after the params, the forward map's stored tiles (a bitmap
     over the tile grid, then their cells), the calibration entries. forward is (columns, rows,
     origin_x, origin_y, cell, sigmas, with_heading, stored tile positions, cell value function
-    (tile, cell) -> (expected list, route, heading))."""
-    out = map_header(5, width, height, thresholds, board_index, params, samples)
+    (tile, cell) -> (expected list, route, heading)). With bearings, version 6: bearings is
+    (a1, a3, bearing sigmas, cell bearing function (tile, cell) -> list, 8.0 for none)."""
+    out = map_header(5 if bearings is None else 6, width, height, thresholds, board_index, params,
+                     samples)
     out += struct.pack("<%df" % len(weights), *weights)
     for features, x, y in samples:
         out += struct.pack("<%df" % len(features), *features)
@@ -105,7 +107,7 @@ def encode_map_v5(width, height, thresholds, board_index, params, weights, sampl
     cols, rows, ox, oy, cell, sigmas, with_heading, tiles, value = forward
     out += struct.pack("<IIfffI", cols, rows, ox, oy, cell, len(sigmas))
     out += struct.pack("<%df" % len(sigmas), *sigmas)
-    out += bytes([1 if with_heading else 0, 0, 0, 0])
+    out += bytes([(1 if with_heading else 0) | (0 if bearings is None else 2), 0, 0, 0])
     positions = ((cols + 7) // 8) * ((rows + 7) // 8)
     bitmap = bytearray((positions + 7) // 8)
     for t in tiles:
@@ -119,6 +121,14 @@ def encode_map_v5(width, height, thresholds, board_index, params, weights, sampl
     if with_heading:
         for _, _, heading in cells:
             out += struct.pack("<f", heading)
+    if bearings is not None:
+        a1, a3, bearing_sigmas, bearing = bearings
+        out += struct.pack("<ff", a1, a3)
+        out += struct.pack("<%df" % len(bearing_sigmas), *bearing_sigmas)
+        for t in sorted(tiles):
+            for c in range(64):
+                values = bearing(t, c)
+                out += struct.pack("<%df" % len(values), *values)
     out += struct.pack("<I", len(calibration))
     for entry, v in calibration:
         out += struct.pack("<If", entry, v)
@@ -157,6 +167,16 @@ def map_seeds(e2e):
             (20, 10, 2.0, 0.7, 0.05, [0.1, 0.2], True, [1, 3],
              lambda t, c: ([0.01 * c, 1.5 - 0.01 * t], 0.001 * c, 1.5)),
             [(1, 0.02), (2, 0.03), (3, 0.01)]),
+        # Version 6: the same with board bearings, the second board's at every third cell
+        # missing (8.0).
+        "forward-v6-bearings.hmap": encode_map_v5(
+            160, 120, [red, green], [0, 1], [100.0 / 19200, 0.5, 0.7, 0.01, 0.02, 3.0, 0.1],
+            [1.0, 0.5], [([0.0, 1.5], 2.1, 0.7), ([2.25, 0.5], 2.0, 1.3)],
+            (20, 10, 2.0, 0.7, 0.05, [0.1, 0.2], True, [1, 3],
+             lambda t, c: ([0.01 * c, 1.5 - 0.01 * t], 0.001 * c, 1.5)),
+            [(1, 0.02), (2, 0.03), (3, 0.01)],
+            (1.1, -0.12, [0.04, 0.08],
+             lambda t, c: [-3.0 + 0.09 * c, 8.0 if c % 3 == 0 else 0.5 - 0.01 * c - 0.1 * t])),
     }
     tiny = os.path.join(e2e, "tiny.hmap")
     if os.path.exists(tiny):

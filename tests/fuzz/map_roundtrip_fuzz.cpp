@@ -2,6 +2,8 @@
 // the fuzzer reaches the body); when it decodes, encode_map must give back exactly the same
 // bytes, and decoding those again must give the same map. A difference means the decoder
 // accepts something the format does not define (an ignored field, a non-canonical encoding).
+// A decoded forward map without bearings is then given some (map version 6) and must round trip
+// with them too.
 
 #include <cstdint>
 #include <cstring>
@@ -15,7 +17,7 @@ using namespace harmoloc::algorithms;
 
 namespace {
 
-MapFile g_map;  // ~1.8 MiB each: static
+MapFile g_map;  // ~3 MiB each: static
 MapFile g_again;
 
 bool same_model(const MapFile& a, const MapFile& b) {
@@ -55,7 +57,8 @@ bool same_model(const MapFile& a, const MapFile& b) {
   if (f.present() != g.present()) return false;
   if (!f.present()) return true;
   if (f.columns != g.columns || f.rows != g.rows || f.board_count != g.board_count ||
-      f.has_heading != g.has_heading || f.tile_count != g.tile_count) {
+      f.has_heading != g.has_heading || f.has_bearings != g.has_bearings ||
+      f.tile_count != g.tile_count) {
     return false;
   }
   const std::size_t positions = static_cast<std::size_t>(f.tile_columns) * f.tile_rows;
@@ -66,10 +69,45 @@ bool same_model(const MapFile& a, const MapFile& b) {
   if (!same_bits(fs, gs, sizeof fs) || !same_bits(f.sigma.data(), g.sigma.data(), sizeof f.sigma))
     return false;
   const std::size_t cells = f.stored_cells();
+  if (f.has_bearings) {
+    // Version 6: the law, each board's spread and every stored cell's bearings.
+    const float fb[] = {f.bearing_a1_rad, f.bearing_a3_rad};
+    const float gb[] = {g.bearing_a1_rad, g.bearing_a3_rad};
+    if (!same_bits(fb, gb, sizeof fb) ||
+        !same_bits(f.bearing_sigma_rad.data(), g.bearing_sigma_rad.data(),
+                   sizeof f.bearing_sigma_rad) ||
+        !same_bits(f.bearing_rad.data(), g.bearing_rad.data(), cells * kMaxBoards * sizeof(float)))
+      return false;
+  }
   return same_bits(f.expected.data(), g.expected.data(), cells * kMaxBoards * sizeof(float)) &&
          same_bits(f.route_distance_m.data(), g.route_distance_m.data(), cells * sizeof(float)) &&
          (!f.has_heading ||
           same_bits(f.heading_rad.data(), g.heading_rad.data(), cells * sizeof(float)));
+}
+
+// A decoded forward map without bearings is given some, drawn from the input's bytes (about one
+// value in eight without a bearing), and must survive encode and decode with them: the bearings'
+// writer and reader over whatever grid and tiles the input has.
+void check_added_bearings(const std::vector<std::uint8_t>& input) {
+  ForwardMap& f = g_map.forward;
+  if (!f.present() || f.has_bearings) return;
+  f.has_bearings = true;
+  f.bearing_a1_rad = 0.5F + 0.005F * static_cast<float>(input[input.size() / 2]);
+  f.bearing_a3_rad = -0.25F * f.bearing_a1_rad;
+  for (std::size_t b = 0; b < f.board_count; ++b)
+    f.bearing_sigma_rad[b] = b == 0 ? 0.05F : 0.002F * static_cast<float>(input[b % input.size()]);
+  const std::size_t cells = f.stored_cells();
+  for (std::size_t i = 0; i < cells * f.board_count; ++i) {
+    const std::uint8_t v = input[i % input.size()];
+    f.bearing_rad[(i / f.board_count) * kMaxBoards + i % f.board_count] =
+        v % 8 == 0 ? ForwardMap::kNoBearing : 0.024F * static_cast<float>(v) - 3.06F;
+  }
+  const std::vector<std::uint8_t> encoded = encode_map(g_map);
+  HARMOLOC_FUZZ_CHECK(!decode_map(encoded.data(), encoded.size(), g_again),
+                      "a map given bearings does not decode");
+  HARMOLOC_FUZZ_CHECK(same_model(g_map, g_again), "decode(encode(map with bearings)) differs");
+  HARMOLOC_FUZZ_CHECK(encode_map(g_again) == encoded,
+                      "a map given bearings re-encodes to different bytes");
 }
 
 }  // namespace
@@ -91,10 +129,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const std::vector<std::uint8_t> encoded = encode_map(g_map);
   if (input[8] >= 1 && input[8] < kMapFormatVersion) {
     // An older map (regressions/map_roundtrip/version1.hmap, corpus tiny-trained-v2.hmap,
-    // forward-v3.hmap) is written back as the current version, without what it lacked: the same
-    // model, a version 1 map's dissimilarity bound at 1, no forward map before version 3, every
-    // feature weight 1 and no calibration before version 4, a forward map of versions 3 and 4
-    // with every tile of its grid stored.
+    // forward-v3.hmap, forward-v5-sparse.hmap) is written back as the current version, without
+    // what it lacked: the same model, a version 1 map's dissimilarity bound at 1, no forward map
+    // before version 3, every feature weight 1 and no calibration before version 4, a forward
+    // map of versions 3 and 4 with every tile of its grid stored, no bearings before version 6.
     HARMOLOC_FUZZ_CHECK(input[8] != 1 || g_map.model.max_dissimilarity == 1.0F,
                         "a version 1 map decodes with a dissimilarity bound");
     HARMOLOC_FUZZ_CHECK(input[8] >= 3 || !g_map.forward.present(),
@@ -106,11 +144,14 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
                                           g_map.model.local_linear_ridge == 0.0F),
                         "a map before version 4 decodes with weights or calibration");
     const ForwardMap& f = g_map.forward;
-    HARMOLOC_FUZZ_CHECK(!f.present() || f.tile_count == f.tile_columns * f.tile_rows,
-                        "a version 3 or 4 forward map decodes without every tile");
+    HARMOLOC_FUZZ_CHECK(
+        input[8] >= 5 || !f.present() || f.tile_count == f.tile_columns * f.tile_rows,
+        "a version 3 or 4 forward map decodes without every tile");
+    HARMOLOC_FUZZ_CHECK(!f.has_bearings, "a map before version 6 decodes with bearings");
     HARMOLOC_FUZZ_CHECK(!decode_map(encoded.data(), encoded.size(), g_again),
                         "a re-encoded older map does not decode");
     HARMOLOC_FUZZ_CHECK(same_model(g_map, g_again), "decode(encode(older map)) differs");
+    check_added_bearings(input);
     return 0;
   }
   HARMOLOC_FUZZ_CHECK(encoded.size() == input.size(),
@@ -120,5 +161,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   HARMOLOC_FUZZ_CHECK(!decode_map(encoded.data(), encoded.size(), g_again),
                       "an encoded map does not decode");
   HARMOLOC_FUZZ_CHECK(same_model(g_map, g_again), "decode(encode(map)) differs from map");
+  check_added_bearings(input);
   return 0;
 }

@@ -137,3 +137,59 @@ TEST(ForwardMapTraining, CellHeadingIsTheMeanOfItsOwnPass) {
   const double at = ha::route_heading(*map, 1.5, 0.5);
   EXPECT_LT(std::min(std::fabs(at), std::fabs(at - 90.0 * deg)), 3.5 * deg) << at / deg;
 }
+
+// Bearings: each cell keeps the world bearing at which the training run saw a board from near
+// it, and each board the spread of its bearing between passes; a board never seen whole gets
+// none, and a stretch where a board was cut by the frame holds none.
+TEST(ForwardMapTraining, CellBearingsAreWhereTheRunSawTheBoards) {
+  const double deg = 3.14159265358979323846 / 180.0;
+  PlacedRun run = diagonal_run(2.0);  // (0.5, 0.5) to (2.1, 1.7), forth and back
+  hs::BearingObservations bearings;
+  bearings.a1_rad = 1.2;
+  bearings.a3_rad = 0.1;
+  const double bx = 2.5, by = 0.0;  // board 0 stands here
+  const auto truth = [&](double x, double y) { return std::atan2(by - y, bx - x); };
+  bearings.world_rad.resize(run.features.size());
+  for (const hs::PlacedFrame& f : run.placed) {
+    // A deterministic +-0.2 degree wobble between frames, as a centroid's noise.
+    const double noise = 0.2 * deg * std::sin(1.7 * static_cast<double>(f.index));
+    const double s = std::hypot(f.pose.x_m - 0.5, f.pose.y_m - 0.5);
+    const bool cut = s > 1.0 && s < 1.2;  // the board at the frame's edge along this stretch
+    bearings.world_rad[f.index] = {
+        cut ? std::nanf("") : static_cast<float>(truth(f.pose.x_m, f.pose.y_m) + noise),
+        std::nanf("")};  // board 1 never gives a bearing
+  }
+  auto map = std::make_unique<ha::ForwardMap>();
+  const hs::ForwardMapReport report = hs::train_forward_map_placed(
+      run.features, run.placed, 2, hs::ForwardMapOptions{}, *map, &bearings);
+  ASSERT_TRUE(map->has_bearings);
+  ASSERT_TRUE(report.has_bearings);
+  EXPECT_FLOAT_EQ(map->bearing_a1_rad, 1.2F);
+  EXPECT_FLOAT_EQ(map->bearing_a3_rad, 0.1F);
+  EXPECT_GT(map->bearing_sigma_rad[0], 0.09 * deg);
+  EXPECT_LT(map->bearing_sigma_rad[0], 0.4 * deg);
+  EXPECT_EQ(map->bearing_sigma_rad[1], 0.0F);
+  EXPECT_GT(report.bearing_cells, 0U);
+  for (const double s : {0.2, 0.6, 0.9, 1.5, 1.9}) {
+    const double x = 0.5 + 0.8 * s, y = 0.5 + 0.6 * s;
+    for (const double off : {0.0, 0.01}) {
+      float b = 0.0F;
+      ASSERT_TRUE(ha::expected_bearing(*map, ha::locate(*map, x - 0.6 * off, y + 0.8 * off), 0, b))
+          << s;
+      EXPECT_NEAR(b, truth(x - 0.6 * off, y + 0.8 * off), 0.3 * deg) << s << " " << off;
+      EXPECT_FALSE(ha::expected_bearing(*map, ha::locate(*map, x, y), 1, b));
+    }
+  }
+  float b = 0.0F;
+  EXPECT_FALSE(ha::expected_bearing(*map, ha::locate(*map, 0.5 + 0.8 * 1.1, 0.5 + 0.6 * 1.1), 0, b))
+      << "the cut stretch holds no bearing";
+
+  // Without observations, or with every bearing missing, the map has none.
+  auto plain = std::make_unique<ha::ForwardMap>();
+  hs::train_forward_map_placed(run.features, run.placed, 2, hs::ForwardMapOptions{}, *plain);
+  EXPECT_FALSE(plain->has_bearings);
+  for (auto& v : bearings.world_rad) v = {std::nanf(""), std::nanf("")};
+  hs::train_forward_map_placed(run.features, run.placed, 2, hs::ForwardMapOptions{}, *plain,
+                               &bearings);
+  EXPECT_FALSE(plain->has_bearings);
+}

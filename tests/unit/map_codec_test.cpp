@@ -559,6 +559,10 @@ TEST(MapCodec, LargestMapFitsTheSizeCap) {
   f.board_count = ha::kMaxBoards;
   f.sigma.fill(0.1F);
   f.has_heading = true;
+  // Version 6: the bearings too (every cell without one, as lay_out_grid left them).
+  f.has_bearings = true;
+  f.bearing_a1_rad = 1.0F;
+  f.bearing_sigma_rad.fill(0.05F);
   const std::vector<std::uint8_t> b = ha::encode_map(*map);
   // Every count at its capacity but the calibration's (the trainer writes 3 of the 64 allowed).
   EXPECT_EQ(b.size() + ha::kMaxCalibrationEntries * 8U, ha::kMaxMapFileBytes);
@@ -769,7 +773,9 @@ TEST(MapCodec, ForwardMapCorruptionWithValidChecksum) {
       },
       "models no board");
   reject(
-      "unknown flag", [](auto& b) { b[kOffFlags] = 2; }, "flags");
+      "unknown flag", [](auto& b) { b[kOffFlags] = 5; }, "flags");
+  reject(
+      "unknown high flag", [](auto& b) { b[kOffFlags] = 0x81; }, "flags");
   reject(
       "padding", [](auto& b) { b[kOffFlags + 2] = 1; }, "flags");
   reject(
@@ -799,4 +805,261 @@ TEST(MapCodec, ForwardMapCorruptionWithValidChecksum) {
   auto out = std::make_unique<ha::MapFile>();
   EXPECT_TRUE(ha::decode_map(b.data(), b.size(), *out));
   EXPECT_FALSE(out->forward.present());
+}
+
+namespace {
+
+// make_map_with_forward's map with board bearings (version 6): the law, each board's spread
+// (boards 3 and 6.. not modelled), and per stored cell of its one tile a bearing per board, some
+// cells without one (kNoBearing: board 3 everywhere, board 1 at every fifth cell, the cells
+// beyond the grid as lay_out_grid left them).
+std::unique_ptr<ha::MapFile> make_map_with_bearings() {
+  auto map = make_map_with_forward();
+  ha::ForwardMap& f = map->forward;
+  f.has_bearings = true;
+  f.bearing_a1_rad = 1.2F;
+  f.bearing_a3_rad = -0.15F;
+  f.bearing_sigma_rad = {0.05F, 0.1F, 0.02F, 0.0F, 0.03F, 0.04F, 0.0F, 0.0F};
+  for (std::uint32_t r = 0; r < 2; ++r) {
+    for (std::uint32_t c = 0; c < 3; ++c) {
+      const std::size_t k = r * 3 + c, at = f.index(c, r);
+      for (std::size_t b = 0; b < kBoards; ++b) {
+        const bool none = b == 3 || (b == 1 && k % 5 == 0);
+        f.bearing_rad[at * ha::kMaxBoards + b] =
+            none ? ha::ForwardMap::kNoBearing : -3.0F + 0.2F * static_cast<float>(k + 4 * b);
+      }
+    }
+  }
+  // The extremes a bearing may take.
+  f.bearing_rad[f.index(2, 1) * ha::kMaxBoards + 0] = -3.1416F;
+  f.bearing_rad[f.index(2, 1) * ha::kMaxBoards + 2] = 3.1416F;
+  return map;
+}
+
+// Offsets of the version 6 bearings, after the headings of make_map_with_forward's map.
+constexpr std::size_t kOffBearingA1 = kOffHeading + kTileCells * 4;
+constexpr std::size_t kOffBearingA3 = kOffBearingA1 + 4;
+constexpr std::size_t kOffBearingSigma = kOffBearingA3 + 4;
+constexpr std::size_t kOffBearings = kOffBearingSigma + 4 * kBoards;
+constexpr std::size_t kOffBearingsEnd = kOffBearings + kTileCells * kBoards * 4;
+
+// True when @p f's bearings are as lay_out_grid leaves them: none, every stored cell and the
+// void cell without a bearing.
+bool bearings_cleared(const ha::ForwardMap& f) {
+  if (f.has_bearings || f.bearing_a1_rad != 0.0F || f.bearing_a3_rad != 0.0F) return false;
+  for (const float s : f.bearing_sigma_rad) {
+    if (s != 0.0F) return false;
+  }
+  for (std::size_t i = 0; i < f.stored_cells() * ha::kMaxBoards; ++i) {
+    if (f.bearing_rad[i] != ha::ForwardMap::kNoBearing) return false;
+  }
+  for (std::size_t b = 0; b < ha::kMaxBoards; ++b) {
+    if (f.bearing_rad[ha::ForwardMap::kVoidCell * ha::kMaxBoards + b] != ha::ForwardMap::kNoBearing)
+      return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+// Version 6: the board bearings follow the headings, flagged by bit 1, and read back exactly.
+TEST(MapCodec, ForwardMapBearingsRoundTripAndLayout) {
+  const auto map = make_map_with_bearings();
+  const std::vector<std::uint8_t> bytes = ha::encode_map(*map);
+  ASSERT_EQ(bytes.size(), kOffBearingsEnd + 4 + 4);
+  EXPECT_EQ(get_u32(bytes, kOffVersion), 6U);
+  EXPECT_EQ(bytes[kOffFlags], 3U);
+  std::uint32_t bits = 0;
+  std::memcpy(&bits, &map->forward.bearing_a1_rad, 4);
+  EXPECT_EQ(get_u32(bytes, kOffBearingA1), bits);
+  std::memcpy(&bits, &map->forward.bearing_a3_rad, 4);
+  EXPECT_EQ(get_u32(bytes, kOffBearingA3), bits);
+  std::memcpy(&bits, &map->forward.bearing_sigma_rad[1], 4);
+  EXPECT_EQ(get_u32(bytes, kOffBearingSigma + 4), bits);
+  // Cell (1, 0), board 2: storage index 1, its third value.
+  std::memcpy(&bits, &map->forward.bearing_rad[1 * ha::kMaxBoards + 2], 4);
+  EXPECT_EQ(get_u32(bytes, kOffBearings + (1 * kBoards + 2) * 4), bits);
+
+  auto out = std::make_unique<ha::MapFile>();
+  const ha::MapError e = ha::decode_map(bytes.data(), bytes.size(), *out);
+  ASSERT_FALSE(e) << e.what;
+  const ha::ForwardMap& a = map->forward;
+  const ha::ForwardMap& b = out->forward;
+  ASSERT_TRUE(b.present());
+  EXPECT_TRUE(b.has_heading);
+  EXPECT_TRUE(b.has_bearings);
+  EXPECT_EQ(b.bearing_a1_rad, a.bearing_a1_rad);
+  EXPECT_EQ(b.bearing_a3_rad, a.bearing_a3_rad);
+  EXPECT_EQ(b.bearing_sigma_rad, a.bearing_sigma_rad);
+  EXPECT_EQ(b.bearing_rad, a.bearing_rad);
+  EXPECT_EQ(b.heading_rad, a.heading_rad);
+  EXPECT_EQ(b.expected, a.expected);
+  std::size_t none = 0, some = 0;
+  for (std::size_t c = 0; c < b.stored_cells(); ++c) {
+    for (std::size_t k = 0; k < kBoards; ++k) {
+      const float v = b.bearing_rad[c * ha::kMaxBoards + k];
+      (v == ha::ForwardMap::kNoBearing ? none : some) += 1;
+    }
+  }
+  EXPECT_EQ(some, 6U * 5U - 2U);  // the grid's six cells, boards 0 to 5 but 3, board 1 twice none
+  EXPECT_GT(none, 0U);
+  EXPECT_EQ(b.bearing_rad[b.index(2, 1) * ha::kMaxBoards], -3.1416F);
+  EXPECT_EQ(ha::encode_map(*out), bytes);
+
+  // Bearings without headings: bit 1 alone, the section one value a stored cell shorter.
+  auto bare = make_map_with_bearings();
+  bare->forward.has_heading = false;
+  const std::vector<std::uint8_t> no_heading = ha::encode_map(*bare);
+  EXPECT_EQ(no_heading.size(), bytes.size() - kTileCells * 4);
+  EXPECT_EQ(no_heading[kOffFlags], 2U);
+  const ha::MapError e2 = ha::decode_map(no_heading.data(), no_heading.size(), *out);
+  ASSERT_FALSE(e2) << e2.what;
+  EXPECT_FALSE(out->forward.has_heading);
+  EXPECT_TRUE(out->forward.has_bearings);
+  EXPECT_EQ(out->forward.bearing_rad, a.bearing_rad);
+  EXPECT_EQ(ha::encode_map(*out), no_heading);
+}
+
+// A map without bearings (version 6 without bit 1, or version 5) decodes without them, with the
+// bearing arrays as lay_out_grid leaves them, even into a map object that held bearings before.
+TEST(MapCodec, ForwardMapWithoutBearingsRoundTrip) {
+  const auto map = make_map_with_forward();
+  const std::vector<std::uint8_t> bytes = ha::encode_map(*map);
+  ASSERT_EQ(bytes.size(), kOffHeading + kTileCells * 4 + 4 + 4);
+  EXPECT_EQ(bytes[kOffFlags], 1U);
+  const std::vector<std::uint8_t> with = ha::encode_map(*make_map_with_bearings());
+  auto out = std::make_unique<ha::MapFile>();
+  ASSERT_FALSE(ha::decode_map(with.data(), with.size(), *out));
+  ASSERT_TRUE(out->forward.has_bearings);
+
+  const ha::MapError e = ha::decode_map(bytes.data(), bytes.size(), *out);
+  ASSERT_FALSE(e) << e.what;
+  EXPECT_TRUE(out->forward.present());
+  EXPECT_TRUE(bearings_cleared(out->forward));
+  EXPECT_EQ(ha::encode_map(*out), bytes);
+
+  // The same map as version 5 still reads, the same map, and is written back as version 6.
+  std::vector<std::uint8_t> v5 = bytes;
+  put_u32(v5, kOffVersion, 5);
+  fix_crc(v5);
+  ASSERT_FALSE(ha::decode_map(with.data(), with.size(), *out));
+  const ha::MapError e5 = ha::decode_map(v5.data(), v5.size(), *out);
+  ASSERT_FALSE(e5) << e5.what;
+  EXPECT_TRUE(bearings_cleared(out->forward));
+  EXPECT_EQ(out->forward.heading_rad, map->forward.heading_rad);
+  EXPECT_EQ(ha::encode_map(*out), bytes);
+
+  // A map without a forward map has no bearings either.
+  ASSERT_FALSE(ha::decode_map(with.data(), with.size(), *out));
+  const std::vector<std::uint8_t> plain = ha::encode_map(*make_map());
+  ASSERT_FALSE(ha::decode_map(plain.data(), plain.size(), *out));
+  EXPECT_FALSE(out->forward.present());
+  EXPECT_FALSE(out->forward.has_bearings);
+}
+
+TEST(MapCodec, ForwardMapBearingsCorruptionWithValidChecksum) {
+  const std::vector<std::uint8_t> good = ha::encode_map(*make_map_with_bearings());
+  ASSERT_EQ(decode_error(good), "");
+  const auto reject = [&](const char* what, auto edit, const char* expect) {
+    std::vector<std::uint8_t> b = good;
+    edit(b);
+    fix_crc(b);
+    const std::string why = decode_error(b);
+    EXPECT_NE(why.find(expect), std::string::npos) << what << ": " << why;
+  };
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  // Bit 1 means nothing before version 6: such a map is refused, not read with bearings.
+  reject(
+      "bearings in a version 5 map", [](auto& b) { put_u32(b, kOffVersion, 5); },
+      "flags: unknown bits set");
+  reject(
+      "a1 0", [](auto& b) { put_f32(b, kOffBearingA1, 0.0F); }, "bearing law: a1");
+  reject(
+      "a1 NaN", [&](auto& b) { put_f32(b, kOffBearingA1, nan); }, "bearing law: a1");
+  reject(
+      "a1 negative", [](auto& b) { put_f32(b, kOffBearingA1, -1.2F); }, "bearing law: a1");
+  reject(
+      "a1 above 4 rad", [](auto& b) { put_f32(b, kOffBearingA1, 4.01F); }, "bearing law: a1");
+  reject(
+      "a3 below -a1 (the law would turn back)", [](auto& b) { put_f32(b, kOffBearingA3, -1.21F); },
+      "bearing law: a3");
+  reject(
+      "a3 above 3 a1", [](auto& b) { put_f32(b, kOffBearingA3, 3.61F); }, "bearing law: a3");
+  reject(
+      "a3 NaN", [&](auto& b) { put_f32(b, kOffBearingA3, nan); }, "bearing law: a3");
+  reject(
+      "bearing sigma negative", [](auto& b) { put_f32(b, kOffBearingSigma + 4, -0.1F); },
+      "bearing sigma");
+  reject(
+      "bearing sigma NaN", [&](auto& b) { put_f32(b, kOffBearingSigma, nan); }, "bearing sigma");
+  reject(
+      "bearing sigma above 1 rad", [](auto& b) { put_f32(b, kOffBearingSigma, 1.5F); },
+      "bearing sigma");
+  reject(
+      "every bearing sigma 0",
+      [](auto& b) {
+        for (std::size_t k = 0; k < kBoards; ++k) put_f32(b, kOffBearingSigma + 4 * k, 0.0F);
+      },
+      "every bearing sigma is 0");
+  reject(
+      "a bearing of 5 rad", [](auto& b) { put_f32(b, kOffBearings + 4 * 7, 5.0F); },
+      "bearing neither");
+  reject(
+      "a bearing just beyond pi", [](auto& b) { put_f32(b, kOffBearings, 3.1417F); },
+      "bearing neither");
+  reject(
+      "a bearing NaN", [&](auto& b) { put_f32(b, kOffBearingsEnd - 4, nan); }, "bearing neither");
+  reject(
+      "a bearing of -8 (not the no-bearing value)",
+      [](auto& b) { put_f32(b, kOffBearings + 4, -ha::ForwardMap::kNoBearing); },
+      "bearing neither");
+  reject(
+      "truncated inside the bearing cells",
+      [](auto& b) {
+        b.erase(b.begin() + static_cast<std::ptrdiff_t>(kOffBearingsEnd - 12),
+                b.begin() + static_cast<std::ptrdiff_t>(kOffBearingsEnd));
+      },
+      "truncated: the forward map's bearings");
+  reject(
+      "truncated inside the bearing law",
+      [](auto& b) {
+        b.resize(kOffBearingA3 + 2);
+        b.resize(b.size() + 4);  // the CRC
+      },
+      "truncated: the forward map's bearing law");
+  // The values at the edges of what is allowed are a map.
+  std::vector<std::uint8_t> b = good;
+  put_f32(b, kOffBearingA1, 4.0F);
+  put_f32(b, kOffBearingA3, -4.0F);
+  put_f32(b, kOffBearingSigma, 1.0F);
+  put_f32(b, kOffBearings, ha::ForwardMap::kNoBearing);
+  fix_crc(b);
+  EXPECT_EQ(decode_error(b), "");
+  put_f32(b, kOffBearingA3, 9.0F);
+  fix_crc(b);
+  EXPECT_EQ(decode_error(b), "");
+  // A rejected map leaves no half-read forward map, and no bearings, behind.
+  b = good;
+  put_f32(b, kOffBearingsEnd - 4, 5.0F);
+  fix_crc(b);
+  auto out = std::make_unique<ha::MapFile>();
+  EXPECT_TRUE(ha::decode_map(b.data(), b.size(), *out));
+  EXPECT_FALSE(out->forward.present());
+  EXPECT_FALSE(out->forward.has_bearings);
+}
+
+// Cut anywhere in the bearings and re-sealed, a map is refused as truncated.
+TEST(MapCodec, ForwardMapBearingsTruncatedAtEveryLength) {
+  const std::vector<std::uint8_t> good = ha::encode_map(*make_map_with_bearings());
+  auto out = std::make_unique<ha::MapFile>();
+  for (std::size_t n = kOffBearingA1; n < kOffBearingsEnd; ++n) {
+    std::vector<std::uint8_t> b(good.begin(), good.begin() + static_cast<std::ptrdiff_t>(n));
+    b.resize(n + 4);
+    fix_crc(b);
+    const ha::MapError e = ha::decode_map(b.data(), b.size(), *out);
+    ASSERT_TRUE(e) << "cut to " << n << " bytes and accepted";
+    EXPECT_NE(std::string(e.what).find("truncated"), std::string::npos) << n << ": " << e.what;
+    EXPECT_LE(e.offset, n);
+    EXPECT_FALSE(out->forward.has_bearings);
+  }
 }

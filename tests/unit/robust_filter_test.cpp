@@ -416,6 +416,128 @@ TEST(ParticleFilterBoards, ParticlesTurnedFromTheRoutesHeadingAreUnlikely) {
   EXPECT_NEAR(weight_ratio(params, 1.0, 1.0, 1.0 + 90 * deg), 1.0, 1e-6);
 }
 
+// Bearings: a board seen across the frame weighs each particle by how its heading and place fit
+// where the map says the board lies from there (yaw - image angle against the cell's world
+// bearing), in the board's mixture; off, or without a measured angle, it weighs nothing.
+TEST(ParticleFilterBoards, ABoardsBearingTellsPlacesAndHeadingsApart) {
+  auto map = make_forward_map();
+  const double bx = 1.5, by = 2.0;  // board 0 stands here, beyond the grid
+  const auto world = [&](double x, double y) { return std::atan2(by - y, bx - x); };
+  map->has_bearings = true;
+  map->bearing_a1_rad = 1.0F;
+  map->bearing_a3_rad = 0.0F;
+  map->bearing_sigma_rad[0] = 0.005F;
+  for (std::uint32_t r = 0; r < map->rows; ++r) {
+    for (std::uint32_t c = 0; c < map->columns; ++c)
+      map->bearing_rad[map->index(c, r) * ha::kMaxBoards] =
+          static_cast<float>(world(1.0 + 0.05 * c, 0.5 + 0.05 * r));
+  }
+  // The lookup is the cells' bilinear mean: close to the geometry between cells.
+  float at = 0.0F;
+  ASSERT_TRUE(ha::expected_bearing(*map, ha::locate(*map, 1.37, 0.81), 0, at));
+  EXPECT_NEAR(at, world(1.37, 0.81), 1e-3);
+  EXPECT_FALSE(ha::expected_bearing(*map, ha::locate(*map, 1.37, 0.81), 1, at));
+
+  // The robot at (1.45, 0.75) facing the board's side: it sees board 0 at this image angle.
+  const double yaw = 1.5;
+  ha::BoardFeatures seen = observe(1.45, 0.75);
+  seen.angle_rad[0] = static_cast<float>(yaw - world(1.45, 0.75));
+  seen.angle_mask = 1U;
+  const auto weights = [&](const ha::BoardModelParams& params, const ha::BoardFeatures& o,
+                           const ha::Pose2& a, const ha::Pose2& b, ha::BoardUpdate& u) {
+    ha::BoardReliability reliability;
+    reliability.reset(params);
+    reliability.assess(*map, o, ha::Pose2{1.45, 0.75, 0.0}, params, u);
+    for (std::size_t k = 0; k < u.boards; ++k) u.use[k] = false;  // the bearing alone
+    ha::ParticleFilter pf;
+    pf.configure(100, 3, ha::MotionNoise{});
+    pf.initialize_between(a, b, 0.0, 0.0, false);
+    pf.update_boards(u);
+    double wa = 0.0, wb = 0.0;
+    for (std::size_t i = 0; i < pf.size(); ++i)
+      (std::fabs(pf.particle(i).x_m - a.x_m) + std::fabs(pf.particle(i).yaw_rad - a.yaw_rad) < 1e-9
+           ? wa
+           : wb) += pf.weight(i);
+    return wb / wa;  // equal halves
+  };
+  ha::BoardModelParams params;
+  params.route_heading_sigma_deg = 0.0;
+  params.tempering = 1.0;
+  const ha::Pose2 truth{1.45, 0.75, yaw};
+  ha::BoardUpdate u;
+  // 10 cm to the side: the board is seen 4.6 degrees off, over 5 widened sigmas.
+  const ha::Pose2 beside{1.55, 0.75, yaw};
+  const double ratio = weights(params, seen, truth, beside, u);
+  ASSERT_EQ(u.bearing_mask, 1U);
+  const float expected_at_beside = [&] {
+    float e = 0.0F;
+    ha::expected_bearing(*map, ha::locate(*map, 1.55, 0.75), 0, e);
+    return e;
+  }();
+  const double miss =
+      yaw - static_cast<double>(seen.angle_rad[0]) - static_cast<double>(expected_at_beside);
+  const double l_beside =
+      static_cast<double>(u.gain[0]) *
+          std::exp(-miss * miss * static_cast<double>(u.bearing_inv_two_var[0])) +
+      static_cast<double>(u.floor[0]);
+  const double l_truth = static_cast<double>(u.gain[0]) + static_cast<double>(u.floor[0]);
+  EXPECT_NEAR(ratio, l_beside / l_truth, 1e-4 * l_beside / l_truth);
+  EXPECT_LT(ratio, 0.1);
+  // The same place turned by 3 degrees: the heading is seen too.
+  const double turned = weights(params, seen, truth, ha::Pose2{1.45, 0.75, yaw + 0.0524}, u);
+  EXPECT_LT(turned, 0.1);
+  // Across the wrap: facing -3.1 rad, yaw - angle - bearing is a whole turn, i.e. no miss.
+  ha::BoardFeatures wrapped = seen;
+  wrapped.angle_rad[0] = static_cast<float>(ha::wrap_angle_rad(-3.1 - world(1.45, 0.75)));
+  EXPECT_LT(weights(params, wrapped, ha::Pose2{1.45, 0.75, -3.1}, ha::Pose2{1.55, 0.75, -3.1}, u),
+            0.1);
+  // Off in the config, with no angle measured, or a board the map has no bearings for: no term.
+  ha::BoardModelParams off = params;
+  off.bearings = false;
+  EXPECT_NEAR(weights(off, seen, truth, beside, u), 1.0, 1e-9);
+  EXPECT_EQ(u.bearing_mask, 0U);
+  ha::BoardFeatures unseen = seen;
+  unseen.angle_mask = 0U;
+  EXPECT_NEAR(weights(params, unseen, truth, beside, u), 1.0, 1e-9);
+  map->bearing_sigma_rad[0] = 0.0F;
+  EXPECT_NEAR(weights(params, seen, truth, beside, u), 1.0, 1e-9);
+  map->bearing_sigma_rad[0] = 0.005F;
+  map->has_bearings = false;
+  EXPECT_NEAR(weights(params, seen, truth, beside, u), 1.0, 1e-9);
+}
+
+// A board's image angle comes from its centroid column under the map's law, only for a board
+// seen whole with enough pixels.
+TEST(BoardObservation, ImageAngleFromTheCentroidColumn) {
+  auto map = make_forward_map();
+  map->has_bearings = true;
+  map->bearing_a1_rad = 1.2F;
+  map->bearing_a3_rad = 0.3F;
+  ha::AreaVector a;
+  a.count = 3;
+  a.width_px = 641;  // centre column 320
+  a.pixels = {100, 100, 29, 0, 0, 0, 0, 0};
+  a.column_sum = {100U * 480U, 100U * 320U, 29U * 10U, 0, 0, 0, 0, 0};
+  a.side_pixels = {0, 0, 0, 0, 0, 0, 0, 0};
+  float angle = 0.0F;
+  ASSERT_TRUE(ha::board_image_angle(*map, a, 0, angle));
+  const double t = 160.0 / 641.0;
+  EXPECT_NEAR(angle, 1.2 * t + 0.3 * t * t * t, 1e-6);
+  ASSERT_TRUE(ha::board_image_angle(*map, a, 1, angle));
+  EXPECT_NEAR(angle, 0.0, 1e-7);
+  EXPECT_FALSE(ha::board_image_angle(*map, a, 2, angle)) << "fewer than kBearingMinPixels";
+  a.side_pixels[0] = 1;
+  EXPECT_FALSE(ha::board_image_angle(*map, a, 0, angle)) << "cut by the frame";
+  const ha::BoardFeatures f = ha::board_features(*map, 1.0F, a);
+  EXPECT_EQ(f.angle_mask, 2U);
+  a.width_px = 0;  // columns not measured
+  EXPECT_FALSE(ha::board_image_angle(*map, a, 1, angle));
+  a.width_px = 641;
+  map->has_bearings = false;
+  EXPECT_FALSE(ha::board_image_angle(*map, a, 1, angle));
+  EXPECT_EQ(ha::board_features(*map, 1.0F, a).angle_mask, 0U);
+}
+
 // The demonstration of the whole model in one frame: with one board hidden, the robust model
 // keeps the particles at the true place; Guo & Li's plain product moves them to where the hidden
 // board's zero fits better.

@@ -25,13 +25,18 @@
 
 namespace harmoloc::algorithms {
 
-/// Every board's area in one frame, in the map's feature units (area_scale x pixels).
+/// Every board's area in one frame, in the map's feature units (area_scale x pixels), and the
+/// image angle of the boards that give a bearing (board_image_angle).
 struct BoardFeatures {
   std::array<float, kMaxBoards> value{};
   std::size_t count = 0;
+  std::array<float, kMaxBoards> angle_rad{};  ///< where bit b of angle_mask is set
+  std::uint32_t angle_mask = 0;
 };
 
 BoardFeatures board_features(float area_scale, const AreaVector& areas);
+/// The same with the image angles under @p map's law (none when the map has no bearings).
+BoardFeatures board_features(const ForwardMap& map, float area_scale, const AreaVector& areas);
 
 /// The largest feature the forward map expects for each board anywhere on its grid (0 for the
 /// boards it does not model). Computed once, at start-up.
@@ -69,6 +74,11 @@ struct BoardModelParams {
   double route_heading_free_deg = 5.0;   ///< heading difference that costs nothing
   double route_heading_sigma_deg = 5.0;  ///< beyond it, a Gaussian fall-off (0: no heading term)
   bool robust = true;  ///< false: Guo & Li's plain product of Gaussians (w = 1, s = 1)
+  /// Where the map holds the boards' bearings (ForwardMap::has_bearings): each board that gives
+  /// a bearing this frame also weighs the particles by where it appears across the frame, with
+  /// the trained spread of its bearing widened by sigma_scale, in the same mixture (its motion
+  /// index and scaling) and tempering as its area.
+  bool bearings = true;
   /// How far from the estimate a board's area may be explained when the boards are assessed
   /// (consensus, motion index, scaling): the spread between passes of the training run over
   /// one place, from the map's calibration (0: at the estimate only). Where a board's area
@@ -91,7 +101,12 @@ struct BoardUpdate {
   std::array<float, kMaxBoards> gain{};         ///< w_b
   std::array<float, kMaxBoards> floor{};        ///< (1 - w_b) c
   std::array<float, kMaxBoards> inv_two_var{};  ///< s_b^2 / (2 k^2 sigma_b^2)
-  double inv_tempering = 1.0;                   ///< exponent of the boards' joint likelihood
+  /// Boards whose bearing takes part this frame (bit b), their image angle and
+  /// s_b^2 / (2 k^2 sigma_bearing_b^2).
+  std::uint32_t bearing_mask = 0;
+  std::array<float, kMaxBoards> angle_rad{};
+  std::array<float, kMaxBoards> bearing_inv_two_var{};
+  double inv_tempering = 1.0;  ///< exponent of the boards' joint likelihood
   float route_free_m = 0.0F;
   float route_inv_two_var = 0.0F;
   float heading_free_rad = 0.0F;

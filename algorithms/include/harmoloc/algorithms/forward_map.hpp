@@ -19,6 +19,11 @@ namespace harmoloc::algorithms {
 /// Tiles a forward map may store (a board's build may set fewer: the bare-metal kernels do).
 #define HARMOLOC_FORWARD_MAP_MAX_TILES 640
 #endif
+#ifndef HARMOLOC_FORWARD_MAP_BEARINGS
+/// Whether the forward map has room for the boards' bearings (1). A board's build may leave them
+/// out (0: the bare-metal kernels do, to fit 256 KiB); it then refuses a map that holds them.
+#define HARMOLOC_FORWARD_MAP_BEARINGS 1
+#endif
 #ifndef HARMOLOC_FORWARD_MAP_MAX_TILE_GRID
 /// Tile positions the grid may span (stored or not): 128 x 128 tiles of 16 cm at 2 cm cells.
 #define HARMOLOC_FORWARD_MAP_MAX_TILE_GRID 16384
@@ -75,6 +80,27 @@ struct ForwardMap {
   /// The training run's heading near the cell (yaw, radians), where has_heading.
   std::array<float, kMaxCells + 1> heading_rad{};
 
+  /// Board bearings (map version 6; docs/bearings.md): the lens's column-to-angle law learnt
+  /// from the training run, and per stored cell the world bearing of every board as the training
+  /// run saw it from near the cell: yaw - angle(centroid column). Heading-independent, like the
+  /// areas. A particle at the cell with heading yaw expects board b at image angle
+  /// yaw - bearing_rad; the observed angle comes from the law.
+  bool has_bearings = false;
+  /// The law: angle_rad(t) = a1 t + a3 t^3 with t = (u - (W - 1) / 2) / W for centroid column u
+  /// in a frame W pixels wide (positive to the right of the optical axis).
+  float bearing_a1_rad = 0.0F;
+  float bearing_a3_rad = 0.0F;
+  /// Per board, the spread of its world bearing between passes over one place (radians); 0: the
+  /// board's bearings are not modelled.
+  std::array<float, kMaxBoards> bearing_sigma_rad{};
+  /// What bearing_rad holds where the training run did not see the board whole near the cell.
+  static constexpr float kNoBearing = 8.0F;
+  /// Whether this build holds bearings (HARMOLOC_FORWARD_MAP_BEARINGS).
+  static constexpr bool kBearingStorage = HARMOLOC_FORWARD_MAP_BEARINGS != 0;
+  /// Per stored cell and the void cell, kMaxBoards a cell, in [-pi, pi] or kNoBearing (one cell
+  /// only, never read, without kBearingStorage).
+  std::array<float, (kBearingStorage ? kMaxCells + 1 : 1) * kMaxBoards> bearing_rad{};
+
   bool present() const { return columns > 0 && rows > 0; }
   /// Stored cells (whole tiles, including the cells of border tiles beyond the grid).
   std::size_t stored_cells() const { return static_cast<std::size_t>(tile_count) * kTileCells; }
@@ -94,6 +120,17 @@ struct ForwardMap {
     return expected.data() + index(c, r) * kMaxBoards;
   }
 };
+
+/// A board's centroid column gives a bearing only with at least this many pixels and none on
+/// the frame's left or right edge (a blob the frame cuts has its centroid pulled inwards); the
+/// trainer and the firmware use the same rule.
+constexpr std::uint32_t kBearingMinPixels = 30;
+
+/// The image angle of board @p b in @p areas under @p map's law (radians, positive to the right
+/// of the optical axis); false when the board gives no bearing in this frame (columns not
+/// measured, too small, cut by the frame) or the map has no law.
+bool board_image_angle(const ForwardMap& map, const AreaVector& areas, std::size_t b,
+                       float& angle_rad);
 
 /// Tiles a grid of @p columns x @p rows cells needs along each axis.
 constexpr std::uint32_t tiles_along(std::uint32_t cells) {
@@ -129,5 +166,11 @@ float route_heading(const ForwardMap& map, double x_m, double y_m);
 /// The same at @p point: the heading of its heaviest stored corner; false (and @p heading_rad
 /// untouched) when the map has no heading or no corner of @p point is stored.
 bool route_heading(const ForwardMap& map, const GridPoint& point, float& heading_rad);
+
+/// The world bearing of board @p b expected at @p point (the stored cells' bilinear mean, over
+/// the corners that hold one, taken around the first such corner so that the mean does not jump
+/// at +-pi); false when no corner holds one.
+bool expected_bearing(const ForwardMap& map, const GridPoint& point, std::size_t b,
+                      float& bearing_rad);
 
 }  // namespace harmoloc::algorithms

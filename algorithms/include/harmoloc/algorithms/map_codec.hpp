@@ -15,9 +15,10 @@ namespace harmoloc::algorithms {
 
 /// Version 2 added the known-place dissimilarity bound, version 3 the forward map, version 4
 /// the calibration measured on the training run, version 5 stores the forward map's tiles near
-/// the training run instead of its whole grid; versions 1 to 4 are still read (without what
-/// they lack; a version 3 or 4 forward map as a grid of which every tile is stored).
-constexpr std::uint32_t kMapFormatVersion = 5;
+/// the training run instead of its whole grid, version 6 adds the board bearings; versions 1 to
+/// 5 are still read (without what they lack; a version 3 or 4 forward map as a grid of which
+/// every tile is stored, a forward map before version 6 without bearings).
+constexpr std::uint32_t kMapFormatVersion = 6;
 
 /// What the trainer measured on the training run that the firmware derives its scene-dependent
 /// settings from (docs/map-format.md): nothing of it is a constant tuned to one scene.
@@ -40,14 +41,17 @@ struct MapCalibration {
 /// Most calibration entries a map may hold (version 4).
 constexpr std::uint32_t kMaxCalibrationEntries = 64;
 
-/// The largest map file this build reads (every count at its capacity, version 5): the loader
+/// The largest map file this build reads (every count at its capacity, version 6): the loader
 /// refuses a larger file before reading it.
 constexpr std::size_t kMaxMapFileBytes =
     8U + 4U * 4U + kMaxBoards * 12U + 8U + HarmonicModel::kMaxFeatures + 7U * 4U +
     HarmonicModel::kMaxFeatures * 4U +
     HarmonicModel::kMaxSamples * (HarmonicModel::kMaxFeatures + 2U) * 4U + 8U + 16U +
     kMaxBoards * 4U + 4U + 4U + (ForwardMap::kMaxTileGrid + 7U) / 8U +
-    ForwardMap::kMaxCells * (kMaxBoards + 2U) * 4U + 4U + kMaxCalibrationEntries * 8U + 4U;
+    ForwardMap::kMaxCells * (kMaxBoards + 2U) * 4U +
+    // Version 6: the bearing law (a1, a3), each board's bearing spread, every cell's bearings.
+    8U + kMaxBoards * 4U + ForwardMap::kMaxCells * kMaxBoards * 4U + 4U +
+    kMaxCalibrationEntries * 8U + 4U;
 
 /// How far from the map's origin a position in a map may be (metres): a training target beyond
 /// it is refused (a label in millimetres or at 1e30 must not become a map the firmware trusts).

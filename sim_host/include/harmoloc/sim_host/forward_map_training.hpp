@@ -43,6 +43,12 @@ struct ForwardMapReport {
   /// Median distance from a frame to the nearest frame of another pass (metres).
   double pass_spread_m = 0.0;
   bool has_heading = false;
+  /// Bearings (train_forward_map_placed with a law): per board, the spread of its world bearing
+  /// between passes (radians, 0: not modelled), and the stored cells holding any bearing.
+  bool has_bearings = false;
+  std::vector<double> bearing_sigma_rad;
+  std::size_t bearing_cells = 0;
+  std::size_t bearing_residuals = 0;  ///< frames x boards the spreads were measured on
 };
 
 /// Fits @p out for @p board_count boards. @p areas_features holds every frame's board features
@@ -63,11 +69,23 @@ struct PlacedFrame {
   algorithms::Pose2 pose;
 };
 
+/// Board bearings for the forward map: the lens's law and what each frame saw.
+struct BearingObservations {
+  double a1_rad = 0.0, a3_rad = 0.0;  ///< the law (algorithms/bearing_calibration.hpp)
+  /// Per frame of the run (PlacedFrame::index) and board: the world bearing the frame saw the
+  /// board at (yaw - angle of its centroid column), NaN where the board gave none.
+  std::vector<std::vector<float>> world_rad;
+};
+
 /// Fits @p out to frames placed by odometry (every frame has a pose with heading); the kernel
-/// width and each board's noise are validated against other passes by travel.
+/// width and each board's noise are validated against other passes by travel. With
+/// @p bearings, each cell also gets every board's world bearing (the same kernel over the frames
+/// of the nearest frame's direction that saw the board whole) and each board the spread of its
+/// bearing between passes.
 ForwardMapReport train_forward_map_placed(const std::vector<std::vector<float>>& features,
                                           const std::vector<PlacedFrame>& placed,
                                           std::size_t board_count, const ForwardMapOptions& options,
-                                          algorithms::ForwardMap& out);
+                                          algorithms::ForwardMap& out,
+                                          const BearingObservations* bearings = nullptr);
 
 }  // namespace harmoloc::sim_host

@@ -78,6 +78,9 @@ struct TrainOptions {
   double known_place_margin = 1.5;
   TrainMethod method = TrainMethod::kNeighbourGraph;
   bool forward_map = true;  ///< also learn the forward map the particle filter weighs boards with
+  /// With the forward map from frames placed by odometry: also each board's bearing (the lens's
+  /// law learnt from the run, docs/bearings.md).
+  bool bearings = true;
   ForwardMapOptions forward;
 };
 
