@@ -111,11 +111,9 @@ void expected_features(const ForwardMap& map, const GridPoint& point, float* out
 
 bool board_image_angle(const ForwardMap& map, const AreaVector& areas, std::size_t b,
                        float& angle_rad) {
-  if (!map.has_bearings || b >= areas.count || !areas.columns_measured()) return false;
-  const std::uint32_t pixels = areas.pixels[b];
-  if (pixels < kBearingMinPixels || areas.side_pixels[b] != 0U) return false;
+  if (!map.has_bearings || !gives_bearing(areas, b)) return false;
   const double width = static_cast<double>(areas.width_px);
-  const double u = static_cast<double>(areas.column_sum[b]) / static_cast<double>(pixels);
+  const double u = areas.centroid_column_px(b);
   const double t = (u - 0.5 * (width - 1.0)) / width;
   angle_rad = static_cast<float>(t * (static_cast<double>(map.bearing_a1_rad) +
                                       static_cast<double>(map.bearing_a3_rad) * t * t));

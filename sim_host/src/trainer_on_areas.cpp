@@ -168,12 +168,10 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<dataset::Sta
       const algorithms::AreaVector& a = run.areas[f.index];
       std::vector<float>& out = observations.world_rad[f.index];
       out.assign(boards, std::numeric_limits<float>::quiet_NaN());
-      if (!a.columns_measured()) continue;
-      for (std::size_t b = 0; b < boards && b < a.count; ++b) {
-        if (a.pixels[b] < algorithms::kBearingMinPixels || a.side_pixels[b] != 0U) continue;
-        const double u = static_cast<double>(a.column_sum[b]) / static_cast<double>(a.pixels[b]);
-        out[b] = static_cast<float>(
-            algorithms::wrap_angle_rad(f.pose.yaw_rad - report.bearings.angle_rad(u, a.width_px)));
+      for (std::size_t b = 0; b < boards; ++b) {
+        if (!algorithms::gives_bearing(a, b)) continue;
+        out[b] = static_cast<float>(algorithms::wrap_angle_rad(
+            f.pose.yaw_rad - report.bearings.angle_rad(a.centroid_column_px(b), a.width_px)));
       }
     }
   }

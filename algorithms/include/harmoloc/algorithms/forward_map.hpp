@@ -126,6 +126,13 @@ struct ForwardMap {
 /// trainer and the firmware use the same rule.
 constexpr std::uint32_t kBearingMinPixels = 30;
 
+/// Whether board @p b of @p areas gives a bearing by that rule (columns measured, enough pixels,
+/// none on the frame's left or right edge).
+inline bool gives_bearing(const AreaVector& areas, std::size_t b) {
+  return areas.columns_measured() && b < areas.count && areas.pixels[b] >= kBearingMinPixels &&
+         areas.side_pixels[b] == 0U;
+}
+
 /// The image angle of board @p b in @p areas under @p map's law (radians, positive to the right
 /// of the optical axis); false when the board gives no bearing in this frame (columns not
 /// measured, too small, cut by the frame) or the map has no law.
