@@ -98,6 +98,31 @@ PlacePreference board_preference_near(const ForwardMap& map, const BoardFeatures
   return best;
 }
 
+namespace {
+
+constexpr double kNoResidual = -1.0;
+
+/// For each board of @p boards (bit b) whose bearing the map holds at @p at: the smaller of
+/// @p residual[b] and |yaw - angle_b - phi_b(at)| (kNoResidual: none yet).
+void fit_bearings(const ForwardMap& map, const GridPoint& at, const BoardFeatures& observed,
+                  double yaw_rad, std::uint32_t boards, std::array<double, kMaxBoards>& residual) {
+  constexpr double kPi = 3.14159265358979323846;
+  for (std::uint32_t mask = boards; mask != 0U; mask &= mask - 1U) {
+    const auto b = static_cast<std::size_t>(__builtin_ctz(mask));
+    float bearing = 0.0F;
+    if (b >= observed.count || !expected_bearing(map, at, b, bearing)) continue;
+    double d = yaw_rad - static_cast<double>(observed.angle_rad[b]) - static_cast<double>(bearing);
+    // yaw and bearing lie in [-pi, pi] and the law's angle within a half turn (as in the
+    // particle filter's update): two turns at most.
+    for (int turn = 0; turn < 2; ++turn)
+      d = d > kPi ? d - 2.0 * kPi : (d < -kPi ? d + 2.0 * kPi : d);
+    d = std::fabs(d);
+    if (residual[b] == kNoResidual || d < residual[b]) residual[b] = d;
+  }
+}
+
+}  // namespace
+
 void BoardReliability::reset(const BoardModelParams& params) {
   static_probability_.fill(params.motion_index_max);
 }
@@ -114,16 +139,25 @@ BoardAssessment BoardReliability::assess(const ForwardMap& map, const BoardFeatu
   // The range of what the map expects within the spread around the estimate (a cross of four
   // points): a board whose area falls inside it, or nearest its edge, is judged by that.
   std::array<float, kMaxBoards> lo = expected, hi = expected;
+  // The same for the bearings: the smallest bearing residual at those points, where the map
+  // holds one.
+  const std::uint32_t bearing_boards =
+      params.bearings && map.has_bearings ? observed.angle_mask : 0U;
+  std::array<double, kMaxBoards> bearing_residual{};
+  bearing_residual.fill(kNoResidual);
+  fit_bearings(map, at, observed, estimate.yaw_rad, bearing_boards, bearing_residual);
   if (params.position_spread_m > 0.0) {
     const double d = params.position_spread_m;
     const double offsets[4][2] = {{d, 0.0}, {-d, 0.0}, {0.0, d}, {0.0, -d}};
     std::array<float, kMaxBoards> e{};
     for (const auto& o : offsets) {
-      expected_features(map, locate(map, estimate.x_m + o[0], estimate.y_m + o[1]), e.data());
+      const GridPoint p = locate(map, estimate.x_m + o[0], estimate.y_m + o[1]);
+      expected_features(map, p, e.data());
       for (std::size_t b = 0; b < kMaxBoards; ++b) {
         lo[b] = std::min(lo[b], e[b]);
         hi[b] = std::max(hi[b], e[b]);
       }
+      fit_bearings(map, p, observed, estimate.yaw_rad, bearing_boards, bearing_residual);
     }
   }
 
@@ -140,6 +174,13 @@ BoardAssessment BoardReliability::assess(const ForwardMap& map, const BoardFeatu
                      : o > hi[b] ? static_cast<double>(o) - static_cast<double>(hi[b])
                                  : 0.0;
     a.chi2[b] = static_cast<float>(r * r * inv_var[b]);
+    const double bearing_sigma = static_cast<double>(map.bearing_sigma_rad[b]);
+    if (bearing_residual[b] != kNoResidual && bearing_sigma > 0.0) {
+      const double bearing_width = params.sigma_scale * bearing_sigma;
+      a.bearing_chi2[b] = static_cast<float>(bearing_residual[b] * bearing_residual[b] /
+                                             (bearing_width * bearing_width));
+      a.chi2[b] += a.bearing_chi2[b];
+    }
     ++a.modelled;
     if (static_cast<double>(a.chi2[b]) < params.consensus_chi2)
       ++a.agreeing;

@@ -249,13 +249,19 @@ bool ParticleFilter::resample_if_needed(double threshold_fraction) {
   return true;
 }
 
-Pose2 ParticleFilter::mean_position() const {
-  double sx = 0.0, sy = 0.0;
+Pose2 ParticleFilter::mean_pose() const {
+  if (count_ == 0) return Pose2{};
+  const double reference = particles_[0].yaw_rad;
+  double sx = 0.0, sy = 0.0, syaw = 0.0;
   for (std::size_t i = 0; i < count_; ++i) {
     sx += weights_[i] * particles_[i].x_m;
     sy += weights_[i] * particles_[i].y_m;
+    // Both headings lie in [-pi, pi] (particles are kept wrapped): one turn puts it back.
+    double d = particles_[i].yaw_rad - reference;
+    d = d > kPi ? d - 2.0 * kPi : (d < -kPi ? d + 2.0 * kPi : d);
+    syaw += weights_[i] * d;
   }
-  return Pose2{sx, sy, 0.0};
+  return Pose2{sx, sy, wrap_angle_rad(reference + syaw)};
 }
 
 PoseEstimate ParticleFilter::estimate() const {

@@ -70,7 +70,7 @@ bool LocalizationCycle::update_with_boards(
     const algorithms::AreaVector& areas,
     const std::array<float, algorithms::HarmonicModel::kMaxFeatures>& features) {
   const algorithms::BoardModelParams& params = board_params_;
-  const algorithms::Pose2 estimate = filter_.mean_position();
+  const algorithms::Pose2 estimate = filter_.mean_pose();
   const algorithms::BoardFeatures observed =
       algorithms::board_features(map_.forward, map_.model.area_scale, areas);
   assessment_ = reliability_.assess(map_.forward, observed, estimate, params, board_update_);

@@ -237,7 +237,7 @@ void BM_FilterStepBoards(benchmark::State& state) {
   algorithms::BoardUpdate update;
   for (auto _ : state) {
     filter.predict(algorithms::OdometryDelta{0.0033, 0.001});
-    reliability.assess(map.forward, observed, filter.mean_position(), params, update);
+    reliability.assess(map.forward, observed, filter.mean_pose(), params, update);
     benchmark::DoNotOptimize(filter.update_boards(update));
     filter.resample_if_needed(1.1);
     benchmark::DoNotOptimize(filter.estimate());

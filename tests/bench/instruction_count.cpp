@@ -217,7 +217,7 @@ int main(int argc, char** argv) {
     static algorithms::BoardUpdate update;
     measure([&] {
       filter.predict(algorithms::OdometryDelta{0.0033, 0.001});
-      reliability.assess(g_map.forward, observed, filter.mean_position(), params, update);
+      reliability.assess(g_map.forward, observed, filter.mean_pose(), params, update);
       (void)filter.update_boards(update);
       filter.resample_if_needed(1.1);
       (void)filter.estimate();

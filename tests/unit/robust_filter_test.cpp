@@ -447,7 +447,8 @@ TEST(ParticleFilterBoards, ABoardsBearingTellsPlacesAndHeadingsApart) {
                            const ha::Pose2& a, const ha::Pose2& b, ha::BoardUpdate& u) {
     ha::BoardReliability reliability;
     reliability.reset(params);
-    reliability.assess(*map, o, ha::Pose2{1.45, 0.75, 0.0}, params, u);
+    // The estimate at place a: the boards and the bearing agree with it.
+    reliability.assess(*map, o, a, params, u);
     for (std::size_t k = 0; k < u.boards; ++k) u.use[k] = false;  // the bearing alone
     ha::ParticleFilter pf;
     pf.configure(100, 3, ha::MotionNoise{});
@@ -504,6 +505,92 @@ TEST(ParticleFilterBoards, ABoardsBearingTellsPlacesAndHeadingsApart) {
   map->bearing_sigma_rad[0] = 0.005F;
   map->has_bearings = false;
   EXPECT_NEAR(weights(params, seen, truth, beside, u), 1.0, 1e-9);
+}
+
+// A board moved along its wall shows the same area; only where it appears gives it away. With
+// bearings its chi2 at the estimate (with the estimate's heading) grows, it leaves the
+// consensus and, frame after frame, is distrusted; without them it is trusted for ever.
+TEST(BoardObservation, ABoardMovedAlongItsWallIsDistrustedByItsBearing) {
+  auto map = make_forward_map();
+  const double bx = 1.5, by = 2.0;  // board 0 stands here, beyond the grid
+  const auto world = [&](double x, double y) { return std::atan2(by - y, bx - x); };
+  map->has_bearings = true;
+  map->bearing_a1_rad = 1.0F;
+  map->bearing_sigma_rad[0] = 0.005F;
+  for (std::uint32_t r = 0; r < map->rows; ++r) {
+    for (std::uint32_t c = 0; c < map->columns; ++c)
+      map->bearing_rad[map->index(c, r) * ha::kMaxBoards] =
+          static_cast<float>(world(1.0 + 0.05 * c, 0.5 + 0.05 * r));
+  }
+  const ha::Pose2 at{1.45, 0.75, 1.5};
+  ha::BoardFeatures seen = observe(at.x_m, at.y_m);
+  seen.angle_mask = 1U;
+  ha::BoardModelParams params;
+  params.position_spread_m = 0.02;
+  ha::BoardUpdate u;
+  {
+    // In place, 2 cm off the estimate: the bearing agrees within the position spread.
+    float bearing_beside = 0.0F;
+    ASSERT_TRUE(
+        ha::expected_bearing(*map, ha::locate(*map, at.x_m + 0.02, at.y_m), 0, bearing_beside));
+    seen.angle_rad[0] = static_cast<float>(at.yaw_rad - static_cast<double>(bearing_beside));
+    ha::BoardReliability reliability;
+    reliability.reset(params);
+    const ha::BoardAssessment a = reliability.assess(*map, seen, at, params, u);
+    EXPECT_LT(a.bearing_chi2[0], 1e-6F);
+    EXPECT_EQ(a.agreeing, 3U);
+  }
+  // Moved 30 cm along its wall (y = 2): seen 13 degrees off, far beyond the spread.
+  const double moved = at.yaw_rad - std::atan2(by - at.y_m, bx + 0.3 - at.x_m);
+  seen.angle_rad[0] = static_cast<float>(moved);
+  const auto frames_to_distrust = [&](const ha::BoardModelParams& p, ha::BoardAssessment& first) {
+    ha::BoardReliability reliability;
+    reliability.reset(p);
+    first = reliability.assess(*map, seen, at, p, u);
+    int frames = 1;
+    while (!reliability.distrusted(0) && frames < 300) {
+      reliability.assess(*map, seen, at, p, u);
+      ++frames;
+    }
+    return frames;
+  };
+  ha::BoardAssessment first;
+  const int frames = frames_to_distrust(params, first);
+  // The residual at the best of the estimate and the four points of the spread.
+  double miss = 10.0;
+  for (const auto& [dx, dy] : {std::pair{0.0, 0.0}, std::pair{0.02, 0.0}, std::pair{-0.02, 0.0},
+                               std::pair{0.0, 0.02}, std::pair{0.0, -0.02}}) {
+    float bearing = 0.0F;
+    ASSERT_TRUE(ha::expected_bearing(*map, ha::locate(*map, at.x_m + dx, at.y_m + dy), 0, bearing));
+    miss = std::min(miss, std::fabs(at.yaw_rad - moved - static_cast<double>(bearing)));
+  }
+  const double width = params.sigma_scale * 0.005;
+  const double chi2 = miss * miss / (width * width);
+  EXPECT_GT(chi2, 100.0);
+  EXPECT_NEAR(first.bearing_chi2[0], chi2, 1e-3 * chi2);
+  EXPECT_NEAR(static_cast<double>(first.chi2[0]), chi2, 1e-3 * chi2) << "the area fits";
+  EXPECT_EQ(first.agreeing, 2U);
+  EXPECT_TRUE(first.consensus);
+  EXPECT_LT(first.scaling[0], 0.01F);
+  EXPECT_GE(frames, 5);
+  EXPECT_LE(frames, 30);
+  ha::BoardModelParams off = params;
+  off.bearings = false;
+  EXPECT_EQ(frames_to_distrust(off, first), 300);
+  EXPECT_EQ(first.bearing_chi2[0], 0.0F);
+  EXPECT_EQ(first.agreeing, 3U);
+}
+
+// The mean pose's heading is the circular mean: a cloud around +-pi averages to +-pi, not 0.
+TEST(ParticleFilter, MeanPoseHeadingAcrossTheWrap) {
+  ha::ParticleFilter pf;
+  pf.configure(200, 5, ha::MotionNoise{});
+  pf.initialize(ha::Pose2{1.0, 2.0, 3.1}, 0.01, 0.1, false);
+  const ha::Pose2 m = pf.mean_pose();
+  EXPECT_NEAR(m.x_m, 1.0, 0.01);
+  EXPECT_NEAR(m.y_m, 2.0, 0.01);
+  EXPECT_NEAR(ha::wrap_angle_rad(m.yaw_rad - 3.1), 0.0, 0.03);
+  EXPECT_NEAR(ha::wrap_angle_rad(m.yaw_rad - pf.estimate().mean.yaw_rad), 0.0, 1e-3);
 }
 
 // A board's image angle comes from its centroid column under the map's law, only for a board

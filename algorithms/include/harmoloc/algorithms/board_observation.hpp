@@ -115,7 +115,13 @@ struct BoardUpdate {
 
 /// How the boards relate to the filter's estimate this frame.
 struct BoardAssessment {
-  std::array<float, kMaxBoards> chi2{};     ///< (o_b - mu_b(estimate))^2 / (k sigma_b)^2
+  /// (o_b - mu_b(estimate))^2 / (k sigma_b)^2, plus bearing_chi2[b]: a board disagrees with the
+  /// estimate when where it appears does not fit, as when its area does not.
+  std::array<float, kMaxBoards> chi2{};
+  /// The bearing's share of chi2: (yaw - angle_b - phi_b(estimate))^2 / (k sigma_bearing_b)^2
+  /// with the estimate's heading, for the boards that give a bearing this frame (0 for others).
+  /// A board moved along its wall keeps its area; only its bearing gives it away.
+  std::array<float, kMaxBoards> bearing_chi2{};
   std::array<float, kMaxBoards> scaling{};  ///< Cheng et al.'s s_b (1 without consensus)
   std::size_t modelled = 0;                 ///< boards the map models
   std::size_t agreeing = 0;                 ///< of those, with chi2 below the consensus bound
@@ -162,8 +168,9 @@ class BoardReliability {
   /// Every board starts as static (motion index at its maximum).
   void reset(const BoardModelParams& params);
 
-  /// Compares @p observed with what @p map expects at @p estimate and fills @p update for the
-  /// particle filter. With consensus, the motion indices learn from this frame first.
+  /// Compares @p observed with what @p map expects at @p estimate (its heading too, for the
+  /// bearings) and fills @p update for the particle filter. With consensus, the motion indices
+  /// learn from this frame first.
   BoardAssessment assess(const ForwardMap& map, const BoardFeatures& observed,
                          const Pose2& estimate, const BoardModelParams& params,
                          BoardUpdate& update);

@@ -110,8 +110,10 @@ class ParticleFilter {
   bool resample_if_needed(double threshold_fraction);
 
   PoseEstimate estimate() const;
-  /// The weighted mean position only (no heading, no covariance: no trigonometry).
-  Pose2 mean_position() const;
+  /// The weighted mean pose without covariance and without trigonometry: the heading is the
+  /// mean of every particle's heading relative to the first particle's, which is the circular
+  /// mean for any cloud narrower than a half turn (a wider one has no meaningful heading).
+  Pose2 mean_pose() const;
   std::size_t size() const { return count_; }
   std::size_t capacity() const { return capacity_; }
 
