@@ -129,7 +129,7 @@ void BoardReliability::reset(const BoardModelParams& params) {
 
 BoardAssessment BoardReliability::assess(const ForwardMap& map, const BoardFeatures& observed,
                                          const Pose2& estimate, const BoardModelParams& params,
-                                         BoardUpdate& update) {
+                                         BoardUpdate& update, double yaw_variance_rad2) {
   BoardAssessment a;
   update.map = &map;
   update.boards = std::min<std::size_t>(map.board_count, observed.count);
@@ -177,8 +177,8 @@ BoardAssessment BoardReliability::assess(const ForwardMap& map, const BoardFeatu
     const double bearing_sigma = static_cast<double>(map.bearing_sigma_rad[b]);
     if (bearing_residual[b] != kNoResidual && bearing_sigma > 0.0) {
       const double bearing_width = params.sigma_scale * bearing_sigma;
-      a.bearing_chi2[b] = static_cast<float>(bearing_residual[b] * bearing_residual[b] /
-                                             (bearing_width * bearing_width));
+      const double variance = bearing_width * bearing_width + std::max(0.0, yaw_variance_rad2);
+      a.bearing_chi2[b] = static_cast<float>(bearing_residual[b] * bearing_residual[b] / variance);
       a.chi2[b] += a.bearing_chi2[b];
     }
     ++a.modelled;

@@ -249,10 +249,10 @@ bool ParticleFilter::resample_if_needed(double threshold_fraction) {
   return true;
 }
 
-Pose2 ParticleFilter::mean_pose() const {
+Pose2 ParticleFilter::mean_pose(double* yaw_variance_rad2) const {
   if (count_ == 0) return Pose2{};
   const double reference = particles_[0].yaw_rad;
-  double sx = 0.0, sy = 0.0, syaw = 0.0;
+  double sx = 0.0, sy = 0.0, syaw = 0.0, syaw2 = 0.0;
   for (std::size_t i = 0; i < count_; ++i) {
     sx += weights_[i] * particles_[i].x_m;
     sy += weights_[i] * particles_[i].y_m;
@@ -260,7 +260,9 @@ Pose2 ParticleFilter::mean_pose() const {
     double d = particles_[i].yaw_rad - reference;
     d = d > kPi ? d - 2.0 * kPi : (d < -kPi ? d + 2.0 * kPi : d);
     syaw += weights_[i] * d;
+    syaw2 += weights_[i] * d * d;
   }
+  if (yaw_variance_rad2 != nullptr) *yaw_variance_rad2 = std::max(0.0, syaw2 - syaw * syaw);
   return Pose2{sx, sy, wrap_angle_rad(reference + syaw)};
 }
 

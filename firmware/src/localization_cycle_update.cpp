@@ -70,10 +70,12 @@ bool LocalizationCycle::update_with_boards(
     const algorithms::AreaVector& areas,
     const std::array<float, algorithms::HarmonicModel::kMaxFeatures>& features) {
   const algorithms::BoardModelParams& params = board_params_;
-  const algorithms::Pose2 estimate = filter_.mean_pose();
+  double yaw_variance_rad2 = 0.0;
+  const algorithms::Pose2 estimate = filter_.mean_pose(&yaw_variance_rad2);
   const algorithms::BoardFeatures observed =
       algorithms::board_features(map_.forward, map_.model.area_scale, areas);
-  assessment_ = reliability_.assess(map_.forward, observed, estimate, params, board_update_);
+  assessment_ = reliability_.assess(map_.forward, observed, estimate, params, board_update_,
+                                    yaw_variance_rad2);
   if (!assessment_.consensus) ++counters_.no_consensus;
 
   // The global fix without the boards that are not to be trusted now: those the motion index

@@ -574,6 +574,17 @@ TEST(BoardObservation, ABoardMovedAlongItsWallIsDistrustedByItsBearing) {
   EXPECT_LT(first.scaling[0], 0.01F);
   EXPECT_GE(frames, 5);
   EXPECT_LE(frames, 30);
+  {
+    // The same frame against a cloud whose headings are still spread by 20 degrees (just
+    // re-seeded): the estimate's heading explains the bearing's miss, the board agrees.
+    ha::BoardReliability reliability;
+    reliability.reset(params);
+    const double spread = 20.0 * 3.14159265358979 / 180.0;
+    const ha::BoardAssessment a = reliability.assess(*map, seen, at, params, u, spread * spread);
+    EXPECT_NEAR(a.bearing_chi2[0], miss * miss / (width * width + spread * spread), 1e-3);
+    EXPECT_LT(a.chi2[0], params.consensus_chi2);
+    EXPECT_EQ(a.agreeing, 3U);
+  }
   ha::BoardModelParams off = params;
   off.bearings = false;
   EXPECT_EQ(frames_to_distrust(off, first), 300);
@@ -591,6 +602,9 @@ TEST(ParticleFilter, MeanPoseHeadingAcrossTheWrap) {
   EXPECT_NEAR(m.y_m, 2.0, 0.01);
   EXPECT_NEAR(ha::wrap_angle_rad(m.yaw_rad - 3.1), 0.0, 0.03);
   EXPECT_NEAR(ha::wrap_angle_rad(m.yaw_rad - pf.estimate().mean.yaw_rad), 0.0, 1e-3);
+  double variance = 0.0;
+  pf.mean_pose(&variance);
+  EXPECT_NEAR(std::sqrt(variance), 0.1, 0.015);
 }
 
 // A board's image angle comes from its centroid column under the map's law, only for a board

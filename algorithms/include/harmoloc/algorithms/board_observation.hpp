@@ -170,10 +170,13 @@ class BoardReliability {
 
   /// Compares @p observed with what @p map expects at @p estimate (its heading too, for the
   /// bearings) and fills @p update for the particle filter. With consensus, the motion indices
-  /// learn from this frame first.
+  /// learn from this frame first. @p yaw_variance_rad2 is the estimate's own heading
+  /// uncertainty (the cloud's spread): a bearing is judged against it as well as against the
+  /// board's widened spread, so that right after a re-seed, when the cloud's headings are
+  /// still spread, the boards that give a bearing are not taken for moved ones.
   BoardAssessment assess(const ForwardMap& map, const BoardFeatures& observed,
-                         const Pose2& estimate, const BoardModelParams& params,
-                         BoardUpdate& update);
+                         const Pose2& estimate, const BoardModelParams& params, BoardUpdate& update,
+                         double yaw_variance_rad2 = 0.0);
 
   /// Motion index of board @p b: probability that it is static and visible.
   double static_probability(std::size_t b) const { return static_probability_[b]; }
