@@ -66,6 +66,27 @@ ha::BoardFeatures observe(double x, double y) {
   return o;
 }
 
+// Board 0 stands at (1.5, 2.0), beyond the grid; its world bearing from (x, y).
+double world_bearing(double x, double y) {
+  return std::atan2(2.0 - y, 1.5 - x);
+}
+
+// The forward map with board 0's bearing from every cell (from the geometry), a linear law and a
+// spread of 0.005 rad.
+std::unique_ptr<ha::ForwardMap> make_bearing_map() {
+  auto map = make_forward_map();
+  map->has_bearings = true;
+  map->bearing_a1_rad = 1.0F;
+  map->bearing_a3_rad = 0.0F;
+  map->bearing_sigma_rad[0] = 0.005F;
+  for (std::uint32_t r = 0; r < map->rows; ++r) {
+    for (std::uint32_t c = 0; c < map->columns; ++c)
+      map->bearing_rad[map->index(c, r) * ha::kMaxBoards] =
+          static_cast<float>(world_bearing(1.0 + 0.05 * c, 0.5 + 0.05 * r));
+  }
+  return map;
+}
+
 }  // namespace
 
 TEST(ForwardMap, BilinearLookupIsExactOnALinearField) {
@@ -420,18 +441,8 @@ TEST(ParticleFilterBoards, ParticlesTurnedFromTheRoutesHeadingAreUnlikely) {
 // where the map says the board lies from there (yaw - image angle against the cell's world
 // bearing), in the board's mixture; off, or without a measured angle, it weighs nothing.
 TEST(ParticleFilterBoards, ABoardsBearingTellsPlacesAndHeadingsApart) {
-  auto map = make_forward_map();
-  const double bx = 1.5, by = 2.0;  // board 0 stands here, beyond the grid
-  const auto world = [&](double x, double y) { return std::atan2(by - y, bx - x); };
-  map->has_bearings = true;
-  map->bearing_a1_rad = 1.0F;
-  map->bearing_a3_rad = 0.0F;
-  map->bearing_sigma_rad[0] = 0.005F;
-  for (std::uint32_t r = 0; r < map->rows; ++r) {
-    for (std::uint32_t c = 0; c < map->columns; ++c)
-      map->bearing_rad[map->index(c, r) * ha::kMaxBoards] =
-          static_cast<float>(world(1.0 + 0.05 * c, 0.5 + 0.05 * r));
-  }
+  const auto map = make_bearing_map();
+  const auto world = world_bearing;
   // The lookup is the cells' bilinear mean: close to the geometry between cells.
   float at = 0.0F;
   ASSERT_TRUE(ha::expected_bearing(*map, ha::locate(*map, 1.37, 0.81), 0, at));
@@ -511,17 +522,7 @@ TEST(ParticleFilterBoards, ABoardsBearingTellsPlacesAndHeadingsApart) {
 // bearings its chi2 at the estimate (with the estimate's heading) grows, it leaves the
 // consensus and, frame after frame, is distrusted; without them it is trusted for ever.
 TEST(BoardObservation, ABoardMovedAlongItsWallIsDistrustedByItsBearing) {
-  auto map = make_forward_map();
-  const double bx = 1.5, by = 2.0;  // board 0 stands here, beyond the grid
-  const auto world = [&](double x, double y) { return std::atan2(by - y, bx - x); };
-  map->has_bearings = true;
-  map->bearing_a1_rad = 1.0F;
-  map->bearing_sigma_rad[0] = 0.005F;
-  for (std::uint32_t r = 0; r < map->rows; ++r) {
-    for (std::uint32_t c = 0; c < map->columns; ++c)
-      map->bearing_rad[map->index(c, r) * ha::kMaxBoards] =
-          static_cast<float>(world(1.0 + 0.05 * c, 0.5 + 0.05 * r));
-  }
+  const auto map = make_bearing_map();
   const ha::Pose2 at{1.45, 0.75, 1.5};
   ha::BoardFeatures seen = observe(at.x_m, at.y_m);
   seen.angle_mask = 1U;
@@ -541,7 +542,7 @@ TEST(BoardObservation, ABoardMovedAlongItsWallIsDistrustedByItsBearing) {
     EXPECT_EQ(a.agreeing, 3U);
   }
   // Moved 30 cm along its wall (y = 2): seen 13 degrees off, far beyond the spread.
-  const double moved = at.yaw_rad - std::atan2(by - at.y_m, bx + 0.3 - at.x_m);
+  const double moved = at.yaw_rad - std::atan2(2.0 - at.y_m, 1.5 + 0.3 - at.x_m);
   seen.angle_rad[0] = static_cast<float>(moved);
   const auto frames_to_distrust = [&](const ha::BoardModelParams& p, ha::BoardAssessment& first) {
     ha::BoardReliability reliability;
