@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace harmoloc::algorithms {
 
@@ -100,13 +101,10 @@ PlacePreference board_preference_near(const ForwardMap& map, const BoardFeatures
 
 namespace {
 
-constexpr double kNoResidual = -1.0;
-
 /// For each board of @p boards (bit b) whose bearing the map holds at @p at: the smaller of
-/// @p residual[b] and |yaw - angle_b - phi_b(at)| (kNoResidual: none yet).
+/// @p residual[b] and |yaw - angle_b - phi_b(at)| (infinite: none yet).
 void fit_bearings(const ForwardMap& map, const GridPoint& at, const BoardFeatures& observed,
                   double yaw_rad, std::uint32_t boards, std::array<double, kMaxBoards>& residual) {
-  constexpr double kPi = 3.14159265358979323846;
   for (std::uint32_t mask = boards; mask != 0U; mask &= mask - 1U) {
     const auto b = static_cast<std::size_t>(__builtin_ctz(mask));
     float bearing = 0.0F;
@@ -114,10 +112,8 @@ void fit_bearings(const ForwardMap& map, const GridPoint& at, const BoardFeature
     double d = yaw_rad - static_cast<double>(observed.angle_rad[b]) - static_cast<double>(bearing);
     // yaw and bearing lie in [-pi, pi] and the law's angle within a half turn (as in the
     // particle filter's update): two turns at most.
-    for (int turn = 0; turn < 2; ++turn)
-      d = d > kPi ? d - 2.0 * kPi : (d < -kPi ? d + 2.0 * kPi : d);
-    d = std::fabs(d);
-    if (residual[b] == kNoResidual || d < residual[b]) residual[b] = d;
+    d = wrap_once_rad(wrap_once_rad(d));
+    residual[b] = std::min(residual[b], std::fabs(d));
   }
 }
 
@@ -144,7 +140,7 @@ BoardAssessment BoardReliability::assess(const ForwardMap& map, const BoardFeatu
   const std::uint32_t bearing_boards =
       params.bearings && map.has_bearings ? observed.angle_mask : 0U;
   std::array<double, kMaxBoards> bearing_residual{};
-  bearing_residual.fill(kNoResidual);
+  bearing_residual.fill(std::numeric_limits<double>::infinity());
   fit_bearings(map, at, observed, estimate.yaw_rad, bearing_boards, bearing_residual);
   if (params.position_spread_m > 0.0) {
     const double d = params.position_spread_m;
@@ -175,7 +171,7 @@ BoardAssessment BoardReliability::assess(const ForwardMap& map, const BoardFeatu
                                  : 0.0;
     a.chi2[b] = static_cast<float>(r * r * inv_var[b]);
     const double bearing_sigma = static_cast<double>(map.bearing_sigma_rad[b]);
-    if (bearing_residual[b] != kNoResidual && bearing_sigma > 0.0) {
+    if (std::isfinite(bearing_residual[b]) && bearing_sigma > 0.0) {
       const double bearing_width = params.sigma_scale * bearing_sigma;
       const double variance = bearing_width * bearing_width + std::max(0.0, yaw_variance_rad2);
       a.bearing_chi2[b] = static_cast<float>(bearing_residual[b] * bearing_residual[b] / variance);

@@ -138,8 +138,7 @@ double ParticleFilter::update_boards(const BoardUpdate& u) {
                  static_cast<double>(bearing);
       // yaw and bearing lie in [-pi, pi] and the law's angle within a half turn, so two turns
       // at most bring d back (and a value that is not finite stays bounded in work).
-      for (int turn = 0; turn < 2; ++turn)
-        d = d > kPi ? d - 2.0 * kPi : (d < -kPi ? d + 2.0 * kPi : d);
+      d = wrap_once_rad(wrap_once_rad(d));
       const auto r = static_cast<float>(d);
       likelihood *=
           static_cast<double>(u.gain[b] * std::exp(-r * r * u.bearing_inv_two_var[b]) + u.floor[b]);
@@ -159,7 +158,7 @@ double ParticleFilter::update_boards(const BoardUpdate& u) {
     if (u.heading_inv_two_var > 0.0F && route_heading(map, at, heading_rad)) {
       // Both angles lie in [-pi, pi] (particles are kept wrapped), so one turn puts it back.
       double d = particles_[i].yaw_rad - static_cast<double>(heading_rad);
-      d = d > kPi ? d - 2.0 * kPi : (d < -kPi ? d + 2.0 * kPi : d);
+      d = wrap_once_rad(d);
       const float off_heading = static_cast<float>(std::fabs(d)) - u.heading_free_rad;
       if (off_heading > 0.0F)
         likelihood *=
@@ -258,7 +257,7 @@ Pose2 ParticleFilter::mean_pose(double* yaw_variance_rad2) const {
     sy += weights_[i] * particles_[i].y_m;
     // Both headings lie in [-pi, pi] (particles are kept wrapped): one turn puts it back.
     double d = particles_[i].yaw_rad - reference;
-    d = d > kPi ? d - 2.0 * kPi : (d < -kPi ? d + 2.0 * kPi : d);
+    d = wrap_once_rad(d);
     syaw += weights_[i] * d;
     syaw2 += weights_[i] * d * d;
   }

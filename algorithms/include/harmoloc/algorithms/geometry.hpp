@@ -15,6 +15,13 @@ inline double wrap_angle_rad(double angle_rad) {
   return a - kPi;
 }
 
+/// One turn towards [-pi, pi]: exact for an angle within a turn and a half of it (the difference
+/// of two wrapped angles), and without fmod, for the per-particle loops.
+inline double wrap_once_rad(double angle_rad) {
+  return angle_rad > kPi ? angle_rad - 2.0 * kPi
+                         : (angle_rad < -kPi ? angle_rad + 2.0 * kPi : angle_rad);
+}
+
 struct Pose2 {
   double x_m = 0.0;
   double y_m = 0.0;
