@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include "harmoloc/algorithms/forward_map.hpp"
+
 namespace harmoloc::algorithms {
 
 namespace {
@@ -118,7 +120,9 @@ BearingCalibration calibrate_bearings(const std::vector<BearingFrame>& frames,
     const AreaVector& a = f.areas;
     if (!a.columns_measured()) continue;
     for (std::size_t k = 0; k < a.count; ++k) {
-      if (a.pixels[k] < options.min_pixels || a.side_pixels[k] != 0) continue;
+      // The firmware's rule (enough pixels, none on the frame's sides), so that the law is
+      // learnt from the same centroids the filter will weigh.
+      if (!gives_bearing(a, k)) continue;
       const double u = a.centroid_column_px(k);
       const double t = (u - 0.5 * (static_cast<double>(a.width_px) - 1.0)) / a.width_px;
       rays[k].push_back(Ray{f.pose.x_m, f.pose.y_m, f.pose.yaw_rad, t});

@@ -30,9 +30,6 @@ struct BearingFrame {
 };
 
 struct BearingCalibrationOptions {
-  /// A board's centroid is used only with at least this many pixels and none on the frame's
-  /// sides (a cut blob's centroid is pulled inwards).
-  std::uint32_t min_pixels = 30;
   /// A board needs this many usable frames, and rays spread over at least this angle, to be
   /// triangulated.
   std::size_t min_frames = 20;
