@@ -183,7 +183,7 @@ BoardAssessment BoardReliability::assess(const ForwardMap& map, const BoardFeatu
     else if (r > 0.0)
       ++a.exceeding;
   }
-  a.consensus = a.modelled > 0 && static_cast<double>(a.agreeing) >=
+  a.consensus = a.modelled > 0 && static_cast<double>(a.agreeing) >
                                       params.consensus_fraction * static_cast<double>(a.modelled);
 
   const double c = params.outlier_floor;

@@ -206,7 +206,7 @@ void read_observation(const Checker& check, const toml::table& root, Observation
   b.outlier_floor = check.number(*t, "outlier_floor", w, b.outlier_floor, 1e-9, 1.0);
   b.dcs_phi = check.number(*t, "dcs_phi", w, b.dcs_phi, 1e-3, 1e3);
   b.consensus_chi2 = check.number(*t, "consensus_chi2", w, b.consensus_chi2, 0.1, 1e4);
-  b.consensus_fraction = check.number(*t, "consensus_fraction", w, b.consensus_fraction, 0.0, 1.0);
+  b.consensus_fraction = check.number(*t, "consensus_fraction", w, b.consensus_fraction, 0.0, 0.99);
   b.motion_index_rate = check.number(*t, "motion_index_rate", w, b.motion_index_rate, 0.0, 1.0);
   b.motion_index_min = check.number(*t, "motion_index_min", w, b.motion_index_min, 0.0, 1.0);
   b.motion_index_max = check.number(*t, "motion_index_max", w, b.motion_index_max, 0.0, 1.0);

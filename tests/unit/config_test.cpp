@@ -341,7 +341,7 @@ tempering = 12
 outlier_floor = 0.001
 dcs_phi = 2
 consensus_chi2 = 16
-consensus_fraction = 0.5
+consensus_fraction = 0.6
 motion_index_rate = 0.1
 motion_index_min = 0.05
 motion_index_max = 0.9
@@ -372,7 +372,7 @@ yaw_sigma_deg = 30
   EXPECT_DOUBLE_EQ(b.outlier_floor, 0.001);
   EXPECT_DOUBLE_EQ(b.dcs_phi, 2.0);
   EXPECT_DOUBLE_EQ(b.consensus_chi2, 16.0);
-  EXPECT_DOUBLE_EQ(b.consensus_fraction, 0.5);
+  EXPECT_DOUBLE_EQ(b.consensus_fraction, 0.6);
   EXPECT_DOUBLE_EQ(b.motion_index_rate, 0.1);
   EXPECT_DOUBLE_EQ(b.motion_index_min, 0.05);
   EXPECT_DOUBLE_EQ(b.motion_index_max, 0.9);

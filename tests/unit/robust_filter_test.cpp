@@ -269,6 +269,40 @@ TEST(BoardObservation, WithoutConsensusNothingIsScaledAndNothingLearnt) {
     EXPECT_NEAR(reliability.static_probability(b), params.motion_index_max, 1e-9);
 }
 
+// The consensus is a majority of the modelled boards, whatever their number: with 7 boards, 4
+// agreeing carry it and 3 do not (the old "at least 60%" asked 5 of 7, so that one moved board
+// and one it hid, with a third a little off, kept every board at full weight).
+TEST(BoardObservation, TheConsensusIsAMajorityOfTheModelledBoards) {
+  for (std::size_t n = 1; n <= ha::kMaxBoards; ++n) {
+    auto map = std::make_unique<ha::ForwardMap>();
+    ASSERT_TRUE(ha::lay_out_grid(*map, 3, 3));
+    map->origin_x_m = 0.0F;
+    map->origin_y_m = 0.0F;
+    map->cell_m = 0.5F;
+    map->board_count = static_cast<std::uint32_t>(n);
+    for (std::size_t b = 0; b < n; ++b) map->sigma[b] = 0.02F;
+    for (std::uint32_t i = 0; i < map->rows * map->columns; ++i) {
+      float* e = map->cell(i % map->columns, i / map->columns);
+      for (std::size_t b = 0; b < n; ++b) e[b] = 1.0F;
+    }
+    for (std::size_t disagreeing = 0; disagreeing <= n; ++disagreeing) {
+      ha::BoardFeatures o;
+      o.count = n;
+      for (std::size_t b = 0; b < n; ++b) o.value[b] = b < disagreeing ? 2.0F : 1.0F;
+      ha::BoardModelParams params;
+      ha::BoardReliability reliability;
+      reliability.reset(params);
+      ha::BoardUpdate u;
+      const ha::BoardAssessment a =
+          reliability.assess(*map, o, ha::Pose2{0.5, 0.5, 0.0}, params, u);
+      EXPECT_EQ(a.modelled, n);
+      EXPECT_EQ(a.agreeing, n - disagreeing);
+      EXPECT_EQ(a.consensus, 2 * (n - disagreeing) > n)
+          << n << " boards, " << disagreeing << " disagreeing";
+    }
+  }
+}
+
 TEST(BoardObservation, NonRobustIsGuoAndLisPlainProduct) {
   const auto map = make_forward_map();
   ha::BoardModelParams params;

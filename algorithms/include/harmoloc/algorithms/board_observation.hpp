@@ -58,9 +58,10 @@ struct BoardModelParams {
   /// The kidnap test's likelihood of a board that shows less than expected: it may be hidden (a
   /// person, a box), which is likelier than an arbitrary outlier (board_preference).
   double hidden_floor = 0.1;
-  double dcs_phi = 1.0;             ///< Cheng et al.'s Phi
-  double consensus_chi2 = 9.0;      ///< a board agrees with the estimate when its chi2 is below
-  double consensus_fraction = 0.6;  ///< at least this fraction of the boards must agree
+  double dcs_phi = 1.0;         ///< Cheng et al.'s Phi
+  double consensus_chi2 = 9.0;  ///< a board agrees with the estimate when its chi2 is below
+  /// More than this share of the modelled boards must agree: a majority (4 of 6 or 7, 5 of 8).
+  double consensus_fraction = 0.5;
   double motion_index_rate = 0.05;  ///< weight of one frame in the motion index (forgetting)
   double motion_index_min = 0.02;   ///< bounds, so that a board can always come back
   double motion_index_max = 0.98;
