@@ -11,11 +11,11 @@
 // counters are one CAN frame a cycle with the counts of the frame shown, starting just below 2^32
 // (they wrap in the first minute).
 //
-// Asserted: every cycle runs (no crash), 0 overruns, heap in use and open descriptors the same at
-// the end as after the first 1,000 cycles, resident memory within 1 MiB; each fault counted
-// where it should be; every kidnap detected and the error back under 10 cm within 3 s; the error
-// outside those 3 s windows under the bound below; the link's stream whole frames only. The
-// numbers go to stdout and to soak_faults.json in the working directory.
+// Asserted: every cycle runs (no crash), 0 overruns (with HARMOLOC_TIMING_CHECKS=1), heap in use
+// and open descriptors the same at the end as after the first 1,000 cycles, resident memory within
+// 1 MiB; each fault counted where it should be; every kidnap detected and the error back under 10
+// cm within 3 s; the error outside those 3 s windows under the bound below; the link's stream whole
+// frames only. The numbers go to stdout and to soak_faults.json in the working directory.
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <stdlib.h>
@@ -513,7 +513,12 @@ TEST(SoakWithFaults, OneHourOfCyclesWithFaultsAndKidnaps) {
   // No crash, no stall, no overrun; resources flat.
   EXPECT_EQ(ran, kCycles);
   EXPECT_LT(wall_s, 3600.0) << "slower than real time";
-  EXPECT_EQ(c.overruns, 0U);
+  // The budget on CPU time only with HARMOLOC_TIMING_CHECKS=1 (a quiet machine, the board): a
+  // loaded machine or a sanitizer stretches single cycles (fault_test.cpp, the same rule).
+  const char* timing = std::getenv("HARMOLOC_TIMING_CHECKS");
+  if (timing != nullptr && std::string(timing) == "1") {
+    EXPECT_EQ(c.overruns, 0U);
+  }
   EXPECT_EQ(end.heap_in_use, start.heap_in_use) << "the heap grew";
   EXPECT_EQ(end.open_fds, start.open_fds) << "descriptors leaked";
   EXPECT_LT(rss_max - rss_min, 1024) << "resident memory grew (kB)";
