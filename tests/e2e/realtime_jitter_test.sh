@@ -8,12 +8,7 @@ out="$WORK/realtime"
 rm -rf "$out"; mkdir -p "$out"
 "$BIN/harmoloc" --dataset "$WORK/test" --map "$WORK/tiny.hmap" --loop 4 --realtime --stats "$out/stats.json" \
   --link "$out/link.bin"
-if [ "${HARMOLOC_TIMING_CHECKS:-0}" = 1 ]; then
-  "$BIN/harmoloc-budget" "$out/stats.json" --check
-else
-  "$BIN/harmoloc-budget" "$out/stats.json"
-  "$BIN/harmoloc-budget" "$out/stats.json" --budget-ms 1000 --check > /dev/null
-fi
+check_budget "$out/stats.json"
 python3 - "$out/stats.json" <<'PY'
 import json, sys
 s = json.load(open(sys.argv[1]))

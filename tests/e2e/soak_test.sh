@@ -13,12 +13,7 @@ start=$(date +%s)
 "$BIN/harmoloc" --dataset "$WORK/test" --map "$WORK/tiny.hmap" --loop "$loops" --trajectory "$out/est.tum" \
   --stats "$out/stats.json" --quiet
 echo "wall time $(( $(date +%s) - start )) s for $loops passes"
-if [ "${HARMOLOC_TIMING_CHECKS:-0}" = 1 ]; then
-  "$BIN/harmoloc-budget" "$out/stats.json" --check
-else
-  "$BIN/harmoloc-budget" "$out/stats.json"
-  "$BIN/harmoloc-budget" "$out/stats.json" --budget-ms 1000 --check > /dev/null
-fi
+check_budget "$out/stats.json"
 python3 - "$out/stats.json" "$out/est.tum" "${HARMOLOC_TIMING_CHECKS:-0}" <<'PY'
 import json, math, sys
 s = json.load(open(sys.argv[1]))

@@ -162,8 +162,7 @@ void expect_pose_flows(const Replay& r, double from_s) {
 // stretches (84 ms once in CI under ASan), and a test must not fail under load. Otherwise a
 // cycle must stay under 1 s of CPU time, which an unbounded loop would not.
 void expect_cycle_keeps_its_rate(const Replay& r, bool exact = true) {
-  const char* timing = std::getenv("HARMOLOC_TIMING_CHECKS");
-  if (timing != nullptr && std::string(timing) == "1") {
+  if (harmoloc::fault::timing_checks()) {
     EXPECT_LT(r.max_cpu_ms, kBudget_ms);
     EXPECT_EQ(r.counters.overruns, 0U);
   } else {
