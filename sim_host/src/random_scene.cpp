@@ -16,13 +16,16 @@ namespace harmoloc::sim_host::random_scene_detail {
 namespace {
 
 constexpr double kCheckStep_m = 0.25;
+constexpr double kCheckTurn_deg = 15.0;  // a tour's turns on the spot, checked this often
 constexpr std::uint32_t kProxyWidth_px = 320;
 
 }  // namespace
 
 // Where the camera would be along the route: the route's own places every kCheckStep_m with the
-// heading of the curve (driven forward; a shuttle's way back is the same places reversing).
+// heading of the curve (driven forward; a shuttle's way back is the same places reversing); a
+// tour's places as driven, its turns on the spot every kCheckTurn_deg.
 std::vector<Pose2> route_places(const RouteSpec& route) {
+  if (route.shape == RouteShape::kTour) return tour_places(route, kCheckStep_m, kCheckTurn_deg);
   const auto pts = route_curve(route, kCheckStep_m);
   std::vector<Pose2> out;
   const bool loop = route.shape == RouteShape::kLoop;

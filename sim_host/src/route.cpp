@@ -20,6 +20,47 @@ namespace {
 
 constexpr double kLegMargin_s = 0.1;  // "driving": this far inside a leg
 
+// Wheel travel from the pose increments (standard differential drive); none across a jump (the
+// samples @p jump_at, ascending).
+void add_wheel_travel(const Scenario& scenario, const std::vector<std::size_t>& jump_at,
+                      std::vector<MotionSample>& out) {
+  const double half_track = 0.5 * scenario.robot.track_m;
+  std::size_t next_jump = 0;
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    if (i == 0) {
+      out[i].left_m = out[i].right_m = 0.0;
+      continue;
+    }
+    if (next_jump < jump_at.size() && i == jump_at[next_jump]) {
+      ++next_jump;
+      out[i].left_m = out[i - 1].left_m;
+      out[i].right_m = out[i - 1].right_m;
+      continue;
+    }
+    const Pose2& p0 = out[i - 1].pose;
+    const Pose2& p1 = out[i].pose;
+    const double dyaw = wrap_angle_rad(p1.yaw_rad - p0.yaw_rad);
+    const double mid = p0.yaw_rad + 0.5 * dyaw;
+    const double ds = (p1.x_m - p0.x_m) * std::cos(mid) + (p1.y_m - p0.y_m) * std::sin(mid);
+    out[i].left_m = out[i - 1].left_m + ds - dyaw * half_track;
+    out[i].right_m = out[i - 1].right_m + ds + dyaw * half_track;
+  }
+}
+
+// The largest |heading - mean heading| over the run (degrees).
+double max_heading_offset_deg(const std::vector<MotionSample>& out) {
+  double mean_sin = 0.0, mean_cos = 0.0;
+  for (const MotionSample& m : out) {
+    mean_sin += std::sin(m.pose.yaw_rad);
+    mean_cos += std::cos(m.pose.yaw_rad);
+  }
+  const double mean = std::atan2(mean_sin, mean_cos);
+  double worst = 0.0;
+  for (const MotionSample& m : out)
+    worst = std::max(worst, std::fabs(wrap_angle_rad(m.pose.yaw_rad - mean)));
+  return worst * 180.0 / kPi;
+}
+
 }  // namespace
 
 std::uint64_t dataset_time_ns(double start_time_s, double t_s) {
@@ -32,6 +73,28 @@ std::vector<MotionSample> simulate_motion(const Scenario& scenario, double step_
                                           algorithms::Pcg32* kidnap_rng,
                                           std::vector<KidnapEvent>* kidnaps) {
   const RouteSpec& r = scenario.route;
+  if (r.shape == RouteShape::kTour) {
+    if (scenario.kidnaps.count > 0)
+      throw std::runtime_error("kidnaps on a tour route are not simulated yet");
+    const std::vector<TourSegment> tour = tour_segments(r);
+    const double total_s = tour.back().t0_s + tour.back().duration_s;
+    const auto count = static_cast<std::size_t>(std::ceil(total_s / step_s)) + 1;
+    std::vector<MotionSample> out(count);
+    for (std::size_t i = 0; i < count; ++i) {
+      const double t = static_cast<double>(i) * step_s;
+      out[i].t_s = t;
+      out[i].route_t_s = t;
+      out[i].pose = tour_pose(tour, r, t);
+    }
+    add_wheel_travel(scenario, {}, out);
+    if (stats != nullptr) {
+      stats->length_m = route_length_m(r);
+      stats->duration_s = total_s;
+      stats->max_heading_offset_deg = max_heading_offset_deg(out);
+    }
+    if (kidnaps != nullptr) kidnaps->clear();
+    return out;
+  }
   const bool loop = r.shape == RouteShape::kLoop;
   const Polyline path = make_path(r.waypoints_m, loop);
   const double length = path.length();
@@ -227,39 +290,11 @@ std::vector<MotionSample> simulate_motion(const Scenario& scenario, double step_
           KidnapEvent{t, out[i - 1].pose, out[i].pose, dataset_time_ns(scenario.start_time_s, t)});
     }
   }
-  // Wheel travel from the pose increments (standard differential drive); none across a jump.
-  const double half_track = 0.5 * scenario.robot.track_m;
-  double mean_sin = 0.0, mean_cos = 0.0;
-  std::size_t next_jump = 0;
-  for (std::size_t i = 0; i < count; ++i) {
-    mean_sin += std::sin(out[i].pose.yaw_rad);
-    mean_cos += std::cos(out[i].pose.yaw_rad);
-    if (i == 0) {
-      out[i].left_m = out[i].right_m = 0.0;
-      continue;
-    }
-    if (next_jump < jump_at.size() && i == jump_at[next_jump]) {
-      ++next_jump;
-      out[i].left_m = out[i - 1].left_m;
-      out[i].right_m = out[i - 1].right_m;
-      continue;
-    }
-    const Pose2& p0 = out[i - 1].pose;
-    const Pose2& p1 = out[i].pose;
-    const double dyaw = wrap_angle_rad(p1.yaw_rad - p0.yaw_rad);
-    const double mid = p0.yaw_rad + 0.5 * dyaw;
-    const double ds = (p1.x_m - p0.x_m) * std::cos(mid) + (p1.y_m - p0.y_m) * std::sin(mid);
-    out[i].left_m = out[i - 1].left_m + ds - dyaw * half_track;
-    out[i].right_m = out[i - 1].right_m + ds + dyaw * half_track;
-  }
+  add_wheel_travel(scenario, jump_at, out);
   if (stats != nullptr) {
     stats->length_m = length;
     stats->duration_s = total_s;
-    const double mean = std::atan2(mean_sin, mean_cos);
-    double worst = 0.0;
-    for (const MotionSample& m : out)
-      worst = std::max(worst, std::fabs(wrap_angle_rad(m.pose.yaw_rad - mean)));
-    stats->max_heading_offset_deg = worst * 180.0 / kPi;
+    stats->max_heading_offset_deg = max_heading_offset_deg(out);
   }
   if (kidnaps != nullptr) *kidnaps = std::move(events);
   return out;
@@ -267,6 +302,10 @@ std::vector<MotionSample> simulate_motion(const Scenario& scenario, double step_
 
 double run_duration_s(const Scenario& scenario) {
   const RouteSpec& r = scenario.route;
+  if (r.shape == RouteShape::kTour) {
+    const std::vector<TourSegment> tour = tour_segments(r);
+    return tour.back().t0_s + tour.back().duration_s;
+  }
   const bool loop = r.shape == RouteShape::kLoop;
   const double length = route_length_m(r);
   double leg_s = 0.0;

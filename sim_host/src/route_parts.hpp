@@ -8,6 +8,9 @@
 #include <cstddef>
 #include <vector>
 
+#include "harmoloc/algorithms/geometry.hpp"
+#include "harmoloc/sim_host/scenario.hpp"
+
 namespace harmoloc::sim_host::route_detail {
 
 struct Polyline {
@@ -38,5 +41,24 @@ Polyline make_path(const std::vector<std::array<double, 2>>& w, bool closed, int
 
 // Distance covered after time t on a leg of length L with a trapezoidal speed profile.
 double leg_distance(double t, double length, double v, double a, double& duration);
+
+// One piece of a tour (RouteShape::kTour): standing still, turning on the spot or driving a
+// straight leg (forward or reversing: the heading is held either way).
+struct TourSegment {
+  enum class Kind { kPause, kTurn, kDrive };
+  Kind kind = Kind::kPause;
+  double t0_s = 0.0;
+  double duration_s = 0.0;
+  algorithms::Pose2 from;  // a turn's yaw is not wrapped: to.yaw_rad - from.yaw_rad is the turn
+  algorithms::Pose2 to;
+};
+
+// The tour's pieces in time order, from its start pause to its end pause. Throws
+// std::runtime_error when the waypoints and headings do not make a tour.
+std::vector<TourSegment> tour_segments(const RouteSpec& route);
+
+// Where the tour puts the robot at run time @p t_s (the start pose before, the end pose after).
+algorithms::Pose2 tour_pose(const std::vector<TourSegment>& tour, const RouteSpec& route,
+                            double t_s);
 
 }  // namespace harmoloc::sim_host::route_detail

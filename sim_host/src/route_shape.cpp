@@ -73,8 +73,27 @@ double leg_distance(double t, double length, double v, double a, double& duratio
 
 using namespace route_detail;
 
+namespace {
+
+// The route's curve: a tour's straight legs, or the smooth curve through the waypoints.
+Polyline route_path(const RouteSpec& route) {
+  if (route.shape != RouteShape::kTour)
+    return make_path(route.waypoints_m, route.shape == RouteShape::kLoop);
+  if (route.waypoints_m.size() < 2) throw std::runtime_error("a tour needs at least 2 waypoints");
+  Polyline p;
+  for (const auto& w : route.waypoints_m) {
+    p.s.push_back(p.x.empty() ? 0.0
+                              : p.s.back() + std::hypot(w[0] - p.x.back(), w[1] - p.y.back()));
+    p.x.push_back(w[0]);
+    p.y.push_back(w[1]);
+  }
+  return p;
+}
+
+}  // namespace
+
 std::vector<std::array<double, 2>> route_curve(const RouteSpec& route, double step_m) {
-  const Polyline path = make_path(route.waypoints_m, route.shape == RouteShape::kLoop);
+  const Polyline path = route_path(route);
   const double length = path.length();
   const auto n = std::max<std::size_t>(2, static_cast<std::size_t>(std::ceil(length / step_m)) + 1);
   std::vector<std::array<double, 2>> out;
@@ -88,10 +107,11 @@ std::vector<std::array<double, 2>> route_curve(const RouteSpec& route, double st
 }
 
 double route_length_m(const RouteSpec& route) {
-  return make_path(route.waypoints_m, route.shape == RouteShape::kLoop).length();
+  return route_path(route).length();
 }
 
 bool route_crosses_itself(const RouteSpec& route, std::string* why) {
+  if (route.shape == RouteShape::kTour) return false;  // a tour may cross itself
   constexpr double kClearance_m = 0.05;
   const bool loop = route.shape == RouteShape::kLoop;
   const Polyline path = make_path(route.waypoints_m, loop, 40);

@@ -250,26 +250,38 @@ Scenario from_file(const std::string& file, int depth) {
   }
   if (const toml::table* r = t["route"].as_table()) {
     only(*r, file, "route.",
-         {"shape", "waypoints", "speed_mps", "acceleration_mps2", "pause_s", "laps", "wander_m"});
+         {"shape", "waypoints", "speed_mps", "acceleration_mps2", "pause_s", "laps", "wander_m",
+          "turn_rate_dps"});
     if (const toml::node* shape = r->get("shape")) {
       const auto v = shape->value_exact<std::string>();
       if (v && *v == "shuttle")
         s.route.shape = RouteShape::kShuttle;
       else if (v && *v == "loop")
         s.route.shape = RouteShape::kLoop;
+      else if (v && *v == "tour")
+        s.route.shape = RouteShape::kTour;
       else
-        fail(file, "route.shape must be \"shuttle\" or \"loop\"");
+        fail(file, "route.shape must be \"shuttle\", \"loop\" or \"tour\"");
     }
+    const bool tour = s.route.shape == RouteShape::kTour;
     if (const toml::array* w = (*r)["waypoints"].as_array()) {
       s.route.waypoints_m.clear();
+      s.route.heading_deg.clear();
       for (const toml::node& p : *w) {
-        const auto xy = numbers(&p, 2, file, "route.waypoints[]");
+        // A tour's waypoints are poses: [x, y, heading_deg].
+        const auto xy = numbers(
+            &p, tour ? 3 : 2, file,
+            tour ? "route.waypoints[] (a tour's: [x, y, heading_deg])" : "route.waypoints[]");
         s.route.waypoints_m.push_back({xy[0], xy[1]});
+        if (tour) s.route.heading_deg.push_back(xy[2]);
       }
       if (s.route.waypoints_m.size() < 2) fail(file, "route.waypoints needs at least 2 points");
     }
+    if (tour && s.route.heading_deg.size() != s.route.waypoints_m.size())
+      fail(file, "route.waypoints of a tour are [x, y, heading_deg]");
     if (s.route.shape == RouteShape::kLoop && s.route.waypoints_m.size() < 3)
       fail(file, "route.waypoints needs at least 3 points for a loop");
+    set_num(*r, "turn_rate_dps", s.route.turn_rate_dps, file, "route.", 1, 720);
     set_num(*r, "speed_mps", s.route.speed_mps, file, "route.", 0.01, 2);
     set_num(*r, "acceleration_mps2", s.route.acceleration_mps2, file, "route.", 0.01, 10);
     set_num(*r, "pause_s", s.route.pause_s, file, "route.", 0, 60);

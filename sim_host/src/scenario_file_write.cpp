@@ -82,10 +82,19 @@ std::string scenario_to_toml(const Scenario& s) {
       .set("drift_period_s", s.lighting.drift_period_s)
       .set("drift_phase_deg", s.lighting.drift_phase_deg)
       .set("steps", number_arrays(s.lighting.steps));
-  w.table("route")
-      .set("shape", s.route.shape == RouteShape::kLoop ? "loop" : "shuttle")
-      .set("waypoints", number_arrays(s.route.waypoints_m))
-      .set("speed_mps", s.route.speed_mps)
+  const bool tour = s.route.shape == RouteShape::kTour;
+  std::vector<std::array<double, 3>> poses;
+  for (std::size_t i = 0; tour && i < s.route.waypoints_m.size(); ++i)
+    poses.push_back({s.route.waypoints_m[i][0], s.route.waypoints_m[i][1],
+                     i < s.route.heading_deg.size() ? s.route.heading_deg[i] : 0.0});
+  auto& route = w.table("route").set("shape", tour                                 ? "tour"
+                                              : s.route.shape == RouteShape::kLoop ? "loop"
+                                                                                   : "shuttle");
+  if (tour)
+    route.set("waypoints", number_arrays(poses)).set("turn_rate_dps", s.route.turn_rate_dps);
+  else
+    route.set("waypoints", number_arrays(s.route.waypoints_m));
+  route.set("speed_mps", s.route.speed_mps)
       .set("acceleration_mps2", s.route.acceleration_mps2)
       .set("pause_s", s.route.pause_s)
       .set("laps", s.route.laps)

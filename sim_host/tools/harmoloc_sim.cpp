@@ -32,6 +32,8 @@ int main(int argc, char** argv) {
   std::optional<std::uint64_t> random_seed, run_seed, lighting_seed;
   std::string variant;
   int kidnaps = 10;
+  int waypoints = 8;
+  std::uint64_t roam_seed = 1;
   double minutes = 10.0;
   bool list = false, quiet = false;
   auto* scenario_opt =
@@ -43,8 +45,11 @@ int main(int argc, char** argv) {
       ->excludes(scenario_opt);
   app.add_option("--variant", variant,
                  "with --random: kidnap (--kidnaps of them), dynamic (a person hides a board, a "
-                 "board moves), long (--minutes of driving)")
-      ->check(CLI::IsMember({"kidnap", "dynamic", "long"}));
+                 "board moves), long (--minutes of driving), coverage (lanes over a floor around "
+                 "the route at several headings: a floor map's training run), roam (random poses "
+                 "on that floor, --waypoints of them, drawn from --roam-seed: a test run off any "
+                 "trained path)")
+      ->check(CLI::IsMember({"kidnap", "dynamic", "long", "coverage", "roam"}));
   app.add_option("--run-seed", run_seed,
                  "with --random: the run's seed (pixel noise, slip, wander, labels); default the "
                  "scene's SEED (or --seed)");
@@ -53,6 +58,11 @@ int main(int argc, char** argv) {
   app.add_option("--kidnaps", kidnaps, "--variant kidnap: how many")
       ->capture_default_str()
       ->check(CLI::Range(1, 1000));
+  app.add_option("--waypoints", waypoints, "--variant roam: how many poses")
+      ->capture_default_str()
+      ->check(CLI::Range(2, 1000));
+  app.add_option("--roam-seed", roam_seed, "--variant roam: which roam of the floor")
+      ->capture_default_str();
   app.add_option("--minutes", minutes, "--variant long: how long the run lasts at least")
       ->capture_default_str()
       ->check(CLI::Range(0.1, 1000.0));
@@ -86,6 +96,8 @@ int main(int argc, char** argv) {
       if (variant == "kidnap") scenario = kidnap_variant(scenario, kidnaps);
       if (variant == "dynamic") scenario = dynamic_variant(scenario);
       if (variant == "long") scenario = long_variant(scenario, minutes);
+      if (variant == "coverage") scenario = coverage_variant(scenario);
+      if (variant == "roam") scenario = roam_variant(scenario, roam_seed, waypoints);
       if (run_seed)
         seed = *run_seed;
       else if (app.count("--seed") == 0)

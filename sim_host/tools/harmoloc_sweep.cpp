@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <mutex>
+#include <sstream>
 #include <thread>
 
 #include <CLI/CLI.hpp>
@@ -51,8 +52,14 @@ int main(int argc, char** argv) {
       ->excludes("--scenes");
   app.add_option("--jobs", jobs, "scenes evaluated in parallel")->capture_default_str();
   app.add_option("--out", out_dir, "folder for sweep.json and index.html")->capture_default_str();
-  app.add_option("--parts", parts, "which runs: nominal,kidnap,dynamic,long")
+  app.add_option("--parts", parts,
+                 "which runs: nominal,kidnap,dynamic,long (the trained route's) and floor (a map "
+                 "trained on a coverage run of the floor around the route, replayed on --roams "
+                 "roams of that floor that no training drove)")
       ->capture_default_str();
+  app.add_option("--roams", opt.roams, "floor: roams per scene (8 poses each)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 100));
   app.add_option("--kidnaps", opt.kidnaps, "kidnaps per scene")->capture_default_str();
   app.add_option("--long-minutes", opt.long_minutes, "length of the long nominal run")
       ->capture_default_str();
@@ -71,10 +78,25 @@ int main(int argc, char** argv) {
     opt.kidnaps = std::min(opt.kidnaps, 5);
     opt.long_minutes = std::min(opt.long_minutes, 1.0);
   }
+  {
+    std::stringstream list(parts);
+    std::string part;
+    while (std::getline(list, part, ',')) {
+      if (part != "nominal" && part != "kidnap" && part != "dynamic" && part != "long" &&
+          part != "floor") {
+        std::fprintf(stderr,
+                     "harmoloc-sweep: --parts: unknown part '%s' (nominal, kidnap, dynamic, long, "
+                     "floor)\n",
+                     part.c_str());
+        return 2;
+      }
+    }
+  }
   opt.nominal = parts.find("nominal") != std::string::npos;
   opt.kidnap = parts.find("kidnap") != std::string::npos;
   opt.dynamic = parts.find("dynamic") != std::string::npos;
   opt.long_run = parts.find("long") != std::string::npos;
+  opt.floor = parts.find("floor") != std::string::npos;
   jobs = std::max(1U, jobs);
   if (!config_path.empty()) {
     try {
@@ -115,7 +137,10 @@ int main(int argc, char** argv) {
     j["scenes"] = scenes;
     j["scenes_done"] = finished.size();
     j["complete"] = final_write;
-    j["options"] = {{"kidnaps", opt.kidnaps}, {"long_minutes", opt.long_minutes}, {"parts", parts}};
+    j["options"] = {{"kidnaps", opt.kidnaps},
+                    {"long_minutes", opt.long_minutes},
+                    {"parts", parts},
+                    {"roams", opt.roams}};
     j["results"] = nlohmann::json::array();
     for (const SceneResult& r : finished) j["results"].push_back(to_json(r));
     if (have_reference) j["default_scene"] = to_json(reference);
@@ -166,6 +191,17 @@ int main(int argc, char** argv) {
                     fmt(cm(r.fused_rmse_m)).c_str(), r.kidnaps_recovered_1s, r.kidnaps,
                     r.long_false_alarms, r.error.empty() ? "" : "; FAILED: ", r.error.c_str());
       say(line);
+      if (opt.floor) {
+        std::snprintf(line, sizeof line,
+                      "harmoloc-sweep: seed %llu floor: fused %s cm, heading %s deg, max %s cm, "
+                      "fix MSE %s/%s cm^2%s%s",
+                      static_cast<unsigned long long>(seed), fmt(cm(r.floor_rmse_m)).c_str(),
+                      fmt(r.floor_heading_rmse_deg).c_str(), fmt(cm(r.floor_max_m)).c_str(),
+                      fmt(cm2(r.floor_fix_mse_x_m2), 1).c_str(),
+                      fmt(cm2(r.floor_fix_mse_y_m2), 1).c_str(),
+                      r.floor_error.empty() ? "" : "; FAILED: ", r.floor_error.c_str());
+        say(line);
+      }
       const std::lock_guard<std::mutex> lock(io);
       results[i] = r;
       evaluated[i] = 1;

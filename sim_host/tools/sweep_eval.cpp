@@ -16,7 +16,7 @@ namespace {
 
 // Seeds of a scene's runs: training, test, kidnaps, dynamic, long (distinct noise streams).
 constexpr std::uint64_t kTrainSeed = 1, kTestSeed = 2, kKidnapSeed = 3, kDynamicSeed = 4,
-                        kLongSeed = 5;
+                        kLongSeed = 5, kCoverageSeed = 6, kRoamSeed = 100;
 
 std::string describe(const Scenario& s) {
   std::ostringstream o;
@@ -111,6 +111,72 @@ void trace(const SweepOptions& opt, std::uint64_t seed, const char* part, const 
   write_trace(run, opt.trace_dir + "/seed-" + std::to_string(seed) + "-" + part + ".csv");
 }
 
+// Issue 20's floor runs: train on the coverage run, replay the roams, pool their frames.
+void floor_part(const Scenario& scene, const algorithms::ThresholdSet& thresholds,
+                std::uint64_t seed, const SweepOptions& opt, SceneResult& r,
+                const std::function<void(const std::string&)>& step) {
+  try {
+    step("floor: coverage training");
+    const Scenario coverage = coverage_variant(scene);
+    const std::string& d = coverage.description;
+    r.floor_summary =
+        d.substr(d.find("coverage run") == std::string::npos ? 0 : d.find("coverage run"));
+    const TrainedMap trained = train_on_scenario(coverage, kCoverageSeed, nullptr, &thresholds);
+    r.floor_train_frames = trained.frames;
+    r.floor_train_ms = trained.report.train_ms + trained.report.forward_ms;
+    r.floor_cv_rmse_x_m = trained.report.x.cv_rmse_m;
+    r.floor_cv_rmse_y_m = trained.report.y.cv_rmse_m;
+    const firmware::FirmwareConfig config = config_for(thresholds, opt);
+    double sx = 0.0, sy = 0.0, se = 0.0, sh = 0.0, worst = 0.0;
+    std::size_t fixes = 0, frames = 0, nominal_bad = 0;
+    for (int k = 1; k <= opt.roams; ++k) {
+      step("floor: roam " + std::to_string(k));
+      const Scenario roam =
+          with_other_lighting(roam_variant(scene, static_cast<std::uint64_t>(k)), kRoamSeed + k);
+      const RunRecord run =
+          replay_scenario(roam, kRoamSeed + static_cast<std::uint64_t>(k), *trained.map, config);
+      trace(opt, seed, ("floor-roam" + std::to_string(k)).c_str(), run);
+      if (!run.frames.empty()) r.floor_roam_s += run.frames.back().t_s;
+      for (const FrameRecord& f : run.frames) {
+        if (!f.fix_present) continue;
+        sx += (f.fix.x_m - f.truth.x_m) * (f.fix.x_m - f.truth.x_m);
+        sy += (f.fix.y_m - f.truth.y_m) * (f.fix.y_m - f.truth.y_m);
+        ++fixes;
+      }
+      const Settled st = settle(run, opt.settle_s, kSettledBound_m, kStartupHold_s);
+      if (st.first_fix_s < 0.0) continue;
+      for (const FrameRecord& f : run.frames) {
+        if (f.t_s < st.first_fix_s + opt.settle_s || !f.valid) continue;
+        const double e = f.position_error_m();
+        const double h = algorithms::wrap_angle_rad(f.estimate.yaw_rad - f.truth.yaw_rad) * 180.0 /
+                         algorithms::kPi;
+        se += e * e;
+        sh += h * h;
+        worst = std::max(worst, e);
+        ++frames;
+        if (e > 0.10 && f.health == firmware::Health::kNominal) ++nominal_bad;
+      }
+    }
+    if (fixes > 0) {
+      r.floor_fix_mse_x_m2 = sx / static_cast<double>(fixes);
+      r.floor_fix_mse_y_m2 = sy / static_cast<double>(fixes);
+    }
+    if (frames > 0) {
+      const auto n = static_cast<double>(frames);
+      r.floor_rmse_m = std::sqrt(se / n);
+      r.floor_heading_rmse_deg = std::sqrt(sh / n);
+      r.floor_max_m = worst;
+      r.floor_nominal_over_10cm = static_cast<double>(nominal_bad) / n;
+    }
+  } catch (const std::exception& e) {
+    r.floor_error = e.what();
+  }
+}
+
+void route_runs(const Scenario& scene, const algorithms::ThresholdSet& thresholds,
+                std::uint64_t seed, const SweepOptions& opt, SceneResult& r,
+                const std::function<void(const std::string&)>& step);
+
 }  // namespace
 
 SceneResult evaluate_scene(const Scenario& scene, const algorithms::ThresholdSet& thresholds,
@@ -123,7 +189,24 @@ SceneResult evaluate_scene(const Scenario& scene, const algorithms::ThresholdSet
   const auto step = [&](const std::string& s) {
     if (progress) progress(s);
   };
+  const bool route_parts = opt.nominal || opt.kidnap || opt.dynamic || opt.long_run;
   try {
+    if (route_parts) route_runs(scene, thresholds, seed, opt, r, step);
+  } catch (const std::exception& e) {
+    r.error = e.what();
+  }
+  if (opt.floor) floor_part(scene, thresholds, seed, opt, r, step);
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+  return r;
+}
+
+namespace {
+
+// The runs of the trained route: the nominal test run, kidnaps, the dynamic run, the long run.
+void route_runs(const Scenario& scene, const algorithms::ThresholdSet& thresholds,
+                std::uint64_t seed, const SweepOptions& opt, SceneResult& r,
+                const std::function<void(const std::string&)>& step) {
+  {
     step("training");
     const TrainedMap trained = train_on_scenario(scene, kTrainSeed, nullptr, &thresholds);
     const TrainReport& tr = trained.report;
@@ -217,12 +300,10 @@ SceneResult evaluate_scene(const Scenario& scene, const algorithms::ThresholdSet
         r.long_rmse_m = s.after.rmse_m;
       }
     }
-  } catch (const std::exception& e) {
-    r.error = e.what();
   }
-  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
-  return r;
 }
+
+}  // namespace
 
 SceneResult evaluate_random_scene(std::uint64_t seed, const SweepOptions& options,
                                   const SweepProgress& progress) {

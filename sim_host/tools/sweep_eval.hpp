@@ -22,6 +22,10 @@ struct SweepOptions {
   bool kidnap = true;
   bool dynamic = true;
   bool long_run = true;
+  /// Issue 20's floor runs: a map trained on the scene's coverage run, replayed on roams of the
+  /// floor that the coverage run never drove (random_scene.hpp).
+  bool floor = false;
+  int roams = 2;               ///< roams of the floor (each 8 poses, other lighting and noise)
   int kidnaps = 20;            ///< kidnaps in the kidnap run (each >= 1 m)
   double long_minutes = 10.0;  ///< length of the long nominal run
   std::uint64_t filter_seed = 1;
@@ -78,6 +82,19 @@ struct SceneResult {
   std::size_t long_false_alarms = 0;
   double long_max_m = -1.0;
   double long_rmse_m = -1.0;
+  // Floor runs (SweepOptions::floor): the coverage run's training and the roams, pooled.
+  std::string floor_error;  ///< non-empty when the floor part failed (the message)
+  std::string floor_summary;
+  std::size_t floor_train_frames = 0;
+  double floor_train_ms = 0.0;
+  double floor_cv_rmse_x_m = -1.0, floor_cv_rmse_y_m = -1.0;
+  double floor_roam_s = 0.0;                                    ///< the roams' run time
+  double floor_fix_mse_x_m2 = -1.0, floor_fix_mse_y_m2 = -1.0;  ///< every frame with a fix
+  double floor_rmse_m = -1.0;  ///< after first fix + settle_s, every roam's frames
+  double floor_heading_rmse_deg = -1.0;
+  double floor_max_m = -1.0;
+  /// Share of those frames reported nominal (health) with an error above 10 cm.
+  double floor_nominal_over_10cm = -1.0;
   double seconds = 0.0;  ///< wall time of the scene's evaluation
 };
 

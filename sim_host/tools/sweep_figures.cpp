@@ -59,6 +59,22 @@ std::vector<Figure> figures() {
        [](const SceneResult& r) { return cm(r.board_place_max_m); }},
       {"bearing_residual", "bearing residual of the placed boards, RMS", "deg",
        [](const SceneResult& r) { return r.bearing_residual_deg; }},
+      // Issue 20: the floor runs (--parts floor) and their targets.
+      {"floor_rmse", "floor roams: fused position RMSE (after first fix + 2 s)", "cm",
+       [](const SceneResult& r) { return cm(r.floor_rmse_m); }, 3.0, 6.0},
+      {"floor_heading", "floor roams: fused heading RMSE", "deg",
+       [](const SceneResult& r) { return r.floor_heading_rmse_deg; }, 2.0, -1.0},
+      {"floor_max", "floor roams: max error", "cm",
+       [](const SceneResult& r) { return cm(r.floor_max_m); }},
+      {"floor_nominal_bad", "floor roams: cycles nominal with error > 10 cm", "%",
+       [](const SceneResult& r) {
+         return r.floor_nominal_over_10cm < 0.0 ? -1.0 : 100.0 * r.floor_nominal_over_10cm;
+       },
+       -1.0, 0.0},
+      {"floor_fix_mse_x", "floor roams: harmonic localizer alone, MSE x", "cm^2",
+       [](const SceneResult& r) { return cm2(r.floor_fix_mse_x_m2); }},
+      {"floor_fix_mse_y", "floor roams: harmonic localizer alone, MSE y", "cm^2",
+       [](const SceneResult& r) { return cm2(r.floor_fix_mse_y_m2); }},
   };
 }
 
@@ -69,7 +85,7 @@ Totals totals_of(const std::vector<SceneResult>& results) {
     t.recovered += r.kidnaps_recovered_1s;
     t.alarms += r.long_false_alarms;
     t.minutes += r.long_minutes;
-    t.failed += r.error.empty() ? 0 : 1;
+    t.failed += r.error.empty() && r.floor_error.empty() ? 0 : 1;
   }
   return t;
 }

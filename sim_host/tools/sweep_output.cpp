@@ -54,6 +54,19 @@ nlohmann::json to_json(const SceneResult& r) {
   j["long_false_alarms"] = r.long_false_alarms;
   j["long_max_m"] = r.long_max_m;
   j["long_rmse_m"] = r.long_rmse_m;
+  if (!r.floor_error.empty()) j["floor_error"] = r.floor_error;
+  if (!r.floor_summary.empty()) j["floor_summary"] = r.floor_summary;
+  j["floor_train_frames"] = r.floor_train_frames;
+  j["floor_train_ms"] = r.floor_train_ms;
+  j["floor_cv_rmse_x_m"] = r.floor_cv_rmse_x_m;
+  j["floor_cv_rmse_y_m"] = r.floor_cv_rmse_y_m;
+  j["floor_roam_s"] = r.floor_roam_s;
+  j["floor_fix_mse_x_m2"] = r.floor_fix_mse_x_m2;
+  j["floor_fix_mse_y_m2"] = r.floor_fix_mse_y_m2;
+  j["floor_rmse_m"] = r.floor_rmse_m;
+  j["floor_heading_rmse_deg"] = r.floor_heading_rmse_deg;
+  j["floor_max_m"] = r.floor_max_m;
+  j["floor_nominal_over_10cm"] = r.floor_nominal_over_10cm;
   j["seconds"] = r.seconds;
   return j;
 }
@@ -147,7 +160,11 @@ void write_html(const std::string& path, const std::vector<SceneResult>& results
     << "font-weight:bold}</style></head><body>";
   o << "<h1>harmoloc sweep over random scenes</h1><p>" << svg::escape(command) << "</p>";
   std::size_t failed = 0;
-  for (const SceneResult& r : results) failed += r.error.empty() ? 0 : 1;
+  bool floor = false;
+  for (const SceneResult& r : results) {
+    failed += r.error.empty() && r.floor_error.empty() ? 0 : 1;
+    floor = floor || r.floor_rmse_m >= 0.0 || !r.floor_error.empty();
+  }
   o << "<p>" << results.size() << " scenes, " << failed
     << " failed. Each dot is a scene; the green ring is the project's own default scene "
        "(desk-shuttle). Hover a dot for its seed.</p>";
@@ -173,13 +190,20 @@ void write_html(const std::string& path, const std::vector<SceneResult>& results
   for (const Figure& f : figures()) o << "<div>" << strip_svg(f, results, reference) << "</div>";
   o << "<h2>Scenes</h2><table><tr><th>seed</th><th class='l'>scene</th><th>fix MSE x/y (cm^2)</th>"
     << "<th>fused RMSE (cm)</th><th>start-up (s)</th><th>kidnaps in 1 s</th>"
-    << "<th>false alarms</th><th>dynamic max (cm)</th><th class='l'>error</th></tr>";
+    << "<th>false alarms</th><th>dynamic max (cm)</th>"
+    << (floor ? "<th>floor RMSE (cm)</th><th>floor heading (deg)</th>" : "")
+    << "<th class='l'>error</th></tr>";
   for (const SceneResult& r : results) {
     o << "<tr><td>" << r.seed << "</td><td class='l'>" << svg::escape(r.summary) << "</td><td>"
       << fmt(cm2(r.fix_mse_x_m2), 1) << " / " << fmt(cm2(r.fix_mse_y_m2), 1) << "</td><td>"
       << fmt(cm(r.fused_rmse_m)) << "</td><td>" << fmt(r.startup_s) << "</td><td>"
       << r.kidnaps_recovered_1s << "/" << r.kidnaps << "</td><td>" << r.long_false_alarms
-      << "</td><td>" << fmt(cm(r.dynamic_max_m), 1) << "</td><td class='l'>" << svg::escape(r.error)
+      << "</td><td>" << fmt(cm(r.dynamic_max_m), 1) << "</td>";
+    if (floor)
+      o << "<td>" << fmt(cm(r.floor_rmse_m)) << "</td><td>" << fmt(r.floor_heading_rmse_deg)
+        << "</td>";
+    o << "<td class='l'>"
+      << svg::escape(r.error + (r.floor_error.empty() ? "" : " floor: " + r.floor_error))
       << "</td></tr>";
   }
   o << "</table></body></html>\n";

@@ -609,8 +609,9 @@ TEST(RandomScene, DerivedRunsShareTheScenesWindowsAndRobot) {
   // All but the first line (it names the scene).
   const auto body = [](const std::string& text) { return text.substr(text.find('\n')); };
   const std::string config = body(hs::firmware_config_toml(s));
-  for (const hs::Scenario& v : {hs::with_other_lighting(s, 5), hs::kidnap_variant(s, 3),
-                                hs::dynamic_variant(s), hs::long_variant(s, 3.0)}) {
+  for (const hs::Scenario& v :
+       {hs::with_other_lighting(s, 5), hs::kidnap_variant(s, 3), hs::dynamic_variant(s),
+        hs::long_variant(s, 3.0), hs::coverage_variant(s), hs::roam_variant(s, 2)}) {
     SCOPED_TRACE(v.name);
     EXPECT_EQ(body(hs::firmware_config_toml(v)), config);
   }
@@ -625,4 +626,91 @@ TEST(RandomScene, LabelsCarryTheHeadingOrYawZero) {
     for (const auto& label : run.labels()) any_nonzero = any_nonzero || label.pose.yaw_rad != 0.0;
     EXPECT_EQ(any_nonzero, heading);
   }
+}
+
+namespace {
+
+bool on_floor(const hs::FloorPlan& f, double x, double y) {
+  const double dx = x - f.centre_x_m, dy = y - f.centre_y_m;
+  const double u = dx * std::cos(f.axis_rad) + dy * std::sin(f.axis_rad);
+  const double v = -dx * std::sin(f.axis_rad) + dy * std::cos(f.axis_rad);
+  return std::fabs(u) <= f.half_length_m + 1e-6 && std::fabs(v) <= f.half_width_m + 1e-6;
+}
+
+double off_covered_deg(const hs::FloorPlan& f, double yaw_rad) {
+  double best = 1e9;
+  for (const double h : f.headings_rad)
+    best = std::min(best, std::fabs(ha::wrap_angle_rad(yaw_rad - h)) * 180.0 / kPi);
+  return best;
+}
+
+}  // namespace
+
+TEST(RandomScene, CoverageRunDrivesLanesOverTheFloorAtEveryCoveredHeading) {
+  for (const std::uint64_t seed : {5ULL, 7ULL}) {  // a shuttle and a loop
+    SCOPED_TRACE(seed);
+    const hs::Scenario s = hs::random_scenario(seed);
+    const hs::FloorPlan f = hs::floor_plan(s);
+    ASSERT_GE(f.headings_rad.size(), 2U);
+    EXPECT_LE(f.half_length_m, 1.5 + 1e-9);
+    EXPECT_LE(f.half_width_m, 1.0 + 1e-9);
+    const hs::Scenario c = hs::coverage_variant(s);
+    EXPECT_EQ(c.route.shape, hs::RouteShape::kTour);
+    EXPECT_EQ(hs::scenario_to_toml(c), hs::scenario_to_toml(hs::coverage_variant(s)));
+    EXPECT_LE(hs::run_duration_s(c), 1.2 * 360.0);
+    EXPECT_GE(hs::run_duration_s(c), 60.0);
+    EXPECT_EQ(c.labelled_frames, 64);
+    // Every lane end on the floor, at a covered heading; every covered heading driven.
+    std::set<long> driven;
+    for (std::size_t i = 0; i < c.route.waypoints_m.size(); ++i) {
+      EXPECT_TRUE(on_floor(f, c.route.waypoints_m[i][0], c.route.waypoints_m[i][1]));
+      const double yaw = c.route.heading_deg[i] * kPi / 180.0;
+      EXPECT_LT(off_covered_deg(f, yaw), 0.01);
+      for (std::size_t k = 0; k < f.headings_rad.size(); ++k)
+        if (std::fabs(ha::wrap_angle_rad(yaw - f.headings_rad[k])) < 1e-3)
+          driven.insert(static_cast<long>(k));
+    }
+    EXPECT_EQ(driven.size(), f.headings_rad.size());
+    // The lanes fill the floor: every place of its 20 cm grid lies within 25 cm of the run.
+    ha::Pcg32 rng(1);
+    const auto m = hs::simulate_motion(c, 0.05, rng, nullptr);
+    const double cu = std::cos(f.axis_rad), su = std::sin(f.axis_rad);
+    double farthest = 0.0;
+    for (double u = -f.half_length_m + 0.1; u < f.half_length_m - 0.1; u += 0.2) {
+      for (double v = -f.half_width_m + 0.1; v < f.half_width_m - 0.1; v += 0.2) {
+        const double x = f.centre_x_m + u * cu - v * su, y = f.centre_y_m + u * su + v * cu;
+        double nearest = 1e9;
+        for (const auto& p : m)
+          nearest = std::min(nearest, std::hypot(p.pose.x_m - x, p.pose.y_m - y));
+        farthest = std::max(farthest, nearest);
+      }
+    }
+    EXPECT_LT(farthest, 0.25);
+  }
+}
+
+TEST(RandomScene, RoamVisitsRandomPosesOnTheFloorWithTwoBoardsInView) {
+  const hs::Scenario s = hs::random_scenario(5);
+  const hs::FloorPlan f = hs::floor_plan(s);
+  const hs::Scenario r = hs::roam_variant(s, 3, 6);
+  EXPECT_EQ(r.route.shape, hs::RouteShape::kTour);
+  ASSERT_EQ(r.route.waypoints_m.size(), 6U);
+  EXPECT_EQ(hs::scenario_to_toml(r), hs::scenario_to_toml(hs::roam_variant(s, 3, 6)));
+  EXPECT_NE(hs::scenario_to_toml(r), hs::scenario_to_toml(hs::roam_variant(s, 4, 6)));
+  for (std::size_t i = 0; i < 6; ++i) {
+    EXPECT_LT(off_covered_deg(f, r.route.heading_deg[i] * kPi / 180.0), 12.0 + 1e-6);
+  }
+  // Along the whole roam (its turns on the spot too) the camera sees 2 usable boards.
+  const hs::SceneRenderer renderer(r);
+  const double usable = std::max(
+      60.0, hs::kUsableBoardShare * r.camera.width_px * static_cast<double>(r.camera.height_px));
+  std::size_t fewest = 99;
+  for (const ha::Pose2& p : hs::tour_places(r.route, 0.1, 10.0)) {
+    EXPECT_TRUE(on_floor(f, p.x_m, p.y_m));
+    std::size_t n = 0;
+    for (const std::uint32_t c : renderer.visible_board_pixels(p)) n += c >= usable ? 1 : 0;
+    fewest = std::min(fewest, n);
+  }
+  EXPECT_GE(fewest, 2U);
+  EXPECT_NE(ht::error_of([&] { hs::roam_variant(s, 3, 1); }), "");
 }

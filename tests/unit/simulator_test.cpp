@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -333,6 +334,117 @@ TEST(Motion, WheelTravelIntegratesBackToThePose) {
     EXPECT_NEAR(m.back().left_m, 0.0, 0.01);
     EXPECT_NEAR(m.back().right_m, 0.0, 0.01);
   }
+}
+
+namespace {
+
+// A tour in the tiny scenario's room: @p poses [x, y, heading_deg].
+hs::Scenario tour_of(const std::vector<std::array<double, 3>>& poses) {
+  hs::Scenario s = hs::load_scenario("tiny");
+  s.route.shape = hs::RouteShape::kTour;
+  s.route.waypoints_m.clear();
+  s.route.heading_deg.clear();
+  for (const auto& p : poses) {
+    s.route.waypoints_m.push_back({p[0], p[1]});
+    s.route.heading_deg.push_back(p[2]);
+  }
+  return s;
+}
+
+}  // namespace
+
+TEST(Motion, TourTurnsOnTheSpotAndDrivesStraightLegs) {
+  hs::Scenario s = tour_of({{1.0, 1.0, 0.0}, {2.0, 1.0, 0.0}, {2.0, 1.0, 90.0}, {2.0, 1.6, 150.0}});
+  s.route.turn_rate_dps = 60.0;
+  hs::RouteStats stats;
+  const double step = 0.001;
+  const auto m = motion_of(s, step, 1, &stats);
+  ASSERT_GT(m.size(), 1000U);
+  EXPECT_NEAR(stats.length_m, 1.6, 1e-9);
+  EXPECT_NEAR(m.back().t_s, stats.duration_s, step);
+  EXPECT_NEAR(hs::run_duration_s(s), stats.duration_s, 1e-9);
+  EXPECT_NEAR(m.front().pose.x_m, 1.0, 1e-12);
+  EXPECT_NEAR(m.back().pose.x_m, 2.0, 1e-9);
+  EXPECT_NEAR(m.back().pose.y_m, 1.6, 1e-9);
+  EXPECT_NEAR(m.back().pose.yaw_rad, 150.0 * kPi / 180.0, 1e-9);
+  double fastest = 0.0, fastest_turn = 0.0;
+  for (std::size_t i = 1; i < m.size(); ++i) {
+    const ha::Pose2 &a = m[i - 1].pose, &b = m[i].pose;
+    const double moved = std::hypot(b.x_m - a.x_m, b.y_m - a.y_m);
+    const double turned = std::fabs(ha::wrap_angle_rad(b.yaw_rad - a.yaw_rad));
+    fastest = std::max(fastest, moved / step);
+    fastest_turn = std::max(fastest_turn, turned / step);
+    // Either it turns on the spot or it drives straight, never both.
+    ASSERT_FALSE(moved > 1e-12 && turned > 1e-12) << "t " << m[i].t_s;
+    // On the legs: y = 1 from x 1 to 2, then x = 2 up to y 1.6.
+    const bool first_leg =
+        std::fabs(b.y_m - 1.0) < 1e-9 && b.x_m > 1.0 - 1e-9 && b.x_m < 2.0 + 1e-9;
+    const bool second_leg =
+        std::fabs(b.x_m - 2.0) < 1e-9 && b.y_m > 1.0 - 1e-9 && b.y_m < 1.6 + 1e-9;
+    ASSERT_TRUE(first_leg || second_leg) << b.x_m << ", " << b.y_m;
+    // Driving the second leg the camera faces +y: forward (90 degrees) needs no turn before it.
+    if (second_leg && b.y_m > 1.0 + 1e-6 && b.y_m < 1.6 - 1e-6) {
+      ASSERT_NEAR(b.yaw_rad, 0.5 * kPi, 1e-9);
+    }
+  }
+  EXPECT_LE(fastest, s.route.speed_mps * 1.001);
+  EXPECT_LE(fastest_turn, 60.0 * kPi / 180.0 * 1.001);
+  EXPECT_GT(fastest_turn, 0.5 * 60.0 * kPi / 180.0);
+  // The wheels' travel integrates back to the pose.
+  ha::Pose2 dead = m.front().pose;
+  double worst = 0.0;
+  for (std::size_t i = 1; i < m.size(); ++i) {
+    const double dl = m[i].left_m - m[i - 1].left_m, dr = m[i].right_m - m[i - 1].right_m;
+    dead = ha::apply_arc(dead, ha::OdometryDelta{0.5 * (dl + dr), (dr - dl) / s.robot.track_m});
+    worst = std::max(worst, std::hypot(dead.x_m - m[i].pose.x_m, dead.y_m - m[i].pose.y_m));
+  }
+  EXPECT_LT(worst, 0.002);
+}
+
+TEST(Motion, TourReversesWhereThatTurnsLess) {
+  // Back along the camera's axis: reversing, no turn at all.
+  const hs::Scenario back = tour_of({{2.0, 1.0, 0.0}, {1.0, 1.0, 0.0}});
+  const auto m = motion_of(back, 0.01, 1, nullptr);
+  double widest = 0.0;
+  for (const auto& x : m) widest = std::max(widest, std::fabs(x.pose.yaw_rad));
+  EXPECT_LT(widest, 1e-12);
+  EXPECT_NEAR(m.back().pose.x_m, 1.0, 1e-9);
+  EXPECT_LT(m.back().left_m, -0.99);  // the wheels turned backwards
+  // The tour's places: both ends and the legs between, every 10 cm.
+  const auto places = hs::tour_places(back.route, 0.1, 10.0);
+  ASSERT_EQ(places.size(), 11U);
+  EXPECT_NEAR(places.back().x_m, 1.0, 1e-12);
+}
+
+TEST(Motion, ToursRefuseWhatTheyCannotDrive) {
+  hs::Scenario s = tour_of({{1.0, 1.0, 0.0}, {2.0, 1.0, 0.0}});
+  s.route.heading_deg.pop_back();
+  EXPECT_NE(ht::error_of([&] { motion_of(s, 0.01, 1, nullptr); }).find("heading"),
+            std::string::npos);
+  hs::Scenario k = tour_of({{1.0, 1.0, 0.0}, {2.0, 1.0, 0.0}});
+  k.kidnaps.count = 1;
+  ha::Pcg32 rng(1), kidnap_rng(2);
+  EXPECT_NE(
+      ht::error_of([&] { hs::simulate_motion(k, 0.01, rng, nullptr, &kidnap_rng); }).find("tour"),
+      std::string::npos);
+}
+
+TEST(Scenario, TourFilesReadAndWriteThePoses) {
+  ht::TempDir dir;
+  const std::string path =
+      dir.write("tour.toml",
+                "base = \"tiny\"\n[route]\nshape = \"tour\"\nturn_rate_dps = 30\n"
+                "waypoints = [[1.0, 1.0, 90], [1.5, 1.2, 45.5]]\n");
+  const hs::Scenario s = hs::load_scenario(path);
+  ASSERT_EQ(s.route.shape, hs::RouteShape::kTour);
+  ASSERT_EQ(s.route.heading_deg.size(), 2U);
+  EXPECT_EQ(s.route.heading_deg[1], 45.5);
+  EXPECT_EQ(s.route.turn_rate_dps, 30.0);
+  const std::string again = dir.write("again.toml", hs::scenario_to_toml(s));
+  EXPECT_EQ(hs::scenario_to_toml(hs::load_scenario(again)), hs::scenario_to_toml(s));
+  const std::string bad =
+      dir.write("bad.toml", "[route]\nshape = \"tour\"\nwaypoints = [[1.0, 1.0], [1.5, 1.2]]\n");
+  ht::expect_one_line(scenario_error(bad), bad + ": ", "heading_deg");
 }
 
 // --- renderer ----------------------------------------------------------------------------------

@@ -75,4 +75,32 @@ Scenario dynamic_variant(const Scenario& scenario);
 /// The nominal scene driven for at least @p minutes (laps enough).
 Scenario long_variant(const Scenario& scenario, double minutes);
 
+/// The floor around a scene's route that its floor runs cover (docs/scenarios.md, "Floor
+/// runs"): a rectangle along the route's principal axis (its extent plus 0.3 m, at most 3 x 2 m,
+/// less where a few minutes of lanes would not cover it), clear of the walls and the desk, and the
+/// headings from which at least 80% of its places (a 20 cm grid) see 2 usable boards: a
+/// shuttle's mean heading and 20 degrees either side, a loop's four quarter turns from the
+/// floor's axis. Shrunk towards the route's middle until at least two headings qualify.
+struct FloorPlan {
+  double centre_x_m = 0.0;
+  double centre_y_m = 0.0;
+  double axis_rad = 0.0;  ///< the long side's direction
+  double half_length_m = 0.0;
+  double half_width_m = 0.0;
+  std::vector<double> headings_rad;  ///< the covered headings
+  std::size_t places = 0;            ///< grid places checked
+};
+/// Throws std::runtime_error with one line when no floor qualifies.
+FloorPlan floor_plan(const Scenario& scenario);
+
+/// The training run of a floor map: lanes over floor_plan's floor along each covered heading
+/// (forward along a lane, reversing diagonally to the next: the camera keeps the heading), a tour
+/// of about 6 minutes at the scene's speed (at least 0.15 m/s), 64 labels over it.
+Scenario coverage_variant(const Scenario& scenario);
+
+/// A test run on the floor that no training drove: @p waypoints random poses on floor_plan's
+/// floor (drawn from @p seed), headings within 12 degrees of a covered one, joined by turns on the
+/// spot and straight legs along which every place sees 2 usable boards.
+Scenario roam_variant(const Scenario& scenario, std::uint64_t seed, int waypoints = 8);
+
 }  // namespace harmoloc::sim_host

@@ -1,8 +1,9 @@
 #pragma once
 /// @file The robot's motion along a scenario's route: a smooth curve through the waypoints, either
 /// driven forward and then backward (a shuttle: a differential-drive robot keeps the desk in view
-/// that way) or round a closed curve forward only (a loop), with a trapezoidal speed profile.
-/// Sampled at a fine fixed step.
+/// that way) or round a closed curve forward only (a loop), with a trapezoidal speed profile; or
+/// a tour of poses joined by turns on the spot and straight legs (a floor's coverage run, a test
+/// run off the route). Sampled at a fine fixed step.
 
 #include <array>
 #include <cstdint>
@@ -51,19 +52,23 @@ std::vector<MotionSample> simulate_motion(const Scenario& scenario, double step_
                                           algorithms::Pcg32* kidnap_rng = nullptr,
                                           std::vector<KidnapEvent>* kidnaps = nullptr);
 
-/// The route's curve (Catmull-Rom through the waypoints; closed for a loop, ending at its start)
-/// sampled about every @p step_m metres: [x, y] points.
+/// The route's curve (Catmull-Rom through the waypoints; closed for a loop, ending at its start;
+/// a tour's straight legs, once) sampled about every @p step_m metres: [x, y] points.
 std::vector<std::array<double, 2>> route_curve(const RouteSpec& route, double step_m);
 
 /// How long a run of @p scenario lasts (seconds): its laps with their pauses, as simulate_motion
 /// samples it.
 double run_duration_s(const Scenario& scenario);
 
-/// The curve's length (a loop: once round).
+/// The curve's length (a loop: once round; a tour: its legs, once).
 double route_length_m(const RouteSpec& route);
 
+/// The poses a tour (RouteShape::kTour) passes through as driven: about every @p step_m along
+/// its legs and every @p step_deg of its turns on the spot, each waypoint's pose included.
+std::vector<algorithms::Pose2> tour_places(const RouteSpec& route, double step_m, double step_deg);
+
 /// True when the route's curve crosses or touches itself (closer than 5 cm between parts that are
-/// not neighbours along it); @p why (if given) then says where.
+/// not neighbours along it); @p why (if given) then says where. Never for a tour.
 bool route_crosses_itself(const RouteSpec& route, std::string* why = nullptr);
 
 /// A run time (seconds from the start) on the dataset's clock: @p start_time_s (whole

@@ -107,6 +107,12 @@ enum class RouteShape : std::uint8_t {
   /// A closed curve through the waypoints (back to the first), driven forward only, heading in
   /// the direction of travel, laps times round without stopping; a pause at the start and end.
   kLoop = 1,
+  /// Poses visited in turn, as a floor's coverage run or a test run off any route is driven:
+  /// from each waypoint the robot turns on the spot towards the next (or away from it, to
+  /// reverse, whichever turns less overall), drives the straight leg, and turns on the spot to
+  /// the waypoint's heading (heading_deg); a pause at the start and end. No wander. A tour may
+  /// cross itself. Laps > 1 drive back to the first waypoint and repeat.
+  kTour = 2,
 };
 
 struct RouteSpec {
@@ -117,6 +123,11 @@ struct RouteSpec {
   double pause_s = 0.5;    ///< standstill at each end of the route (loop: at the start and end)
   int laps = 1;            ///< shuttle: forward then back is one lap; loop: once round
   double wander_m = 0.01;  ///< how far a run strays sideways from the route (smooth)
+  /// kTour only: the heading at each waypoint (degrees, map frame), one per waypoint.
+  std::vector<double> heading_deg;
+  /// kTour only: how fast the robot turns on the spot (degrees per second, reached with the
+  /// same ramp time as speed_mps).
+  double turn_rate_dps = 45.0;
 };
 
 struct EncoderSpec {

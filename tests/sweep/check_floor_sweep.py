@@ -1,0 +1,44 @@
+#!/usr/bin/env python3
+"""Checks a floor sweep's sweep.json (harmoloc-sweep --parts floor, issue 20): every scene's
+coverage run trained and its roams replayed and scored. No accuracy bound yet: the route maps
+do not localize off their route (docs/sweep.md, "Floor runs"), which is what issue 20 changes.
+"""
+import json
+import sys
+
+FIGURES = ["floor_rmse_m", "floor_heading_rmse_deg", "floor_max_m", "floor_nominal_over_10cm",
+           "floor_fix_mse_x_m2", "floor_fix_mse_y_m2", "floor_cv_rmse_x_m", "floor_cv_rmse_y_m"]
+
+
+def main():
+    if len(sys.argv) != 2:
+        print("usage: check_floor_sweep.py SWEEP_JSON", file=sys.stderr)
+        return 2
+    with open(sys.argv[1]) as f:
+        d = json.load(f)
+    problems = []
+    results = d.get("results", [])
+    if not results:
+        problems.append("no scenes in the sweep")
+    for r in results:
+        seed = r["seed"]
+        if r.get("floor_error") or r.get("error"):
+            problems.append(f"seed {seed}: failed: {r.get('floor_error') or r.get('error')}")
+            continue
+        for key in FIGURES:
+            if not r.get(key, -1.0) >= 0.0:
+                problems.append(f"seed {seed}: {key} not measured")
+        if r.get("floor_train_frames", 0) < 1000:
+            problems.append(f"seed {seed}: coverage run of {r.get('floor_train_frames', 0)} frames")
+        if not r.get("floor_roam_s", 0.0) > 10.0:
+            problems.append(f"seed {seed}: roams of {r.get('floor_roam_s', 0.0)} s")
+        if r.get("fused_rmse_m", -1.0) >= 0.0:
+            problems.append(f"seed {seed}: a route part ran although only the floor was asked for")
+    for p in problems:
+        print("check_floor_sweep: " + p)
+    print(f"check_floor_sweep: {len(results)} scenes, {len(problems)} problems")
+    return 1 if problems else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
