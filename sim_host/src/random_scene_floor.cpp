@@ -29,6 +29,8 @@ constexpr double kMinCoverageSpeed_mps = 0.15;
 constexpr double kLaneSpacing_m = 0.35;  // lanes this far apart, widened to fit the budget
 constexpr double kFeasibleShare = 0.8;   // a heading is covered where this share sees 2 boards
 constexpr std::uint64_t kFloorStream = 131;
+constexpr double kKidnapFirst_s = 10.0;     // a roam's kidnaps: the first,
+constexpr double kKidnapInterval_s = 10.0;  // and one every this long
 
 struct Frame2 {
   double ux, uy;  // the floor's long axis
@@ -273,8 +275,9 @@ Scenario coverage_variant(const Scenario& s) {
   return out;
 }
 
-Scenario roam_variant(const Scenario& s, std::uint64_t seed, int waypoints) {
+Scenario roam_variant(const Scenario& s, std::uint64_t seed, int waypoints, int kidnaps) {
   if (waypoints < 2) throw std::runtime_error("roam_variant: at least 2 waypoints");
+  if (kidnaps < 0) throw std::runtime_error("roam_variant: kidnaps must not be negative");
   const FloorPlan f = floor_plan(s);
   const Scenario proxy = proxy_of(s);
   const SceneRenderer renderer(proxy);
@@ -320,7 +323,14 @@ Scenario roam_variant(const Scenario& s, std::uint64_t seed, int waypoints) {
   }
   r.waypoints_m.push_back({at[0], at[1]});
   r.heading_deg.push_back(at[2]);
-  for (int k = 1; k < waypoints; ++k) {
+  // With kidnaps the roam lasts until 10 s after the last one (more poses where needed).
+  KidnapSpec& ks = out.kidnaps;
+  ks.first_s = kKidnapFirst_s;
+  ks.interval_s = kKidnapInterval_s;
+  ks.min_distance_m = std::min(1.0, 0.5 * std::hypot(2.0 * f.half_length_m, 2.0 * f.half_width_m));
+  const double need_s = kidnaps > 0 ? ks.first_s + (kidnaps - 1) * ks.interval_s + 10.0 : 0.0;
+  for (int k = 1; k < waypoints || (kidnaps > 0 && run_duration_s(out) < need_s); ++k) {
+    if (k > 1000) throw std::runtime_error(s.name + ": the roam cannot be made long enough");
     bool found = false;
     for (int tries = 0; tries < 200 && !found; ++tries) {
       const std::array<double, 3> next = draw_pose();
@@ -332,13 +342,52 @@ Scenario roam_variant(const Scenario& s, std::uint64_t seed, int waypoints) {
     r.waypoints_m.push_back({at[0], at[1]});
     r.heading_deg.push_back(at[2]);
   }
+  // The kidnaps, one by one: where the robot is at the kidnap's time (with the earlier ones),
+  // a pose on the floor far enough from it from which the rest of its way keeps 2 boards in view.
+  for (int k = 0; k < kidnaps; ++k) {
+    const double t_k = ks.first_s + k * ks.interval_s;
+    bool found = false;
+    for (int tries = 0; tries < 300 && !found; ++tries) {
+      const std::array<double, 3> to = draw_pose();
+      Scenario trial = out;
+      trial.kidnaps.count = k + 1;
+      trial.kidnaps.poses.push_back(to);
+      Pcg32 motion_rng(seed, kFloorStream + 1);
+      std::vector<KidnapEvent> events;
+      std::vector<MotionSample> m;
+      try {
+        m = simulate_motion(trial, 0.05, motion_rng, nullptr, nullptr, &events);
+      } catch (const std::runtime_error&) {
+        continue;
+      }
+      if (events.size() != static_cast<std::size_t>(k + 1)) continue;
+      const KidnapEvent& e = events.back();
+      if (std::hypot(e.to.x_m - e.from.x_m, e.to.y_m - e.from.y_m) < ks.min_distance_m) continue;
+      bool fine = true;
+      for (std::size_t i = 0; i < m.size() && fine; i += 5) {
+        if (m[i].t_s < t_k - 1e-9) continue;
+        if (m[i].t_s > t_k + ks.interval_s) break;
+        fine = on_floor(f, m[i].pose.x_m, m[i].pose.y_m, 0.0) &&
+               boards_in_view(renderer, m[i].pose, usable) >= 2;
+      }
+      if (!fine) continue;
+      out = trial;
+      found = true;
+    }
+    if (!found)
+      throw std::runtime_error(s.name + ": no kidnap place on the floor for kidnap " +
+                               std::to_string(k + 1));
+  }
   const double before = run_duration_s(s);
   for (auto& st : out.lighting.steps) st[0] = q(st[0] * run_duration_s(out) / before, 10.0);
   out.name = s.name + "-roam" + std::to_string(seed);
   std::ostringstream o;
   o.precision(3);
-  o << s.description << "; roam " << seed << ": " << waypoints << " poses on the floor, "
-    << route_length_m(r) << " m in " << run_duration_s(out) << " s";
+  o << s.description << "; roam " << seed << ": " << r.waypoints_m.size() << " poses on the floor, "
+    << route_length_m(r) << " m";
+  if (kidnaps > 0)
+    o << ", " << kidnaps << " kidnaps (at least " << ks.min_distance_m << " m) every "
+      << ks.interval_s << " s from " << ks.first_s << " s";
   out.description = o.str();
   return out;
 }

@@ -74,25 +74,79 @@ std::vector<MotionSample> simulate_motion(const Scenario& scenario, double step_
                                           std::vector<KidnapEvent>* kidnaps) {
   const RouteSpec& r = scenario.route;
   if (r.shape == RouteShape::kTour) {
-    if (scenario.kidnaps.count > 0)
-      throw std::runtime_error("kidnaps on a tour route are not simulated yet");
-    const std::vector<TourSegment> tour = tour_segments(r);
-    const double total_s = tour.back().t0_s + tour.back().duration_s;
-    const auto count = static_cast<std::size_t>(std::ceil(total_s / step_s)) + 1;
-    std::vector<MotionSample> out(count);
-    for (std::size_t i = 0; i < count; ++i) {
+    // Kidnaps on a tour: at each kidnap time the robot is put down at the kidnap's pose and
+    // drives on from there to the waypoint it was heading for, and on along the tour.
+    const KidnapSpec& ks = scenario.kidnaps;
+    if (ks.count > 0 && ks.poses.size() != static_cast<std::size_t>(ks.count))
+      throw std::runtime_error(
+          "a tour's kidnaps need a pose each (kidnaps.poses [x, y, heading_deg])");
+    if (ks.count > 0 && r.laps != 1)
+      throw std::runtime_error("kidnaps on a tour need route.laps = 1");
+    RouteSpec leg = r;
+    std::vector<TourSegment> tour = tour_segments(leg);
+    std::vector<MotionSample> out;
+    std::vector<std::size_t> jump_at;
+    std::vector<KidnapEvent> events;
+    for (std::size_t i = 0;; ++i) {
       const double t = static_cast<double>(i) * step_s;
-      out[i].t_s = t;
-      out[i].route_t_s = t;
-      out[i].pose = tour_pose(tour, r, t);
+      const std::size_t k = events.size();
+      if (k < static_cast<std::size_t>(ks.count) && t >= ks.first_s + k * ks.interval_s - 1e-9 &&
+          i > 0) {
+        // The rest of the tour from the kidnap's pose.
+        const auto it = std::upper_bound(tour.begin(), tour.end(), t,
+                                         [](double v, const TourSegment& s) { return v < s.t0_s; });
+        const std::size_t next = (it == tour.begin() ? tour.front() : *(it - 1)).target;
+        const std::array<double, 3>& to = ks.poses[k];
+        RouteSpec rest = r;
+        rest.waypoints_m = {{to[0], to[1]}};
+        rest.heading_deg = {to[2]};
+        rest.pause_s = 0.0;
+        for (std::size_t j = std::min(next, r.waypoints_m.size() - 1); j < r.waypoints_m.size();
+             ++j) {
+          rest.waypoints_m.push_back(r.waypoints_m[j]);
+          rest.heading_deg.push_back(r.heading_deg[j]);
+        }
+        if (rest.waypoints_m.size() < 2) {  // nothing left to drive: stand there
+          rest.waypoints_m.push_back(rest.waypoints_m.front());
+          rest.heading_deg.push_back(rest.heading_deg.front());
+        }
+        rest.pause_s = r.pause_s;
+        tour = tour_segments(rest, t);
+        // No standstill before driving on: drop the start pause.
+        if (!tour.empty() && tour.front().kind == TourSegment::Kind::kPause) {
+          const double shift = tour.front().duration_s;
+          tour.erase(tour.begin());
+          for (TourSegment& s : tour) s.t0_s -= shift;
+        }
+        leg = rest;
+        jump_at.push_back(i);
+        const Pose2 put = tour_pose(tour, leg, t);
+        events.push_back(
+            KidnapEvent{t, out.back().pose, put, dataset_time_ns(scenario.start_time_s, t)});
+      }
+      const double end = tour.back().t0_s + tour.back().duration_s;
+      if (t > end + step_s - 1e-9) break;
+      MotionSample m;
+      m.t_s = t;
+      m.route_t_s = t;
+      m.pose = tour_pose(tour, leg, t);
+      out.push_back(m);
     }
-    add_wheel_travel(scenario, {}, out);
+    const double total_s = out.back().t_s;
+    if (ks.count > 0 && events.size() < static_cast<std::size_t>(ks.count)) {
+      std::ostringstream msg;
+      msg << "kidnap " << events.size() + 1 << " of " << ks.count << " at "
+          << ks.first_s + static_cast<double>(events.size()) * ks.interval_s
+          << " s is after the end of the tour (" << total_s << " s)";
+      throw std::runtime_error(msg.str());
+    }
+    add_wheel_travel(scenario, jump_at, out);
     if (stats != nullptr) {
       stats->length_m = route_length_m(r);
       stats->duration_s = total_s;
       stats->max_heading_offset_deg = max_heading_offset_deg(out);
     }
-    if (kidnaps != nullptr) kidnaps->clear();
+    if (kidnaps != nullptr) *kidnaps = std::move(events);
     return out;
   }
   const bool loop = r.shape == RouteShape::kLoop;

@@ -51,11 +51,12 @@ struct TourSegment {
   double duration_s = 0.0;
   algorithms::Pose2 from;  // a turn's yaw is not wrapped: to.yaw_rad - from.yaw_rad is the turn
   algorithms::Pose2 to;
+  std::size_t target = 0;  // the waypoint this segment is on the way to (or turning at)
 };
 
-// The tour's pieces in time order, from its start pause to its end pause. Throws
-// std::runtime_error when the waypoints and headings do not make a tour.
-std::vector<TourSegment> tour_segments(const RouteSpec& route);
+// The tour's pieces in time order, from its start pause to its end pause, starting at
+// @p t0_s. Throws std::runtime_error when the waypoints and headings do not make a tour.
+std::vector<TourSegment> tour_segments(const RouteSpec& route, double t0_s = 0.0);
 
 // Where the tour puts the robot at run time @p t_s (the start pose before, the end pose after).
 algorithms::Pose2 tour_pose(const std::vector<TourSegment>& tour, const RouteSpec& route,

@@ -25,7 +25,7 @@ double turn_acceleration(const RouteSpec& r) {
 
 }  // namespace
 
-std::vector<TourSegment> tour_segments(const RouteSpec& r) {
+std::vector<TourSegment> tour_segments(const RouteSpec& r, double t0_s) {
   const std::size_t n = r.waypoints_m.size();
   if (n < 2) throw std::runtime_error("a tour needs at least 2 waypoints");
   if (r.heading_deg.size() != n) {
@@ -37,7 +37,8 @@ std::vector<TourSegment> tour_segments(const RouteSpec& r) {
   if (!(r.speed_mps > 0.0 && r.acceleration_mps2 > 0.0 && r.turn_rate_dps > 0.0))
     throw std::runtime_error("a tour needs a positive speed, acceleration and turn rate");
   std::vector<TourSegment> out;
-  double t = 0.0;
+  double t = t0_s;
+  std::size_t target = 1;
   Pose2 at{r.waypoints_m[0][0], r.waypoints_m[0][1], r.heading_deg[0] * kDeg};
   const auto add = [&](TourSegment::Kind kind, double duration, const Pose2& to) {
     TourSegment s;
@@ -46,6 +47,7 @@ std::vector<TourSegment> tour_segments(const RouteSpec& r) {
     s.duration_s = duration;
     s.from = at;
     s.to = to;
+    s.target = target;
     out.push_back(s);
     t += duration;
     at = to;
@@ -60,6 +62,7 @@ std::vector<TourSegment> tour_segments(const RouteSpec& r) {
   if (r.pause_s > 0.0) add(TourSegment::Kind::kPause, r.pause_s, at);
   for (int lap = 0; lap < r.laps; ++lap) {
     for (std::size_t j = lap == 0 ? 1 : 0; j < n; ++j) {
+      target = j;
       const double x = r.waypoints_m[j][0], y = r.waypoints_m[j][1];
       const double heading = r.heading_deg[j] * kDeg;
       const double length = std::hypot(x - at.x_m, y - at.y_m);

@@ -162,8 +162,18 @@ void read_events(const toml::table& t, const std::string& file, Scenario& s) {
   if (const toml::node* n = t.get("kidnaps")) {
     const toml::table* k = n->as_table();
     if (k == nullptr) fail(file, "kidnaps must be a table ([kidnaps])");
-    only(*k, file, "kidnaps.", {"count", "first_s", "interval_s", "min_distance_m"});
+    only(*k, file, "kidnaps.", {"count", "first_s", "interval_s", "min_distance_m", "poses"});
     set_int(*k, "count", s.kidnaps.count, file, "kidnaps.", 0, kMaxKidnaps);
+    if (const toml::array* poses = (*k)["poses"].as_array()) {
+      s.kidnaps.poses.clear();
+      for (const toml::node& p : *poses) {
+        const auto v = numbers(&p, 3, file, "kidnaps.poses[] ([x, y, heading_deg])");
+        s.kidnaps.poses.push_back({v[0], v[1], v[2]});
+      }
+      if (s.kidnaps.poses.size() > static_cast<std::size_t>(kMaxKidnaps))
+        fail(file, "kidnaps.poses: too many");
+      if (k->get("count") == nullptr) s.kidnaps.count = static_cast<int>(s.kidnaps.poses.size());
+    }
     set_num(*k, "first_s", s.kidnaps.first_s, file, "kidnaps.", 0, kMaxEventTime_s);
     set_num(*k, "interval_s", s.kidnaps.interval_s, file, "kidnaps.", 0.1, kMaxEventTime_s);
     set_num(*k, "min_distance_m", s.kidnaps.min_distance_m, file, "kidnaps.", 0, kMaxCoordinate_m);

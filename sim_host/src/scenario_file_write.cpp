@@ -145,6 +145,7 @@ std::string scenario_to_toml(const Scenario& s) {
         .set("first_s", s.kidnaps.first_s)
         .set("interval_s", s.kidnaps.interval_s)
         .set("min_distance_m", s.kidnaps.min_distance_m);
+    if (!s.kidnaps.poses.empty()) w.set("poses", number_arrays(s.kidnaps.poses));
   }
   return w.text();
 }

@@ -55,7 +55,9 @@ int main(int argc, char** argv) {
                  "scene's SEED (or --seed)");
   app.add_option("--lighting", lighting_seed,
                  "with --random: other lighting for the run, drawn from this seed (a test run)");
-  app.add_option("--kidnaps", kidnaps, "--variant kidnap: how many")
+  app.add_option("--kidnaps", kidnaps,
+                 "--variant kidnap: how many; --variant roam: carry the robot this many times to "
+                 "another pose on the floor (none unless given)")
       ->capture_default_str()
       ->check(CLI::Range(1, 1000));
   app.add_option("--waypoints", waypoints, "--variant roam: how many poses")
@@ -97,7 +99,9 @@ int main(int argc, char** argv) {
       if (variant == "dynamic") scenario = dynamic_variant(scenario);
       if (variant == "long") scenario = long_variant(scenario, minutes);
       if (variant == "coverage") scenario = coverage_variant(scenario);
-      if (variant == "roam") scenario = roam_variant(scenario, roam_seed, waypoints);
+      if (variant == "roam")
+        scenario =
+            roam_variant(scenario, roam_seed, waypoints, app.count("--kidnaps") > 0 ? kidnaps : 0);
       if (run_seed)
         seed = *run_seed;
       else if (app.count("--seed") == 0)

@@ -60,6 +60,10 @@ int main(int argc, char** argv) {
   app.add_option("--roams", opt.roams, "floor: roams per scene (8 poses each)")
       ->capture_default_str()
       ->check(CLI::Range(1, 100));
+  app.add_option("--floor-kidnaps", opt.floor_kidnaps,
+                 "floor: kidnaps to anywhere on the floor, in one more roam (0: none)")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 100));
   app.add_option("--kidnaps", opt.kidnaps, "kidnaps per scene")->capture_default_str();
   app.add_option("--long-minutes", opt.long_minutes, "length of the long nominal run")
       ->capture_default_str();
@@ -161,6 +165,10 @@ int main(int argc, char** argv) {
     j["false_alarms_total"] = t.alarms;
     j["long_minutes_total"] = t.minutes;
     j["failed_scenes"] = t.failed;
+    if (opt.floor) {
+      j["floor_kidnaps_total"] = t.floor_kidnaps;
+      j["floor_kidnaps_recovered_2s_total"] = t.floor_recovered;
+    }
     std::ofstream(fs::path(out_dir) / "sweep.json") << j.dump(1) << "\n";
     write_html((fs::path(out_dir) / "index.html").string(), finished,
                have_reference ? &reference : nullptr, command);
@@ -194,11 +202,12 @@ int main(int argc, char** argv) {
       if (opt.floor) {
         std::snprintf(line, sizeof line,
                       "harmoloc-sweep: seed %llu floor: fused %s cm, heading %s deg, max %s cm, "
-                      "fix MSE %s/%s cm^2%s%s",
+                      "fix MSE %s/%s cm^2, kidnaps %zu/%zu%s%s",
                       static_cast<unsigned long long>(seed), fmt(cm(r.floor_rmse_m)).c_str(),
                       fmt(r.floor_heading_rmse_deg).c_str(), fmt(cm(r.floor_max_m)).c_str(),
                       fmt(cm2(r.floor_fix_mse_x_m2), 1).c_str(),
-                      fmt(cm2(r.floor_fix_mse_y_m2), 1).c_str(),
+                      fmt(cm2(r.floor_fix_mse_y_m2), 1).c_str(), r.floor_kidnaps_recovered_2s,
+                      r.floor_kidnaps,
                       r.floor_error.empty() ? "" : "; FAILED: ", r.floor_error.c_str());
         say(line);
       }
@@ -243,6 +252,13 @@ int main(int argc, char** argv) {
           ? 100.0 * static_cast<double>(totals.recovered) / static_cast<double>(totals.kidnaps)
           : 0.0,
       totals.alarms, totals.minutes, totals.failed);
+  if (opt.floor) {
+    std::printf("floor: kidnaps back under 10 cm within 2 s: %zu of %zu (%.1f%%)\n",
+                totals.floor_recovered, totals.floor_kidnaps,
+                totals.floor_kidnaps > 0 ? 100.0 * static_cast<double>(totals.floor_recovered) /
+                                               static_cast<double>(totals.floor_kidnaps)
+                                         : 0.0);
+  }
   std::printf("wrote %s/sweep.json and %s/index.html\n", out_dir.c_str(), out_dir.c_str());
   return totals.failed > 0 ? 1 : 0;
 }

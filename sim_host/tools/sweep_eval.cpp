@@ -16,7 +16,7 @@ namespace {
 
 // Seeds of a scene's runs: training, test, kidnaps, dynamic, long (distinct noise streams).
 constexpr std::uint64_t kTrainSeed = 1, kTestSeed = 2, kKidnapSeed = 3, kDynamicSeed = 4,
-                        kLongSeed = 5, kCoverageSeed = 6, kRoamSeed = 100;
+                        kLongSeed = 5, kCoverageSeed = 6, kRoamSeed = 100, kKidnapRoam = 50;
 
 std::string describe(const Scenario& s) {
   std::ostringstream o;
@@ -156,6 +156,16 @@ void floor_part(const Scenario& scene, const algorithms::ThresholdSet& threshold
         ++frames;
         if (e > 0.10 && f.health == firmware::Health::kNominal) ++nominal_bad;
       }
+    }
+    if (opt.floor_kidnaps > 0) {
+      step("floor: roam with kidnaps");
+      const Scenario roam = with_other_lighting(
+          roam_variant(scene, kKidnapRoam, 8, opt.floor_kidnaps), kRoamSeed + kKidnapRoam);
+      const RunRecord run = replay_scenario(roam, kRoamSeed + kKidnapRoam, *trained.map, config);
+      trace(opt, seed, "floor-kidnap", run);
+      const KidnapSummary ks = kidnap_summary(run, 0.10, 0.5, 2.0);
+      r.floor_kidnaps = ks.outcomes.size();
+      r.floor_kidnaps_recovered_2s = ks.recovered_within;
     }
     if (fixes > 0) {
       r.floor_fix_mse_x_m2 = sx / static_cast<double>(fixes);

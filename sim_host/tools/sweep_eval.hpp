@@ -26,6 +26,7 @@ struct SweepOptions {
   /// floor that the coverage run never drove (random_scene.hpp).
   bool floor = false;
   int roams = 2;               ///< roams of the floor (each 8 poses, other lighting and noise)
+  int floor_kidnaps = 5;       ///< kidnaps in one more roam of the floor (0: none)
   int kidnaps = 20;            ///< kidnaps in the kidnap run (each >= 1 m)
   double long_minutes = 10.0;  ///< length of the long nominal run
   std::uint64_t filter_seed = 1;
@@ -95,6 +96,9 @@ struct SceneResult {
   double floor_max_m = -1.0;
   /// Share of those frames reported nominal (health) with an error above 10 cm.
   double floor_nominal_over_10cm = -1.0;
+  /// A roam with kidnaps to anywhere on the floor (SweepOptions::floor_kidnaps): how many, and
+  /// how many the filter confirmed and brought back under 10 cm within 2 s (for 0.5 s).
+  std::size_t floor_kidnaps = 0, floor_kidnaps_recovered_2s = 0;
   double seconds = 0.0;  ///< wall time of the scene's evaluation
 };
 

@@ -71,6 +71,13 @@ std::vector<Figure> figures() {
          return r.floor_nominal_over_10cm < 0.0 ? -1.0 : 100.0 * r.floor_nominal_over_10cm;
        },
        -1.0, 0.0},
+      {"floor_kidnaps", "floor roams: kidnaps back under 10 cm within 2 s", "%",
+       [](const SceneResult& r) {
+         return r.floor_kidnaps == 0 ? -1.0
+                                     : 100.0 * static_cast<double>(r.floor_kidnaps_recovered_2s) /
+                                           static_cast<double>(r.floor_kidnaps);
+       },
+       -1.0, -1.0, true},
       {"floor_fix_mse_x", "floor roams: harmonic localizer alone, MSE x", "cm^2",
        [](const SceneResult& r) { return cm2(r.floor_fix_mse_x_m2); }},
       {"floor_fix_mse_y", "floor roams: harmonic localizer alone, MSE y", "cm^2",
@@ -83,6 +90,8 @@ Totals totals_of(const std::vector<SceneResult>& results) {
   for (const SceneResult& r : results) {
     t.kidnaps += r.kidnaps;
     t.recovered += r.kidnaps_recovered_1s;
+    t.floor_kidnaps += r.floor_kidnaps;
+    t.floor_recovered += r.floor_kidnaps_recovered_2s;
     t.alarms += r.long_false_alarms;
     t.minutes += r.long_minutes;
     t.failed += r.error.empty() && r.floor_error.empty() ? 0 : 1;

@@ -38,6 +38,7 @@ std::vector<Figure> figures();
 // What the scenes add up to.
 struct Totals {
   std::size_t kidnaps = 0, recovered = 0, alarms = 0, failed = 0;
+  std::size_t floor_kidnaps = 0, floor_recovered = 0;
   double minutes = 0.0;
 };
 Totals totals_of(const std::vector<SceneResult>& results);

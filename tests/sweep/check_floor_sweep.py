@@ -32,6 +32,8 @@ def main():
             problems.append(f"seed {seed}: coverage run of {r.get('floor_train_frames', 0)} frames")
         if not r.get("floor_roam_s", 0.0) > 10.0:
             problems.append(f"seed {seed}: roams of {r.get('floor_roam_s', 0.0)} s")
+        if r.get("floor_kidnaps", 0) < 1:
+            problems.append(f"seed {seed}: no kidnap in the floor's kidnap roam")
         if r.get("fused_rmse_m", -1.0) >= 0.0:
             problems.append(f"seed {seed}: a route part ran although only the floor was asked for")
     for p in problems:

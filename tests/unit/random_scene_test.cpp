@@ -714,3 +714,23 @@ TEST(RandomScene, RoamVisitsRandomPosesOnTheFloorWithTwoBoardsInView) {
   EXPECT_GE(fewest, 2U);
   EXPECT_NE(ht::error_of([&] { hs::roam_variant(s, 3, 1); }), "");
 }
+
+TEST(RandomScene, RoamKidnapsCarryTheRobotAcrossTheFloor) {
+  const hs::Scenario s = hs::random_scenario(5);
+  const hs::FloorPlan f = hs::floor_plan(s);
+  const hs::Scenario r = hs::roam_variant(s, 2, 8, 3);
+  EXPECT_EQ(r.kidnaps.count, 3);
+  ASSERT_EQ(r.kidnaps.poses.size(), 3U);
+  EXPECT_EQ(hs::scenario_to_toml(r), hs::scenario_to_toml(hs::roam_variant(s, 2, 8, 3)));
+  const hs::ScenarioRun run(r, 7);
+  ASSERT_EQ(run.kidnaps().size(), 3U);
+  for (std::size_t k = 0; k < 3; ++k) {
+    const hs::KidnapEvent& e = run.kidnaps()[k];
+    EXPECT_NEAR(e.t_s, 10.0 + 10.0 * static_cast<double>(k), 0.05);
+    EXPECT_GE(std::hypot(e.to.x_m - e.from.x_m, e.to.y_m - e.from.y_m),
+              r.kidnaps.min_distance_m - 1e-9);
+    EXPECT_TRUE(on_floor(f, e.to.x_m, e.to.y_m));
+    EXPECT_LT(off_covered_deg(f, e.to.yaw_rad), 12.0 + 1e-6);
+  }
+  EXPECT_GE(run.route().duration_s, 30.0 + 10.0 - 1e-9);
+}

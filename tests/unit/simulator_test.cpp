@@ -424,9 +424,51 @@ TEST(Motion, ToursRefuseWhatTheyCannotDrive) {
   hs::Scenario k = tour_of({{1.0, 1.0, 0.0}, {2.0, 1.0, 0.0}});
   k.kidnaps.count = 1;
   ha::Pcg32 rng(1), kidnap_rng(2);
-  EXPECT_NE(
-      ht::error_of([&] { hs::simulate_motion(k, 0.01, rng, nullptr, &kidnap_rng); }).find("tour"),
-      std::string::npos);
+  EXPECT_NE(ht::error_of([&] {
+              hs::simulate_motion(k, 0.01, rng, nullptr, &kidnap_rng);
+            }).find("kidnaps.poses"),
+            std::string::npos);
+  k.kidnaps.poses = {{1.5, 1.5, 0.0}};
+  k.kidnaps.first_s = 1000.0;
+  EXPECT_NE(ht::error_of([&] {
+              hs::simulate_motion(k, 0.01, rng, nullptr, &kidnap_rng);
+            }).find("after the end of the tour"),
+            std::string::npos);
+}
+
+TEST(Motion, TourKidnapPutsTheRobotDownAndDrivesOnToItsNextWaypoint) {
+  hs::Scenario s = tour_of({{1.0, 1.0, 0.0}, {2.0, 1.0, 0.0}, {2.0, 1.8, 90.0}});
+  s.kidnaps.count = 1;
+  s.kidnaps.first_s = 3.0;
+  s.kidnaps.poses = {{1.2, 1.9, -90.0}};
+  ha::Pcg32 rng(1);
+  std::vector<hs::KidnapEvent> events;
+  hs::RouteStats stats;
+  const auto m = hs::simulate_motion(s, 0.01, rng, &stats, nullptr, &events);
+  ASSERT_EQ(events.size(), 1U);
+  EXPECT_NEAR(events[0].t_s, 3.0, 0.011);
+  EXPECT_NEAR(events[0].from.y_m, 1.0, 1e-9);  // on the first leg
+  EXPECT_NEAR(events[0].to.x_m, 1.2, 1e-9);
+  EXPECT_NEAR(events[0].to.y_m, 1.9, 1e-9);
+  EXPECT_NEAR(events[0].to.yaw_rad, -0.5 * kPi, 1e-9);
+  // From there to the waypoint it was heading for (2, 1), then on to the last one.
+  EXPECT_NEAR(m.back().pose.x_m, 2.0, 1e-9);
+  EXPECT_NEAR(m.back().pose.y_m, 1.8, 1e-9);
+  bool passed_second = false;
+  std::size_t jump = 0;
+  for (std::size_t i = 0; i < m.size(); ++i) {
+    if (m[i].t_s > 3.0 && std::hypot(m[i].pose.x_m - 2.0, m[i].pose.y_m - 1.0) < 1e-6)
+      passed_second = true;
+    if (jump == 0 && i > 0 &&
+        std::hypot(m[i].pose.x_m - m[i - 1].pose.x_m, m[i].pose.y_m - m[i - 1].pose.y_m) > 0.5)
+      jump = i;
+  }
+  EXPECT_TRUE(passed_second);
+  ASSERT_GT(jump, 0U);
+  // The wheels do not turn across the jump.
+  EXPECT_EQ(m[jump].left_m, m[jump - 1].left_m);
+  EXPECT_EQ(m[jump].right_m, m[jump - 1].right_m);
+  EXPECT_NEAR(stats.duration_s, m.back().t_s, 1e-9);
 }
 
 TEST(Scenario, TourFilesReadAndWriteThePoses) {
@@ -442,6 +484,15 @@ TEST(Scenario, TourFilesReadAndWriteThePoses) {
   EXPECT_EQ(s.route.turn_rate_dps, 30.0);
   const std::string again = dir.write("again.toml", hs::scenario_to_toml(s));
   EXPECT_EQ(hs::scenario_to_toml(hs::load_scenario(again)), hs::scenario_to_toml(s));
+  const std::string kidnapped = dir.write(
+      "kidnapped.toml", hs::scenario_to_toml(s) +
+                            "\n[kidnaps]\nfirst_s = 2\nposes = [[1.2, 1.3, 10], [1.1, 1.0, 0]]\n");
+  const hs::Scenario k = hs::load_scenario(kidnapped);
+  EXPECT_EQ(k.kidnaps.count, 2);
+  ASSERT_EQ(k.kidnaps.poses.size(), 2U);
+  EXPECT_EQ(k.kidnaps.poses[0][2], 10.0);
+  const std::string k_again = dir.write("k_again.toml", hs::scenario_to_toml(k));
+  EXPECT_EQ(hs::scenario_to_toml(hs::load_scenario(k_again)), hs::scenario_to_toml(k));
   const std::string bad =
       dir.write("bad.toml", "[route]\nshape = \"tour\"\nwaypoints = [[1.0, 1.0], [1.5, 1.2]]\n");
   ht::expect_one_line(scenario_error(bad), bad + ": ", "heading_deg");

@@ -100,7 +100,11 @@ Scenario coverage_variant(const Scenario& scenario);
 
 /// A test run on the floor that no training drove: @p waypoints random poses on floor_plan's
 /// floor (drawn from @p seed), headings within 12 degrees of a covered one, joined by turns on the
-/// spot and straight legs along which every place sees 2 usable boards.
-Scenario roam_variant(const Scenario& scenario, std::uint64_t seed, int waypoints = 8);
+/// spot and straight legs along which every place sees 2 usable boards. With @p kidnaps, the
+/// robot is carried every 10 s from 10 s to another such pose on the floor (at least 1 m away,
+/// or half the floor's diagonal on small floors) and drives on from there to the pose it was
+/// heading for; more poses where the roam would end too soon.
+Scenario roam_variant(const Scenario& scenario, std::uint64_t seed, int waypoints = 8,
+                      int kidnaps = 0);
 
 }  // namespace harmoloc::sim_host

@@ -162,11 +162,14 @@ struct BoardMoveSpec {
 
 /// The robot is lifted and put down elsewhere on its route (a kidnap), @p count times: at run
 /// times first_s + k interval_s, each new place at least @p min_distance_m from the old one.
+/// On a tour the places are given (poses, one per kidnap): from each the robot drives on to the
+/// waypoint it was heading for and on along its tour.
 struct KidnapSpec {
   int count = 0;
   double first_s = 10.0;
   double interval_s = 8.0;
   double min_distance_m = 1.0;
+  std::vector<std::array<double, 3>> poses;  ///< a tour's: [x, y, heading_deg] per kidnap
 };
 
 struct Scenario {
