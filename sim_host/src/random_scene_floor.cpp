@@ -159,6 +159,27 @@ void add_lanes(const FloorPlan& f, double h, double spacing_m, double from_x, do
   }
 }
 
+// The scene with its route replaced by an empty tour (one lap, no wander) and without events.
+Scenario floor_tour_of(const Scenario& s) {
+  Scenario out = s;
+  out.occluders.clear();
+  out.board_moves.clear();
+  out.kidnaps = KidnapSpec{};
+  RouteSpec& r = out.route;
+  r.shape = RouteShape::kTour;
+  r.laps = 1;
+  r.wander_m = 0.0;
+  r.waypoints_m.clear();
+  r.heading_deg.clear();
+  return out;
+}
+
+// Keeps @p out's lighting steps at the share of its run they had in @p scene's.
+void keep_lighting_shares(const Scenario& scene, Scenario& out) {
+  const double before = run_duration_s(scene), after = run_duration_s(out);
+  for (auto& st : out.lighting.steps) st[0] = q(st[0] * after / before, 10.0);
+}
+
 }  // namespace
 
 FloorPlan floor_plan(const Scenario& s) {
@@ -235,15 +256,9 @@ FloorPlan floor_plan(const Scenario& s) {
 
 Scenario coverage_variant(const Scenario& s) {
   const FloorPlan f = floor_plan(s);
-  Scenario out = s;
-  out.occluders.clear();
-  out.board_moves.clear();
-  out.kidnaps = KidnapSpec{};
+  Scenario out = floor_tour_of(s);
   RouteSpec& r = out.route;
-  r.shape = RouteShape::kTour;
   r.speed_mps = std::max(s.route.speed_mps, kMinCoverageSpeed_mps);
-  r.laps = 1;
-  r.wander_m = 0.0;
   double spacing = kLaneSpacing_m;
   for (int attempt = 0; attempt < 10; ++attempt, spacing *= 1.2) {
     std::vector<std::array<double, 3>> poses;
@@ -260,8 +275,7 @@ Scenario coverage_variant(const Scenario& s) {
     }
     if (run_duration_s(out) <= kCoverageBudget_s * 1.2) break;
   }
-  const double before = run_duration_s(s);
-  for (auto& st : out.lighting.steps) st[0] = q(st[0] * run_duration_s(out) / before, 10.0);
+  keep_lighting_shares(s, out);
   out.name = s.name + "-coverage";
   std::ostringstream d;
   d.precision(3);
@@ -284,16 +298,8 @@ Scenario roam_variant(const Scenario& s, std::uint64_t seed, int waypoints, int 
   const double usable = usable_px(proxy);
   Pcg32 rng(seed, kFloorStream);
   Draw d(rng);
-  Scenario out = s;
-  out.occluders.clear();
-  out.board_moves.clear();
-  out.kidnaps = KidnapSpec{};
+  Scenario out = floor_tour_of(s);
   RouteSpec& r = out.route;
-  r.shape = RouteShape::kTour;
-  r.laps = 1;
-  r.wander_m = 0.0;
-  r.waypoints_m.clear();
-  r.heading_deg.clear();
   const auto draw_pose = [&]() {
     const double u = d.u(-1.0, 1.0) * (f.half_length_m - 0.1);
     const double v = d.u(-1.0, 1.0) * (f.half_width_m - 0.1);
@@ -378,8 +384,7 @@ Scenario roam_variant(const Scenario& s, std::uint64_t seed, int waypoints, int 
       throw std::runtime_error(s.name + ": no kidnap place on the floor for kidnap " +
                                std::to_string(k + 1));
   }
-  const double before = run_duration_s(s);
-  for (auto& st : out.lighting.steps) st[0] = q(st[0] * run_duration_s(out) / before, 10.0);
+  keep_lighting_shares(s, out);
   out.name = s.name + "-roam" + std::to_string(seed);
   std::ostringstream o;
   o.precision(3);
