@@ -333,7 +333,7 @@ Scenario roam_variant(const Scenario& s, std::uint64_t seed, int waypoints, int 
   KidnapSpec& ks = out.kidnaps;
   ks.first_s = kKidnapFirst_s;
   ks.interval_s = kKidnapInterval_s;
-  ks.min_distance_m = std::min(1.0, 0.5 * std::hypot(2.0 * f.half_length_m, 2.0 * f.half_width_m));
+  ks.min_distance_m = std::min(1.0, 0.4 * std::hypot(2.0 * f.half_length_m, 2.0 * f.half_width_m));
   const double need_s = kidnaps > 0 ? ks.first_s + (kidnaps - 1) * ks.interval_s + 10.0 : 0.0;
   for (int k = 1; k < waypoints || (kidnaps > 0 && run_duration_s(out) < need_s); ++k) {
     if (k > 1000) throw std::runtime_error(s.name + ": the roam cannot be made long enough");

@@ -102,7 +102,7 @@ Scenario coverage_variant(const Scenario& scenario);
 /// floor (drawn from @p seed), headings within 12 degrees of a covered one, joined by turns on the
 /// spot and straight legs along which every place sees 2 usable boards. With @p kidnaps, the
 /// robot is carried every 10 s from 10 s to another such pose on the floor (at least 1 m away,
-/// or half the floor's diagonal on small floors) and drives on from there to the pose it was
+/// or 40% of the floor's diagonal on small floors) and drives on from there to the pose it was
 /// heading for; more poses where the roam would end too soon.
 Scenario roam_variant(const Scenario& scenario, std::uint64_t seed, int waypoints = 8,
                       int kidnaps = 0);
