@@ -124,15 +124,15 @@ std::vector<MotionSample> simulate_motion(const Scenario& scenario, double step_
         events.push_back(
             KidnapEvent{t, out.back().pose, put, dataset_time_ns(scenario.start_time_s, t)});
       }
-      const double end = tour.back().t0_s + tour.back().duration_s;
-      if (t > end + step_s - 1e-9) break;
+      // Samples up to the first at or after the tour's end (as a route's: ceil(total / step) + 1).
+      if (!out.empty() && out.back().t_s >= tour.back().t0_s + tour.back().duration_s - 1e-9) break;
       MotionSample m;
       m.t_s = t;
       m.route_t_s = t;
       m.pose = tour_pose(tour, leg, t);
       out.push_back(m);
     }
-    const double total_s = out.back().t_s;
+    const double total_s = tour.back().t0_s + tour.back().duration_s;
     if (ks.count > 0 && events.size() < static_cast<std::size_t>(ks.count)) {
       std::ostringstream msg;
       msg << "kidnap " << events.size() + 1 << " of " << ks.count << " at "

@@ -468,7 +468,8 @@ TEST(Motion, TourKidnapPutsTheRobotDownAndDrivesOnToItsNextWaypoint) {
   // The wheels do not turn across the jump.
   EXPECT_EQ(m[jump].left_m, m[jump - 1].left_m);
   EXPECT_EQ(m[jump].right_m, m[jump - 1].right_m);
-  EXPECT_NEAR(stats.duration_s, m.back().t_s, 1e-9);
+  EXPECT_NEAR(stats.duration_s, m.back().t_s, 0.01);
+  EXPECT_LE(stats.duration_s, m.back().t_s + 1e-9);
 }
 
 TEST(Scenario, TourFilesReadAndWriteThePoses) {
