@@ -100,7 +100,6 @@ std::vector<MotionSample> simulate_motion(const Scenario& scenario, double step_
         RouteSpec rest = r;
         rest.waypoints_m = {{to[0], to[1]}};
         rest.heading_deg = {to[2]};
-        rest.pause_s = 0.0;
         for (std::size_t j = std::min(next, r.waypoints_m.size() - 1); j < r.waypoints_m.size();
              ++j) {
           rest.waypoints_m.push_back(r.waypoints_m[j]);
@@ -110,7 +109,6 @@ std::vector<MotionSample> simulate_motion(const Scenario& scenario, double step_
           rest.waypoints_m.push_back(rest.waypoints_m.front());
           rest.heading_deg.push_back(rest.heading_deg.front());
         }
-        rest.pause_s = r.pause_s;
         tour = tour_segments(rest, t);
         // No standstill before driving on: drop the start pause.
         if (!tour.empty() && tour.front().kind == TourSegment::Kind::kPause) {
