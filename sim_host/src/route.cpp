@@ -90,8 +90,8 @@ std::vector<MotionSample> simulate_motion(const Scenario& scenario, double step_
     for (std::size_t i = 0;; ++i) {
       const double t = static_cast<double>(i) * step_s;
       const std::size_t k = events.size();
-      if (k < static_cast<std::size_t>(ks.count) && t >= ks.first_s + k * ks.interval_s - 1e-9 &&
-          i > 0) {
+      if (k < static_cast<std::size_t>(ks.count) &&
+          t >= ks.first_s + static_cast<double>(k) * ks.interval_s - 1e-9 && i > 0) {
         // The rest of the tour from the kidnap's pose.
         const auto it = std::upper_bound(tour.begin(), tour.end(), t,
                                          [](double v, const TourSegment& s) { return v < s.t0_s; });

@@ -17,6 +17,12 @@ struct Polyline {
   std::vector<double> x, y, s;  // s: cumulative arc length
   bool closed = false;          // a loop: arc lengths wrap round
   double length() const { return s.back(); }
+  /// Fills s from x and y.
+  void measure() {
+    s.assign(x.size(), 0.0);
+    for (std::size_t k = 1; k < x.size(); ++k)
+      s[k] = s[k - 1] + std::hypot(x[k] - x[k - 1], y[k] - y[k - 1]);
+  }
   void at(double si, double& px, double& py, double& tx, double& ty) const {
     if (closed && (si < 0.0 || si > length())) {
       si = std::fmod(si, length());

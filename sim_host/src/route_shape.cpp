@@ -42,9 +42,7 @@ Polyline make_path(const std::vector<std::array<double, 2>>& w, bool closed, int
       p.y.push_back(c[1]);
     }
   }
-  p.s.assign(p.x.size(), 0.0);
-  for (std::size_t k = 1; k < p.x.size(); ++k)
-    p.s[k] = p.s[k - 1] + std::hypot(p.x[k] - p.x[k - 1], p.y[k] - p.y[k - 1]);
+  p.measure();
   return p;
 }
 
@@ -82,11 +80,10 @@ Polyline route_path(const RouteSpec& route) {
   if (route.waypoints_m.size() < 2) throw std::runtime_error("a tour needs at least 2 waypoints");
   Polyline p;
   for (const auto& w : route.waypoints_m) {
-    p.s.push_back(p.x.empty() ? 0.0
-                              : p.s.back() + std::hypot(w[0] - p.x.back(), w[1] - p.y.back()));
     p.x.push_back(w[0]);
     p.y.push_back(w[1]);
   }
+  p.measure();
   return p;
 }
 
