@@ -18,6 +18,7 @@ constexpr std::uint32_t kCalibrationLocalLinearRidge = 4;
 constexpr std::uint32_t kCalibrationLeftWheelScale = 5;
 constexpr std::uint32_t kCalibrationRightWheelScale = 6;
 constexpr std::uint32_t kCalibrationTrackScale = 7;
+constexpr std::uint32_t kCalibrationPassHeadingSpread = 8;
 constexpr float kMinOdometryScale = 0.5F, kMaxOdometryScale = 2.0F;
 
 inline constexpr std::uint8_t kMagic[8] = {'H', 'A', 'R', 'M', 'O', 'M', 'A', 'P'};

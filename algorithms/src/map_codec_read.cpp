@@ -134,7 +134,7 @@ MapError decode_map(const std::uint8_t* data, std::size_t size, MapFile& map) {
     if (entries > kMaxCalibrationEntries) return MapError{"too many calibration entries", r.pos()};
     // Canonical only (what encode_map writes, so that a map reads back to the same bytes):
     // the measured entries 1, 2, 3 all or none, then the ridge (4) when it is above 0, then the
-    // odometry's scales 5, 6, 7 all or none.
+    // odometry's scales 5, 6, 7 all or none, then the pass heading spread (8) when it is above 0.
     std::uint32_t measured = 0, previous = 0, odometry_entries = 0;
     for (std::uint32_t i = 0; i < entries; ++i) {
       std::uint32_t id = 0;
@@ -157,12 +157,16 @@ MapError decode_map(const std::uint8_t* data, std::size_t size, MapFile& map) {
         map.calibration.right_wheel_scale = value;
       else if (id == kCalibrationTrackScale)
         map.calibration.track_scale = value;
+      else if (id == kCalibrationPassHeadingSpread)
+        map.calibration.pass_heading_spread_rad = value;
       else
         return MapError{"unknown calibration entry (a newer trainer?)", r.pos()};
       if (id <= previous) return MapError{"calibration entries out of order", r.pos()};
       if (id == kCalibrationLocalLinearRidge && !(value > 0.0F))
         return MapError{"local linear ridge 0 written (absent means none)", r.pos()};
-      const bool odometry = id >= kCalibrationLeftWheelScale;
+      if (id == kCalibrationPassHeadingSpread && !(value > 0.0F && value <= 3.1416F))
+        return MapError{"pass heading spread not in (0, pi] (absent means 0)", r.pos()};
+      const bool odometry = id >= kCalibrationLeftWheelScale && id <= kCalibrationTrackScale;
       if (odometry && !(value >= kMinOdometryScale && value <= kMaxOdometryScale))
         return MapError{"odometry scale out of range (0.5..2)", r.pos()};
       measured += id < kCalibrationLocalLinearRidge ? 1U : 0U;

@@ -111,8 +111,10 @@ std::vector<std::uint8_t> encode_map(const MapFile& map) {
   // Version 4: the calibration, as (id, value) entries.
   const MapCalibration& cal = map.calibration;
   const bool local_linear = map.model.local_linear_ridge > 0.0F;
-  if (cal.present || local_linear || cal.odometry_present) {
-    w.u32((cal.present ? 3U : 0U) + (local_linear ? 1U : 0U) + (cal.odometry_present ? 3U : 0U));
+  const bool turned = cal.pass_heading_spread_rad > 0.0F;
+  if (cal.present || local_linear || cal.odometry_present || turned) {
+    w.u32((cal.present ? 3U : 0U) + (local_linear ? 1U : 0U) + (cal.odometry_present ? 3U : 0U) +
+          (turned ? 1U : 0U));
     if (cal.present) {
       w.u32(kCalibrationFixRmseX);
       w.f32(cal.fix_rmse_x_m);
@@ -134,6 +136,11 @@ std::vector<std::uint8_t> encode_map(const MapFile& map) {
       w.f32(cal.right_wheel_scale);
       w.u32(kCalibrationTrackScale);
       w.f32(cal.track_scale);
+    }
+    // Only above 0, as the ridge (a map trained without headings has none).
+    if (turned) {
+      w.u32(kCalibrationPassHeadingSpread);
+      w.f32(cal.pass_heading_spread_rad);
     }
   } else {
     w.u32(0);

@@ -183,12 +183,27 @@ void read_observation(const Checker& check, const toml::table& root, Observation
   const toml::table* t = check.section(root, "observation");
   if (t == nullptr) return;
   const std::string w = "observation.";
-  check.only(
-      *t, w,
-      {"model", "fix_term", "fix_board_check", "robust", "sigma_scale", "tempering",
-       "outlier_floor", "dcs_phi", "consensus_chi2", "consensus_fraction", "motion_index_rate",
-       "motion_index_min", "motion_index_max", "route_free_m", "route_sigma_m",
-       "route_heading_free_deg", "route_heading_sigma_deg", "implausible_ratio", "bearings"});
+  check.only(*t, w,
+             {"model",
+              "fix_term",
+              "fix_board_check",
+              "robust",
+              "sigma_scale",
+              "tempering",
+              "outlier_floor",
+              "dcs_phi",
+              "consensus_chi2",
+              "consensus_fraction",
+              "motion_index_rate",
+              "motion_index_min",
+              "motion_index_max",
+              "route_free_m",
+              "route_sigma_m",
+              "route_heading_free_deg",
+              "route_heading_sigma_deg",
+              "implausible_ratio",
+              "bearings",
+              "route_terms"});
   const std::string model = check.text(*t, "model", w, "boards");
   if (model == "boards")
     o.model = ObservationModel::kBoards;
@@ -196,6 +211,16 @@ void read_observation(const Checker& check, const toml::table& root, Observation
     o.model = ObservationModel::kFix;
   else
     check.fail(t->get("model"), "observation.model must be \"boards\" or \"fix\"");
+  const std::string route_terms = check.text(*t, "route_terms", w, "auto");
+  if (route_terms == "auto")
+    o.route_terms = RouteTerms::kAuto;
+  else if (route_terms == "on")
+    o.route_terms = RouteTerms::kOn;
+  else if (route_terms == "off")
+    o.route_terms = RouteTerms::kOff;
+  else
+    check.fail(t->get("route_terms"),
+               "observation.route_terms must be \"auto\", \"on\" or \"off\"");
   o.fix_term = flag(check, *t, "fix_term", w, o.fix_term);
   o.fix_board_check = flag(check, *t, "fix_board_check", w, o.fix_board_check);
   auto& b = o.boards;

@@ -21,7 +21,11 @@ algorithms::Pose2 LocalizationCycle::route_pose(double x_m, double y_m) const {
 }
 
 double LocalizationCycle::reseed_yaw_sigma_rad() const {
-  return config_.kidnap.yaw_sigma_deg * algorithms::kPi / 180.0;
+  const double configured = config_.kidnap.yaw_sigma_deg * algorithms::kPi / 180.0;
+  // Without the route terms (a floor map) the heading at a place is one of several the training
+  // run drove there: as wide as its passes over one place lie apart.
+  if (route_terms_) return configured;
+  return std::max(configured, static_cast<double>(map_.calibration.pass_heading_spread_rad));
 }
 
 void LocalizationCycle::reseed_around(double x_m, double y_m) {

@@ -60,6 +60,31 @@ std::string odometry_summary(const FirmwareConfig& config,
   return line;
 }
 
+bool route_terms_on(const FirmwareConfig& config, const algorithms::MapCalibration& calibration) {
+  switch (config.observation.route_terms) {
+    case RouteTerms::kOn:
+      return true;
+    case RouteTerms::kOff:
+      return false;
+    case RouteTerms::kAuto:
+      break;
+  }
+  return !algorithms::is_floor_map(calibration);
+}
+
+std::string route_terms_summary(const FirmwareConfig& config,
+                                const algorithms::MapCalibration& calibration) {
+  if (route_terms_on(config, calibration)) return {};
+  if (config.observation.route_terms == RouteTerms::kOff)
+    return "no route terms (observation.route_terms = \"off\")";
+  char line[200];
+  std::snprintf(line, sizeof line,
+                "a floor map (its training passes %.0f deg apart): particles weighed by the "
+                "boards alone, no route terms",
+                static_cast<double>(calibration.pass_heading_spread_rad) * 180.0 / algorithms::kPi);
+  return line;
+}
+
 LocalizationCycle::LocalizationCycle(const FirmwareConfig& config, const algorithms::MapFile& map,
                                      hal::Camera& camera, hal::WheelEncoders& encoders,
                                      hal::PoseLink& link, const hal::Clock& clock,
@@ -81,6 +106,12 @@ LocalizationCycle::LocalizationCycle(const FirmwareConfig& config, const algorit
   kidnap_params_ = derived_kidnap_params(config.kidnap.detector, map.calibration);
   geometry_ = effective_geometry(config, map.calibration);
   board_params_ = config.observation.boards;
+  // A floor map's places between its passes, at the headings it drove, are the map's too.
+  route_terms_ = route_terms_on(config, map.calibration);
+  if (!route_terms_) {
+    board_params_.route_sigma_m = 0.0;
+    board_params_.route_heading_sigma_deg = 0.0;
+  }
   // The fix's own error per axis on the training run (0 without a calibration).
   const double fix_rmse = map.calibration.present
                               ? std::hypot(static_cast<double>(map.calibration.fix_rmse_x_m),

@@ -52,12 +52,14 @@ class FrameIndex {
     for (std::size_t i = 0; i < frames.size(); ++i) order_[fill[bucket_of[i]]++] = i;
   }
 
-  /// Squared distance from (x, y) to the nearest frame @p keep accepts (infinity: none).
+  /// Squared distance from (x, y) to the nearest frame @p keep accepts (infinity: none); that
+  /// frame in @p which when given (nullptr: none).
   template <typename Keep>
-  double nearest_d2(double x, double y, Keep keep) const {
+  double nearest_d2(double x, double y, Keep keep, const Positioned** which = nullptr) const {
     const long c0 = column(x), r0 = row(y);
     const long reach = std::max({c0, columns_ - 1 - c0, r0, rows_ - 1 - r0});
     double best = std::numeric_limits<double>::infinity();
+    if (which != nullptr) *which = nullptr;
     for (long ring = 0; ring <= reach; ++ring) {
       // Every frame not yet seen lies at least (ring - 1) buckets away.
       const double near = std::max(0.0, static_cast<double>(ring - 1)) * bucket_m_;
@@ -71,7 +73,11 @@ class FrameIndex {
             for (std::size_t k = first_[b]; k < first_[b + 1]; ++k) {
               const Positioned& p = frames_[order_[k]];
               if (!keep(p)) continue;
-              best = std::min(best, (p.x_m - x) * (p.x_m - x) + (p.y_m - y) * (p.y_m - y));
+              const double d2 = (p.x_m - x) * (p.x_m - x) + (p.y_m - y) * (p.y_m - y);
+              if (d2 < best) {
+                best = d2;
+                if (which != nullptr) *which = &p;
+              }
             }
           }
           if (ring == 0) break;
@@ -357,11 +363,27 @@ ForwardMapReport fit_grid(std::vector<Positioned>& frames, std::size_t board_cou
   const FrameIndex index(frames, 0.05);
   {
     std::vector<double> nearest(frames.size(), std::numeric_limits<double>::infinity());
+    // With it, how far that frame of another pass turned from this one's heading.
+    std::vector<double> turned;
     for (std::size_t i = 0; i < frames.size(); ++i) {
       const Positioned& p = frames[i];
-      nearest[i] = std::sqrt(index.nearest_d2(p.x_m, p.y_m, [&](const Positioned& q) {
-        return !same_pass(q, p.t_s, p.travel_m, opt.exclude_same_pass_s, opt.exclude_same_pass_m);
-      }));
+      const Positioned* other = nullptr;
+      nearest[i] = std::sqrt(index.nearest_d2(
+          p.x_m, p.y_m,
+          [&](const Positioned& q) {
+            return !same_pass(q, p.t_s, p.travel_m, opt.exclude_same_pass_s,
+                              opt.exclude_same_pass_m);
+          },
+          &other));
+      if (p.has_yaw && other != nullptr && other->has_yaw)
+        turned.push_back(std::fabs(algorithms::wrap_angle_rad(other->yaw_rad - p.yaw_rad)));
+    }
+    // The upper quartile: a floor driven at two headings has about half its frames' nearest
+    // other pass at the other heading, which puts the median on the edge between the two.
+    if (!turned.empty()) {
+      auto q3 = turned.begin() + static_cast<std::ptrdiff_t>(3 * turned.size() / 4);
+      std::nth_element(turned.begin(), q3, turned.end());
+      report.pass_heading_spread_rad = *q3;
     }
     std::vector<double> finite;
     for (double d : nearest) {

@@ -290,6 +290,8 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<dataset::Sta
     map.forward = *forward;
     report.forward = forward_report;
     map.calibration.pass_spread_m = static_cast<float>(report.forward.pass_spread_m);
+    map.calibration.pass_heading_spread_rad =
+        static_cast<float>(report.forward.pass_heading_spread_rad);
     report.has_forward_map = true;
     report.forward_ms = forward_ms;
   }

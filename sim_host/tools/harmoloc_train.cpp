@@ -323,6 +323,16 @@ int main(int argc, char** argv) {
               fw.has_heading ? "from the labels" : "unknown (labels have none)");
         }
         std::printf("board noise   %s (%% of frame, against other passes)\n", sig.c_str());
+        if (fw.has_heading) {
+          const double turn_deg = fw.pass_heading_spread_rad * 180.0 / algorithms::kPi;
+          std::printf(
+              "passes        %.1f cm from the nearest other pass (median), %.1f deg turned from it "
+              "(upper quartile): %s\n",
+              100.0 * fw.pass_spread_m, turn_deg,
+              algorithms::is_floor_map(map.calibration)
+                  ? "a floor map (lanes at several headings; the filter drops the route terms)"
+                  : "a route map");
+        }
         if (fw.has_bearings) {
           std::string spread;
           for (std::size_t b = 0; b < fw.bearing_sigma_rad.size(); ++b) {

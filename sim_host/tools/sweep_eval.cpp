@@ -106,6 +106,29 @@ void bearing_figures(const TrainReport& tr, const Scenario& scene, SceneResult& 
   r.bearing_half_fov_deg = tr.bearings.half_fov_rad() * 180.0 / algorithms::kPi;
 }
 
+// The harmonic fixes' squared errors per axis, all of them and the known places', over one or
+// more runs.
+struct FixErrors {
+  double x_m2 = 0.0, y_m2 = 0.0, known_x_m2 = 0.0, known_y_m2 = 0.0;
+  std::size_t all = 0, known = 0;
+  void add(const RunRecord& run) {
+    for (const FrameRecord& f : run.frames) {
+      if (!f.fix_present) continue;
+      const double ex = f.fix.x_m - f.truth.x_m, ey = f.fix.y_m - f.truth.y_m;
+      x_m2 += ex * ex;
+      y_m2 += ey * ey;
+      ++all;
+      if (f.fix_known) {
+        known_x_m2 += ex * ex;
+        known_y_m2 += ey * ey;
+        ++known;
+      }
+    }
+  }
+  double mse_x_m2() const { return x_m2 / static_cast<double>(all); }
+  double mse_y_m2() const { return y_m2 / static_cast<double>(all); }
+};
+
 void trace(const SweepOptions& opt, std::uint64_t seed, const char* part, const RunRecord& run) {
   if (opt.trace_dir.empty()) return;
   write_trace(run, opt.trace_dir + "/seed-" + std::to_string(seed) + "-" + part + ".csv");
@@ -125,10 +148,12 @@ void floor_part(const Scenario& scene, const algorithms::ThresholdSet& threshold
     r.floor_train_frames = trained.frames;
     r.floor_train_ms = trained.report.train_ms + trained.report.forward_ms;
     r.floor_cv_rmse_x_m = trained.report.x.cv_rmse_m;
+    r.floor_pass_heading_spread_rad = trained.report.forward.pass_heading_spread_rad;
     r.floor_cv_rmse_y_m = trained.report.y.cv_rmse_m;
     const firmware::FirmwareConfig config = config_for(thresholds, opt);
-    double sx = 0.0, sy = 0.0, se = 0.0, sh = 0.0, worst = 0.0;
-    std::size_t fixes = 0, frames = 0, nominal_bad = 0;
+    FixErrors fixes;
+    double se = 0.0, sh = 0.0, worst = 0.0;
+    std::size_t frames = 0, nominal_bad = 0;
     for (int k = 1; k <= opt.roams; ++k) {
       step("floor: roam " + std::to_string(k));
       const Scenario roam =
@@ -137,29 +162,26 @@ void floor_part(const Scenario& scene, const algorithms::ThresholdSet& threshold
           replay_scenario(roam, kRoamSeed + static_cast<std::uint64_t>(k), *trained.map, config);
       trace(opt, seed, ("floor-roam" + std::to_string(k)).c_str(), run);
       if (!run.frames.empty()) r.floor_roam_s += run.frames.back().t_s;
-      for (const FrameRecord& f : run.frames) {
-        if (!f.fix_present) continue;
-        sx += (f.fix.x_m - f.truth.x_m) * (f.fix.x_m - f.truth.x_m);
-        sy += (f.fix.y_m - f.truth.y_m) * (f.fix.y_m - f.truth.y_m);
-        ++fixes;
-      }
+      fixes.add(run);
       const Settled st = settle(run, opt.settle_s, kSettledBound_m, kStartupHold_s);
       if (st.first_fix_s < 0.0) continue;
+      const double from_s = st.first_fix_s + opt.settle_s;
+      // The roams are pooled: their squared errors add up frame by frame.
+      const ErrorStats e = error_stats(run, from_s, 1e300);
+      const auto n = static_cast<double>(e.frames);
+      se += e.rmse_m * e.rmse_m * n;
+      sh += e.heading_rmse_deg * e.heading_rmse_deg * n;
+      worst = std::max(worst, e.max_m);
+      frames += e.frames;
       for (const FrameRecord& f : run.frames) {
-        if (f.t_s < st.first_fix_s + opt.settle_s || !f.valid) continue;
-        const double e = f.position_error_m();
-        const double h = algorithms::wrap_angle_rad(f.estimate.yaw_rad - f.truth.yaw_rad) * 180.0 /
-                         algorithms::kPi;
-        se += e * e;
-        sh += h * h;
-        worst = std::max(worst, e);
-        ++frames;
-        if (e > 0.10 && f.health == firmware::Health::kNominal) ++nominal_bad;
+        if (f.t_s >= from_s && f.valid && f.position_error_m() > 0.10 &&
+            f.health == firmware::Health::kNominal)
+          ++nominal_bad;
       }
     }
-    if (fixes > 0) {
-      r.floor_fix_mse_x_m2 = sx / static_cast<double>(fixes);
-      r.floor_fix_mse_y_m2 = sy / static_cast<double>(fixes);
+    if (fixes.all > 0) {
+      r.floor_fix_mse_x_m2 = fixes.mse_x_m2();
+      r.floor_fix_mse_y_m2 = fixes.mse_y_m2();
     }
     if (frames > 0) {
       const auto n = static_cast<double>(frames);
@@ -232,6 +254,7 @@ void route_runs(const Scenario& scene, const algorithms::ThresholdSet& threshold
       r.placement_heading_rmse_deg = trained.placement_heading_rmse_deg;
     }
     r.cv_rmse_x_m = tr.x.cv_rmse_m;
+    r.pass_heading_spread_rad = tr.forward.pass_heading_spread_rad;
     r.cv_rmse_y_m = tr.y.cv_rmse_m;
     r.boards_used = board_names(tr, scene);
     bearing_figures(tr, scene, r);
@@ -243,28 +266,16 @@ void route_runs(const Scenario& scene, const algorithms::ThresholdSet& threshold
       const RunRecord run =
           replay_scenario(with_other_lighting(scene, kTestSeed), kTestSeed, map, config);
       trace(opt, seed, "nominal", run);
-      double sx = 0, sy = 0, kx = 0, ky = 0;
-      std::size_t n = 0, known = 0;
-      for (const FrameRecord& f : run.frames) {
-        if (!f.fix_present) continue;
-        const double ex = f.fix.x_m - f.truth.x_m, ey = f.fix.y_m - f.truth.y_m;
-        sx += ex * ex;
-        sy += ey * ey;
-        ++n;
-        if (f.fix_known) {
-          kx += ex * ex;
-          ky += ey * ey;
-          ++known;
-        }
+      FixErrors fixes;
+      fixes.add(run);
+      if (fixes.all > 0) {
+        r.fix_mse_x_m2 = fixes.mse_x_m2();
+        r.fix_mse_y_m2 = fixes.mse_y_m2();
+        r.fix_known_fraction = static_cast<double>(fixes.known) / static_cast<double>(fixes.all);
       }
-      if (n > 0) {
-        r.fix_mse_x_m2 = sx / static_cast<double>(n);
-        r.fix_mse_y_m2 = sy / static_cast<double>(n);
-        r.fix_known_fraction = static_cast<double>(known) / static_cast<double>(n);
-      }
-      if (known > 0) {
-        r.fix_known_mse_x_m2 = kx / static_cast<double>(known);
-        r.fix_known_mse_y_m2 = ky / static_cast<double>(known);
+      if (fixes.known > 0) {
+        r.fix_known_mse_x_m2 = fixes.known_x_m2 / static_cast<double>(fixes.known);
+        r.fix_known_mse_y_m2 = fixes.known_y_m2 / static_cast<double>(fixes.known);
       }
       const Settled s = settle(run, opt.settle_s, kSettledBound_m, kStartupHold_s);
       r.first_fix_s = s.first_fix_s;

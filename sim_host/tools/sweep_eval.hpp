@@ -50,6 +50,8 @@ struct SceneResult {
   double placement_rmse_m = -1.0;
   double placement_heading_rmse_deg = -1.0;
   double cv_rmse_x_m = -1.0, cv_rmse_y_m = -1.0;
+  double pass_heading_spread_rad =
+      -1.0;  ///< the training run's (ForwardMapReport::pass_heading_spread_rad)
   std::string boards_used;
   // Boards placed from their centroid columns (TrainReport::bearings), against the scene's board
   // centres; -1 when the calibration was not ok.
@@ -89,6 +91,7 @@ struct SceneResult {
   std::size_t floor_train_frames = 0;
   double floor_train_ms = 0.0;
   double floor_cv_rmse_x_m = -1.0, floor_cv_rmse_y_m = -1.0;
+  double floor_pass_heading_spread_rad = -1.0;                  ///< the coverage run's
   double floor_roam_s = 0.0;                                    ///< the roams' run time
   double floor_fix_mse_x_m2 = -1.0, floor_fix_mse_y_m2 = -1.0;  ///< every frame with a fix
   double floor_rmse_m = -1.0;  ///< after first fix + settle_s, every roam's frames

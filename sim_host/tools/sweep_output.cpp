@@ -23,6 +23,7 @@ nlohmann::json to_json(const SceneResult& r) {
   j["placement_rmse_m"] = r.placement_rmse_m;
   j["placement_heading_rmse_deg"] = r.placement_heading_rmse_deg;
   j["cv_rmse_x_m"] = r.cv_rmse_x_m;
+  j["pass_heading_spread_rad"] = r.pass_heading_spread_rad;
   j["cv_rmse_y_m"] = r.cv_rmse_y_m;
   j["boards_used"] = r.boards_used;
   j["bearing_boards_placed"] = r.bearing_boards_placed;
@@ -59,6 +60,7 @@ nlohmann::json to_json(const SceneResult& r) {
   j["floor_train_frames"] = r.floor_train_frames;
   j["floor_train_ms"] = r.floor_train_ms;
   j["floor_cv_rmse_x_m"] = r.floor_cv_rmse_x_m;
+  j["floor_pass_heading_spread_rad"] = r.floor_pass_heading_spread_rad;
   j["floor_cv_rmse_y_m"] = r.floor_cv_rmse_y_m;
   j["floor_roam_s"] = r.floor_roam_s;
   j["floor_fix_mse_x_m2"] = r.floor_fix_mse_x_m2;

@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Checks a floor sweep's sweep.json (harmoloc-sweep --parts floor, issue 20): every scene's
-coverage run trained and its roams replayed and scored. No accuracy bound yet: the route maps
-do not localize off their route (docs/sweep.md, "Floor runs"), which is what issue 20 changes.
+coverage run trained into a floor map (its passes 10 degrees or more apart in heading, so that
+the firmware drops the route terms) and its roams replayed and scored. No accuracy bound yet:
+the floor maps localize to tens of centimetres (docs/sweep.md, "Floor runs").
 """
 import json
 import sys
@@ -28,6 +29,10 @@ def main():
         for key in FIGURES:
             if not r.get(key, -1.0) >= 0.0:
                 problems.append(f"seed {seed}: {key} not measured")
+        turned_deg = r.get("floor_pass_heading_spread_rad", -1.0) * 180.0 / 3.141592653589793
+        if not turned_deg >= 10.0:
+            problems.append(f"seed {seed}: the coverage run's passes {turned_deg:.1f} deg apart: "
+                            "not a floor map")
         if r.get("floor_train_frames", 0) < 1000:
             problems.append(f"seed {seed}: coverage run of {r.get('floor_train_frames', 0)} frames")
         if not r.get("floor_roam_s", 0.0) > 10.0:

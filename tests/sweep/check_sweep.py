@@ -52,6 +52,12 @@ def main():
         if r.get("bearing_boards_placed", 0) < 2 or not 0 <= r.get("bearing_residual_deg", -1) <= 2.0:
             problems.append(f"seed {seed}: bearings: {r.get('bearing_boards_placed', 0)} boards "
                             f"placed, residual {r.get('bearing_residual_deg', -1):.2f} deg")
+        # A route's training run is a route map: its passes run the same way over each place
+        # (under 10 degrees apart), so that the firmware keeps its route terms.
+        turned_deg = r.get("pass_heading_spread_rad", -1.0) * 180.0 / 3.141592653589793
+        if not 0.0 <= turned_deg < 10.0:
+            problems.append(f"seed {seed}: the route's passes {turned_deg:.1f} deg apart: "
+                            "taken for a floor map")
         # The firmware's own particle count (filter.particles_mean in its stats) was read.
         if not r.get("particles_mean", -1.0) >= 1.0:
             problems.append(f"seed {seed}: particles_mean not measured")

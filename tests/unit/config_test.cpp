@@ -347,6 +347,7 @@ motion_index_min = 0.05
 motion_index_max = 0.9
 route_free_m = 0.05
 route_sigma_m = 0
+route_terms = "off"
 implausible_ratio = 3.5
 
 [kidnap]
@@ -378,6 +379,7 @@ yaw_sigma_deg = 30
   EXPECT_DOUBLE_EQ(b.motion_index_max, 0.9);
   EXPECT_DOUBLE_EQ(b.route_free_m, 0.05);
   EXPECT_DOUBLE_EQ(b.route_sigma_m, 0.0);
+  EXPECT_EQ(c.observation.route_terms, hf::RouteTerms::kOff);
   EXPECT_DOUBLE_EQ(b.implausible_ratio, 3.5);
   const auto& k = c.kidnap;
   EXPECT_FALSE(k.enabled);
@@ -395,6 +397,10 @@ yaw_sigma_deg = 30
   // Defaults: the robust per-board model, kidnap test on, re-seed around the fix.
   const hf::FirmwareConfig d = hf::default_config();
   EXPECT_EQ(d.observation.model, hf::ObservationModel::kBoards);
+  EXPECT_EQ(d.observation.route_terms, hf::RouteTerms::kAuto);
+  EXPECT_EQ(hf::load_config(dir.write("on.toml", "[observation]\nroute_terms = \"on\"\n"))
+                .observation.route_terms,
+            hf::RouteTerms::kOn);
   EXPECT_TRUE(d.observation.boards.robust);
   EXPECT_TRUE(d.observation.fix_board_check);
   EXPECT_TRUE(d.kidnap.enabled);
@@ -406,6 +412,8 @@ TEST(Config, ObservationAndKidnapValuesAreChecked) {
   ht::TempDir dir;
   const std::pair<const char*, const char*> bad[] = {
       {"[observation]\nmodel = \"magic\"\n", "observation.model"},
+      {"[observation]\nroute_terms = \"floor\"\n", "observation.route_terms must be"},
+      {"[observation]\nroute_terms = true\n", "observation.route_terms"},
       {"[observation]\ntempering = 0.5\n", "observation.tempering"},
       {"[observation]\nrobust = 1\n", "observation.robust must be true or false"},
       {"[observation]\nimplausible_ratio = 0.5\n", "observation.implausible_ratio"},
@@ -479,4 +487,29 @@ TEST(Config, OdometryRunsOnTheMapsCalibrationUnlessTurnedOff) {
   EXPECT_EQ(hf::effective_geometry(c, cal).track_m, c.geometry.track_m);
   EXPECT_EQ(hf::effective_geometry(c, cal).left_scale, 1.0);
   EXPECT_NE(hf::odometry_summary(c, cal).find("map_calibration = false"), std::string::npos);
+}
+
+// The route terms: on for a route map (its passes run one way), off for a floor map (its passes
+// 10 degrees or more apart in heading) unless the config says otherwise; a line says so.
+TEST(Config, FloorMapsDropTheRouteTermsUnlessConfiguredOtherwise) {
+  ht::TempDir dir;
+  hf::FirmwareConfig c = hf::default_config();
+  harmoloc::algorithms::MapCalibration cal;
+  EXPECT_TRUE(hf::route_terms_on(c, cal)) << "a map without the measure is a route map";
+  EXPECT_EQ(hf::route_terms_summary(c, cal), "");
+  const double deg = 3.14159265358979 / 180.0;
+  cal.pass_heading_spread_rad = static_cast<float>(3.0 * deg);  // a route's passes
+  EXPECT_TRUE(hf::route_terms_on(c, cal));
+  cal.pass_heading_spread_rad = static_cast<float>(21.0 * deg);  // lanes at several headings
+  EXPECT_FALSE(hf::route_terms_on(c, cal));
+  EXPECT_NE(hf::route_terms_summary(c, cal).find("a floor map (its training passes 21 deg apart)"),
+            std::string::npos)
+      << hf::route_terms_summary(c, cal);
+  c = hf::load_config(dir.write("on.toml", "[observation]\nroute_terms = \"on\"\n"));
+  EXPECT_TRUE(hf::route_terms_on(c, cal));
+  EXPECT_EQ(hf::route_terms_summary(c, cal), "");
+  c = hf::load_config(dir.write("off.toml", "[observation]\nroute_terms = \"off\"\n"));
+  cal.pass_heading_spread_rad = 0.0F;
+  EXPECT_FALSE(hf::route_terms_on(c, cal));
+  EXPECT_NE(hf::route_terms_summary(c, cal).find("route_terms = \"off\""), std::string::npos);
 }

@@ -8,6 +8,8 @@
 #include <memory>
 #include <vector>
 
+#include "harmoloc/algorithms/map_codec.hpp"
+
 namespace ha = harmoloc::algorithms;
 namespace hs = harmoloc::sim_host;
 
@@ -192,4 +194,54 @@ TEST(ForwardMapTraining, CellBearingsAreWhereTheRunSawTheBoards) {
   hs::train_forward_map_placed(run.features, run.placed, 2, hs::ForwardMapOptions{}, *plain,
                                &bearings);
   EXPECT_FALSE(plain->has_bearings);
+}
+
+namespace {
+
+// A floor driven in lanes: for each heading, 5 lanes 0.35 m apart across a 1.4 m square
+// centred on (1.5, 1.5), each 1.4 m long, a frame every 5 mm; the robot travels 1 m between
+// lanes, so that each lane is a pass of its own.
+PlacedRun lanes_run(const std::vector<double>& headings_rad) {
+  PlacedRun run;
+  const double step = 0.005;
+  double travel = 0.0;
+  for (const double h : headings_rad) {
+    const double ux = std::cos(h), uy = std::sin(h);
+    for (int lane = -2; lane <= 2; ++lane) {
+      const double off = 0.35 * lane;
+      for (int i = 0; i <= 280; ++i) {
+        const double s = -0.7 + step * i;
+        const double x = 1.5 + s * ux - off * uy, y = 1.5 + s * uy + off * ux;
+        run.features.push_back({static_cast<float>(1.0 + 0.1 * x), static_cast<float>(2.0 + y)});
+        hs::PlacedFrame f;
+        f.index = run.features.size() - 1;
+        f.t_s = static_cast<double>(f.index) / 30.0;
+        f.travel_m = travel;
+        f.pose = ha::Pose2{x, y, h};
+        run.placed.push_back(f);
+        travel += step;
+      }
+      travel += 1.0;
+    }
+  }
+  return run;
+}
+
+}  // namespace
+
+// How far apart in heading the passes over one place run (the upper quartile): a route's passes
+// (forth and back, reversing) within a degree, a floor's lanes at two headings 30 degrees apart
+// by that; lanes at one heading are a route too. The firmware tells floor maps by it.
+TEST(ForwardMapTraining, PassHeadingSpreadTellsAFloorFromARoute) {
+  const double deg = 3.14159265358979323846 / 180.0;
+  const auto spread = [](const PlacedRun& run) {
+    auto map = std::make_unique<ha::ForwardMap>();
+    return hs::train_forward_map_placed(run.features, run.placed, 2, hs::ForwardMapOptions{}, *map)
+        .pass_heading_spread_rad;
+  };
+  EXPECT_LT(spread(diagonal_run(3.0)), 1.0 * deg);
+  EXPECT_LT(spread(lanes_run({0.4})), 1.0 * deg);
+  const double floor = spread(lanes_run({0.4, 0.4 + 30.0 * deg}));
+  EXPECT_NEAR(floor, 30.0 * deg, 1.0 * deg) << floor / deg;
+  EXPECT_GE(floor, static_cast<double>(ha::kFloorMapPassHeadingSpread_rad));
 }

@@ -332,6 +332,48 @@ TEST(MapCodec, OdometryCalibrationRoundTripAndChecks) {
   EXPECT_EQ(out->calibration.track_scale, 1.0F);
 }
 
+// The median heading difference between the training run's passes over one place travels as
+// entry 8, after the odometry's, written only above 0; it says whether the map is a floor map.
+TEST(MapCodec, PassHeadingSpreadRoundTripAndChecks) {
+  auto map = make_map();
+  const std::vector<std::uint8_t> plain = ha::encode_map(*map);
+  map->calibration.odometry_present = true;
+  map->calibration.pass_heading_spread_rad = 0.35F;  // 20 degrees: lanes at several headings
+  const std::vector<std::uint8_t> bytes = ha::encode_map(*map);
+  ASSERT_EQ(bytes.size(), plain.size() + 32);
+  auto out = std::make_unique<ha::MapFile>();
+  ASSERT_FALSE(ha::decode_map(bytes.data(), bytes.size(), *out));
+  EXPECT_EQ(out->calibration.pass_heading_spread_rad, 0.35F);
+  EXPECT_TRUE(out->calibration.odometry_present);
+  EXPECT_TRUE(ha::is_floor_map(out->calibration));
+  EXPECT_EQ(ha::encode_map(*out), bytes);
+  const std::size_t count_at = bytes.size() - 4 - 4 - 4 * 8;
+  ASSERT_EQ(get_u32(bytes, count_at), 4U);
+  const std::size_t entry = count_at + 4 + 3 * 8;
+  ASSERT_EQ(get_u32(bytes, entry), 8U);
+  for (float v : {0.0F, 3.2F}) {
+    std::vector<std::uint8_t> b = bytes;
+    put_f32(b, entry + 4, v);
+    fix_crc(b);
+    EXPECT_NE(decode_error(b).find("pass heading spread"), std::string::npos) << decode_error(b);
+  }
+  // Not before the odometry's entries: out of order.
+  std::vector<std::uint8_t> b = bytes;
+  put_u32(b, entry, 8U);
+  put_u32(b, count_at + 4, 8U);
+  put_f32(b, count_at + 4 + 4, 0.5F);
+  put_u32(b, entry, 5U);
+  put_f32(b, entry + 4, 0.994F);
+  fix_crc(b);
+  EXPECT_FALSE(decode_error(b).empty());
+  // A route's few degrees are no floor; a map without the entry reads as 0.
+  map->calibration.pass_heading_spread_rad = 0.05F;
+  EXPECT_FALSE(ha::is_floor_map(map->calibration));
+  ASSERT_FALSE(ha::decode_map(plain.data(), plain.size(), *out));
+  EXPECT_EQ(out->calibration.pass_heading_spread_rad, 0.0F);
+  EXPECT_FALSE(ha::is_floor_map(out->calibration));
+}
+
 // Maps written before the forward map existed (version 2) still load, without it.
 TEST(MapCodec, ReadsVersionTwo) {
   const auto map = make_map();

@@ -98,10 +98,14 @@ std::string Application::start_cycle(const dataset::DatasetMetadata& recorded, h
   return start_signing(config_, *cycle_, signing_store_);
 }
 
-void Application::say_odometry() const {
+void Application::say_map_settings() const {
   if (const std::string odometry = firmware::odometry_summary(config_, map_.calibration);
       !odometry.empty()) {
     std::fprintf(stderr, "harmoloc: %s\n", odometry.c_str());
+  }
+  if (const std::string route = firmware::route_terms_summary(config_, map_.calibration);
+      !route.empty()) {
+    std::fprintf(stderr, "harmoloc: %s\n", route.c_str());
   }
 }
 

@@ -100,8 +100,9 @@ class Application {
   firmware::CyclePacer& pacer() { return *pacer_; }
   /// For the board to say what it is (board, pacing, wake-up latency, how a run ends by itself).
   firmware::RunCounters& counters() { return run_; }
-  /// The odometry line of the start-up summary, if the config or the map calibrates any.
-  void say_odometry() const;
+  /// The start-up summary's lines on what the map sets: the odometry calibration applied, the
+  /// route terms dropped for a floor map (none when there is nothing to say).
+  void say_map_settings() const;
 
   // ---- the run ----
   /// Cycles until @p loop ends the run, the cycle ends or a stop signal arrives; each pose goes

@@ -66,7 +66,7 @@ int main(int argc, char** argv) {
   app.cycle().set_overrun_alarm(o.realtime);
   if (!o.app.quiet) {
     devices.say(app.map(), config, o.realtime, timer_paced);
-    app.say_odometry();
+    app.say_map_settings();
     if (app.link().can_receive()) {
       std::fprintf(stderr, "harmoloc: link commands %s\n",
                    config.link.has_signing_key ? "signed only (MAVLink 2 signing key loaded)"

@@ -73,7 +73,7 @@ int main(int argc, char** argv) {
         stderr, "harmoloc: map of %u samples on %u boards, %zu particles, %.0f Hz, %s-paced\n",
         app.map().model.sample_count, app.map().model.feature_count, config.filter.particles,
         config.cycle.rate_hz, firmware::pacing_name(config.cycle.pacing));
-    app.say_odometry();
+    app.say_map_settings();
     std::fprintf(stderr, "harmoloc: %s\n", rt.summary.c_str());
   }
 

@@ -36,7 +36,22 @@ struct MapCalibration {
   float left_wheel_scale = 1.0F;
   float right_wheel_scale = 1.0F;
   float track_scale = 1.0F;
+  /// Upper quartile of the heading difference between a training frame and the nearest frame of
+  /// another pass (radians, 0..pi; absent, 0, in maps before it): how far apart in heading two
+  /// passes over one place run.
+  float pass_heading_spread_rad = 0.0F;
 };
+
+/// From this pass heading spread on (10 degrees), a map is a floor map (docs/filter.md): the
+/// training run drove its places at several headings, so the places and headings between its
+/// passes are the map's too, and the filter drops the route terms that hold a particle to the
+/// passes. A route's passes run within a few degrees of each other.
+constexpr float kFloorMapPassHeadingSpread_rad = 0.174533F;
+
+/// Whether @p calibration says the map covers a floor rather than a route.
+inline bool is_floor_map(const MapCalibration& calibration) {
+  return calibration.pass_heading_spread_rad >= kFloorMapPassHeadingSpread_rad;
+}
 
 /// Most calibration entries a map may hold (version 4).
 constexpr std::uint32_t kMaxCalibrationEntries = 64;

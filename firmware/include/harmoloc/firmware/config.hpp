@@ -59,8 +59,17 @@ enum class ObservationModel : std::uint8_t {
   kFix,     ///< a Gaussian around the harmonic localizer's fix (maps without a forward model)
 };
 
+/// Whether the particles are held to the training run's passes (the route term and the route
+/// heading term of BoardModelParams).
+enum class RouteTerms : std::uint8_t {
+  kAuto,  ///< on for a route map, off for a floor map (algorithms::is_floor_map)
+  kOn,    ///< on, as configured, whatever the map
+  kOff,   ///< off
+};
+
 struct ObservationConfig {
   ObservationModel model = ObservationModel::kBoards;
+  RouteTerms route_terms = RouteTerms::kAuto;
   /// With the per-board model, also weigh the particles by the harmonic fix (a version 4 map's
   /// calibration gives its width).
   bool fix_term = true;

@@ -115,6 +115,15 @@ algorithms::DiffDriveGeometry effective_geometry(const FirmwareConfig& config,
 std::string odometry_summary(const FirmwareConfig& config,
                              const algorithms::MapCalibration& calibration);
 
+/// Whether the particles are held to the training run's passes (the route term and the route
+/// heading term): as observation.route_terms says, or by the map (off for a floor map).
+bool route_terms_on(const FirmwareConfig& config, const algorithms::MapCalibration& calibration);
+
+/// One start-up line when the route terms are off (a floor map, or the config); empty when they
+/// are on. Start-up only (allocates).
+std::string route_terms_summary(const FirmwareConfig& config,
+                                const algorithms::MapCalibration& calibration);
+
 class LocalizationCycle {
  public:
   /// @p map must outlive the cycle (the firmware keeps it in static storage). The colour table
@@ -312,6 +321,8 @@ class LocalizationCycle {
   std::array<char, hal::PersistentRecord::kMaxBytes> signing_record_{};
   mavlink::CommandReceiver receiver_;
   const bool use_boards_;
+  // The route term and the route heading term (RouteTerms): off for a floor map by default.
+  bool route_terms_ = true;
   mavlink::FrameBuffer frame_buffer_{};
   std::array<LatencyHistogram, kStageCount> histograms_{};
   LatencyHistogram capture_to_send_{};

@@ -42,6 +42,10 @@ struct ForwardMapReport {
   double validation_rmse = 0.0;  ///< over all modelled boards, feature units
   /// Median distance from a frame to the nearest frame of another pass (metres).
   double pass_spread_m = 0.0;
+  /// Upper quartile of the heading difference between a frame and the nearest frame of another
+  /// pass (radians; 0 without headings): a few degrees on a route (its passes run one way, or
+  /// reverse along it), the lanes' heading difference on a floor driven at several headings.
+  double pass_heading_spread_rad = 0.0;
   bool has_heading = false;
   /// Bearings (train_forward_map_placed with a law): per board, the spread of its world bearing
   /// between passes (radians, 0: not modelled), and the stored cells holding any bearing.
