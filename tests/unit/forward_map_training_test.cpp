@@ -22,6 +22,19 @@ struct PlacedRun {
   std::vector<hs::PlacedFrame> placed;
 };
 
+// Appends a frame at (x, y) facing @p yaw_rad with these two boards' features, @p travel_m
+// along the run; its time follows from its index (30 Hz).
+void add_frame(PlacedRun& run, double f0, double f1, double x, double y, double yaw_rad,
+               double travel_m) {
+  run.features.push_back({static_cast<float>(f0), static_cast<float>(f1)});
+  hs::PlacedFrame f;
+  f.index = run.features.size() - 1;
+  f.t_s = static_cast<double>(f.index) / 30.0;
+  f.travel_m = travel_m;
+  f.pose = ha::Pose2{x, y, yaw_rad};
+  run.placed.push_back(f);
+}
+
 PlacedRun diagonal_run(double length_m) {
   PlacedRun run;
   const double step = 0.005, heading = std::atan2(0.6, 0.8);
@@ -31,14 +44,7 @@ PlacedRun diagonal_run(double length_m) {
     for (std::size_t i = 0; i <= n; ++i) {
       const double s = (pass == 0 ? static_cast<double>(i) : static_cast<double>(n - i)) * step;
       const double x = 0.5 + 0.8 * s, y = 0.5 + 0.6 * s;
-      run.features.push_back(
-          {static_cast<float>(1.0 + 0.1 * s), static_cast<float>(2.0 + std::sin(2.0 * s))});
-      hs::PlacedFrame f;
-      f.index = run.features.size() - 1;
-      f.t_s = static_cast<double>(f.index) / 30.0;
-      f.travel_m = travel;
-      f.pose = ha::Pose2{x, y, heading};
-      run.placed.push_back(f);
+      add_frame(run, 1.0 + 0.1 * s, 2.0 + std::sin(2.0 * s), x, y, heading, travel);
       travel += step;
     }
   }
@@ -102,14 +108,8 @@ PlacedRun crossing_run(double wobble_rad, double turn_rad) {
     for (std::size_t i = 0; i <= 400; ++i) {
       const double s = static_cast<double>(i) * step;
       const double x = pass == 0 ? 0.5 + s : 1.5, y = pass == 0 ? 0.5 : s - 0.5;
-      run.features.push_back({static_cast<float>(1.0 + 0.1 * x), static_cast<float>(2.0 + y)});
-      hs::PlacedFrame f;
-      f.index = run.features.size() - 1;
-      f.t_s = static_cast<double>(f.index) / 30.0;
-      f.travel_m = travel;
       const double wobble = (i % 2 == 0 ? 1.0 : -1.0) * wobble_rad;
-      f.pose = ha::Pose2{x, y, (pass == 0 ? 0.0 : turn_rad) + wobble};
-      run.placed.push_back(f);
+      add_frame(run, 1.0 + 0.1 * x, 2.0 + y, x, y, (pass == 0 ? 0.0 : turn_rad) + wobble, travel);
       travel += step;
     }
   }
@@ -212,13 +212,7 @@ PlacedRun lanes_run(const std::vector<double>& headings_rad) {
       for (int i = 0; i <= 280; ++i) {
         const double s = -0.7 + step * i;
         const double x = 1.5 + s * ux - off * uy, y = 1.5 + s * uy + off * ux;
-        run.features.push_back({static_cast<float>(1.0 + 0.1 * x), static_cast<float>(2.0 + y)});
-        hs::PlacedFrame f;
-        f.index = run.features.size() - 1;
-        f.t_s = static_cast<double>(f.index) / 30.0;
-        f.travel_m = travel;
-        f.pose = ha::Pose2{x, y, h};
-        run.placed.push_back(f);
+        add_frame(run, 1.0 + 0.1 * x, 2.0 + y, x, y, h, travel);
         travel += step;
       }
       travel += 1.0;
