@@ -84,11 +84,7 @@ PlacePreference board_preference_near(const ForwardMap& map, const BoardFeatures
   // A grid of at most 25 x 25 places over the disc, none finer than the map's cells.
   const double step = std::max(static_cast<double>(map.cell_m), radius_m / 12.0);
   const int reach = static_cast<int>(std::floor(radius_m / step));
-  // Without a route term the map's places are wherever it stored cells (the void cell's
-  // distance is far beyond any route's).
-  const double on_route_m = params.route_sigma_m > 0.0
-                                ? params.route_free_m + 2.0 * params.route_sigma_m
-                                : 0.5 * static_cast<double>(ForwardMap::kVoidRouteDistance_m);
+  const double on_route_m = params.route_free_m + 2.0 * params.route_sigma_m;
   for (int j = -reach; j <= reach; ++j) {
     for (int i = -reach; i <= reach; ++i) {
       const double dx = i * step, dy = j * step;

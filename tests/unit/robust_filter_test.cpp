@@ -777,20 +777,6 @@ TEST(BoardPreference, NearAFixThatIsOffTheBoardsFindTheirPlace) {
       ha::board_preference_near(*map, seen, 1.6, 0.75, 0.0, 1.1, 0.75, 0.25, params);
   EXPECT_EQ(own.nats, at_fix);
   EXPECT_EQ(own.x_m, 1.6);
-
-  // Carried off the route (20 cm beside it): a route map's search stays on the route; without
-  // the route term (a floor map) every stored place counts, and the boards find the robot's.
-  const ha::BoardFeatures beside = observe(1.75, 0.95);
-  const ha::PlacePreference on_route =
-      ha::board_preference_near(*map, beside, 1.6, 0.8, 0.25, 1.1, 0.75, 0.25, params);
-  EXPECT_LE(std::fabs(on_route.y_m - 0.75), 0.09 + 1e-9) << on_route.y_m;
-  ha::BoardModelParams floor = params;
-  floor.route_sigma_m = 0.0;
-  const ha::PlacePreference anywhere =
-      ha::board_preference_near(*map, beside, 1.6, 0.8, 0.25, 1.1, 0.75, 0.25, floor);
-  EXPECT_NEAR(anywhere.x_m, 1.75, 0.03);
-  EXPECT_NEAR(anywhere.y_m, 0.95, 0.03);
-  EXPECT_GT(anywhere.nats, on_route.nats);
 }
 
 // ---- kidnap test -------------------------------------------------------------------------------

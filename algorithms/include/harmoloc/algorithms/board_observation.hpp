@@ -153,8 +153,7 @@ struct PlacePreference {
 
 /// board_preference of the best place within @p radius_m of (@p ax_m, @p ay_m) (on a grid of at
 /// most 25 x 25 places, only those on the trained route: within route_free_m + 2 route_sigma_m
-/// of it, or without a route term (route_sigma_m 0: a floor map) every place in a stored tile;
-/// and at least @p min_distance_m from place b), the fix's own place included whatever
+/// of it, and at least @p min_distance_m from place b), the fix's own place included whatever
 /// its route distance. For the kidnap test: a fix can be off by more than its training error
 /// where few boards are in view (three boards at 320 x 240: 18 cm at a place the boards told
 /// apart), and the boards then fit the fix's own place no better than the estimate's although
