@@ -127,6 +127,8 @@ struct FixErrors {
   }
   double mse_x_m2() const { return x_m2 / static_cast<double>(all); }
   double mse_y_m2() const { return y_m2 / static_cast<double>(all); }
+  double known_mse_x_m2() const { return known_x_m2 / static_cast<double>(known); }
+  double known_mse_y_m2() const { return known_y_m2 / static_cast<double>(known); }
 };
 
 void trace(const SweepOptions& opt, std::uint64_t seed, const char* part, const RunRecord& run) {
@@ -274,8 +276,8 @@ void route_runs(const Scenario& scene, const algorithms::ThresholdSet& threshold
         r.fix_known_fraction = static_cast<double>(fixes.known) / static_cast<double>(fixes.all);
       }
       if (fixes.known > 0) {
-        r.fix_known_mse_x_m2 = fixes.known_x_m2 / static_cast<double>(fixes.known);
-        r.fix_known_mse_y_m2 = fixes.known_y_m2 / static_cast<double>(fixes.known);
+        r.fix_known_mse_x_m2 = fixes.known_mse_x_m2();
+        r.fix_known_mse_y_m2 = fixes.known_mse_y_m2();
       }
       const Settled s = settle(run, opt.settle_s, kSettledBound_m, kStartupHold_s);
       r.first_fix_s = s.first_fix_s;

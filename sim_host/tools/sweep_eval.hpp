@@ -50,8 +50,8 @@ struct SceneResult {
   double placement_rmse_m = -1.0;
   double placement_heading_rmse_deg = -1.0;
   double cv_rmse_x_m = -1.0, cv_rmse_y_m = -1.0;
-  double pass_heading_spread_rad =
-      -1.0;  ///< the training run's (ForwardMapReport::pass_heading_spread_rad)
+  /// The training run's ForwardMapReport::pass_heading_spread_rad.
+  double pass_heading_spread_rad = -1.0;
   std::string boards_used;
   // Boards placed from their centroid columns (TrainReport::bearings), against the scene's board
   // centres; -1 when the calibration was not ok.
