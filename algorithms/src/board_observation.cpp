@@ -26,9 +26,13 @@ BoardFeatures board_features(const ForwardMap& map, float area_scale, const Area
 std::array<float, kMaxBoards> board_maxima(const ForwardMap& map) {
   std::array<float, kMaxBoards> m{};
   const std::size_t boards = std::min<std::size_t>(map.board_count, kMaxBoards);
+  const bool terms = ForwardMap::kHeadingTermStorage && map.has_heading_terms;
   for (std::size_t c = 0; c < map.stored_cells(); ++c) {
     const float* e = map.expected.data() + c * kMaxBoards;
-    for (std::size_t b = 0; b < boards; ++b) m[b] = std::max(m[b], e[b]);
+    // With heading terms, the most the cell expects at any heading.
+    const float* t = terms ? map.heading_terms.data() + c * kMaxBoards * 2 : nullptr;
+    for (std::size_t b = 0; b < boards; ++b)
+      m[b] = std::max(m[b], e[b] + (t != nullptr ? std::hypot(t[2 * b], t[2 * b + 1]) : 0.0F));
   }
   return m;
 }
@@ -48,10 +52,12 @@ bool frame_implausible(const ForwardMap& map, const std::array<float, kMaxBoards
 
 double board_preference(const ForwardMap& map, const BoardFeatures& observed, double ax_m,
                         double ay_m, double bx_m, double by_m, const BoardModelParams& params,
-                        std::uint32_t leave_out) {
+                        std::uint32_t leave_out, double yaw_rad) {
   std::array<float, kMaxBoards> ea{}, eb{};
-  expected_features(map, locate(map, ax_m, ay_m), ea.data());
-  expected_features(map, locate(map, bx_m, by_m), eb.data());
+  const auto cos_yaw = static_cast<float>(std::cos(yaw_rad));
+  const auto sin_yaw = static_cast<float>(std::sin(yaw_rad));
+  expected_features(map, locate(map, ax_m, ay_m), cos_yaw, sin_yaw, ea.data());
+  expected_features(map, locate(map, bx_m, by_m), cos_yaw, sin_yaw, eb.data());
   const std::size_t boards = std::min<std::size_t>({map.board_count, observed.count, kMaxBoards});
   const double c = params.outlier_floor;
   const double hidden = std::max(params.hidden_floor, c);
@@ -77,9 +83,11 @@ double board_preference(const ForwardMap& map, const BoardFeatures& observed, do
 PlacePreference board_preference_near(const ForwardMap& map, const BoardFeatures& observed,
                                       double ax_m, double ay_m, double radius_m, double bx_m,
                                       double by_m, double min_distance_m,
-                                      const BoardModelParams& params, std::uint32_t leave_out) {
-  PlacePreference best{board_preference(map, observed, ax_m, ay_m, bx_m, by_m, params, leave_out),
-                       ax_m, ay_m};
+                                      const BoardModelParams& params, std::uint32_t leave_out,
+                                      double yaw_rad) {
+  PlacePreference best{
+      board_preference(map, observed, ax_m, ay_m, bx_m, by_m, params, leave_out, yaw_rad), ax_m,
+      ay_m};
   if (!(radius_m > 0.0) || !map.present()) return best;
   // A grid of at most 25 x 25 places over the disc, none finer than the map's cells.
   const double step = std::max(static_cast<double>(map.cell_m), radius_m / 12.0);
@@ -92,7 +100,8 @@ PlacePreference board_preference_near(const ForwardMap& map, const BoardFeatures
       const double x = ax_m + dx, y = ay_m + dy;
       if (std::hypot(x - bx_m, y - by_m) < min_distance_m) continue;
       if (static_cast<double>(route_distance(map, locate(map, x, y))) > on_route_m) continue;
-      const double nats = board_preference(map, observed, x, y, bx_m, by_m, params, leave_out);
+      const double nats =
+          board_preference(map, observed, x, y, bx_m, by_m, params, leave_out, yaw_rad);
       if (nats > best.nats) best = PlacePreference{nats, x, y};
     }
   }
@@ -131,7 +140,9 @@ BoardAssessment BoardReliability::assess(const ForwardMap& map, const BoardFeatu
   update.boards = std::min<std::size_t>(map.board_count, observed.count);
   const GridPoint at = locate(map, estimate.x_m, estimate.y_m);
   std::array<float, kMaxBoards> expected{};
-  expected_features(map, at, expected.data());
+  const auto cos_yaw = static_cast<float>(std::cos(estimate.yaw_rad));
+  const auto sin_yaw = static_cast<float>(std::sin(estimate.yaw_rad));
+  expected_features(map, at, cos_yaw, sin_yaw, expected.data());
   // The range of what the map expects within the spread around the estimate (a cross of four
   // points): a board whose area falls inside it, or nearest its edge, is judged by that.
   std::array<float, kMaxBoards> lo = expected, hi = expected;
@@ -148,7 +159,7 @@ BoardAssessment BoardReliability::assess(const ForwardMap& map, const BoardFeatu
     std::array<float, kMaxBoards> e{};
     for (const auto& o : offsets) {
       const GridPoint p = locate(map, estimate.x_m + o[0], estimate.y_m + o[1]);
-      expected_features(map, p, e.data());
+      expected_features(map, p, cos_yaw, sin_yaw, e.data());
       for (std::size_t b = 0; b < kMaxBoards; ++b) {
         lo[b] = std::min(lo[b], e[b]);
         hi[b] = std::max(hi[b], e[b]);

@@ -62,6 +62,12 @@ bool lay_out_grid(ForwardMap& map, std::uint32_t columns, std::uint32_t rows,
   std::fill_n(map.route_distance_m.begin(), cells, 0.0F);
   std::fill_n(map.heading_rad.begin(), cells, 0.0F);
   std::fill_n(map.expected.begin() + ForwardMap::kVoidCell * kMaxBoards, kMaxBoards, 0.0F);
+  map.has_heading_terms = false;
+  if (ForwardMap::kHeadingTermStorage) {
+    std::fill_n(map.heading_terms.begin(), cells * kMaxBoards * 2, 0.0F);
+    std::fill_n(map.heading_terms.begin() + ForwardMap::kVoidCell * kMaxBoards * 2, kMaxBoards * 2,
+                0.0F);
+  }
   map.has_bearings = false;
   map.bearing_a1_rad = map.bearing_a3_rad = 0.0F;
   map.bearing_sigma_rad.fill(0.0F);
@@ -107,6 +113,20 @@ void expected_features(const ForwardMap& map, const GridPoint& point, float* out
     out[b] = point.weight[0] * corner[0][b] + point.weight[1] * corner[1][b] +
              point.weight[2] * corner[2][b] + point.weight[3] * corner[3][b];
   }
+}
+
+void expected_features(const ForwardMap& map, const GridPoint& point, float cos_yaw, float sin_yaw,
+                       float* out) {
+  expected_features(map, point, out);
+  if (!ForwardMap::kHeadingTermStorage || !map.has_heading_terms) return;
+  const std::size_t n = map.board_count;
+  for (int k = 0; k < 4; ++k) {
+    const float w = point.weight[k];
+    if (w == 0.0F) continue;
+    const float* t = map.heading_terms.data() + point.index[k] * kMaxBoards * 2;
+    for (std::size_t b = 0; b < n; ++b) out[b] += w * (t[2 * b] * cos_yaw + t[2 * b + 1] * sin_yaw);
+  }
+  for (std::size_t b = 0; b < n; ++b) out[b] = std::max(out[b], 0.0F);
 }
 
 bool board_image_angle(const ForwardMap& map, const AreaVector& areas, std::size_t b,

@@ -87,6 +87,24 @@ MapError decode_bearings(Reader& r, ForwardMap& f) {
   return MapError{};
 }
 
+// The heading terms (version 7), after the bearings: every stored cell's c and s of every board,
+// in storage order.
+MapError decode_heading_terms(Reader& r, ForwardMap& f) {
+  const std::size_t boards = f.board_count, cells = f.stored_cells();
+  if (!r.need(cells * boards * 8U, "forward map heading terms"))
+    return MapError{"truncated: the forward map's heading terms are shorter than its size says",
+                    r.pos()};
+  for (std::size_t c = 0; c < cells; ++c) {
+    float* t = f.heading_terms.data() + c * kMaxBoards * 2;
+    for (std::size_t b = 0; b < 2 * boards; ++b) {
+      r.f32(t[b], "forward map heading terms");
+      if (!finite_in(t[b], -1.0e6F, 1.0e6F))
+        return MapError{"forward map heading term not finite and within 1e6", r.pos()};
+    }
+  }
+  return MapError{};
+}
+
 }  // namespace
 
 // The forward map section (version 3; tiled from version 5, bearings from version 6).
@@ -94,6 +112,7 @@ MapError decode_forward(Reader& r, std::uint32_t version, std::uint32_t boards, 
   std::uint32_t columns = 0, rows = 0;
   f.columns = f.rows = 0;
   f.has_bearings = false;
+  f.has_heading_terms = false;
   if (!r.u32(columns, "forward map size") || !r.u32(rows, "forward map size"))
     return MapError{"truncated: no room for the forward map's size", r.pos()};
   if (columns == 0 && rows == 0) return MapError{};
@@ -137,14 +156,19 @@ MapError decode_forward(Reader& r, std::uint32_t version, std::uint32_t boards, 
       !r.u8(pad[1], "forward map flags") || !r.u8(pad[2], "forward map flags")) {
     return MapError{"truncated: the forward map's flags are cut short", r.pos()};
   }
-  // Bit 0: headings; bit 1 (version 6 on): bearings.
-  const unsigned known = version >= 6 ? 3U : 1U;
+  // Bit 0: headings; bit 1 (version 6 on): bearings; bit 2 (version 7 on): heading terms.
+  const unsigned known = version >= 7 ? 7U : version >= 6 ? 3U : 1U;
   if ((flag & ~known) != 0U || pad[0] != 0 || pad[1] != 0 || pad[2] != 0)
     return MapError{"forward map flags: unknown bits set", r.pos()};
   if ((flag & 2U) != 0U && !ForwardMap::kBearingStorage)
     return MapError{
         "forward map holds bearings this build has no room for (train it with "
         "--no-bearings)",
+        r.pos()};
+  if ((flag & 4U) != 0U && !ForwardMap::kHeadingTermStorage)
+    return MapError{
+        "forward map holds heading terms (a floor map) this build has no room for (train it "
+        "without --heading-terms)",
         r.pos()};
 
   // The layout: every tile (versions 3 and 4), or the stored tiles' bitmap (version 5).
@@ -195,6 +219,10 @@ MapError decode_forward(Reader& r, std::uint32_t version, std::uint32_t boards, 
   if (!e && (flag & 2U) != 0U) {
     e = decode_bearings(r, f);
     f.has_bearings = !e;
+  }
+  if (!e && (flag & 4U) != 0U) {
+    e = decode_heading_terms(r, f);
+    f.has_heading_terms = !e;
   }
   if (e) {
     f.columns = f.rows = 0;

@@ -73,8 +73,11 @@ std::vector<std::uint8_t> encode_map(const MapFile& map) {
     w.f32(f.cell_m);
     w.u32(f.board_count);
     for (std::size_t b = 0; b < f.board_count; ++b) w.f32(f.sigma[b]);
-    // Bit 0: headings follow the route distances; bit 1 (version 6): the board bearings follow.
-    w.u8(static_cast<std::uint8_t>((f.has_heading ? 1U : 0U) | (f.has_bearings ? 2U : 0U)));
+    // Bit 0: headings follow the route distances; bit 1 (version 6): the board bearings follow;
+    // bit 2 (version 7): the heading terms follow.
+    const bool terms = ForwardMap::kHeadingTermStorage && f.has_heading_terms;
+    w.u8(static_cast<std::uint8_t>((f.has_heading ? 1U : 0U) | (f.has_bearings ? 2U : 0U) |
+                                   (terms ? 4U : 0U)));
     w.u8(0);
     w.u8(0);
     w.u8(0);
@@ -105,6 +108,13 @@ std::vector<std::uint8_t> encode_map(const MapFile& map) {
       for (std::size_t b = 0; b < f.board_count; ++b) w.f32(f.bearing_sigma_rad[b]);
       for (std::size_t c = 0; c < cells; ++c) {
         for (std::size_t b = 0; b < f.board_count; ++b) w.f32(f.bearing_rad[c * kMaxBoards + b]);
+      }
+    }
+    // Version 7: every stored cell's heading terms, per board c then s.
+    if (terms) {
+      for (std::size_t c = 0; c < cells; ++c) {
+        for (std::size_t b = 0; b < 2 * f.board_count; ++b)
+          w.f32(f.heading_terms[c * kMaxBoards * 2 + b]);
       }
     }
   }

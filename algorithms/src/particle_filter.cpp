@@ -120,7 +120,12 @@ double ParticleFilter::update_boards(const BoardUpdate& u) {
   double sum = 0.0, match = 0.0;
   for (std::size_t i = 0; i < count_; ++i) {
     const GridPoint at = locate(map, particles_[i].x_m, particles_[i].y_m);
-    expected_features(map, at, expected.data());
+    if (map.has_heading_terms) {
+      const auto yaw = static_cast<float>(particles_[i].yaw_rad);
+      expected_features(map, at, std::cos(yaw), std::sin(yaw), expected.data());
+    } else {
+      expected_features(map, at, expected.data());
+    }
     double likelihood = 1.0;
     for (std::size_t b = 0; b < u.boards; ++b) {
       if (!u.use[b]) continue;

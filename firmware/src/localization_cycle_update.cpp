@@ -143,7 +143,7 @@ bool LocalizationCycle::update_with_boards(
       const double reach = kidnap_params_.fix_distance_m;
       const algorithms::PlacePreference best = algorithms::board_preference_near(
           map_.forward, observed, evidence_fix.x_m, evidence_fix.y_m, reach, estimate.x_m,
-          estimate.y_m, reach, params, leave_out);
+          estimate.y_m, reach, params, leave_out, estimate.yaw_rad);
       in.preference = best.nats;
       in.place_x_m = best.x_m;
       in.place_y_m = best.y_m;

@@ -153,6 +153,79 @@ bool kernel_mean(const FrameIndex& index, double x, double y, double bandwidth_m
   return true;
 }
 
+// The kernel-weighted sums of kernel_mean at (x, y), with each frame's heading as (cos, sin): what
+// the mean and the first harmonic over the heading (heading_fit) are fitted from.
+struct KernelSums {
+  double w = 0.0, c = 0.0, s = 0.0, cc = 0.0, cs = 0.0, ss = 0.0;
+  std::array<double, kMaxBoards> a{}, ca{}, sa{};
+};
+
+bool kernel_sums(const FrameIndex& index, double x, double y, double bandwidth_m,
+                 std::size_t boards, double t_s, double travel_m, double exclude_s,
+                 double exclude_m, KernelSums& out) {
+  const bool exclude = exclude_s > 0.0 || exclude_m > 0.0;
+  const auto keep = [&](const Positioned& p) {
+    return !exclude || !same_pass(p, t_s, travel_m, exclude_s, exclude_m);
+  };
+  out = KernelSums{};
+  const double d2_min = index.nearest_d2(x, y, keep);
+  if (!std::isfinite(d2_min)) return false;
+  constexpr double kCut = 30.0;
+  const double inv = 0.5 / (bandwidth_m * bandwidth_m);
+  index.within(x, y, std::sqrt(d2_min + kCut / inv), [&](const Positioned& p) {
+    if (!keep(p)) return;
+    const double e = ((p.x_m - x) * (p.x_m - x) + (p.y_m - y) * (p.y_m - y) - d2_min) * inv;
+    if (e > kCut) return;
+    const double w = std::exp(-e);
+    const double c = std::cos(p.yaw_rad), s = std::sin(p.yaw_rad);
+    out.w += w;
+    out.c += w * c;
+    out.s += w * s;
+    out.cc += w * c * c;
+    out.cs += w * c * s;
+    out.ss += w * s * s;
+    for (std::size_t b = 0; b < boards; ++b) {
+      const double a = static_cast<double>((*p.features)[b]);
+      out.a[b] += w * a;
+      out.ca[b] += w * c * a;
+      out.sa[b] += w * s * a;
+    }
+  });
+  return out.w > 0.0;
+}
+
+// The first harmonic over the heading fitted to @p k: per board, a0 + c cos(yaw) + s sin(yaw),
+// by least squares with a ridge of @p ridge times the weight on (c, s), so that it falls back to
+// the weighted mean (c = s = 0) where the frames' headings do not spread (a route). A ridge of
+// infinity (or not finite): the mean.
+struct HeadingFit {
+  std::array<double, kMaxBoards> a0{}, c{}, s{};
+  double predict(std::size_t b, double cos_yaw, double sin_yaw) const {
+    return std::max(0.0, a0[b] + c[b] * cos_yaw + s[b] * sin_yaw);
+  }
+};
+
+HeadingFit heading_fit(const KernelSums& k, std::size_t boards, double ridge) {
+  HeadingFit f;
+  const double mc = k.c / k.w, ms = k.s / k.w;
+  // The centred second moments, plus the ridge.
+  const bool terms = std::isfinite(ridge);
+  const double a11 = k.cc - k.w * mc * mc + (terms ? ridge * k.w : 0.0);
+  const double a12 = k.cs - k.w * mc * ms;
+  const double a22 = k.ss - k.w * ms * ms + (terms ? ridge * k.w : 0.0);
+  const double det = a11 * a22 - a12 * a12;
+  for (std::size_t b = 0; b < boards; ++b) {
+    const double mean = k.a[b] / k.w;
+    if (terms && det > 0.0) {
+      const double r1 = k.ca[b] - mc * k.a[b], r2 = k.sa[b] - ms * k.a[b];
+      f.c[b] = (a22 * r1 - a12 * r2) / det;
+      f.s[b] = (a11 * r2 - a12 * r1) / det;
+    }
+    f.a0[b] = mean - f.c[b] * mc - f.s[b] * ms;
+  }
+  return f;
+}
+
 // Board bearings around a place: per board, the kernel-weighted sums of the unit vectors of the
 // world bearings of the frames that saw it whole, and the kernel weight of all frames.
 struct BearingSums {
@@ -397,38 +470,70 @@ ForwardMapReport fit_grid(std::vector<Positioned>& frames, std::size_t board_cou
       for (std::size_t i = 0; i < frames.size(); ++i) comparable[i] = nearest[i] <= bound ? 1 : 0;
     }
   }
+  // With headings, the first harmonic over the heading is tried too, with each ridge of the
+  // options (a floor's passes over one place run at several headings, and the boards' areas
+  // change with the heading); it is kept only where it predicts other passes clearly better.
+  const bool try_terms = report.has_heading && !opt.heading_ridges.empty();
+  std::vector<double> ridges{std::numeric_limits<double>::infinity()};
+  if (try_terms) ridges.insert(ridges.end(), opt.heading_ridges.begin(), opt.heading_ridges.end());
+  double best_terms = std::numeric_limits<double>::infinity(), terms_h = 0.0, terms_ridge = 0.0;
+  std::vector<double> terms_sq;
   for (double h : opt.bandwidths_m) {
-    std::vector<double> sq(board_count, 0.0);
+    std::vector<std::vector<double>> sq(ridges.size(), std::vector<double>(board_count, 0.0));
     std::size_t n = 0;
+    KernelSums k;
     for (std::size_t i = 0; i < frames.size(); ++i) {
       const Positioned& p = frames[i];
       if (!comparable[i]) continue;
-      if (!kernel_mean(index, p.x_m, p.y_m, h, board_count, p.t_s, p.travel_m,
-                       opt.exclude_same_pass_s, opt.exclude_same_pass_m, mean.data())) {
+      if (!kernel_sums(index, p.x_m, p.y_m, h, board_count, p.t_s, p.travel_m,
+                       opt.exclude_same_pass_s, opt.exclude_same_pass_m, k)) {
         continue;
       }
       ++n;
-      for (std::size_t b = 0; b < board_count; ++b) {
-        const double r = static_cast<double>((*p.features)[b]) - mean[b];
-        sq[b] += r * r;
+      const double cos_yaw = std::cos(p.yaw_rad), sin_yaw = std::sin(p.yaw_rad);
+      for (std::size_t r = 0; r < ridges.size(); ++r) {
+        const HeadingFit fit = heading_fit(k, board_count, ridges[r]);
+        for (std::size_t b = 0; b < board_count; ++b) {
+          const double e = r == 0 ? k.a[b] / k.w : fit.predict(b, cos_yaw, sin_yaw);
+          const double res = static_cast<double>((*p.features)[b]) - e;
+          sq[r][b] += res * res;
+        }
       }
     }
     if (n == 0) continue;
-    double total = 0.0;
-    std::size_t used = 0;
-    for (std::size_t b = 0; b < board_count; ++b) {
-      sq[b] /= static_cast<double>(n);
-      if (modelled[b]) {
-        total += sq[b];
-        ++used;
+    for (std::size_t r = 0; r < ridges.size(); ++r) {
+      double total = 0.0;
+      std::size_t used = 0;
+      for (std::size_t b = 0; b < board_count; ++b) {
+        sq[r][b] /= static_cast<double>(n);
+        if (modelled[b]) {
+          total += sq[r][b];
+          ++used;
+        }
+      }
+      total = used > 0 ? total / static_cast<double>(used) : 0.0;
+      if (r == 0 && total < best) {
+        best = total;
+        report.bandwidth_m = h;
+        best_sq = sq[r];
+      } else if (r > 0 && total < best_terms) {
+        best_terms = total;
+        terms_h = h;
+        terms_ridge = ridges[r];
+        terms_sq = sq[r];
       }
     }
-    total = used > 0 ? total / static_cast<double>(used) : 0.0;
-    if (total < best) {
-      best = total;
-      report.bandwidth_m = h;
-      best_sq = sq;
-    }
+  }
+  report.heading_terms_validation_rmse = std::isfinite(best_terms) ? std::sqrt(best_terms) : 0.0;
+  const bool use_terms =
+      try_terms && !best_sq.empty() && best_terms < (1.0 - opt.heading_terms_min_gain) * best;
+  const std::vector<double> blind_sq = best_sq;
+  if (use_terms) {
+    report.mean_validation_rmse = std::sqrt(best);
+    best = best_terms;
+    report.bandwidth_m = terms_h;
+    report.heading_ridge = terms_ridge;
+    best_sq = terms_sq;
   }
   if (best_sq.empty()) {
     // A single pass: no other pass to validate against; the smallest width, noise from itself.
@@ -502,7 +607,7 @@ ForwardMapReport fit_grid(std::vector<Positioned>& frames, std::size_t board_cou
     }
     if (count <= max_tiles) break;
   }
-  out = ForwardMap{};
+  algorithms::reset(out);
   if (!algorithms::lay_out_grid(out, columns, rows, stored.data()))
     throw std::runtime_error("forward map: the grid does not fit (internal error)");
   out.origin_x_m = static_cast<float>(x0);
@@ -511,6 +616,7 @@ ForwardMapReport fit_grid(std::vector<Positioned>& frames, std::size_t board_cou
   out.board_count = static_cast<std::uint32_t>(board_count);
   report.cells = out.stored_cells();
   report.sigma.assign(board_count, 0.0);
+  report.heading_blind_sigma.assign(board_count, 0.0);
   for (std::size_t b = 0; b < board_count; ++b) {
     if (!modelled[b]) continue;
     // A floor: a board whose frames agree perfectly must still not make the filter certain.
@@ -518,18 +624,35 @@ ForwardMapReport fit_grid(std::vector<Positioned>& frames, std::size_t board_cou
     for (const Positioned& p : frames) peak = std::max(peak, static_cast<double>((*p.features)[b]));
     report.sigma[b] = std::max(std::sqrt(best_sq[b]), std::max(1e-3 * peak, 1e-4));
     out.sigma[b] = static_cast<float>(report.sigma[b]);
+    report.heading_blind_sigma[b] =
+        blind_sq.empty() ? report.sigma[b]
+                         : std::max(std::sqrt(blind_sq[b]), std::max(1e-3 * peak, 1e-4));
   }
   out.has_heading = report.has_heading;
+  out.has_heading_terms = use_terms;
   const auto any = [](const Positioned&) { return true; };
   for (std::uint32_t r = 0; r < out.rows; ++r) {
     for (std::uint32_t c = 0; c < out.columns; ++c) {
       const std::size_t at = out.index(c, r);
       if (at == ForwardMap::kVoidCell) continue;
       const double x = x0 + c * cell, y = y0 + r * cell;
-      kernel_mean(index, x, y, report.bandwidth_m, board_count, 0.0, -1.0, 0.0, 0.0, mean.data());
       float* e = out.expected.data() + at * algorithms::kMaxBoards;
-      for (std::size_t b = 0; b < board_count; ++b)
-        e[b] = modelled[b] ? static_cast<float>(mean[b]) : 0.0F;
+      if (use_terms) {
+        KernelSums k;
+        kernel_sums(index, x, y, report.bandwidth_m, board_count, 0.0, -1.0, 0.0, 0.0, k);
+        const HeadingFit fit = heading_fit(k, board_count, report.heading_ridge);
+        float* t = out.heading_terms.data() + at * algorithms::kMaxBoards * 2;
+        for (std::size_t b = 0; b < board_count; ++b) {
+          if (!modelled[b]) continue;
+          e[b] = static_cast<float>(fit.a0[b]);
+          t[2 * b] = static_cast<float>(fit.c[b]);
+          t[2 * b + 1] = static_cast<float>(fit.s[b]);
+        }
+      } else {
+        kernel_mean(index, x, y, report.bandwidth_m, board_count, 0.0, -1.0, 0.0, 0.0, mean.data());
+        for (std::size_t b = 0; b < board_count; ++b)
+          e[b] = modelled[b] ? static_cast<float>(mean[b]) : 0.0F;
+      }
       const double d2 = index.nearest_d2(x, y, any);
       out.route_distance_m[at] = static_cast<float>(std::sqrt(d2));
       // The heading of the frames near the cell that run the way the nearest one does: their

@@ -186,7 +186,9 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<dataset::Sta
     const ForwardMapReport& noise = forward_report;
     double largest = 0.0;
     for (std::size_t c = 0; c < candidates.size(); ++c) {
-      const double sigma = noise.sigma[static_cast<std::size_t>(candidates[c])];
+      // The harmonic map sees no heading: its noise is the areas' spread over every heading
+      // (the forward map's without heading terms).
+      const double sigma = noise.heading_blind_sigma[static_cast<std::size_t>(candidates[c])];
       scale[c] = sigma > 0.0 ? 1.0 / sigma : 0.0;
       largest = std::max(largest, scale[c]);
     }
@@ -243,7 +245,7 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<dataset::Sta
       std::min(1.0, std::max(opt.known_place_margin * quantile(nearest_dissimilarity, 0.99), 0.01));
   report.train_ms = ms_since(t_train);
 
-  map = algorithms::MapFile{};
+  algorithms::reset(map);
   map.image_width_px = run.image_width_px;
   map.image_height_px = run.image_height_px;
   map.thresholds = opt.thresholds;

@@ -74,6 +74,8 @@ int main(int argc, char** argv) {
   app.add_option("--trace", opt.trace_dir,
                  "also write every run frame by frame (truth, estimate, fix, verdicts) as CSV "
                  "into this folder: seed-N-nominal.csv, -kidnap, -dynamic, -long");
+  app.add_flag("--heading-terms", opt.heading_terms,
+               "floor: train the floor's map with heading terms (harmoloc-train --heading-terms)");
   app.add_flag("--quick", quick, "a short sweep: 5 kidnaps, a 1-minute long run");
   app.add_flag("--no-default-scene", no_default, "leave out the project's own default scene");
   app.add_flag("--quiet", quiet, "no progress on stderr");
@@ -144,6 +146,7 @@ int main(int argc, char** argv) {
     j["options"] = {{"kidnaps", opt.kidnaps},
                     {"long_minutes", opt.long_minutes},
                     {"parts", parts},
+                    {"heading_terms", opt.heading_terms},
                     {"roams", opt.roams}};
     j["results"] = nlohmann::json::array();
     for (const SceneResult& r : finished) j["results"].push_back(to_json(r));

@@ -74,6 +74,12 @@ int main(int argc, char** argv) {
   app.add_flag("--no-bearings", no_bearings,
                "do not store the boards' bearings (where each board is seen across the frame) in\n"
                "the map: the filter then weighs by areas alone, as maps before version 6");
+  bool heading_terms = false;
+  app.add_flag("--heading-terms", heading_terms,
+               "model the boards' areas over the heading too where the run drove a place at\n"
+               "several headings (a floor; map format 7), kept where they predict other passes\n"
+               "better. Experimental: not for the bare-metal kernels (no room), and on random\n"
+               "floors they bettered the heading and kidnaps but not the position (docs/sweep.md)");
   app.add_option("--out", out, "map file to write")->required();
   app.add_option("--config", config_path,
                  "firmware config whose colour thresholds to use (default: built-in)");
@@ -124,6 +130,7 @@ int main(int argc, char** argv) {
     opt.geometry = config.geometry;
     opt.use_odometry = !no_odometry;
     opt.bearings = !no_bearings;
+    if (heading_terms) opt.forward.heading_ridges = sim_host::kHeadingRidges;
     opt.label_tolerance_ns = static_cast<std::uint64_t>(std::llround(label_tolerance_ms * 1e6));
     if (label_offset == "auto") {
       opt.label_offset_auto = true;
@@ -332,6 +339,16 @@ int main(int argc, char** argv) {
               algorithms::is_floor_map(map.calibration)
                   ? "a floor map (lanes at several headings; the filter drops the route terms)"
                   : "a route map");
+          if (map.forward.has_heading_terms)
+            std::printf(
+                "heading terms the boards' areas modelled over the heading too: they predict "
+                "other passes to %.3g RMS against %.3g without (ridge %g)\n",
+                fw.validation_rmse, fw.mean_validation_rmse, fw.heading_ridge);
+          else if (fw.heading_terms_validation_rmse > 0.0)
+            std::printf(
+                "heading terms none: over the heading the areas predict other passes to %.3g RMS, "
+                "no better than %.3g without\n",
+                fw.heading_terms_validation_rmse, fw.validation_rmse);
         }
         if (fw.has_bearings) {
           std::string spread;

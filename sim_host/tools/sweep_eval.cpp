@@ -146,11 +146,19 @@ void floor_part(const Scenario& scene, const algorithms::ThresholdSet& threshold
     const std::string& d = coverage.description;
     r.floor_summary =
         d.substr(d.find("coverage run") == std::string::npos ? 0 : d.find("coverage run"));
-    const TrainedMap trained = train_on_scenario(coverage, kCoverageSeed, nullptr, &thresholds);
+    TrainOptions train;
+    if (opt.heading_terms) train.forward.heading_ridges = kHeadingRidges;
+    const TrainedMap trained =
+        train_on_scenario(coverage, kCoverageSeed, nullptr, &thresholds, &train);
     r.floor_train_frames = trained.frames;
     r.floor_train_ms = trained.report.train_ms + trained.report.forward_ms;
     r.floor_cv_rmse_x_m = trained.report.x.cv_rmse_m;
     r.floor_pass_heading_spread_rad = trained.report.forward.pass_heading_spread_rad;
+    const ForwardMapReport& fw = trained.report.forward;
+    r.floor_heading_ridge = fw.heading_ridge;
+    r.floor_validation_rmse = fw.validation_rmse;
+    r.floor_mean_validation_rmse =
+        fw.heading_ridge > 0.0 ? fw.mean_validation_rmse : fw.validation_rmse;
     r.floor_cv_rmse_y_m = trained.report.y.cv_rmse_m;
     const firmware::FirmwareConfig config = config_for(thresholds, opt);
     FixErrors fixes;

@@ -25,8 +25,10 @@ struct SweepOptions {
   /// Issue 20's floor runs: a map trained on the scene's coverage run, replayed on roams of the
   /// floor that the coverage run never drove (random_scene.hpp).
   bool floor = false;
-  int roams = 2;               ///< roams of the floor (each 8 poses, other lighting and noise)
-  int floor_kidnaps = 5;       ///< kidnaps in one more roam of the floor (0: none)
+  int roams = 2;          ///< roams of the floor (each 8 poses, other lighting and noise)
+  int floor_kidnaps = 5;  ///< kidnaps in one more roam of the floor (0: none)
+  /// The floor's map trained with heading terms (harmoloc-train --heading-terms).
+  bool heading_terms = false;
   int kidnaps = 20;            ///< kidnaps in the kidnap run (each >= 1 m)
   double long_minutes = 10.0;  ///< length of the long nominal run
   std::uint64_t filter_seed = 1;
@@ -91,7 +93,11 @@ struct SceneResult {
   std::size_t floor_train_frames = 0;
   double floor_train_ms = 0.0;
   double floor_cv_rmse_x_m = -1.0, floor_cv_rmse_y_m = -1.0;
-  double floor_pass_heading_spread_rad = -1.0;                  ///< the coverage run's
+  double floor_pass_heading_spread_rad = -1.0;  ///< the coverage run's
+  /// The coverage run's forward map: its heading terms' ridge (0: none), its validation RMS
+  /// (feature units, over the modelled boards) and the same without heading terms.
+  double floor_heading_ridge = 0.0;
+  double floor_validation_rmse = -1.0, floor_mean_validation_rmse = -1.0;
   double floor_roam_s = 0.0;                                    ///< the roams' run time
   double floor_fix_mse_x_m2 = -1.0, floor_fix_mse_y_m2 = -1.0;  ///< every frame with a fix
   double floor_rmse_m = -1.0;  ///< after first fix + settle_s, every roam's frames

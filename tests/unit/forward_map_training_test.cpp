@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <memory>
 #include <vector>
@@ -200,8 +201,9 @@ namespace {
 
 // A floor driven in lanes: for each heading, 5 lanes 0.35 m apart across a 1.4 m square
 // centred on (1.5, 1.5), each 1.4 m long, a frame every 5 mm; the robot travels 1 m between
-// lanes, so that each lane is a pass of its own.
-PlacedRun lanes_run(const std::vector<double>& headings_rad) {
+// lanes, so that each lane is a pass of its own. The second board's feature changes with the
+// heading by @p heading_gain sin(heading) (a board nearer the frame's edge at one heading).
+PlacedRun lanes_run(const std::vector<double>& headings_rad, double heading_gain = 0.0) {
   PlacedRun run;
   const double step = 0.005;
   double travel = 0.0;
@@ -212,7 +214,7 @@ PlacedRun lanes_run(const std::vector<double>& headings_rad) {
       for (int i = 0; i <= 280; ++i) {
         const double s = -0.7 + step * i;
         const double x = 1.5 + s * ux - off * uy, y = 1.5 + s * uy + off * ux;
-        add_frame(run, 1.0 + 0.1 * x, 2.0 + y, x, y, h, travel);
+        add_frame(run, 1.0 + 0.1 * x, 2.0 + y + heading_gain * std::sin(h), x, y, h, travel);
         travel += step;
       }
       travel += 1.0;
@@ -238,4 +240,36 @@ TEST(ForwardMapTraining, PassHeadingSpreadTellsAFloorFromARoute) {
   const double floor = spread(lanes_run({0.4, 0.4 + 30.0 * deg}));
   EXPECT_NEAR(floor, 30.0 * deg, 1.0 * deg) << floor / deg;
   EXPECT_GE(floor, static_cast<double>(ha::kFloorMapPassHeadingSpread_rad));
+}
+
+// Where the boards' areas change with the heading, a floor's map models them over the heading
+// (the first harmonic), and predicts each lane's view where the lanes cross; lanes at one heading
+// (a route) get no heading terms.
+TEST(ForwardMapTraining, HeadingTermsWhereTheAreasChangeWithTheHeading) {
+  const double deg = 3.14159265358979323846 / 180.0;
+  const double h0 = 0.4, h1 = 0.4 + 30.0 * deg;
+  auto map = std::make_unique<ha::ForwardMap>();
+  const PlacedRun floor = lanes_run({h0, h1}, 0.8);
+  hs::ForwardMapOptions with;
+  with.heading_ridges = hs::kHeadingRidges;
+  const hs::ForwardMapReport r =
+      hs::train_forward_map_placed(floor.features, floor.placed, 2, with, *map);
+  ASSERT_TRUE(map->has_heading_terms);
+  EXPECT_GT(r.heading_ridge, 0.0);
+  EXPECT_LT(r.validation_rmse, 0.3 * r.mean_validation_rmse)
+      << r.validation_rmse << " " << r.mean_validation_rmse;
+  std::array<float, ha::kMaxBoards> e{};
+  for (const double h : {h0, h1}) {
+    ha::expected_features(*map, ha::locate(*map, 1.5, 1.5), static_cast<float>(std::cos(h)),
+                          static_cast<float>(std::sin(h)), e.data());
+    EXPECT_NEAR(e[1], 2.0 + 1.5 + 0.8 * std::sin(h), 0.03) << h;
+    EXPECT_NEAR(e[0], 1.0 + 0.15, 0.01) << h;
+  }
+  auto plain = std::make_unique<ha::ForwardMap>();
+  const PlacedRun route = lanes_run({h0}, 0.8);
+  hs::train_forward_map_placed(route.features, route.placed, 2, with, *plain);
+  EXPECT_FALSE(plain->has_heading_terms);
+  // Without ridges to try (the default), none either.
+  hs::train_forward_map_placed(floor.features, floor.placed, 2, hs::ForwardMapOptions{}, *plain);
+  EXPECT_FALSE(plain->has_heading_terms);
 }

@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -10,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "harmoloc/algorithms/board_observation.hpp"
 #include "harmoloc/algorithms/crc32.hpp"
 #include "test_support.hpp"
 
@@ -605,6 +607,7 @@ TEST(MapCodec, LargestMapFitsTheSizeCap) {
   f.has_bearings = true;
   f.bearing_a1_rad = 1.0F;
   f.bearing_sigma_rad.fill(0.05F);
+  f.has_heading_terms = true;  // version 7
   const std::vector<std::uint8_t> b = ha::encode_map(*map);
   // Every count at its capacity but the calibration's (the trainer writes 3 of the 64 allowed).
   EXPECT_EQ(b.size() + ha::kMaxCalibrationEntries * 8U, ha::kMaxMapFileBytes);
@@ -691,6 +694,71 @@ TEST(MapCodec, ForwardMapRoundTripAndLayout) {
 
 // Only the tiles near the training run are stored: a lookup in one that is not reads the void
 // cell, far from the route, which the route term rules out.
+// Version 7: a floor map's heading terms follow the bearings (or the headings), flagged by bit 2,
+// and read back exactly; a term that is not finite is refused.
+TEST(MapCodec, HeadingTermsRoundTripAndChecks) {
+  auto map = make_map_with_forward();
+  const std::vector<std::uint8_t> plain = ha::encode_map(*map);
+  ha::ForwardMap& f = map->forward;
+  f.has_heading_terms = true;
+  for (std::size_t c = 0; c < f.stored_cells(); ++c) {
+    for (std::size_t b = 0; b < kBoards; ++b) {
+      f.heading_terms[(c * ha::kMaxBoards + b) * 2] = 0.01F * static_cast<float>(c + b);
+      f.heading_terms[(c * ha::kMaxBoards + b) * 2 + 1] = -0.02F * static_cast<float>(b);
+    }
+  }
+  const std::vector<std::uint8_t> bytes = ha::encode_map(*map);
+  ASSERT_EQ(bytes.size(), plain.size() + f.stored_cells() * kBoards * 8);
+  EXPECT_EQ(bytes[kOffFlags], 5U);
+  auto out = std::make_unique<ha::MapFile>();
+  ASSERT_FALSE(ha::decode_map(bytes.data(), bytes.size(), *out));
+  EXPECT_TRUE(out->forward.has_heading_terms);
+  for (std::size_t i = 0; i < f.stored_cells() * ha::kMaxBoards * 2; ++i)
+    ASSERT_EQ(out->forward.heading_terms[i], f.heading_terms[i]) << i;
+  EXPECT_EQ(ha::encode_map(*out), bytes);
+  // The first cell's first term sits right after the cells' headings, before the CRC and the
+  // calibration count.
+  const std::size_t first = plain.size() - 4 - 4;
+  for (float v : {std::numeric_limits<float>::infinity(), 2.0e6F}) {
+    std::vector<std::uint8_t> b = bytes;
+    put_f32(b, first, v);
+    fix_crc(b);
+    EXPECT_NE(decode_error(b).find("heading term"), std::string::npos) << v << decode_error(b);
+  }
+  std::vector<std::uint8_t> cut(bytes.begin(),
+                                bytes.begin() + static_cast<std::ptrdiff_t>(first + 8));
+  EXPECT_FALSE(decode_error(cut).empty());
+  // A map without them reads with none.
+  ASSERT_FALSE(ha::decode_map(plain.data(), plain.size(), *out));
+  EXPECT_FALSE(out->forward.has_heading_terms);
+}
+
+// What a cell with heading terms expects at a heading: the harmonic, never below 0; without a
+// heading (or without terms) the cell's value alone.
+TEST(ForwardMap, HeadingTermsAddTheFirstHarmonic) {
+  auto map = make_map_with_forward();
+  ha::ForwardMap& f = map->forward;
+  const std::size_t at = f.index(1, 0);
+  f.expected[at * ha::kMaxBoards + 0] = 1.0F;
+  f.heading_terms[at * ha::kMaxBoards * 2 + 0] = 0.5F;   // c
+  f.heading_terms[at * ha::kMaxBoards * 2 + 1] = -2.0F;  // s
+  const ha::GridPoint p = ha::locate(f, 1.55, 0.25);
+  std::array<float, ha::kMaxBoards> e{};
+  ha::expected_features(f, p, 1.0F, 0.0F, e.data());
+  EXPECT_FLOAT_EQ(e[0], 1.0F);  // no terms in the map yet
+  f.has_heading_terms = true;
+  ha::expected_features(f, p, 1.0F, 0.0F, e.data());
+  EXPECT_FLOAT_EQ(e[0], 1.5F);
+  ha::expected_features(f, p, 0.0F, -1.0F, e.data());
+  EXPECT_FLOAT_EQ(e[0], 3.0F);
+  ha::expected_features(f, p, 0.0F, 1.0F, e.data());
+  EXPECT_FLOAT_EQ(e[0], 0.0F);  // 1 - 2 clamped
+  ha::expected_features(f, p, e.data());
+  EXPECT_FLOAT_EQ(e[0], 1.0F);
+  // The most any heading expects there: 1 + hypot(0.5, 2).
+  EXPECT_NEAR(ha::board_maxima(f)[0], 1.0F + std::hypot(0.5F, 2.0F), 1e-5F);
+}
+
 TEST(MapCodec, SparseTilesRoundTripAndTheVoid) {
   auto map = make_map_with_forward();
   ha::ForwardMap& f = map->forward;
@@ -815,7 +883,7 @@ TEST(MapCodec, ForwardMapCorruptionWithValidChecksum) {
       },
       "models no board");
   reject(
-      "unknown flag", [](auto& b) { b[kOffFlags] = 5; }, "flags");
+      "unknown flag", [](auto& b) { b[kOffFlags] = 9; }, "flags");
   reject(
       "unknown high flag", [](auto& b) { b[kOffFlags] = 0x81; }, "flags");
   reject(
@@ -909,7 +977,7 @@ TEST(MapCodec, ForwardMapBearingsRoundTripAndLayout) {
   const auto map = make_map_with_bearings();
   const std::vector<std::uint8_t> bytes = ha::encode_map(*map);
   ASSERT_EQ(bytes.size(), kOffBearingsEnd + 4 + 4);
-  EXPECT_EQ(get_u32(bytes, kOffVersion), 6U);
+  EXPECT_EQ(get_u32(bytes, kOffVersion), ha::kMapFormatVersion);
   EXPECT_EQ(bytes[kOffFlags], 3U);
   std::uint32_t bits = 0;
   std::memcpy(&bits, &map->forward.bearing_a1_rad, 4);

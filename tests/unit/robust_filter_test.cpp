@@ -179,7 +179,7 @@ TEST(BoardObservation, ImplausibleFrameIsMostBoardsBeyondAnywhereOnTheMap) {
   EXPECT_TRUE(ha::frame_implausible(*map, m, o, 2.0));
   EXPECT_FALSE(ha::frame_implausible(*map, m, o, 3.0));
   EXPECT_FALSE(ha::frame_implausible(*map, m, o, 0.0));  // the check off
-  const ha::ForwardMap none;
+  static const ha::ForwardMap none;                      // megabytes: not on the stack
   EXPECT_FALSE(ha::frame_implausible(none, ha::board_maxima(none), o, 2.0));
 }
 

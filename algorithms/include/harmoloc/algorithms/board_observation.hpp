@@ -140,10 +140,11 @@ struct BoardAssessment {
 /// make the estimate look wrong. For the kidnap test: do the boards prefer the global fix (a)
 /// to the estimate (b)? Boards whose bit is set in @p leave_out do not count (those the filter
 /// has found moved or hidden: a board a person is walking away from is still partly hidden, and
-/// with three boards its shortfall alone can favour a place a few centimetres off).
+/// with three boards its shortfall alone can favour a place a few centimetres off). Both places
+/// are seen at heading @p yaw_rad (what a map with heading terms expects depends on it).
 double board_preference(const ForwardMap& map, const BoardFeatures& observed, double ax_m,
                         double ay_m, double bx_m, double by_m, const BoardModelParams& params,
-                        std::uint32_t leave_out = 0);
+                        std::uint32_t leave_out = 0, double yaw_rad = 0.0);
 
 /// The place near a fix that the boards prefer most to place b, and by how much (nats).
 struct PlacePreference {
@@ -161,7 +162,8 @@ struct PlacePreference {
 PlacePreference board_preference_near(const ForwardMap& map, const BoardFeatures& observed,
                                       double ax_m, double ay_m, double radius_m, double bx_m,
                                       double by_m, double min_distance_m,
-                                      const BoardModelParams& params, std::uint32_t leave_out = 0);
+                                      const BoardModelParams& params, std::uint32_t leave_out = 0,
+                                      double yaw_rad = 0.0);
 
 /// The per-board state that lives from frame to frame: each board's motion index.
 class BoardReliability {

@@ -10,6 +10,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <new>
 
 #include "harmoloc/algorithms/segmentation.hpp"
 
@@ -23,6 +24,11 @@ namespace harmoloc::algorithms {
 /// Whether the forward map has room for the boards' bearings (1). A board's build may leave them
 /// out (0: the bare-metal kernels do, to fit 256 KiB); it then refuses a map that holds them.
 #define HARMOLOC_FORWARD_MAP_BEARINGS 1
+#endif
+#ifndef HARMOLOC_FORWARD_MAP_HEADING_TERMS
+/// Whether the forward map has room for the heading terms of a floor map (1). A board's build
+/// may leave them out (0: the bare-metal kernels do); it then refuses a map that holds them.
+#define HARMOLOC_FORWARD_MAP_HEADING_TERMS 1
 #endif
 #ifndef HARMOLOC_FORWARD_MAP_MAX_TILE_GRID
 /// Tile positions the grid may span (stored or not): 128 x 128 tiles of 16 cm at 2 cm cells.
@@ -101,6 +107,18 @@ struct ForwardMap {
   /// only, never read, without kBearingStorage).
   std::array<float, (kBearingStorage ? kMaxCells + 1 : 1) * kMaxBoards> bearing_rad{};
 
+  /// Heading terms (map version 7): where the training run drove a place at several headings
+  /// (a floor), what the camera sees there depends on the heading too; each stored cell then
+  /// holds, per board, the first harmonic of the area over the heading: the board's expected
+  /// feature at heading yaw is expected + c cos(yaw) + s sin(yaw) (at least 0). The trainer fits
+  /// them only where they predict other passes better (docs/filter.md); a route map has none.
+  bool has_heading_terms = false;
+  /// Whether this build holds heading terms (HARMOLOC_FORWARD_MAP_HEADING_TERMS).
+  static constexpr bool kHeadingTermStorage = HARMOLOC_FORWARD_MAP_HEADING_TERMS != 0;
+  /// Per stored cell and the void cell (one cell only without kHeadingTermStorage), per board:
+  /// c, s (2 kMaxBoards a cell).
+  std::array<float, (kHeadingTermStorage ? kMaxCells + 1 : 1) * kMaxBoards * 2> heading_terms{};
+
   bool present() const { return columns > 0 && rows > 0; }
   /// Stored cells (whole tiles, including the cells of border tiles beyond the grid).
   std::size_t stored_cells() const { return static_cast<std::size_t>(tile_count) * kTileCells; }
@@ -120,6 +138,13 @@ struct ForwardMap {
     return expected.data() + index(c, r) * kMaxBoards;
   }
 };
+
+/// Puts @p map back to a value-initialised ForwardMap in place: the object is megabytes, and an
+/// assignment from a temporary would put a second one on the stack.
+inline void reset(ForwardMap& map) {
+  map.~ForwardMap();
+  ::new (static_cast<void*>(&map)) ForwardMap();
+}
 
 /// A board's centroid column gives a bearing only with at least this many pixels and none on
 /// the frame's left or right edge (a blob the frame cuts has its centroid pulled inwards); the
@@ -161,8 +186,14 @@ struct GridPoint {
 /// Locates (@p x_m, @p y_m) on @p map's grid (clamped to the border). @p map must be present().
 GridPoint locate(const ForwardMap& map, double x_m, double y_m);
 
-/// The expected features of all map.board_count boards at @p point.
+/// The expected features of all map.board_count boards at @p point (a map with heading terms:
+/// their value over every heading, the terms left out).
 void expected_features(const ForwardMap& map, const GridPoint& point, float* out);
+
+/// The same seen at heading yaw, given as @p cos_yaw, @p sin_yaw: with the map's heading terms
+/// where it has them (each at least 0).
+void expected_features(const ForwardMap& map, const GridPoint& point, float cos_yaw, float sin_yaw,
+                       float* out);
 
 /// The distance to the training run at @p point (metres; bilinear, plus the distance beyond the
 /// grid for a position outside it).

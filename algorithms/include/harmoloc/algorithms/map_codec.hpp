@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <new>
 #include <vector>
 
 #include "harmoloc/algorithms/forward_map.hpp"
@@ -15,10 +16,11 @@ namespace harmoloc::algorithms {
 
 /// Version 2 added the known-place dissimilarity bound, version 3 the forward map, version 4
 /// the calibration measured on the training run, version 5 stores the forward map's tiles near
-/// the training run instead of its whole grid, version 6 adds the board bearings; versions 1 to
-/// 5 are still read (without what they lack; a version 3 or 4 forward map as a grid of which
-/// every tile is stored, a forward map before version 6 without bearings).
-constexpr std::uint32_t kMapFormatVersion = 6;
+/// the training run instead of its whole grid, version 6 adds the board bearings, version 7 the
+/// heading terms of a floor map; versions 1 to 6 are still read (without what they lack; a
+/// version 3 or 4 forward map as a grid of which every tile is stored, a forward map before
+/// version 6 without bearings).
+constexpr std::uint32_t kMapFormatVersion = 7;
 
 /// What the trainer measured on the training run that the firmware derives its scene-dependent
 /// settings from (docs/map-format.md): nothing of it is a constant tuned to one scene.
@@ -65,8 +67,9 @@ constexpr std::size_t kMaxMapFileBytes =
     kMaxBoards * 4U + 4U + 4U + (ForwardMap::kMaxTileGrid + 7U) / 8U +
     ForwardMap::kMaxCells * (kMaxBoards + 2U) * 4U +
     // Version 6: the bearing law (a1, a3), each board's bearing spread, every cell's bearings.
-    8U + kMaxBoards * 4U + ForwardMap::kMaxCells * kMaxBoards * 4U + 4U +
-    kMaxCalibrationEntries * 8U + 4U;
+    8U + kMaxBoards * 4U + ForwardMap::kMaxCells * kMaxBoards * 4U +
+    // Version 7: every cell's heading terms.
+    ForwardMap::kMaxCells * kMaxBoards * 8U + 4U + kMaxCalibrationEntries * 8U + 4U;
 
 /// How far from the map's origin a position in a map may be (metres): a training target beyond
 /// it is refused (a label in millimetres or at 1e30 must not become a map the firmware trusts).
@@ -81,6 +84,12 @@ struct MapFile {
   ForwardMap forward;  ///< absent (columns 0) in maps before version 3
   MapCalibration calibration;
 };
+
+/// Puts @p map back to a value-initialised MapFile in place (megabytes: see reset(ForwardMap&)).
+inline void reset(MapFile& map) {
+  map.~MapFile();
+  ::new (static_cast<void*>(&map)) MapFile();
+}
 
 /// Serialises @p map (host/trainer side; allocates).
 std::vector<std::uint8_t> encode_map(const MapFile& map);

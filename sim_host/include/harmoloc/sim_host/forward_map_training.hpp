@@ -16,6 +16,9 @@
 
 namespace harmoloc::sim_host {
 
+/// The heading terms' ridges harmoloc-train --heading-terms tries (ForwardMapOptions).
+inline const std::vector<double> kHeadingRidges{0.1, 0.03, 0.01, 0.003, 0.001};
+
 struct ForwardMapOptions {
   double max_label_gap_s = 1.0;  ///< interpolate between labels at most this far apart in time
   /// The grid stores the tiles within this distance of a training position.
@@ -25,6 +28,16 @@ struct ForwardMapOptions {
   /// a board whose build holds fewer (the bare-metal kernels: 64).
   std::size_t max_tiles = 0;
   std::vector<double> bandwidths_m{0.01, 0.015, 0.02, 0.03, 0.05};  ///< candidates
+  /// Ridges tried for the heading terms (ForwardMap::has_heading_terms), times the kernel weight
+  /// on the harmonic's two coefficients, cross-validated with the bandwidths against other
+  /// passes; empty (the default): no heading terms. kHeadingRidges is the trainer's list
+  /// (`harmoloc-train --heading-terms`). Not the default: on the floor runs of 19 random scenes
+  /// they brought the heading and the kidnaps closer but the position further (docs/sweep.md).
+  std::vector<double> heading_ridges;
+  /// The heading terms are kept only when they lower the validation's mean square error by at
+  /// least this share (a route's passes run one way: the terms fit its few degrees of wobble
+  /// and gain nothing).
+  double heading_terms_min_gain = 0.05;
   double exclude_same_pass_s = 1.0;  ///< validation leaves out frames this close in time
   /// With frames placed by odometry: validation leaves out frames this close in travel instead
   /// (a robot that stands still does not start another pass).
@@ -37,9 +50,17 @@ struct ForwardMapReport {
   std::size_t from_harmonic = 0;  ///< positioned by the harmonic map (known place)
   std::size_t by_odometry = 0;    ///< placed by odometry between the labels
   double bandwidth_m = 0.0;
-  std::size_t cells = 0;         ///< stored cells (the stored tiles' cells)
-  std::vector<double> sigma;     ///< per board (feature units), 0 = not modelled
+  std::size_t cells = 0;      ///< stored cells (the stored tiles' cells)
+  std::vector<double> sigma;  ///< per board (feature units), 0 = not modelled
+  /// The same without heading terms (equal to sigma when the map has none): the noise a model
+  /// that sees no heading (the harmonic map) meets.
+  std::vector<double> heading_blind_sigma;
   double validation_rmse = 0.0;  ///< over all modelled boards, feature units
+  /// The heading terms' ridge when the map holds them (0: none), the validation RMS without them
+  /// (then) and the best with them (whether kept or not; 0: not tried).
+  double heading_ridge = 0.0;
+  double mean_validation_rmse = 0.0;
+  double heading_terms_validation_rmse = 0.0;
   /// Median distance from a frame to the nearest frame of another pass (metres).
   double pass_spread_m = 0.0;
   /// Upper quartile of the heading difference between a frame and the nearest frame of another
