@@ -2,8 +2,8 @@
 // the fuzzer reaches the body); when it decodes, encode_map must give back exactly the same
 // bytes, and decoding those again must give the same map. A difference means the decoder
 // accepts something the format does not define (an ignored field, a non-canonical encoding).
-// A decoded forward map without bearings is then given some (map version 6) and must round trip
-// with them too.
+// A decoded forward map without bearings is then given some (map version 6), and one without
+// heading terms some (version 7), and must round trip with them too.
 
 #include <cstdint>
 #include <cstring>
@@ -79,6 +79,11 @@ bool same_model(const MapFile& a, const MapFile& b) {
         !same_bits(f.bearing_rad.data(), g.bearing_rad.data(), cells * kMaxBoards * sizeof(float)))
       return false;
   }
+  if (f.has_heading_terms != g.has_heading_terms) return false;
+  // Version 7: every stored cell's heading terms.
+  if (f.has_heading_terms && !same_bits(f.heading_terms.data(), g.heading_terms.data(),
+                                        cells * kMaxBoards * 2 * sizeof(float)))
+    return false;
   return same_bits(f.expected.data(), g.expected.data(), cells * kMaxBoards * sizeof(float)) &&
          same_bits(f.route_distance_m.data(), g.route_distance_m.data(), cells * sizeof(float)) &&
          (!f.has_heading ||
@@ -110,6 +115,26 @@ void check_added_bearings(const std::vector<std::uint8_t>& input) {
                       "a map given bearings re-encodes to different bytes");
 }
 
+// A decoded forward map without heading terms is given some (map version 7), drawn from the
+// input's bytes, and must survive encode and decode with them.
+void check_added_heading_terms(const std::vector<std::uint8_t>& input) {
+  ForwardMap& f = g_map.forward;
+  if (!f.present() || f.has_heading_terms) return;
+  f.has_heading_terms = true;
+  const std::size_t cells = f.stored_cells();
+  for (std::size_t i = 0; i < cells * f.board_count * 2; ++i) {
+    const std::size_t c = i / (2 * f.board_count), k = i % (2 * f.board_count);
+    f.heading_terms[c * kMaxBoards * 2 + k] =
+        0.01F * static_cast<float>(input[i % input.size()]) - 1.28F;
+  }
+  const std::vector<std::uint8_t> encoded = encode_map(g_map);
+  HARMOLOC_FUZZ_CHECK(!decode_map(encoded.data(), encoded.size(), g_again),
+                      "a map given heading terms does not decode");
+  HARMOLOC_FUZZ_CHECK(same_model(g_map, g_again), "decode(encode(map with heading terms)) differs");
+  HARMOLOC_FUZZ_CHECK(encode_map(g_again) == encoded,
+                      "a map given heading terms re-encodes to different bytes");
+}
+
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
@@ -132,7 +157,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     // forward-v3.hmap, forward-v5-sparse.hmap) is written back as the current version, without
     // what it lacked: the same model, a version 1 map's dissimilarity bound at 1, no forward map
     // before version 3, every feature weight 1 and no calibration before version 4, a forward
-    // map of versions 3 and 4 with every tile of its grid stored, no bearings before version 6.
+    // map of versions 3 and 4 with every tile of its grid stored, no bearings before version 6,
+    // no heading terms before version 7.
     HARMOLOC_FUZZ_CHECK(input[8] != 1 || g_map.model.max_dissimilarity == 1.0F,
                         "a version 1 map decodes with a dissimilarity bound");
     HARMOLOC_FUZZ_CHECK(input[8] >= 3 || !g_map.forward.present(),
@@ -147,11 +173,14 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     HARMOLOC_FUZZ_CHECK(
         input[8] >= 5 || !f.present() || f.tile_count == f.tile_columns * f.tile_rows,
         "a version 3 or 4 forward map decodes without every tile");
-    HARMOLOC_FUZZ_CHECK(!f.has_bearings, "a map before version 6 decodes with bearings");
+    HARMOLOC_FUZZ_CHECK(input[8] >= 6 || !f.has_bearings,
+                        "a map before version 6 decodes with bearings");
+    HARMOLOC_FUZZ_CHECK(!f.has_heading_terms, "a map before version 7 decodes with heading terms");
     HARMOLOC_FUZZ_CHECK(!decode_map(encoded.data(), encoded.size(), g_again),
                         "a re-encoded older map does not decode");
     HARMOLOC_FUZZ_CHECK(same_model(g_map, g_again), "decode(encode(older map)) differs");
     check_added_bearings(input);
+    check_added_heading_terms(input);
     return 0;
   }
   HARMOLOC_FUZZ_CHECK(encoded.size() == input.size(),
@@ -162,5 +191,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
                       "an encoded map does not decode");
   HARMOLOC_FUZZ_CHECK(same_model(g_map, g_again), "decode(encode(map)) differs from map");
   check_added_bearings(input);
+  check_added_heading_terms(input);
   return 0;
 }
