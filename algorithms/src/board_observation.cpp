@@ -50,14 +50,11 @@ bool frame_implausible(const ForwardMap& map, const std::array<float, kMaxBoards
   return modelled > 0 && 2 * beyond > modelled;
 }
 
-double board_preference(const ForwardMap& map, const BoardFeatures& observed, double ax_m,
-                        double ay_m, double bx_m, double by_m, const BoardModelParams& params,
-                        std::uint32_t leave_out, double yaw_rad) {
-  std::array<float, kMaxBoards> ea{}, eb{};
-  const auto cos_yaw = static_cast<float>(std::cos(yaw_rad));
-  const auto sin_yaw = static_cast<float>(std::sin(yaw_rad));
-  expected_features(map, locate(map, ax_m, ay_m), cos_yaw, sin_yaw, ea.data());
-  expected_features(map, locate(map, bx_m, by_m), cos_yaw, sin_yaw, eb.data());
+namespace {
+
+// board_preference from what the map expects at place a (@p ea) and at place b (@p eb).
+double preference(const ForwardMap& map, const BoardFeatures& observed, const float* ea,
+                  const float* eb, const BoardModelParams& params, std::uint32_t leave_out) {
   const std::size_t boards = std::min<std::size_t>({map.board_count, observed.count, kMaxBoards});
   const double c = params.outlier_floor;
   const double hidden = std::max(params.hidden_floor, c);
@@ -80,6 +77,18 @@ double board_preference(const ForwardMap& map, const BoardFeatures& observed, do
   return sum;
 }
 
+}  // namespace
+
+double board_preference(const ForwardMap& map, const BoardFeatures& observed, double ax_m,
+                        double ay_m, double bx_m, double by_m, const BoardModelParams& params,
+                        std::uint32_t leave_out, double yaw_rad) {
+  std::array<float, kMaxBoards> ea{}, eb{};
+  const SeenHeading heading = seen_heading(yaw_rad);
+  expected_features(map, locate(map, ax_m, ay_m), heading, ea.data());
+  expected_features(map, locate(map, bx_m, by_m), heading, eb.data());
+  return preference(map, observed, ea.data(), eb.data(), params, leave_out);
+}
+
 PlacePreference board_preference_near(const ForwardMap& map, const BoardFeatures& observed,
                                       double ax_m, double ay_m, double radius_m, double bx_m,
                                       double by_m, double min_distance_m,
@@ -89,6 +98,10 @@ PlacePreference board_preference_near(const ForwardMap& map, const BoardFeatures
       board_preference(map, observed, ax_m, ay_m, bx_m, by_m, params, leave_out, yaw_rad), ax_m,
       ay_m};
   if (!(radius_m > 0.0) || !map.present()) return best;
+  // Place b and the heading are the same for every candidate.
+  const SeenHeading heading = seen_heading(yaw_rad);
+  std::array<float, kMaxBoards> ea{}, eb{};
+  expected_features(map, locate(map, bx_m, by_m), heading, eb.data());
   // A grid of at most 25 x 25 places over the disc, none finer than the map's cells.
   const double step = std::max(static_cast<double>(map.cell_m), radius_m / 12.0);
   const int reach = static_cast<int>(std::floor(radius_m / step));
@@ -99,9 +112,10 @@ PlacePreference board_preference_near(const ForwardMap& map, const BoardFeatures
       if (dx * dx + dy * dy > radius_m * radius_m || (i == 0 && j == 0)) continue;
       const double x = ax_m + dx, y = ay_m + dy;
       if (std::hypot(x - bx_m, y - by_m) < min_distance_m) continue;
-      if (static_cast<double>(route_distance(map, locate(map, x, y))) > on_route_m) continue;
-      const double nats =
-          board_preference(map, observed, x, y, bx_m, by_m, params, leave_out, yaw_rad);
+      const GridPoint at = locate(map, x, y);
+      if (static_cast<double>(route_distance(map, at)) > on_route_m) continue;
+      expected_features(map, at, heading, ea.data());
+      const double nats = preference(map, observed, ea.data(), eb.data(), params, leave_out);
       if (nats > best.nats) best = PlacePreference{nats, x, y};
     }
   }
@@ -140,9 +154,8 @@ BoardAssessment BoardReliability::assess(const ForwardMap& map, const BoardFeatu
   update.boards = std::min<std::size_t>(map.board_count, observed.count);
   const GridPoint at = locate(map, estimate.x_m, estimate.y_m);
   std::array<float, kMaxBoards> expected{};
-  const auto cos_yaw = static_cast<float>(std::cos(estimate.yaw_rad));
-  const auto sin_yaw = static_cast<float>(std::sin(estimate.yaw_rad));
-  expected_features(map, at, cos_yaw, sin_yaw, expected.data());
+  const SeenHeading heading = seen_heading(estimate.yaw_rad);
+  expected_features(map, at, heading, expected.data());
   // The range of what the map expects within the spread around the estimate (a cross of four
   // points): a board whose area falls inside it, or nearest its edge, is judged by that.
   std::array<float, kMaxBoards> lo = expected, hi = expected;
@@ -159,7 +172,7 @@ BoardAssessment BoardReliability::assess(const ForwardMap& map, const BoardFeatu
     std::array<float, kMaxBoards> e{};
     for (const auto& o : offsets) {
       const GridPoint p = locate(map, estimate.x_m + o[0], estimate.y_m + o[1]);
-      expected_features(map, p, cos_yaw, sin_yaw, e.data());
+      expected_features(map, p, heading, e.data());
       for (std::size_t b = 0; b < kMaxBoards; ++b) {
         lo[b] = std::min(lo[b], e[b]);
         hi[b] = std::max(hi[b], e[b]);

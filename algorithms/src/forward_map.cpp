@@ -9,6 +9,17 @@ namespace {
 
 constexpr float kPiF = 3.14159265358979F;
 
+static_assert(ForwardMap::kHeadingSectors == 16, "the edge table below has 16 entries");
+// Cosine and sine of sector edge k, at -pi + k pi / 8.
+constexpr float kEdgeCos[16] = {-1.000000000F, -0.923879533F, -0.707106781F, -0.382683432F,
+                                0.000000000F,  0.382683432F,  0.707106781F,  0.923879533F,
+                                1.000000000F,  0.923879533F,  0.707106781F,  0.382683432F,
+                                0.000000000F,  -0.382683432F, -0.707106781F, -0.923879533F};
+constexpr float kEdgeSin[16] = {0.000000000F,  -0.382683432F, -0.707106781F, -0.923879533F,
+                                -1.000000000F, -0.923879533F, -0.707106781F, -0.382683432F,
+                                0.000000000F,  0.382683432F,  0.707106781F,  0.923879533F,
+                                1.000000000F,  0.923879533F,  0.707106781F,  0.382683432F};
+
 // Cell coordinate along one axis: the lower corner index and the fraction towards the next,
 // clamped to the grid; @p outside_m gets how far beyond the border the position lies.
 void axis(double position_m, float origin_m, float cell_m, std::uint32_t cells,
@@ -68,6 +79,11 @@ bool lay_out_grid(ForwardMap& map, std::uint32_t columns, std::uint32_t rows,
     std::fill_n(map.heading_terms.begin() + ForwardMap::kVoidCell * kMaxBoards * 2, kMaxBoards * 2,
                 0.0F);
   }
+  map.has_heading_coverage = false;
+  if (ForwardMap::kHeadingTermStorage) {
+    std::fill_n(map.heading_cover.begin(), cells, std::uint16_t{0});
+    map.heading_cover[ForwardMap::kVoidCell] = 0;
+  }
   map.has_bearings = false;
   map.bearing_a1_rad = map.bearing_a3_rad = 0.0F;
   map.bearing_sigma_rad.fill(0.0F);
@@ -115,7 +131,52 @@ void expected_features(const ForwardMap& map, const GridPoint& point, float* out
   }
 }
 
-void expected_features(const ForwardMap& map, const GridPoint& point, float cos_yaw, float sin_yaw,
+int heading_sector(double yaw_rad) {
+  return seen_heading(yaw_rad).sector;
+}
+
+SeenHeading seen_heading(double yaw_rad) {
+  if (!std::isfinite(yaw_rad)) yaw_rad = 0.0;
+  const double two_pi = 2.0 * static_cast<double>(kPiF);
+  double u = (yaw_rad + static_cast<double>(kPiF)) / two_pi;  // turns from -pi
+  u -= std::floor(u);
+  const double at = u * ForwardMap::kHeadingSectors;
+  SeenHeading h;
+  h.sector = std::min(static_cast<int>(at), ForwardMap::kHeadingSectors - 1);
+  h.within = static_cast<float>(std::min(1.0, at - h.sector));
+  h.cos_yaw = static_cast<float>(std::cos(yaw_rad));
+  h.sin_yaw = static_cast<float>(std::sin(yaw_rad));
+  return h;
+}
+
+namespace {
+
+// The heading at which the cell of storage index @p at reads @p h: @p h itself where the cell
+// covers it (or holds no coverage), else the nearest edge of its covered sectors.
+void covered_heading(const ForwardMap& map, std::size_t at, const SeenHeading& h, float& cos_yaw,
+                     float& sin_yaw) {
+  cos_yaw = h.cos_yaw;
+  sin_yaw = h.sin_yaw;
+  if (!map.has_heading_coverage || !h.keep_to_coverage) return;
+  const std::uint32_t mask = map.heading_cover[at];
+  if (mask == 0U || ((mask >> h.sector) & 1U) != 0U) return;
+  constexpr int n = ForwardMap::kHeadingSectors;
+  for (int d = 1; d <= n / 2; ++d) {
+    const int up = (h.sector + d) % n, down = (h.sector - d + n) % n;
+    const bool has_up = ((mask >> up) & 1U) != 0U, has_down = ((mask >> down) & 1U) != 0U;
+    if (!has_up && !has_down) continue;
+    // The sector above is entered at its lower edge, the one below left at its upper edge; at
+    // the same count of sectors, the nearer edge.
+    const int edge = has_down && (!has_up || h.within < 0.5F) ? (down + 1) % n : up;
+    cos_yaw = kEdgeCos[edge];
+    sin_yaw = kEdgeSin[edge];
+    return;
+  }
+}
+
+}  // namespace
+
+void expected_features(const ForwardMap& map, const GridPoint& point, const SeenHeading& heading,
                        float* out) {
   expected_features(map, point, out);
   if (!ForwardMap::kHeadingTermStorage || !map.has_heading_terms) return;
@@ -123,10 +184,24 @@ void expected_features(const ForwardMap& map, const GridPoint& point, float cos_
   for (int k = 0; k < 4; ++k) {
     const float w = point.weight[k];
     if (w == 0.0F) continue;
+    float c = 0.0F, s = 0.0F;
+    covered_heading(map, point.index[k], heading, c, s);
     const float* t = map.heading_terms.data() + point.index[k] * kMaxBoards * 2;
-    for (std::size_t b = 0; b < n; ++b) out[b] += w * (t[2 * b] * cos_yaw + t[2 * b + 1] * sin_yaw);
+    for (std::size_t b = 0; b < n; ++b) out[b] += w * (t[2 * b] * c + t[2 * b + 1] * s);
   }
   for (std::size_t b = 0; b < n; ++b) out[b] = std::max(out[b], 0.0F);
+}
+
+bool heading_covered(const ForwardMap& map, const GridPoint& point, const SeenHeading& heading) {
+  int best = -1;
+  for (int k = 0; k < 4; ++k) {
+    if (point.index[k] == ForwardMap::kVoidCell) continue;
+    if (best < 0 || point.weight[k] > point.weight[best]) best = k;
+  }
+  if (best < 0) return false;
+  if (!ForwardMap::kHeadingTermStorage || !map.has_heading_coverage) return true;
+  const std::uint32_t mask = map.heading_cover[point.index[best]];
+  return mask == 0U || ((mask >> heading.sector) & 1U) != 0U;
 }
 
 bool board_image_angle(const ForwardMap& map, const AreaVector& areas, std::size_t b,

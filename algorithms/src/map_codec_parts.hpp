@@ -31,6 +31,12 @@ class Reader {
     v = data_[pos_++];
     return true;
   }
+  bool u16(std::uint16_t& v, const char* what) {
+    if (!need(2, what)) return false;
+    v = static_cast<std::uint16_t>(data_[pos_] | (data_[pos_ + 1] << 8));
+    pos_ += 2;
+    return true;
+  }
   bool u32(std::uint32_t& v, const char* what) {
     if (!need(4, what)) return false;
     v = 0;

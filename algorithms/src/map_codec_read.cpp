@@ -122,8 +122,9 @@ MapError decode_map(const std::uint8_t* data, std::size_t size, MapFile& map) {
     }
   }
   map.forward.columns = map.forward.rows = 0;
-  map.forward.has_bearings = false;       // before version 6 (and without a forward map): none
-  map.forward.has_heading_terms = false;  // before version 7: none
+  map.forward.has_bearings = false;          // before version 6 (and without a forward map): none
+  map.forward.has_heading_terms = false;     // before version 7: none
+  map.forward.has_heading_coverage = false;  // before version 8: none
   if (version >= 3) {
     if (const MapError e = decode_forward(r, version, boards, map.forward)) return e;
   }

@@ -105,6 +105,21 @@ MapError decode_heading_terms(Reader& r, ForwardMap& f) {
   return MapError{};
 }
 
+// The heading coverage (version 8), after the heading terms: every stored cell's sectors, kept
+// only where this build holds heading terms (without them nothing reads it).
+MapError decode_heading_coverage(Reader& r, ForwardMap& f) {
+  const std::size_t cells = f.stored_cells();
+  if (!r.need(cells * 2U, "forward map heading coverage"))
+    return MapError{"truncated: the forward map's heading coverage is shorter than its size says",
+                    r.pos()};
+  for (std::size_t c = 0; c < cells; ++c) {
+    std::uint16_t mask = 0;
+    r.u16(mask, "forward map heading coverage");
+    if (ForwardMap::kHeadingTermStorage) f.heading_cover[c] = mask;
+  }
+  return MapError{};
+}
+
 }  // namespace
 
 // The forward map section (version 3; tiled from version 5, bearings from version 6).
@@ -113,6 +128,7 @@ MapError decode_forward(Reader& r, std::uint32_t version, std::uint32_t boards, 
   f.columns = f.rows = 0;
   f.has_bearings = false;
   f.has_heading_terms = false;
+  f.has_heading_coverage = false;
   if (!r.u32(columns, "forward map size") || !r.u32(rows, "forward map size"))
     return MapError{"truncated: no room for the forward map's size", r.pos()};
   if (columns == 0 && rows == 0) return MapError{};
@@ -156,10 +172,13 @@ MapError decode_forward(Reader& r, std::uint32_t version, std::uint32_t boards, 
       !r.u8(pad[1], "forward map flags") || !r.u8(pad[2], "forward map flags")) {
     return MapError{"truncated: the forward map's flags are cut short", r.pos()};
   }
-  // Bit 0: headings; bit 1 (version 6 on): bearings; bit 2 (version 7 on): heading terms.
-  const unsigned known = version >= 7 ? 7U : version >= 6 ? 3U : 1U;
+  // Bit 0: headings; bit 1 (version 6 on): bearings; bit 2 (version 7 on): heading terms; bit 3
+  // (version 8 on): heading coverage.
+  const unsigned known = version >= 8 ? 15U : version >= 7 ? 7U : version >= 6 ? 3U : 1U;
   if ((flag & ~known) != 0U || pad[0] != 0 || pad[1] != 0 || pad[2] != 0)
     return MapError{"forward map flags: unknown bits set", r.pos()};
+  if ((flag & 8U) != 0U && (flag & 1U) == 0U)
+    return MapError{"forward map holds heading coverage but no headings", r.pos()};
   if ((flag & 2U) != 0U && !ForwardMap::kBearingStorage)
     return MapError{
         "forward map holds bearings this build has no room for (train it with "
@@ -223,6 +242,10 @@ MapError decode_forward(Reader& r, std::uint32_t version, std::uint32_t boards, 
   if (!e && (flag & 4U) != 0U) {
     e = decode_heading_terms(r, f);
     f.has_heading_terms = !e;
+  }
+  if (!e && (flag & 8U) != 0U) {
+    e = decode_heading_coverage(r, f);
+    f.has_heading_coverage = !e && ForwardMap::kHeadingTermStorage;
   }
   if (e) {
     f.columns = f.rows = 0;

@@ -18,6 +18,10 @@ class Writer {
     out.insert(out.end(), b, b + n);
   }
   void u8(std::uint8_t v) { out.push_back(v); }
+  void u16(std::uint16_t v) {
+    out.push_back(static_cast<std::uint8_t>(v));
+    out.push_back(static_cast<std::uint8_t>(v >> 8));
+  }
   void u32(std::uint32_t v) {
     for (int i = 0; i < 4; ++i) out.push_back(static_cast<std::uint8_t>(v >> (8 * i)));
   }
@@ -74,10 +78,11 @@ std::vector<std::uint8_t> encode_map(const MapFile& map) {
     w.u32(f.board_count);
     for (std::size_t b = 0; b < f.board_count; ++b) w.f32(f.sigma[b]);
     // Bit 0: headings follow the route distances; bit 1 (version 6): the board bearings follow;
-    // bit 2 (version 7): the heading terms follow.
+    // bit 2 (version 7): the heading terms follow; bit 3 (version 8): the heading coverage.
     const bool terms = ForwardMap::kHeadingTermStorage && f.has_heading_terms;
+    const bool cover = ForwardMap::kHeadingTermStorage && f.has_heading && f.has_heading_coverage;
     w.u8(static_cast<std::uint8_t>((f.has_heading ? 1U : 0U) | (f.has_bearings ? 2U : 0U) |
-                                   (terms ? 4U : 0U)));
+                                   (terms ? 4U : 0U) | (cover ? 8U : 0U)));
     w.u8(0);
     w.u8(0);
     w.u8(0);
@@ -116,6 +121,10 @@ std::vector<std::uint8_t> encode_map(const MapFile& map) {
         for (std::size_t b = 0; b < 2 * f.board_count; ++b)
           w.f32(f.heading_terms[c * kMaxBoards * 2 + b]);
       }
+    }
+    // Version 8: every stored cell's covered heading sectors.
+    if (cover) {
+      for (std::size_t c = 0; c < cells; ++c) w.u16(f.heading_cover[c]);
     }
   }
   // Version 4: the calibration, as (id, value) entries.

@@ -121,8 +121,13 @@ double ParticleFilter::update_boards(const BoardUpdate& u) {
   for (std::size_t i = 0; i < count_; ++i) {
     const GridPoint at = locate(map, particles_[i].x_m, particles_[i].y_m);
     if (map.has_heading_terms) {
-      const auto yaw = static_cast<float>(particles_[i].yaw_rad);
-      expected_features(map, at, std::cos(yaw), std::sin(yaw), expected.data());
+      // Each particle at its own heading, the harmonic read beyond the covered headings too: a
+      // particle facing a heading the run never drove there must still look unlike the view,
+      // and read at the covered edge it looked like it (on 19 random floors the position's
+      // median went 22.3 -> 25.3 cm with the edge, docs/sweep.md).
+      SeenHeading heading = seen_heading(particles_[i].yaw_rad);
+      heading.keep_to_coverage = false;
+      expected_features(map, at, heading, expected.data());
     } else {
       expected_features(map, at, expected.data());
     }

@@ -153,8 +153,9 @@ bool kernel_mean(const FrameIndex& index, double x, double y, double bandwidth_m
   return true;
 }
 
-// The kernel-weighted sums of kernel_mean at (x, y), with each frame's heading as (cos, sin): what
-// the mean and the first harmonic over the heading (heading_fit) are fitted from.
+// The kernel-weighted sums of kernel_mean at (x, y), and with @p with_heading each frame's heading
+// as (cos, sin): what the mean and the first harmonic over the heading (heading_fit) are fitted
+// from.
 struct KernelSums {
   double w = 0.0, c = 0.0, s = 0.0, cc = 0.0, cs = 0.0, ss = 0.0;
   std::array<double, kMaxBoards> a{}, ca{}, sa{};
@@ -162,7 +163,7 @@ struct KernelSums {
 
 bool kernel_sums(const FrameIndex& index, double x, double y, double bandwidth_m,
                  std::size_t boards, double t_s, double travel_m, double exclude_s,
-                 double exclude_m, KernelSums& out) {
+                 double exclude_m, bool with_heading, KernelSums& out) {
   const bool exclude = exclude_s > 0.0 || exclude_m > 0.0;
   const auto keep = [&](const Positioned& p) {
     return !exclude || !same_pass(p, t_s, travel_m, exclude_s, exclude_m);
@@ -177,8 +178,13 @@ bool kernel_sums(const FrameIndex& index, double x, double y, double bandwidth_m
     const double e = ((p.x_m - x) * (p.x_m - x) + (p.y_m - y) * (p.y_m - y) - d2_min) * inv;
     if (e > kCut) return;
     const double w = std::exp(-e);
-    const double c = std::cos(p.yaw_rad), s = std::sin(p.yaw_rad);
     out.w += w;
+    if (!with_heading) {
+      for (std::size_t b = 0; b < boards; ++b)
+        out.a[b] += w * static_cast<double>((*p.features)[b]);
+      return;
+    }
+    const double c = std::cos(p.yaw_rad), s = std::sin(p.yaw_rad);
     out.c += w * c;
     out.s += w * s;
     out.cc += w * c * c;
@@ -486,16 +492,20 @@ ForwardMapReport fit_grid(std::vector<Positioned>& frames, std::size_t board_cou
       const Positioned& p = frames[i];
       if (!comparable[i]) continue;
       if (!kernel_sums(index, p.x_m, p.y_m, h, board_count, p.t_s, p.travel_m,
-                       opt.exclude_same_pass_s, opt.exclude_same_pass_m, k)) {
+                       opt.exclude_same_pass_s, opt.exclude_same_pass_m, try_terms, k)) {
         continue;
       }
       ++n;
       const double cos_yaw = std::cos(p.yaw_rad), sin_yaw = std::sin(p.yaw_rad);
-      for (std::size_t r = 0; r < ridges.size(); ++r) {
+      for (std::size_t b = 0; b < board_count; ++b) {
+        const double res = static_cast<double>((*p.features)[b]) - k.a[b] / k.w;
+        sq[0][b] += res * res;
+      }
+      for (std::size_t r = 1; r < ridges.size(); ++r) {
         const HeadingFit fit = heading_fit(k, board_count, ridges[r]);
         for (std::size_t b = 0; b < board_count; ++b) {
-          const double e = r == 0 ? k.a[b] / k.w : fit.predict(b, cos_yaw, sin_yaw);
-          const double res = static_cast<double>((*p.features)[b]) - e;
+          const double res =
+              static_cast<double>((*p.features)[b]) - fit.predict(b, cos_yaw, sin_yaw);
           sq[r][b] += res * res;
         }
       }
@@ -607,7 +617,7 @@ ForwardMapReport fit_grid(std::vector<Positioned>& frames, std::size_t board_cou
     }
     if (count <= max_tiles) break;
   }
-  algorithms::reset(out);
+  algorithms::reset_in_place(out);
   if (!algorithms::lay_out_grid(out, columns, rows, stored.data()))
     throw std::runtime_error("forward map: the grid does not fit (internal error)");
   out.origin_x_m = static_cast<float>(x0);
@@ -630,6 +640,22 @@ ForwardMapReport fit_grid(std::vector<Positioned>& frames, std::size_t board_cou
   }
   out.has_heading = report.has_heading;
   out.has_heading_terms = use_terms;
+  // Heading coverage: each frame's sectors (those whose centre lies within the reach of its
+  // heading), or-ed over the frames the kernel weighs at a cell.
+  const bool cover = report.has_heading && ForwardMap::kHeadingTermStorage;
+  out.has_heading_coverage = cover;
+  std::vector<std::uint16_t> frame_sectors(cover ? frames.size() : 0U, 0);
+  for (std::size_t i = 0; i < frame_sectors.size(); ++i) {
+    if (!frames[i].has_yaw) continue;
+    for (int k = 0; k < ForwardMap::kHeadingSectors; ++k) {
+      const double centre =
+          -algorithms::kPi + (k + 0.5) * static_cast<double>(ForwardMap::kHeadingSector_rad);
+      if (std::fabs(algorithms::wrap_angle_rad(centre - frames[i].yaw_rad)) <=
+          static_cast<double>(ForwardMap::kHeadingReach_rad))
+        frame_sectors[i] |= static_cast<std::uint16_t>(1U << k);
+    }
+  }
+  std::size_t known_cells = 0, known_sectors = 0;
   const auto any = [](const Positioned&) { return true; };
   for (std::uint32_t r = 0; r < out.rows; ++r) {
     for (std::uint32_t c = 0; c < out.columns; ++c) {
@@ -639,7 +665,7 @@ ForwardMapReport fit_grid(std::vector<Positioned>& frames, std::size_t board_cou
       float* e = out.expected.data() + at * algorithms::kMaxBoards;
       if (use_terms) {
         KernelSums k;
-        kernel_sums(index, x, y, report.bandwidth_m, board_count, 0.0, -1.0, 0.0, 0.0, k);
+        kernel_sums(index, x, y, report.bandwidth_m, board_count, 0.0, -1.0, 0.0, 0.0, true, k);
         const HeadingFit fit = heading_fit(k, board_count, report.heading_ridge);
         float* t = out.heading_terms.data() + at * algorithms::kMaxBoards * 2;
         for (std::size_t b = 0; b < board_count; ++b) {
@@ -664,6 +690,7 @@ ForwardMapReport fit_grid(std::vector<Positioned>& frames, std::size_t board_cou
         double yaw_d2 = std::numeric_limits<double>::infinity();
         double anchor = 0.0;
         float yaw = 0.0F;
+        std::uint16_t mask = 0;
         if (std::isfinite(yaw_reach)) {
           index.within(x, y, yaw_reach, [&](const Positioned& p) {
             const double d = (p.x_m - x) * (p.x_m - x) + (p.y_m - y) * (p.y_m - y);
@@ -674,11 +701,15 @@ ForwardMapReport fit_grid(std::vector<Positioned>& frames, std::size_t board_cou
           });
           const double h = report.bandwidth_m;
           const double reach = yaw_reach + 2.0 * h;
+          // The coverage: the headings of the frames weighed at least e^-2 of the nearest's.
+          const double cover_d2 = yaw_reach * yaw_reach + 4.0 * h * h;
           double sin_sum = 0.0, cos_sum = 0.0;
           index.within(x, y, reach, [&](const Positioned& p) {
             if (!p.has_yaw) return;
-            if (std::cos(p.yaw_rad - anchor) < kSamePassCos) return;
             const double d = (p.x_m - x) * (p.x_m - x) + (p.y_m - y) * (p.y_m - y);
+            if (cover && d <= cover_d2)
+              mask |= frame_sectors[static_cast<std::size_t>(&p - frames.data())];
+            if (std::cos(p.yaw_rad - anchor) < kSamePassCos) return;
             const double w = std::exp(-(d - yaw_d2) / (2.0 * h * h));
             sin_sum += w * std::sin(p.yaw_rad);
             cos_sum += w * std::cos(p.yaw_rad);
@@ -687,9 +718,20 @@ ForwardMapReport fit_grid(std::vector<Positioned>& frames, std::size_t board_cou
               sin_sum * sin_sum + cos_sum * cos_sum > 0.0 ? std::atan2(sin_sum, cos_sum) : anchor);
         }
         out.heading_rad[at] = yaw;
+        if (cover) {
+          out.heading_cover[at] = mask;
+          if (std::sqrt(d2) <= report.bandwidth_m) {
+            ++known_cells;
+            known_sectors += static_cast<std::size_t>(__builtin_popcount(mask));
+          }
+        }
       }
     }
   }
+  report.covered_heading_fraction =
+      known_cells > 0 ? static_cast<double>(known_sectors) /
+                            static_cast<double>(known_cells * ForwardMap::kHeadingSectors)
+                      : 0.0;
   if (law != nullptr && report.has_heading)
     fit_bearings(frames, comparable, index, board_count, opt, law, x0, y0, cell, out, report);
   return report;

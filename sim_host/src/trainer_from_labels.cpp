@@ -207,7 +207,7 @@ void train_from_labels(const AreaSeries& run, const std::vector<dataset::Stamped
   report.dissimilarity_bound = dissimilarity_bound;
   report.train_ms = ms_since(t_train);
 
-  algorithms::reset(map);
+  algorithms::reset_in_place(map);
   map.image_width_px = run.image_width_px;
   map.image_height_px = run.image_height_px;
   map.thresholds = opt.thresholds;

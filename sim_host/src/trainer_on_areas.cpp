@@ -245,7 +245,7 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<dataset::Sta
       std::min(1.0, std::max(opt.known_place_margin * quantile(nearest_dissimilarity, 0.99), 0.01));
   report.train_ms = ms_since(t_train);
 
-  algorithms::reset(map);
+  algorithms::reset_in_place(map);
   map.image_width_px = run.image_width_px;
   map.image_height_px = run.image_height_px;
   map.thresholds = opt.thresholds;

@@ -1,4 +1,5 @@
 // harmoloc-train: trains the harmonic map from a recorded (or simulated) run and a few labels.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -9,6 +10,7 @@
 
 #include "harmoloc/firmware/cli.hpp"
 #include "harmoloc/firmware/config.hpp"
+#include "harmoloc/sim_host/coverage_plot.hpp"
 #include "harmoloc/sim_host/trainer.hpp"
 
 namespace {
@@ -81,6 +83,10 @@ int main(int argc, char** argv) {
                "better. Experimental: not for the bare-metal kernels (no room), and on random\n"
                "floors they bettered the heading and kidnaps but not the position (docs/sweep.md)");
   app.add_option("--out", out, "map file to write")->required();
+  std::string coverage_path;
+  app.add_option("--coverage", coverage_path,
+                 "also write a picture (SVG) of where and from which headings the map can\n"
+                 "localize: the places near the training run, each with the headings it covers");
   app.add_option("--config", config_path,
                  "firmware config whose colour thresholds to use (default: built-in)");
   app.add_option("--unlabelled", unlabelled,
@@ -189,6 +195,18 @@ int main(int argc, char** argv) {
     f.write(reinterpret_cast<const char*>(bytes.data()),
             static_cast<std::streamsize>(bytes.size()));
     if (!f) throw std::runtime_error(out + ": cannot write");
+    if (!coverage_path.empty()) {
+      if (!map.forward.present())
+        throw std::runtime_error("--coverage: the map has no forward map to picture");
+      // Known places: within two kernel widths of the run (where the forward map's values are
+      // the run's own, not its nearest frames' carried out).
+      const double known_m =
+          std::max(2.0 * r.forward.bandwidth_m, static_cast<double>(map.forward.cell_m));
+      std::ofstream svg(coverage_path);
+      svg << sim_host::coverage_svg(map.forward, known_m,
+                                    "Coverage of " + out + ": places and headings");
+      if (!svg) throw std::runtime_error(coverage_path + ": cannot write");
+    }
     if (!quiet) {
       const auto& names = config.board_names;
       if (r.label_offset_estimated) {
@@ -339,6 +357,10 @@ int main(int argc, char** argv) {
               algorithms::is_floor_map(map.calibration)
                   ? "a floor map (lanes at several headings; the filter drops the route terms)"
                   : "a route map");
+          std::printf(
+              "headings      %.0f%% of the circle covered near the run (mean over its cells: a "
+              "place is known from the headings within about 45 deg of those it was driven at)\n",
+              100.0 * fw.covered_heading_fraction);
           if (map.forward.has_heading_terms)
             std::printf(
                 "heading terms the boards' areas modelled over the heading too: they predict "

@@ -98,6 +98,8 @@ struct SceneResult {
   /// (feature units, over the modelled boards) and the same without heading terms.
   double floor_heading_ridge = 0.0;
   double floor_validation_rmse = -1.0, floor_mean_validation_rmse = -1.0;
+  /// The share of the circle of headings the floor map covers near the coverage run (-1: none).
+  double floor_covered_heading_fraction = -1.0;
   double floor_roam_s = 0.0;                                    ///< the roams' run time
   double floor_fix_mse_x_m2 = -1.0, floor_fix_mse_y_m2 = -1.0;  ///< every frame with a fix
   double floor_rmse_m = -1.0;  ///< after first fix + settle_s, every roam's frames

@@ -652,6 +652,10 @@ class MapBytes {
     if (size_ < sizeof bytes_) bytes_[size_] = v;
     ++size_;  // past the end: the size check below fails instead of memory being overwritten
   }
+  void u16(std::uint16_t v) {
+    u8(static_cast<std::uint8_t>(v));
+    u8(static_cast<std::uint8_t>(v >> 8));
+  }
   void u32(std::uint32_t v) {
     for (int i = 0; i < 4; ++i) u8(static_cast<std::uint8_t>(v >> (8 * i)));
   }
@@ -667,7 +671,7 @@ class MapBytes {
   void truncate(std::size_t n) { size_ = n; }
 
  private:
-  std::uint8_t bytes_[2048] = {};
+  std::uint8_t bytes_[3584] = {};  // a forward map's tile with heading terms
   std::size_t size_ = 0;
 };
 
@@ -680,6 +684,8 @@ struct MapSpec {
   float sigma_y = 0.6F;
   float first_feature = 0.25F;
   bool trailing = false;
+  /// Forward map flag bits beyond the heading (bit 0): 4 heading terms, 8 heading coverage.
+  std::uint8_t forward_flags = 0;
 };
 
 constexpr std::uint8_t kMagic[8] = {'H', 'A', 'R', 'M', 'O', 'M', 'A', 'P'};
@@ -734,7 +740,7 @@ void write_map(MapBytes& m, const MapSpec& s) {
     m.f32(0.1F);  // sigmas
     m.f32(0.0F);
     m.f32(0.2F);
-    m.u8(1);  // heading
+    m.u8(static_cast<std::uint8_t>(1U | s.forward_flags));  // heading, and what follows
     m.u8(0);
     m.u8(0);
     m.u8(0);
@@ -761,6 +767,12 @@ void write_map(MapBytes& m, const MapSpec& s) {
       m.f32(k < 0 ? 0.0F : 0.01F * static_cast<float>(k));
     }
     for (int i = 0; i < cells; ++i) m.f32(grid_cell(i) < 0 ? 0.0F : 1.5F);
+    if ((s.forward_flags & 4U) != 0U) {
+      for (int i = 0; i < cells * 3 * 2; ++i) m.f32(0.01F);  // heading terms, version 7
+    }
+    if ((s.forward_flags & 8U) != 0U) {
+      for (int i = 0; i < cells; ++i) m.u16(0x0180U);  // heading coverage, version 8
+    }
   }
   if (s.version >= 4) m.u32(0);  // no calibration entries
   if (s.trailing) m.u32(0);
@@ -868,6 +880,21 @@ void test_map_codec() {
     err = ha::decode_map(fw.data(), fw.size(), g_map);
     BM_CHECK(err && std::strstr(err.what, "truncated") != nullptr);
     BM_CHECK(!g_map.forward.present());
+  }
+  // A floor map's heading terms do not fit this build: refused with the way out; its heading
+  // coverage is read and left (nothing here uses it without the terms).
+  s = MapSpec{};
+  s.forward = true;
+  s.forward_flags = 4;
+  BM_CHECK(ha::ForwardMap::kHeadingTermStorage || rejected(s, "without --heading-terms"));
+  s.forward_flags = 8;
+  {
+    static MapBytes cover;
+    cover = MapBytes{};
+    write_map(cover, s);
+    BM_CHECK(!ha::decode_map(cover.data(), cover.size(), g_map));
+    BM_CHECK(g_map.forward.present());
+    BM_CHECK(g_map.forward.has_heading_coverage == ha::ForwardMap::kHeadingTermStorage);
   }
   s = MapSpec{};
   // Version 1 (no dissimilarity bound) is still read, with the test disabled.

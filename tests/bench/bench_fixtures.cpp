@@ -62,7 +62,7 @@ algorithms::ThresholdSet board_thresholds(std::size_t boards) {
 
 void synthetic_map(std::size_t samples, std::uint32_t width_px, std::uint32_t height_px,
                    algorithms::MapFile& map, std::size_t boards) {
-  algorithms::reset(map);
+  algorithms::reset_in_place(map);
   map.image_width_px = width_px;
   map.image_height_px = height_px;
   map.thresholds = board_thresholds(boards);

@@ -2,11 +2,13 @@
 // the fuzzer reaches the body); when it decodes, encode_map must give back exactly the same
 // bytes, and decoding those again must give the same map. A difference means the decoder
 // accepts something the format does not define (an ignored field, a non-canonical encoding).
-// A decoded forward map without bearings is then given some (map version 6), and one without
-// heading terms some (version 7), and must round trip with them too.
+// A decoded forward map without bearings is then given some (map version 6), one without
+// heading terms some (version 7), one with headings and without coverage some (version 8), and
+// must round trip with them too.
 
 #include <cstdint>
 #include <cstring>
+#include <string>
 #include <vector>
 
 #include "fuzz_common.hpp"
@@ -17,7 +19,7 @@ using namespace harmoloc::algorithms;
 
 namespace {
 
-MapFile g_map;  // ~3 MiB each: static
+MapFile g_map;  // ~6 MiB each: static
 MapFile g_again;
 
 bool same_model(const MapFile& a, const MapFile& b) {
@@ -84,10 +86,28 @@ bool same_model(const MapFile& a, const MapFile& b) {
   if (f.has_heading_terms && !same_bits(f.heading_terms.data(), g.heading_terms.data(),
                                         cells * kMaxBoards * 2 * sizeof(float)))
     return false;
+  if (f.has_heading_coverage != g.has_heading_coverage) return false;
+  // Version 8: every stored cell's heading coverage.
+  if (f.has_heading_coverage &&
+      !same_bits(f.heading_cover.data(), g.heading_cover.data(), cells * sizeof(std::uint16_t)))
+    return false;
   return same_bits(f.expected.data(), g.expected.data(), cells * kMaxBoards * sizeof(float)) &&
          same_bits(f.route_distance_m.data(), g.route_distance_m.data(), cells * sizeof(float)) &&
          (!f.has_heading ||
           same_bits(f.heading_rad.data(), g.heading_rad.data(), cells * sizeof(float)));
+}
+
+// g_map, given a section it did not have (@p what), must decode after encoding, to the same
+// model, and re-encode to the same bytes.
+void check_given_round_trip(const char* what) {
+  const auto fail = [what](const char* how) {
+    const std::string line = std::string("a map given ") + what + " " + how;
+    harmoloc::fuzz::finding(line.c_str());
+  };
+  const std::vector<std::uint8_t> encoded = encode_map(g_map);
+  if (decode_map(encoded.data(), encoded.size(), g_again)) fail("does not decode");
+  if (!same_model(g_map, g_again)) fail("decodes to another map");
+  if (encode_map(g_again) != encoded) fail("re-encodes to different bytes");
 }
 
 // A decoded forward map without bearings is given some, drawn from the input's bytes (about one
@@ -107,12 +127,7 @@ void check_added_bearings(const std::vector<std::uint8_t>& input) {
     f.bearing_rad[(i / f.board_count) * kMaxBoards + i % f.board_count] =
         v % 8 == 0 ? ForwardMap::kNoBearing : 0.024F * static_cast<float>(v) - 3.06F;
   }
-  const std::vector<std::uint8_t> encoded = encode_map(g_map);
-  HARMOLOC_FUZZ_CHECK(!decode_map(encoded.data(), encoded.size(), g_again),
-                      "a map given bearings does not decode");
-  HARMOLOC_FUZZ_CHECK(same_model(g_map, g_again), "decode(encode(map with bearings)) differs");
-  HARMOLOC_FUZZ_CHECK(encode_map(g_again) == encoded,
-                      "a map given bearings re-encodes to different bytes");
+  check_given_round_trip("bearings");
 }
 
 // A decoded forward map without heading terms is given some (map version 7), drawn from the
@@ -127,12 +142,20 @@ void check_added_heading_terms(const std::vector<std::uint8_t>& input) {
     f.heading_terms[c * kMaxBoards * 2 + k] =
         0.01F * static_cast<float>(input[i % input.size()]) - 1.28F;
   }
-  const std::vector<std::uint8_t> encoded = encode_map(g_map);
-  HARMOLOC_FUZZ_CHECK(!decode_map(encoded.data(), encoded.size(), g_again),
-                      "a map given heading terms does not decode");
-  HARMOLOC_FUZZ_CHECK(same_model(g_map, g_again), "decode(encode(map with heading terms)) differs");
-  HARMOLOC_FUZZ_CHECK(encode_map(g_again) == encoded,
-                      "a map given heading terms re-encodes to different bytes");
+  check_given_round_trip("heading terms");
+}
+
+// A decoded forward map with headings and without coverage is given some (map version 8),
+// drawn from the input's bytes, and must survive encode and decode with it.
+void check_added_heading_coverage(const std::vector<std::uint8_t>& input) {
+  ForwardMap& f = g_map.forward;
+  if (!f.present() || !f.has_heading || f.has_heading_coverage) return;
+  f.has_heading_coverage = true;
+  for (std::size_t c = 0; c < f.stored_cells(); ++c) {
+    f.heading_cover[c] =
+        static_cast<std::uint16_t>(input[c % input.size()] | input[(c + 1) % input.size()] << 8);
+  }
+  check_given_round_trip("heading coverage");
 }
 
 }  // namespace
@@ -158,7 +181,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     // what it lacked: the same model, a version 1 map's dissimilarity bound at 1, no forward map
     // before version 3, every feature weight 1 and no calibration before version 4, a forward
     // map of versions 3 and 4 with every tile of its grid stored, no bearings before version 6,
-    // no heading terms before version 7.
+    // no heading terms before version 7, no heading coverage before version 8.
     HARMOLOC_FUZZ_CHECK(input[8] != 1 || g_map.model.max_dissimilarity == 1.0F,
                         "a version 1 map decodes with a dissimilarity bound");
     HARMOLOC_FUZZ_CHECK(input[8] >= 3 || !g_map.forward.present(),
@@ -175,12 +198,15 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         "a version 3 or 4 forward map decodes without every tile");
     HARMOLOC_FUZZ_CHECK(input[8] >= 6 || !f.has_bearings,
                         "a map before version 6 decodes with bearings");
-    HARMOLOC_FUZZ_CHECK(!f.has_heading_terms, "a map before version 7 decodes with heading terms");
+    HARMOLOC_FUZZ_CHECK(input[8] >= 7 || !f.has_heading_terms,
+                        "a map before version 7 decodes with heading terms");
+    HARMOLOC_FUZZ_CHECK(!f.has_heading_coverage, "a map before version 8 decodes with coverage");
     HARMOLOC_FUZZ_CHECK(!decode_map(encoded.data(), encoded.size(), g_again),
                         "a re-encoded older map does not decode");
     HARMOLOC_FUZZ_CHECK(same_model(g_map, g_again), "decode(encode(older map)) differs");
     check_added_bearings(input);
     check_added_heading_terms(input);
+    check_added_heading_coverage(input);
     return 0;
   }
   HARMOLOC_FUZZ_CHECK(encoded.size() == input.size(),
@@ -192,5 +218,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   HARMOLOC_FUZZ_CHECK(same_model(g_map, g_again), "decode(encode(map)) differs from map");
   check_added_bearings(input);
   check_added_heading_terms(input);
+  check_added_heading_coverage(input);
   return 0;
 }

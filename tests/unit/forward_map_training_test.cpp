@@ -7,9 +7,12 @@
 #include <array>
 #include <cmath>
 #include <memory>
+#include <regex>
+#include <string>
 #include <vector>
 
 #include "harmoloc/algorithms/map_codec.hpp"
+#include "harmoloc/sim_host/coverage_plot.hpp"
 
 namespace ha = harmoloc::algorithms;
 namespace hs = harmoloc::sim_host;
@@ -260,11 +263,21 @@ TEST(ForwardMapTraining, HeadingTermsWhereTheAreasChangeWithTheHeading) {
       << r.validation_rmse << " " << r.mean_validation_rmse;
   std::array<float, ha::kMaxBoards> e{};
   for (const double h : {h0, h1}) {
-    ha::expected_features(*map, ha::locate(*map, 1.5, 1.5), static_cast<float>(std::cos(h)),
-                          static_cast<float>(std::sin(h)), e.data());
+    ha::expected_features(*map, ha::locate(*map, 1.5, 1.5), ha::seen_heading(h), e.data());
     EXPECT_NEAR(e[1], 2.0 + 1.5 + 0.8 * std::sin(h), 0.03) << h;
     EXPECT_NEAR(e[0], 1.0 + 0.15, 0.01) << h;
   }
+  // The headings the lanes were driven at (and 30 degrees around them: 45 from a sector's
+  // centre) are covered where they cross; the opposite ones are not.
+  ASSERT_TRUE(map->has_heading_coverage);
+  const ha::GridPoint centre = ha::locate(*map, 1.5, 1.5);
+  for (const double h : {h0, h1, h0 - 30.0 * deg, h1 + 30.0 * deg})
+    EXPECT_TRUE(ha::heading_covered(*map, centre, ha::seen_heading(h))) << h / deg;
+  for (const double h : {h0 + 180.0 * deg, h0 - 90.0 * deg, h1 + 90.0 * deg})
+    EXPECT_FALSE(ha::heading_covered(*map, centre, ha::seen_heading(h))) << h / deg;
+  // Two lanes 30 degrees apart, each reaching 45 degrees: 120 of 360 degrees.
+  EXPECT_GT(r.covered_heading_fraction, 0.25);
+  EXPECT_LT(r.covered_heading_fraction, 0.45);
   auto plain = std::make_unique<ha::ForwardMap>();
   const PlacedRun route = lanes_run({h0}, 0.8);
   hs::train_forward_map_placed(route.features, route.placed, 2, with, *plain);
@@ -272,4 +285,44 @@ TEST(ForwardMapTraining, HeadingTermsWhereTheAreasChangeWithTheHeading) {
   // Without ridges to try (the default), none either.
   hs::train_forward_map_placed(floor.features, floor.placed, 2, hs::ForwardMapOptions{}, *plain);
   EXPECT_FALSE(plain->has_heading_terms);
+}
+
+// The coverage picture: the places within the known distance only, a wedge for each covered
+// sector, pointing the way the camera faced (map y up is page y down).
+TEST(CoveragePlot, WedgesForCoveredHeadingsAtKnownPlaces) {
+  auto map = std::make_unique<ha::ForwardMap>();
+  ASSERT_TRUE(ha::lay_out_grid(*map, 16, 16));
+  map->cell_m = 0.05F;
+  map->board_count = 1;
+  map->has_heading = true;
+  map->has_heading_coverage = true;
+  for (std::uint32_t r = 0; r < 16; ++r) {
+    for (std::uint32_t c = 0; c < 16; ++c) {
+      const std::size_t at = map->index(c, r);
+      map->route_distance_m[at] = c < 8 ? 0.0F : 1.0F;
+      map->heading_cover[at] = 1U << 8;  // 0 to 22.5 degrees
+    }
+  }
+  const std::string svg = hs::coverage_svg(*map, 0.1, "test");
+  const auto count = [&svg](const std::string& pattern) {
+    const std::regex re(pattern);
+    return std::distance(std::sregex_iterator(svg.begin(), svg.end(), re), std::sregex_iterator());
+  };
+  const auto places = count("h[0-9.]+v[0-9.]+h-[0-9.]+z");
+  const auto wedges = count(" 0 0 0 ");
+  EXPECT_GT(places, 20);
+  EXPECT_LT(places, 150);  // about half of 16 x 16 blocks of one cell
+  EXPECT_EQ(wedges, places);
+  std::smatch m;
+  const std::regex wedge(
+      "M([0-9.]+) ([0-9.]+)L([0-9.]+) ([0-9.]+)A[0-9.]+ [0-9.]+ 0 0 0 ([0-9.]+) ([0-9.]+)z");
+  ASSERT_TRUE(std::regex_search(svg, m, wedge));
+  const double cx = std::stod(m[1]), cy = std::stod(m[2]);
+  EXPECT_GT(std::stod(m[3]), cx + 1.0);  // 0 degrees: to the right
+  EXPECT_NEAR(std::stod(m[4]), cy, 0.11);
+  EXPECT_GT(std::stod(m[5]), cx + 1.0);  // 22.5 degrees: right and up the page
+  EXPECT_LT(std::stod(m[6]), cy - 1.0);
+  // Known nowhere: no place and no wedge.
+  const std::string none = hs::coverage_svg(*map, -1.0, "test");
+  EXPECT_EQ(none.find(" 0 0 0 "), std::string::npos);
 }

@@ -20,6 +20,8 @@ namespace ht = harmoloc::test;
 
 namespace {
 
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kHalfPi = kPi / 2.0;
 constexpr std::size_t kBoards = 6;
 constexpr std::size_t kFeatures = 3;
 constexpr std::size_t kSamples = 5;
@@ -607,7 +609,8 @@ TEST(MapCodec, LargestMapFitsTheSizeCap) {
   f.has_bearings = true;
   f.bearing_a1_rad = 1.0F;
   f.bearing_sigma_rad.fill(0.05F);
-  f.has_heading_terms = true;  // version 7
+  f.has_heading_terms = true;     // version 7
+  f.has_heading_coverage = true;  // version 8
   const std::vector<std::uint8_t> b = ha::encode_map(*map);
   // Every count at its capacity but the calibration's (the trainer writes 3 of the 64 allowed).
   EXPECT_EQ(b.size() + ha::kMaxCalibrationEntries * 8U, ha::kMaxMapFileBytes);
@@ -692,8 +695,6 @@ TEST(MapCodec, ForwardMapRoundTripAndLayout) {
   EXPECT_EQ(ha::encode_map(*map).size(), bytes.size() - kTileCells * 4);
 }
 
-// Only the tiles near the training run are stored: a lookup in one that is not reads the void
-// cell, far from the route, which the route term rules out.
 // Version 7: a floor map's heading terms follow the bearings (or the headings), flagged by bit 2,
 // and read back exactly; a term that is not finite is refused.
 TEST(MapCodec, HeadingTermsRoundTripAndChecks) {
@@ -733,25 +734,37 @@ TEST(MapCodec, HeadingTermsRoundTripAndChecks) {
   EXPECT_FALSE(out->forward.has_heading_terms);
 }
 
-// What a cell with heading terms expects at a heading: the harmonic, never below 0; without a
-// heading (or without terms) the cell's value alone.
-TEST(ForwardMap, HeadingTermsAddTheFirstHarmonic) {
+namespace {
+
+// A forward map whose cell (1, 0) expects board 0 at 1 + 0.5 cos(yaw) - 2 sin(yaw) once
+// has_heading_terms is set (it is not yet).
+std::unique_ptr<ha::MapFile> map_with_one_harmonic() {
   auto map = make_map_with_forward();
   ha::ForwardMap& f = map->forward;
   const std::size_t at = f.index(1, 0);
   f.expected[at * ha::kMaxBoards + 0] = 1.0F;
   f.heading_terms[at * ha::kMaxBoards * 2 + 0] = 0.5F;   // c
   f.heading_terms[at * ha::kMaxBoards * 2 + 1] = -2.0F;  // s
+  return map;
+}
+
+}  // namespace
+
+// What a cell with heading terms expects at a heading: the harmonic, never below 0; without a
+// heading (or without terms) the cell's value alone.
+TEST(ForwardMap, HeadingTermsAddTheFirstHarmonic) {
+  auto map = map_with_one_harmonic();
+  ha::ForwardMap& f = map->forward;
   const ha::GridPoint p = ha::locate(f, 1.55, 0.25);
   std::array<float, ha::kMaxBoards> e{};
-  ha::expected_features(f, p, 1.0F, 0.0F, e.data());
+  ha::expected_features(f, p, ha::seen_heading(0.0), e.data());
   EXPECT_FLOAT_EQ(e[0], 1.0F);  // no terms in the map yet
   f.has_heading_terms = true;
-  ha::expected_features(f, p, 1.0F, 0.0F, e.data());
+  ha::expected_features(f, p, ha::seen_heading(0.0), e.data());
   EXPECT_FLOAT_EQ(e[0], 1.5F);
-  ha::expected_features(f, p, 0.0F, -1.0F, e.data());
+  ha::expected_features(f, p, ha::seen_heading(-kHalfPi), e.data());
   EXPECT_FLOAT_EQ(e[0], 3.0F);
-  ha::expected_features(f, p, 0.0F, 1.0F, e.data());
+  ha::expected_features(f, p, ha::seen_heading(kHalfPi), e.data());
   EXPECT_FLOAT_EQ(e[0], 0.0F);  // 1 - 2 clamped
   ha::expected_features(f, p, e.data());
   EXPECT_FLOAT_EQ(e[0], 1.0F);
@@ -759,6 +772,105 @@ TEST(ForwardMap, HeadingTermsAddTheFirstHarmonic) {
   EXPECT_NEAR(ha::board_maxima(f)[0], 1.0F + std::hypot(0.5F, 2.0F), 1e-5F);
 }
 
+// Heading sectors: sixteen of 22.5 degrees from -pi, any angle wrapped.
+TEST(ForwardMap, HeadingSectorsWrapTheCircle) {
+  EXPECT_EQ(ha::heading_sector(-kPi), 0);
+  EXPECT_EQ(ha::heading_sector(0.0), 8);
+  EXPECT_EQ(ha::heading_sector(-0.01), 7);
+  EXPECT_EQ(ha::heading_sector(kPi - 0.01), 15);
+  EXPECT_EQ(ha::heading_sector(kPi + 0.01), 0);
+  EXPECT_EQ(ha::heading_sector(4.0 * kPi + 0.01), 8);
+  EXPECT_EQ(ha::heading_sector(-3.0 * kPi + 0.01), 0);
+  EXPECT_EQ(ha::heading_sector(std::numeric_limits<double>::quiet_NaN()), 8);
+  EXPECT_NEAR(ha::seen_heading(0.3).within, 0.3 / (kPi / 8.0), 1e-5);
+}
+
+// With coverage, a cell's heading terms are read at the heading itself only where the training
+// run drove near it; elsewhere at the nearest edge of the covered sectors, so that the harmonic
+// is not extrapolated to headings it was never fitted on.
+TEST(ForwardMap, HeadingCoverageKeepsTheTermsToTrainedHeadings) {
+  auto map = map_with_one_harmonic();
+  ha::ForwardMap& f = map->forward;
+  const std::size_t at = f.index(1, 0);
+  f.has_heading_terms = true;
+  f.has_heading_coverage = true;
+  f.heading_cover[at] = (1U << 7) | (1U << 8);  // -22.5 to 22.5 degrees
+  const ha::GridPoint p = ha::locate(f, 1.55, 0.25);
+  std::array<float, ha::kMaxBoards> e{};
+  const auto at_heading = [](double yaw) {
+    return 1.0 + 0.5 * std::cos(yaw) - 2.0 * std::sin(yaw);
+  };
+  ha::expected_features(f, p, ha::seen_heading(0.1), e.data());
+  EXPECT_NEAR(e[0], at_heading(0.1), 1e-5);  // covered
+  EXPECT_TRUE(ha::heading_covered(f, p, ha::seen_heading(0.1)));
+  EXPECT_FALSE(ha::heading_covered(f, p, ha::seen_heading(kHalfPi)));
+  // 90 degrees: the upper edge, 22.5; -60 degrees: the lower edge, -22.5.
+  ha::expected_features(f, p, ha::seen_heading(kHalfPi), e.data());
+  EXPECT_NEAR(e[0], std::max(0.0, at_heading(kPi / 8.0)), 1e-5);
+  ha::expected_features(f, p, ha::seen_heading(-kPi / 3.0), e.data());
+  EXPECT_NEAR(e[0], at_heading(-kPi / 8.0), 1e-5);
+  // Unless the heading asks to be read as it is (the filter's particles).
+  ha::SeenHeading own = ha::seen_heading(-kPi / 3.0);
+  own.keep_to_coverage = false;
+  ha::expected_features(f, p, own, e.data());
+  EXPECT_NEAR(e[0], at_heading(-kPi / 3.0), 1e-5);
+  // Opposite (180 degrees, the sector just above -pi's edge... or below pi): an edge either way.
+  ha::expected_features(f, p, ha::seen_heading(kPi - 0.05), e.data());
+  EXPECT_NEAR(e[0], at_heading(kPi / 8.0), 1e-5);  // nearer the upper edge going down
+  ha::expected_features(f, p, ha::seen_heading(-kPi + 0.05), e.data());
+  EXPECT_NEAR(e[0], at_heading(-kPi / 8.0), 1e-5);
+  // A cell with no coverage, or a map without it: the heading itself.
+  f.heading_cover[at] = 0;
+  ha::expected_features(f, p, ha::seen_heading(kHalfPi), e.data());
+  EXPECT_NEAR(e[0], std::max(0.0, at_heading(kHalfPi)), 1e-5);
+  f.heading_cover[at] = 1U << 8;
+  f.has_heading_coverage = false;
+  ha::expected_features(f, p, ha::seen_heading(-kHalfPi), e.data());
+  EXPECT_NEAR(e[0], at_heading(-kHalfPi), 1e-5);
+  EXPECT_TRUE(ha::heading_covered(f, p, ha::seen_heading(-kHalfPi)));
+}
+
+// Version 8: the heading coverage follows the heading terms, flagged by bit 3, one 16-bit mask a
+// stored cell; it needs headings; a cut-short section is refused.
+TEST(MapCodec, HeadingCoverageRoundTripAndChecks) {
+  auto map = make_map_with_forward();
+  const std::vector<std::uint8_t> plain = ha::encode_map(*map);
+  ha::ForwardMap& f = map->forward;
+  ASSERT_TRUE(f.has_heading);
+  f.has_heading_coverage = true;
+  for (std::size_t c = 0; c < f.stored_cells(); ++c)
+    f.heading_cover[c] = static_cast<std::uint16_t>(0x8001U + 37U * c);
+  const std::vector<std::uint8_t> bytes = ha::encode_map(*map);
+  ASSERT_EQ(bytes.size(), plain.size() + f.stored_cells() * 2);
+  EXPECT_EQ(bytes[kOffFlags], 9U);
+  auto out = std::make_unique<ha::MapFile>();
+  ASSERT_FALSE(ha::decode_map(bytes.data(), bytes.size(), *out));
+  EXPECT_TRUE(out->forward.has_heading_coverage);
+  for (std::size_t c = 0; c < f.stored_cells(); ++c)
+    ASSERT_EQ(out->forward.heading_cover[c], f.heading_cover[c]) << c;
+  EXPECT_EQ(ha::encode_map(*out), bytes);
+  // Cut short inside the section.
+  const std::size_t first = plain.size() - 4 - 4;
+  std::vector<std::uint8_t> cut(bytes.begin(),
+                                bytes.begin() + static_cast<std::ptrdiff_t>(first + 3));
+  EXPECT_FALSE(decode_error(cut).empty());
+  // Coverage flagged without headings.
+  std::vector<std::uint8_t> b = bytes;
+  b[kOffFlags] = 8U;
+  fix_crc(b);
+  EXPECT_NE(decode_error(b).find("no headings"), std::string::npos) << decode_error(b);
+  // Bit 3 in a version 7 map is unknown.
+  b = bytes;
+  put_u32(b, 8, 7);
+  fix_crc(b);
+  EXPECT_NE(decode_error(b).find("unknown bits"), std::string::npos) << decode_error(b);
+  // A map without it reads with none.
+  ASSERT_FALSE(ha::decode_map(plain.data(), plain.size(), *out));
+  EXPECT_FALSE(out->forward.has_heading_coverage);
+}
+
+// Only the tiles near the training run are stored: a lookup in one that is not reads the void
+// cell, far from the route, which the route term rules out.
 TEST(MapCodec, SparseTilesRoundTripAndTheVoid) {
   auto map = make_map_with_forward();
   ha::ForwardMap& f = map->forward;
@@ -883,7 +995,7 @@ TEST(MapCodec, ForwardMapCorruptionWithValidChecksum) {
       },
       "models no board");
   reject(
-      "unknown flag", [](auto& b) { b[kOffFlags] = 9; }, "flags");
+      "unknown flag", [](auto& b) { b[kOffFlags] = 17; }, "flags");
   reject(
       "unknown high flag", [](auto& b) { b[kOffFlags] = 0x81; }, "flags");
   reject(

@@ -119,6 +119,22 @@ struct ForwardMap {
   /// c, s (2 kMaxBoards a cell).
   std::array<float, (kHeadingTermStorage ? kMaxCells + 1 : 1) * kMaxBoards * 2> heading_terms{};
 
+  /// Heading coverage (map version 8; docs/filter.md): the circle of headings in kHeadingSectors
+  /// equal sectors, sector k from -pi + k kHeadingSector_rad. Per stored cell, bit k is set when
+  /// the training run drove near the cell at a heading within kHeadingReach_rad of sector k's
+  /// centre ("near": the frames the forward map's kernel weighs at the cell). The heading terms
+  /// are a first harmonic fitted from those headings: beyond them it extrapolates, so a heading
+  /// outside the covered sectors is evaluated at the covered sectors' nearest edge. 0: the cell
+  /// holds no coverage (the void cell, maps before version 8). Built without
+  /// kHeadingTermStorage, the coverage is read and not kept (one cell only).
+  bool has_heading_coverage = false;
+  static constexpr int kHeadingSectors = 16;
+  static constexpr float kHeadingSector_rad = 2.0F * 3.14159265358979F / kHeadingSectors;
+  /// How far from a heading it drove the training run covers: a first harmonic fitted from one
+  /// heading and turned 45 degrees changes by at most 1 - cos 45 = 29% of its amplitude.
+  static constexpr float kHeadingReach_rad = 3.14159265358979F / 4.0F;
+  std::array<std::uint16_t, kHeadingTermStorage ? kMaxCells + 1 : 1> heading_cover{};
+
   bool present() const { return columns > 0 && rows > 0; }
   /// Stored cells (whole tiles, including the cells of border tiles beyond the grid).
   std::size_t stored_cells() const { return static_cast<std::size_t>(tile_count) * kTileCells; }
@@ -139,11 +155,12 @@ struct ForwardMap {
   }
 };
 
-/// Puts @p map back to a value-initialised ForwardMap in place: the object is megabytes, and an
+/// Puts @p object back to a value-initialised T in place: a map object is megabytes, and an
 /// assignment from a temporary would put a second one on the stack.
-inline void reset(ForwardMap& map) {
-  map.~ForwardMap();
-  ::new (static_cast<void*>(&map)) ForwardMap();
+template <class T>
+void reset_in_place(T& object) {
+  object.~T();
+  ::new (static_cast<void*>(&object)) T();
 }
 
 /// A board's centroid column gives a bearing only with at least this many pixels and none on
@@ -190,10 +207,32 @@ GridPoint locate(const ForwardMap& map, double x_m, double y_m);
 /// their value over every heading, the terms left out).
 void expected_features(const ForwardMap& map, const GridPoint& point, float* out);
 
-/// The same seen at heading yaw, given as @p cos_yaw, @p sin_yaw: with the map's heading terms
-/// where it has them (each at least 0).
-void expected_features(const ForwardMap& map, const GridPoint& point, float cos_yaw, float sin_yaw,
+/// A heading as the forward map reads it: the angle, its cosine and sine, and its coverage
+/// sector (ForwardMap::kHeadingSectors).
+struct SeenHeading {
+  float cos_yaw = 1.0F;
+  float sin_yaw = 0.0F;
+  int sector = 0;
+  float within = 0.0F;  ///< where in its sector, 0 (its lower edge) to 1
+  /// Whether a cell reads it only within the headings it covers (else at their nearest edge).
+  bool keep_to_coverage = true;
+};
+
+/// @p yaw_rad (any finite angle; not finite reads as 0) as the forward map reads it.
+SeenHeading seen_heading(double yaw_rad);
+
+/// The coverage sector of @p yaw_rad (any finite angle), 0..kHeadingSectors - 1.
+int heading_sector(double yaw_rad);
+
+/// The same seen at @p heading: with the map's heading terms where it has them (each at least
+/// 0), each corner cell's terms at the heading itself where the cell covers it, else at the
+/// nearest edge of its covered sectors.
+void expected_features(const ForwardMap& map, const GridPoint& point, const SeenHeading& heading,
                        float* out);
+
+/// Whether the map's coverage at @p point's heaviest stored corner holds @p heading (true for a
+/// map without coverage; false for a point with no stored corner).
+bool heading_covered(const ForwardMap& map, const GridPoint& point, const SeenHeading& heading);
 
 /// The distance to the training run at @p point (metres; bilinear, plus the distance beyond the
 /// grid for a position outside it).

@@ -68,6 +68,11 @@ struct ForwardMapReport {
   /// reverse along it), the lanes' heading difference on a floor driven at several headings.
   double pass_heading_spread_rad = 0.0;
   bool has_heading = false;
+  /// With headings: the mean share of the circle of headings the map covers (ForwardMap's
+  /// heading coverage) over the cells within a kernel width of the training run: about 0.3 on a
+  /// route driven one way (a 90-degree reach around one heading), 0.6 forth and back, up to 1
+  /// on a floor driven at every heading.
+  double covered_heading_fraction = 0.0;
   /// Bearings (train_forward_map_placed with a law): per board, the spread of its world bearing
   /// between passes (radians, 0: not modelled), and the stored cells holding any bearing.
   bool has_bearings = false;
