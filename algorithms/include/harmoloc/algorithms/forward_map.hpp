@@ -123,10 +123,10 @@ struct ForwardMap {
   /// equal sectors, sector k from -pi + k kHeadingSector_rad. Per stored cell, bit k is set when
   /// the training run drove near the cell at a heading within kHeadingReach_rad of sector k's
   /// centre ("near": the frames the forward map's kernel weighs at the cell). The heading terms
-  /// are a first harmonic fitted from those headings: beyond them it extrapolates, so a heading
-  /// outside the covered sectors is evaluated at the covered sectors' nearest edge. 0: the cell
-  /// holds no coverage (the void cell, maps before version 8). Built without
-  /// kHeadingTermStorage, the coverage is read and not kept (one cell only).
+  /// are a first harmonic fitted from those headings: beyond them it extrapolates, so where a
+  /// heading keeps to the coverage (SeenHeading) one outside the covered sectors is evaluated at
+  /// their nearest edge. 0: the cell holds no coverage (the void cell, maps before version 8).
+  /// Built without kHeadingTermStorage, the coverage is read and not kept (one cell only).
   bool has_heading_coverage = false;
   static constexpr int kHeadingSectors = 16;
   static constexpr float kHeadingSector_rad = 2.0F * 3.14159265358979F / kHeadingSectors;
@@ -207,8 +207,8 @@ GridPoint locate(const ForwardMap& map, double x_m, double y_m);
 /// their value over every heading, the terms left out).
 void expected_features(const ForwardMap& map, const GridPoint& point, float* out);
 
-/// A heading as the forward map reads it: the angle, its cosine and sine, and its coverage
-/// sector (ForwardMap::kHeadingSectors).
+/// A heading as the forward map reads it: its cosine and sine, its coverage sector
+/// (ForwardMap::kHeadingSectors) and where in it, and whether to keep to the covered headings.
 struct SeenHeading {
   float cos_yaw = 1.0F;
   float sin_yaw = 0.0F;
@@ -225,8 +225,8 @@ SeenHeading seen_heading(double yaw_rad);
 int heading_sector(double yaw_rad);
 
 /// The same seen at @p heading: with the map's heading terms where it has them (each at least
-/// 0), each corner cell's terms at the heading itself where the cell covers it, else at the
-/// nearest edge of its covered sectors.
+/// 0), each corner cell's terms at the heading itself where the cell covers it (or the heading
+/// does not keep to the coverage), else at the nearest edge of its covered sectors.
 void expected_features(const ForwardMap& map, const GridPoint& point, const SeenHeading& heading,
                        float* out);
 
