@@ -125,7 +125,10 @@ double ParticleFilter::update_boards(const BoardUpdate& u) {
       // particle facing a heading the run never drove there must still look unlike the view,
       // and read at the covered edge it looked like it (on 19 random floors the position's
       // median went 22.3 -> 25.3 cm with the edge, docs/sweep.md).
-      SeenHeading heading = seen_heading(particles_[i].yaw_rad);
+      // Not keeping to the coverage, the heading needs no sector: its cos and sin only.
+      SeenHeading heading;
+      heading.cos_yaw = static_cast<float>(std::cos(particles_[i].yaw_rad));
+      heading.sin_yaw = static_cast<float>(std::sin(particles_[i].yaw_rad));
       heading.keep_to_coverage = false;
       expected_features(map, at, heading, expected.data());
     } else {
