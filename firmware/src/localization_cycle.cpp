@@ -53,10 +53,26 @@ bool LocalizationCycle::off_map(const Pose2& p) const {
            p.y_m <= region_max_y_m_);
 }
 
-Health LocalizationCycle::published_health() const {
-  const Health h = assess_health();
-  if (h == Health::kNotInitialized || !off_map(pose_.pose)) return h;
-  return Health::kInvalid;
+bool LocalizationCycle::estimate_covered(const Pose2& p) const {
+  const algorithms::ForwardMap& map = map_.forward;
+  if (!map.has_heading_coverage || !map.present()) return true;
+  return algorithms::heading_covered(map, algorithms::locate(map, p.x_m, p.y_m),
+                                     algorithms::seen_heading(p.yaw_rad));
+}
+
+void LocalizationCycle::set_published_health() {
+  Health h = assess_health();
+  HealthCause cause = HealthCause::kInputs;
+  if (h != Health::kNotInitialized && off_map(pose_.pose)) {
+    h = Health::kInvalid;
+    cause = HealthCause::kOffMap;
+  } else if ((h == Health::kOdometryOnly || h == Health::kInvalid) && ever_fix_ &&
+             data_time_ns_ - last_view_ns_ <=
+                 static_cast<std::uint64_t>(config_.cycle.camera_timeout_ms * 1e6)) {
+    cause = HealthCause::kHeadingNotCovered;
+  }
+  pose_.health = h;
+  pose_.cause = cause;
 }
 
 CycleResult LocalizationCycle::run_once() {

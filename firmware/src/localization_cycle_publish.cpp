@@ -39,14 +39,15 @@ void LocalizationCycle::publish() {
     next_heartbeat_ns_ = (next_heartbeat_ns_ == 0 ? data_time_ns_ : next_heartbeat_ns_) + step;
     if (next_heartbeat_ns_ <= data_time_ns_) next_heartbeat_ns_ = data_time_ns_ + step;
   }
-  // Invalid because the pose is off the map says so in its own words.
-  const bool off = pose_.valid && health == Health::kInvalid && off_map(pose_.pose);
-  if (off) ++counters_.off_map_cycles;
-  if (health != last_reported_health_ || off != last_reported_off_map_) {
-    const HealthText t = health_text(health, off);
+  // Invalid because the pose is off the map, and odometry only because the map does not cover
+  // the heading, say so in their own words.
+  const HealthCause cause = pose_.valid ? pose_.cause : HealthCause::kInputs;
+  if (cause == HealthCause::kOffMap) ++counters_.off_map_cycles;
+  if (health != last_reported_health_ || cause != last_reported_cause_) {
+    const HealthText t = health_text(health, cause);
     send(mavlink_.statustext(t.severity, t.text, frame_buffer_));
     last_reported_health_ = health;
-    last_reported_off_map_ = off;
+    last_reported_cause_ = cause;
   }
   if (pending_overrun_text_ != nullptr) {
     send(mavlink_.statustext(overrun_alarm_ ? mavlink::kSeverityWarning : mavlink::kSeverityInfo,

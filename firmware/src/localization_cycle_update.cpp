@@ -18,6 +18,7 @@ void LocalizationCycle::update(const algorithms::AreaVector& areas, const Featur
                                     algorithms::board_features(map_.model.area_scale, areas),
                                     config_.observation.boards.implausible_ratio);
   if (implausible) ++counters_.implausible_frames;
+  bool vision = false;
   if (fix_.present && !implausible) {
     if (fix_.fix.known_place) {
       ++counters_.fixes_used;
@@ -25,7 +26,6 @@ void LocalizationCycle::update(const algorithms::AreaVector& areas, const Featur
     } else {
       ++counters_.unknown_place;
     }
-    bool vision = false;
     if (!filter_.initialized()) {
       if (fix_.fix.known_place) {
         reseed_around(fix_.fix.x_m, fix_.fix.y_m);
@@ -40,12 +40,16 @@ void LocalizationCycle::update(const algorithms::AreaVector& areas, const Featur
       vision = true;
     }
     if (vision) {
-      last_fix_ns_ = data_time_ns_;
+      last_view_ns_ = data_time_ns_;
       ever_fix_ = true;
     }
   }
   if (filter_.initialized()) {
     const algorithms::PoseEstimate e = filter_.estimate();
+    // A view counts as vision only where the map's heading coverage holds the estimate's
+    // heading at its place: facing another way, the map's view there is a guess, and a pose
+    // that agrees with a guess is not known to within the map's accuracy.
+    if (vision && estimate_covered(e.mean)) last_fix_ns_ = data_time_ns_;
     pose_.pose = e.mean;
     pose_.covariance = e.covariance;
     pose_.valid = true;
@@ -62,7 +66,8 @@ void LocalizationCycle::update(const algorithms::AreaVector& areas, const Featur
     }
   }
   pose_.data_time_ns = data_time_ns_;
-  pose_.health = published_health();
+  set_published_health();
+  if (pose_.cause == HealthCause::kHeadingNotCovered) ++counters_.uncovered_cycles;
   ++counters_.cycles_in_health[static_cast<std::size_t>(pose_.health)];
 }
 

@@ -79,7 +79,7 @@ void LocalizationCycle::service_link() {
   pose_.pose = e.mean;
   pose_.covariance = e.covariance;
   pose_.valid = true;
-  pose_.health = published_health();
+  set_published_health();
 }
 
 mavlink::MavResult LocalizationCycle::execute(const mavlink::CommandLong& command,

@@ -30,7 +30,7 @@ std::uint8_t heartbeat_status(Health health, bool overrun_alarm) {
   return status;
 }
 
-HealthText health_text(Health health, bool off_map) {
+HealthText health_text(Health health, HealthCause cause) {
   static constexpr const char* kText[] = {
       "harmoloc: waiting for a first fix", "harmoloc: pose nominal",
       "harmoloc: odometry only (no camera fix)", "harmoloc: vision only (no encoder data)",
@@ -38,8 +38,15 @@ HealthText health_text(Health health, bool off_map) {
   const std::uint8_t severity = health == Health::kNominal   ? mavlink::kSeverityInfo
                                 : health == Health::kInvalid ? mavlink::kSeverityCritical
                                                              : mavlink::kSeverityWarning;
-  return HealthText{severity, off_map ? "harmoloc: pose invalid (outside the mapped region)"
-                                      : kText[static_cast<std::size_t>(health)]};
+  if (health == Health::kInvalid && cause == HealthCause::kOffMap)
+    return HealthText{severity, "harmoloc: pose invalid (outside the mapped region)"};
+  if (cause == HealthCause::kHeadingNotCovered) {
+    if (health == Health::kOdometryOnly)
+      return HealthText{severity, "harmoloc: odometry only (heading not mapped here)"};
+    if (health == Health::kInvalid)  // no encoder data either
+      return HealthText{severity, "harmoloc: pose invalid (heading not mapped here)"};
+  }
+  return HealthText{severity, kText[static_cast<std::size_t>(health)]};
 }
 
 mavlink::Odometry odometry_message(const PoseOutput& pose, std::uint64_t time_ns,
@@ -67,6 +74,8 @@ mavlink::Odometry odometry_message(const PoseOutput& pose, std::uint64_t time_ns
   m.reset_counter = reset_counter;
   if (pose.health == Health::kInvalid) {
     m.quality = -1;
+  } else if (pose.cause == HealthCause::kHeadingNotCovered) {
+    m.quality = 0;
   } else {
     const double sigma_m = std::sqrt(std::max(0.0, 0.5 * (c(0, 0) + c(1, 1))));
     m.quality =
@@ -133,9 +142,9 @@ bool health_of_text(const char* text, std::size_t size, Health& health) {
   const std::size_t n = ::strnlen(text, size);
   for (const Health h : {Health::kNotInitialized, Health::kNominal, Health::kOdometryOnly,
                          Health::kVisionOnly, Health::kInvalid}) {
-    for (const bool off : {false, true}) {
-      if (off && h != Health::kInvalid) continue;
-      const char* t = health_text(h, off).text;
+    for (const HealthCause cause :
+         {HealthCause::kInputs, HealthCause::kOffMap, HealthCause::kHeadingNotCovered}) {
+      const char* t = health_text(h, cause).text;
       if (std::strlen(t) == n && std::strncmp(t, text, n) == 0) {
         health = h;
         return true;

@@ -207,7 +207,8 @@ void to_json(Json& j, const Document& d) {
     j["localizer"] = Json{{"fixes", l.fixes.value_or(0)},
                           {"unknown_place", l.unknown_place.value_or(0)},
                           {"implausible_frames", l.implausible_frames},
-                          {"off_map_cycles", l.off_map_cycles}};
+                          {"off_map_cycles", l.off_map_cycles},
+                          {"uncovered_cycles", l.uncovered_cycles}};
   }
   const Filter& f = d.filter;
   j["filter"] = Json{{"observation", f.observation},
@@ -313,6 +314,7 @@ void from_json(const Json& j, Document& d) {
     localizer.unknown_place = count(*l, "unknown_place", "localizer.");
     read_count(*l, "implausible_frames", "localizer.", localizer.implausible_frames);
     read_count(*l, "off_map_cycles", "localizer.", localizer.off_map_cycles);
+    read_count(*l, "uncovered_cycles", "localizer.", localizer.uncovered_cycles);
     d.localizer = localizer;
   }
   if (const Json* w = section(j, "wakeup_latency"))

@@ -107,6 +107,9 @@ struct SceneResult {
   double floor_max_m = -1.0;
   /// Share of those frames reported nominal (health) with an error above 10 cm.
   double floor_nominal_over_10cm = -1.0;
+  /// Share of those frames reported nominal at all: a health that says "nominal" less often
+  /// lowers the share above, and this says how much of the floor it still vouches for.
+  double floor_nominal_share = -1.0;
   /// A roam with kidnaps to anywhere on the floor (SweepOptions::floor_kidnaps): how many, and
   /// how many the filter confirmed and brought back under 10 cm within 2 s (for 0.5 s).
   std::size_t floor_kidnaps = 0, floor_kidnaps_recovered_2s = 0;

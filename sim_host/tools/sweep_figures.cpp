@@ -71,6 +71,10 @@ std::vector<Figure> figures() {
          return r.floor_nominal_over_10cm < 0.0 ? -1.0 : 100.0 * r.floor_nominal_over_10cm;
        },
        -1.0, 0.0},
+      {"floor_nominal", "floor roams: cycles reported nominal", "%",
+       [](const SceneResult& r) {
+         return r.floor_nominal_share < 0.0 ? -1.0 : 100.0 * r.floor_nominal_share;
+       }},
       {"floor_kidnaps", "floor roams: kidnaps back under 10 cm within 2 s", "%",
        [](const SceneResult& r) {
          return r.floor_kidnaps == 0 ? -1.0

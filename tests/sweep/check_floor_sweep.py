@@ -8,7 +8,8 @@ import json
 import sys
 
 FIGURES = ["floor_rmse_m", "floor_heading_rmse_deg", "floor_max_m", "floor_nominal_over_10cm",
-           "floor_fix_mse_x_m2", "floor_fix_mse_y_m2", "floor_cv_rmse_x_m", "floor_cv_rmse_y_m"]
+           "floor_nominal_share", "floor_fix_mse_x_m2", "floor_fix_mse_y_m2", "floor_cv_rmse_x_m",
+           "floor_cv_rmse_y_m"]
 
 
 def main():

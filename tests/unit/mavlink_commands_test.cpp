@@ -692,6 +692,108 @@ TEST(MapRegion, APoseOutsideTheMappedRegionIsNeverNominal) {
   EXPECT_EQ(texts, expected);
 }
 
+namespace {
+
+// test_map() with a forward map over its region whose heading coverage holds the sectors within
+// 45 degrees of heading 0 (map frame) in every cell, as a floor map trained on lanes driven
+// along +x would.
+const ha::MapFile& map_covering_heading_zero() {
+  static const std::unique_ptr<ha::MapFile> map = [] {
+    auto m = std::make_unique<ha::MapFile>(test_map());
+    ha::ForwardMap& f = m->forward;
+    EXPECT_TRUE(ha::lay_out_grid(f, 9, 9));
+    f.origin_x_m = 0.0F;
+    f.origin_y_m = -0.5F;
+    f.cell_m = 0.5F;
+    f.board_count = 1;
+    f.sigma[0] = 1.0F;
+    f.has_heading = true;
+    f.has_heading_coverage = true;
+    std::uint16_t mask = 0;
+    for (int k = 0; k < ha::ForwardMap::kHeadingSectors; ++k) {
+      const double centre = -ha::kPi + (k + 0.5) * ha::ForwardMap::kHeadingSector_rad;
+      if (std::fabs(centre) <= ha::ForwardMap::kHeadingReach_rad)
+        mask |= static_cast<std::uint16_t>(1U << k);
+    }
+    for (std::size_t c = 0; c < f.stored_cells(); ++c) f.heading_cover[c] = mask;
+    return m;
+  }();
+  return *map;
+}
+
+}  // namespace
+
+// Issue 20: a floor map knows which headings its training run drove near each place. Facing
+// another way the boards cannot be compared with the map, so the frames do not count as vision:
+// after the camera timeout the pose goes out odometry only, with its own STATUSTEXT, quality 0
+// (unknown) and HEARTBEAT CRITICAL, and is counted; facing a covered heading again, nominal.
+TEST(HeadingCoverage, FacingAHeadingTheMapDoesNotCoverIsOdometryOnly) {
+  if (!ha::ForwardMap::kHeadingTermStorage) GTEST_SKIP() << "built without heading storage";
+  Rig r;
+  StillEncoders encoders;
+  r.camera.frames = true;
+  r.config.link.heartbeat_hz = 50.0;  // a HEARTBEAT every cycle
+  // The fix alone weighs the cloud (the forward map here holds no views).
+  r.config.observation.model = hf::ObservationModel::kFix;
+  r.cycle = std::make_unique<hf::LocalizationCycle>(r.config, map_covering_heading_zero(), r.camera,
+                                                    encoders, r.link, r.clock);
+  // Every frame's fix is sample 0, at (1.0, 0.5) in the map frame (y_frd -0.5).
+  const auto face = [&](float yaw_frd) {
+    r.send_and_run(tf::command(mv::kCmdSetPose, {1.0F, -0.5F, yaw_frd, 0.02F, 0.01F, 0, 0}));
+    std::vector<tf::Decoded> last;
+    for (int i = 0; i < 12; ++i) last = r.run();  // 0.4 s, beyond the 250 ms camera timeout
+    return last;
+  };
+  for (int i = 0; i < 5; ++i) r.run();
+  auto frames = face(0.3F);  // 17 degrees off heading 0: covered
+  EXPECT_EQ(r.cycle->pose().health, hf::Health::kNominal);
+  ASSERT_EQ(of_type(frames, 331).size(), 1U);
+  EXPECT_GT(odometry_of(of_type(frames, 331)[0]).quality, 0);
+  EXPECT_EQ(r.cycle->counters().uncovered_cycles, 0U);
+
+  frames = face(-1.6F);  // 92 degrees (map frame): no lane ran that way
+  EXPECT_EQ(r.cycle->pose().health, hf::Health::kOdometryOnly);
+  EXPECT_EQ(r.cycle->pose().cause, hf::HealthCause::kHeadingNotCovered);
+  ASSERT_EQ(of_type(frames, 331).size(), 1U);
+  EXPECT_EQ(odometry_of(of_type(frames, 331)[0]).quality, 0);
+  ASSERT_EQ(of_type(frames, 0).size(), 1U);
+  EXPECT_EQ(of_type(frames, 0)[0].payload[7], 5);  // CRITICAL
+  const std::uint64_t uncovered = r.cycle->counters().uncovered_cycles;
+  EXPECT_GE(uncovered, 3U);
+  EXPECT_LE(uncovered, 12U);
+
+  face(3.1F);  // half a turn: not covered either
+  EXPECT_EQ(r.cycle->pose().health, hf::Health::kOdometryOnly);
+  face(-0.2F);
+  EXPECT_EQ(r.cycle->pose().health, hf::Health::kNominal);
+
+  std::vector<std::string> texts;
+  for (const auto& f : tf::decode(r.link.written, nullptr))
+    if (f.msg_id == 253) texts.push_back(statustext_of(f));
+  const std::vector<std::string> expected = {"harmoloc: pose nominal",
+                                             "harmoloc: odometry only (heading not mapped here)",
+                                             "harmoloc: pose nominal"};
+  EXPECT_EQ(texts, expected);
+
+  // Without the camera the same pose is odometry only for the camera's sake, in its own words.
+  r.camera.frames = false;
+  face(-1.6F);
+  EXPECT_EQ(r.cycle->pose().health, hf::Health::kOdometryOnly);
+  EXPECT_EQ(r.cycle->pose().cause, hf::HealthCause::kInputs);
+
+  // Without encoder data the camera alone is vision only where the heading is covered, and
+  // invalid, in its own words, where it is not.
+  r.camera.frames = true;
+  r.cycle = std::make_unique<hf::LocalizationCycle>(r.config, map_covering_heading_zero(),
+                                                    r.camera, r.encoders, r.link, r.clock);
+  for (int i = 0; i < 5; ++i) r.run();
+  face(0.0F);
+  EXPECT_EQ(r.cycle->pose().health, hf::Health::kVisionOnly);
+  face(-1.6F);
+  EXPECT_EQ(r.cycle->pose().health, hf::Health::kInvalid);
+  EXPECT_EQ(r.cycle->pose().cause, hf::HealthCause::kHeadingNotCovered);
+}
+
 // Issue 16 item 2: a signed set-pose captured on the line was accepted again after the firmware
 // restarted (the replay protection lived in memory only). The cycle now persists the signing
 // state (drivers::RecordFile, written by its own thread) and the next run restores it: the

@@ -85,13 +85,43 @@ TEST(PoseMessages, HeartbeatStatusFollowsHealthAndTheOverrunAlarm) {
 }
 
 TEST(PoseMessages, HealthTextSaysWhyThePoseIsInvalid) {
-  EXPECT_EQ(hf::health_text(hf::Health::kNominal, false).severity, mav::kSeverityInfo);
-  EXPECT_EQ(hf::health_text(hf::Health::kVisionOnly, false).severity, mav::kSeverityWarning);
-  const hf::HealthText invalid = hf::health_text(hf::Health::kInvalid, false);
+  EXPECT_EQ(hf::health_text(hf::Health::kNominal, hf::HealthCause::kInputs).severity,
+            mav::kSeverityInfo);
+  EXPECT_EQ(hf::health_text(hf::Health::kVisionOnly, hf::HealthCause::kInputs).severity,
+            mav::kSeverityWarning);
+  const hf::HealthText invalid = hf::health_text(hf::Health::kInvalid, hf::HealthCause::kInputs);
   EXPECT_EQ(invalid.severity, mav::kSeverityCritical);
   EXPECT_STREQ(invalid.text, "harmoloc: pose invalid (no camera, no encoders)");
-  EXPECT_STREQ(hf::health_text(hf::Health::kInvalid, true).text,
+  EXPECT_STREQ(hf::health_text(hf::Health::kInvalid, hf::HealthCause::kOffMap).text,
                "harmoloc: pose invalid (outside the mapped region)");
+  const hf::HealthText uncovered =
+      hf::health_text(hf::Health::kOdometryOnly, hf::HealthCause::kHeadingNotCovered);
+  EXPECT_STREQ(uncovered.text, "harmoloc: odometry only (heading not mapped here)");
+  EXPECT_EQ(uncovered.severity, mav::kSeverityWarning);
+  // A cause that does not go with the health is not said (STATUSTEXT holds 50 characters).
+  EXPECT_STREQ(hf::health_text(hf::Health::kNominal, hf::HealthCause::kHeadingNotCovered).text,
+               "harmoloc: pose nominal");
+  EXPECT_STREQ(hf::health_text(hf::Health::kOdometryOnly, hf::HealthCause::kOffMap).text,
+               "harmoloc: odometry only (no camera fix)");
+  const hf::HealthText blind =
+      hf::health_text(hf::Health::kInvalid, hf::HealthCause::kHeadingNotCovered);
+  EXPECT_STREQ(blind.text, "harmoloc: pose invalid (heading not mapped here)");
+  EXPECT_EQ(blind.severity, mav::kSeverityCritical);
+  for (const hf::HealthCause c :
+       {hf::HealthCause::kInputs, hf::HealthCause::kOffMap, hf::HealthCause::kHeadingNotCovered})
+    for (int h = 0; h <= 4; ++h)
+      EXPECT_LE(std::strlen(hf::health_text(static_cast<hf::Health>(h), c).text), 50U);
+}
+
+TEST(PoseMessages, QualityUnknownWhereTheMapDoesNotCoverTheHeading) {
+  hf::PoseOutput p = pose_at(1.0, 2.0, 0.5);
+  p.covariance(0, 0) = p.covariance(1, 1) = 0.01 * 0.01;
+  p.health = hf::Health::kOdometryOnly;
+  EXPECT_EQ(hf::odometry_message(p, 0, 0).quality, 90);
+  p.cause = hf::HealthCause::kHeadingNotCovered;
+  EXPECT_EQ(hf::odometry_message(p, 0, 0).quality, 0);
+  p.health = hf::Health::kInvalid;
+  EXPECT_EQ(hf::odometry_message(p, 0, 0).quality, -1);
 }
 
 // ---- read back: what harmoloc-monitor decodes ----------------------------------------------
@@ -126,14 +156,18 @@ TEST(PoseMessages, HealthReadsBackFromItsTextAndHeartbeat) {
        {hf::Health::kNotInitialized, hf::Health::kNominal, hf::Health::kOdometryOnly,
         hf::Health::kVisionOnly, hf::Health::kInvalid}) {
     hf::Health got = hf::Health::kNominal;
-    const char* text = hf::health_text(h, false).text;
+    const char* text = hf::health_text(h, hf::HealthCause::kInputs).text;
     ASSERT_TRUE(hf::health_of_text(text, std::strlen(text), got));
     EXPECT_EQ(got, h);
   }
   hf::Health got = hf::Health::kNominal;
-  const char* off = hf::health_text(hf::Health::kInvalid, true).text;
+  const char* off = hf::health_text(hf::Health::kInvalid, hf::HealthCause::kOffMap).text;
   ASSERT_TRUE(hf::health_of_text(off, 50, got));
   EXPECT_EQ(got, hf::Health::kInvalid);
+  const char* uncovered =
+      hf::health_text(hf::Health::kOdometryOnly, hf::HealthCause::kHeadingNotCovered).text;
+  ASSERT_TRUE(hf::health_of_text(uncovered, 50, got));
+  EXPECT_EQ(got, hf::Health::kOdometryOnly);
   EXPECT_FALSE(hf::health_of_text("harmoloc: overrun alarm", 50, got));
   EXPECT_FALSE(hf::health_of_text("harmoloc: pose nominal", 8, got));  // cut short: no match
   EXPECT_TRUE(hf::health_of_heartbeat(mav::kMavStateActive, got));

@@ -38,7 +38,8 @@ class LinkWriter {
     append(encoder_.heartbeat(hb, buffer_));
   }
   void health(Health h) {
-    append(encoder_.statustext(mv::kSeverityInfo, fw::health_text(h, false).text, buffer_));
+    append(encoder_.statustext(mv::kSeverityInfo, fw::health_text(h, fw::HealthCause::kInputs).text,
+                               buffer_));
   }
   void pose(double t_s, Pose2 pose, double sigma_m, Health h) {
     fw::PoseOutput out;

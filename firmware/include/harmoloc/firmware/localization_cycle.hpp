@@ -66,6 +66,9 @@ struct CycleCounters {
   std::uint64_t implausible_frames = 0;  ///< frames no place on the map can look like (unused)
   /// Cycles whose pose lay outside the mapped region plus filter.map_margin_m (published invalid).
   std::uint64_t off_map_cycles = 0;
+  /// Cycles published odometry only because the map's heading coverage did not hold the
+  /// estimate's heading at its place while frames were usable.
+  std::uint64_t uncovered_cycles = 0;
   std::uint64_t encoder_samples = 0;
   /// Encoder gaps the cloud spent diffusing (vision only), closed by their first sample: the
   /// cloud is moved to where the gap's travel takes the pose of the last sample before it.
@@ -253,10 +256,13 @@ class LocalizationCycle {
   mavlink::MavResult request_message(const mavlink::CommandLong& command);
   void send(std::size_t size);
   Health assess_health() const;
-  // The health that is published: assess_health(), except that a pose outside the mapped region
-  // (plus filter.map_margin_m) is invalid, never nominal.
-  Health published_health() const;
+  // Sets the health the pose is published with and its cause: assess_health(), except that a
+  // pose outside the mapped region (plus filter.map_margin_m) is invalid, never nominal.
+  void set_published_health();
   bool off_map(const algorithms::Pose2& pose) const;
+  // Whether the map's heading coverage holds the estimate's heading at its place (true for a
+  // map without coverage).
+  bool estimate_covered(const algorithms::Pose2& estimate) const;
   // The measurement update with the per-board model; returns whether the frame counts as vision.
   bool update_with_boards(
       const algorithms::AreaVector& areas,
@@ -337,8 +343,11 @@ class LocalizationCycle {
   std::uint64_t last_frame_ns_ = 0;  ///< timestamp of the last frame used
   bool have_frame_time_ = false;
   bool live_clock_ = false;
-  std::uint64_t last_fix_ns_ = 0;
+  std::uint64_t last_fix_ns_ = 0;  ///< the last frame that counted as vision
   bool ever_fix_ = false;
+  /// The last frame that would have counted as vision had the map covered the estimate's
+  /// heading at its place (the same as last_fix_ns_ wherever it does).
+  std::uint64_t last_view_ns_ = 0;
   algorithms::HarmonicFix last_known_fix_{};  ///< the latest fix of a known place
   std::uint64_t last_encoder_ns_ = 0;
   bool have_encoder_ = false;
@@ -353,7 +362,7 @@ class LocalizationCycle {
   std::uint64_t next_heartbeat_ns_ = 0;
   std::uint8_t reset_counter_ = 0;
   Health last_reported_health_ = Health::kNotInitialized;
-  bool last_reported_off_map_ = false;
+  HealthCause last_reported_cause_ = HealthCause::kInputs;
   /// The mapped region with its margin (map frame): where a published pose may be nominal.
   double region_min_x_m_ = 0.0, region_max_x_m_ = 0.0;
   double region_min_y_m_ = 0.0, region_max_y_m_ = 0.0;

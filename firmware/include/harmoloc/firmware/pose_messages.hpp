@@ -21,13 +21,17 @@ struct HealthText {
   std::uint8_t severity;  ///< MAV_SEVERITY
   const char* text;
 };
-/// @p off_map: invalid because the pose lies outside the mapped region, said in its own words.
-HealthText health_text(Health health, bool off_map);
+/// A cause other than the inputs is said in its own words (kOffMap with kInvalid,
+/// kHeadingNotCovered with kOdometryOnly or kInvalid; with any other health the cause is
+/// ignored).
+HealthText health_text(Health health, HealthCause cause);
 
 /// @p pose as ODOMETRY stamped @p time_ns. Map frame (x, y on the floor, z up, yaw
 /// counter-clockwise) -> MAV_FRAME_LOCAL_FRD (z down): y and yaw change sign; body velocity in
 /// MAV_FRAME_BODY_FRD. Quality from the position's spread (100 at 0, 0 at 10 cm), -1 when the
-/// pose is invalid.
+/// pose is invalid, 0 ("unknown" in MAVLink's words) while the map does not cover the estimate's
+/// heading at its place: the spread is then the cloud's, and the cloud was weighed against a view
+/// the map only guesses.
 mavlink::Odometry odometry_message(const PoseOutput& pose, std::uint64_t time_ns,
                                    std::uint8_t reset_counter);
 

@@ -19,6 +19,17 @@ enum class Health : std::uint8_t {
 };
 const char* health_name(Health health);
 
+/// Why the health is what it is, where the inputs alone do not say it.
+enum class HealthCause : std::uint8_t {
+  kInputs = 0,  ///< the camera's and the encoders' timeouts (the health's own words)
+  kOffMap = 1,  ///< invalid: the pose lies outside the mapped region
+  /// Odometry only (or invalid, without encoder data) although frames arrive: the map's heading
+  /// coverage does not hold the estimate's heading at its place (a floor map faced a way its
+  /// training run never drove there), so what the boards show cannot be compared with what the
+  /// map expects.
+  kHeadingNotCovered = 2,
+};
+
 struct PoseOutput {
   std::uint64_t data_time_ns = 0;
   algorithms::Pose2 pose;
@@ -26,6 +37,7 @@ struct PoseOutput {
   double speed_mps = 0.0;
   double yaw_rate_rps = 0.0;
   Health health = Health::kNotInitialized;
+  HealthCause cause = HealthCause::kInputs;
   bool valid = false;  ///< a pose exists (filter initialised)
 };
 
