@@ -711,8 +711,9 @@ const ha::MapFile& map_covering_heading_zero() {
     f.has_heading_coverage = true;
     std::uint16_t mask = 0;
     for (int k = 0; k < ha::ForwardMap::kHeadingSectors; ++k) {
-      const double centre = -ha::kPi + (k + 0.5) * ha::ForwardMap::kHeadingSector_rad;
-      if (std::fabs(centre) <= ha::ForwardMap::kHeadingReach_rad)
+      const double centre =
+          -ha::kPi + (k + 0.5) * static_cast<double>(ha::ForwardMap::kHeadingSector_rad);
+      if (std::fabs(centre) <= static_cast<double>(ha::ForwardMap::kHeadingReach_rad))
         mask |= static_cast<std::uint16_t>(1U << k);
     }
     for (std::size_t c = 0; c < f.stored_cells(); ++c) f.heading_cover[c] = mask;
@@ -784,8 +785,8 @@ TEST(HeadingCoverage, FacingAHeadingTheMapDoesNotCoverIsOdometryOnly) {
   // Without encoder data the camera alone is vision only where the heading is covered, and
   // invalid, in its own words, where it is not.
   r.camera.frames = true;
-  r.cycle = std::make_unique<hf::LocalizationCycle>(r.config, map_covering_heading_zero(),
-                                                    r.camera, r.encoders, r.link, r.clock);
+  r.cycle = std::make_unique<hf::LocalizationCycle>(r.config, map_covering_heading_zero(), r.camera,
+                                                    r.encoders, r.link, r.clock);
   for (int i = 0; i < 5; ++i) r.run();
   face(0.0F);
   EXPECT_EQ(r.cycle->pose().health, hf::Health::kVisionOnly);

@@ -84,33 +84,41 @@ TEST(PoseMessages, HeartbeatStatusFollowsHealthAndTheOverrunAlarm) {
   EXPECT_EQ(hf::heartbeat_status(hf::Health::kInvalid, true), mav::kMavStateEmergency);
 }
 
-TEST(PoseMessages, HealthTextSaysWhyThePoseIsInvalid) {
-  EXPECT_EQ(hf::health_text(hf::Health::kNominal, hf::HealthCause::kInputs).severity,
-            mav::kSeverityInfo);
-  EXPECT_EQ(hf::health_text(hf::Health::kVisionOnly, hf::HealthCause::kInputs).severity,
-            mav::kSeverityWarning);
-  const hf::HealthText invalid = hf::health_text(hf::Health::kInvalid, hf::HealthCause::kInputs);
-  EXPECT_EQ(invalid.severity, mav::kSeverityCritical);
-  EXPECT_STREQ(invalid.text, "harmoloc: pose invalid (no camera, no encoders)");
-  EXPECT_STREQ(hf::health_text(hf::Health::kInvalid, hf::HealthCause::kOffMap).text,
-               "harmoloc: pose invalid (outside the mapped region)");
-  const hf::HealthText uncovered =
-      hf::health_text(hf::Health::kOdometryOnly, hf::HealthCause::kHeadingNotCovered);
-  EXPECT_STREQ(uncovered.text, "harmoloc: odometry only (heading not mapped here)");
-  EXPECT_EQ(uncovered.severity, mav::kSeverityWarning);
-  // A cause that does not go with the health is not said (STATUSTEXT holds 50 characters).
-  EXPECT_STREQ(hf::health_text(hf::Health::kNominal, hf::HealthCause::kHeadingNotCovered).text,
-               "harmoloc: pose nominal");
-  EXPECT_STREQ(hf::health_text(hf::Health::kOdometryOnly, hf::HealthCause::kOffMap).text,
-               "harmoloc: odometry only (no camera fix)");
-  const hf::HealthText blind =
-      hf::health_text(hf::Health::kInvalid, hf::HealthCause::kHeadingNotCovered);
-  EXPECT_STREQ(blind.text, "harmoloc: pose invalid (heading not mapped here)");
-  EXPECT_EQ(blind.severity, mav::kSeverityCritical);
-  for (const hf::HealthCause c :
-       {hf::HealthCause::kInputs, hf::HealthCause::kOffMap, hf::HealthCause::kHeadingNotCovered})
+TEST(PoseMessages, HealthTextSaysWhyThePoseIsNotNominal) {
+  using C = hf::HealthCause;
+  using H = hf::Health;
+  struct Case {
+    H health;
+    C cause;
+    const char* text;
+    std::uint8_t severity;
+  };
+  // A cause that does not go with the health is not said (the last two).
+  const Case cases[] = {
+      {H::kNominal, C::kInputs, "harmoloc: pose nominal", mav::kSeverityInfo},
+      {H::kVisionOnly, C::kInputs, "harmoloc: vision only (no encoder data)",
+       mav::kSeverityWarning},
+      {H::kInvalid, C::kInputs, "harmoloc: pose invalid (no camera, no encoders)",
+       mav::kSeverityCritical},
+      {H::kInvalid, C::kOffMap, "harmoloc: pose invalid (outside the mapped region)",
+       mav::kSeverityCritical},
+      {H::kOdometryOnly, C::kHeadingNotCovered, "harmoloc: odometry only (heading not mapped here)",
+       mav::kSeverityWarning},
+      {H::kInvalid, C::kHeadingNotCovered, "harmoloc: pose invalid (heading not mapped here)",
+       mav::kSeverityCritical},
+      {H::kNominal, C::kHeadingNotCovered, "harmoloc: pose nominal", mav::kSeverityInfo},
+      {H::kOdometryOnly, C::kOffMap, "harmoloc: odometry only (no camera fix)",
+       mav::kSeverityWarning},
+  };
+  for (const Case& c : cases) {
+    const hf::HealthText t = hf::health_text(c.health, c.cause);
+    EXPECT_STREQ(t.text, c.text);
+    EXPECT_EQ(t.severity, c.severity) << c.text;
+  }
+  // STATUSTEXT holds 50 characters.
+  for (const C c : {C::kInputs, C::kOffMap, C::kHeadingNotCovered})
     for (int h = 0; h <= 4; ++h)
-      EXPECT_LE(std::strlen(hf::health_text(static_cast<hf::Health>(h), c).text), 50U);
+      EXPECT_LE(std::strlen(hf::health_text(static_cast<H>(h), c).text), 50U);
 }
 
 TEST(PoseMessages, QualityUnknownWhereTheMapDoesNotCoverTheHeading) {

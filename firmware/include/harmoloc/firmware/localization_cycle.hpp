@@ -66,8 +66,8 @@ struct CycleCounters {
   std::uint64_t implausible_frames = 0;  ///< frames no place on the map can look like (unused)
   /// Cycles whose pose lay outside the mapped region plus filter.map_margin_m (published invalid).
   std::uint64_t off_map_cycles = 0;
-  /// Cycles published odometry only because the map's heading coverage did not hold the
-  /// estimate's heading at its place while frames were usable.
+  /// Cycles published odometry only (invalid without encoder data) because the map's heading
+  /// coverage did not hold the estimate's heading at its place while frames were usable.
   std::uint64_t uncovered_cycles = 0;
   std::uint64_t encoder_samples = 0;
   /// Encoder gaps the cloud spent diffusing (vision only), closed by their first sample: the
@@ -257,7 +257,9 @@ class LocalizationCycle {
   void send(std::size_t size);
   Health assess_health() const;
   // Sets the health the pose is published with and its cause: assess_health(), except that a
-  // pose outside the mapped region (plus filter.map_margin_m) is invalid, never nominal.
+  // pose outside the mapped region (plus filter.map_margin_m) is invalid, never nominal; a health
+  // that lacks vision while frames arrive whose estimate the heading coverage does not hold says
+  // so (HealthCause::kHeadingNotCovered).
   void set_published_health();
   bool off_map(const algorithms::Pose2& pose) const;
   // Whether the map's heading coverage holds the estimate's heading at its place (true for a

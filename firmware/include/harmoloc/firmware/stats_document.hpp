@@ -97,7 +97,7 @@ struct Localizer {
   std::optional<std::uint64_t> unknown_place;
   std::uint64_t implausible_frames = 0;
   std::uint64_t off_map_cycles = 0;
-  std::uint64_t uncovered_cycles = 0;  ///< odometry only: the map's coverage lacks the heading
+  std::uint64_t uncovered_cycles = 0;  ///< not nominal: the map's coverage lacks the heading
 };
 
 struct Filter {
