@@ -204,6 +204,11 @@ bool heading_covered(const ForwardMap& map, const GridPoint& point, const SeenHe
   return mask == 0U || ((mask >> heading.sector) & 1U) != 0U;
 }
 
+bool heading_covered(const ForwardMap& map, double x_m, double y_m, double yaw_rad) {
+  if (!ForwardMap::kHeadingTermStorage || !map.has_heading_coverage) return true;
+  return heading_covered(map, locate(map, x_m, y_m), seen_heading(yaw_rad));
+}
+
 bool board_image_angle(const ForwardMap& map, const AreaVector& areas, std::size_t b,
                        float& angle_rad) {
   if (!map.has_bearings || !gives_bearing(areas, b)) return false;

@@ -36,11 +36,10 @@ class StageTimer {
 
 Health LocalizationCycle::assess_health() const {
   if (!filter_.initialized()) return Health::kNotInitialized;
-  const auto ms = [](double v) { return static_cast<std::uint64_t>(v * 1e6); };
-  const bool vision =
-      ever_fix_ && data_time_ns_ - last_fix_ns_ <= ms(config_.cycle.camera_timeout_ms);
+  const bool vision = ever_fix_ && camera_fresh(last_fix_ns_);
   const bool odometry =
-      have_encoder_ && data_time_ns_ - last_encoder_ns_ <= ms(config_.cycle.encoder_timeout_ms);
+      have_encoder_ && data_time_ns_ - last_encoder_ns_ <=
+                           static_cast<std::uint64_t>(config_.cycle.encoder_timeout_ms * 1e6);
   if (vision && odometry) return Health::kNominal;
   if (odometry) return Health::kOdometryOnly;
   if (vision) return Health::kVisionOnly;
@@ -53,11 +52,8 @@ bool LocalizationCycle::off_map(const Pose2& p) const {
            p.y_m <= region_max_y_m_);
 }
 
-bool LocalizationCycle::estimate_covered(const Pose2& p) const {
-  const algorithms::ForwardMap& map = map_.forward;
-  if (!map.has_heading_coverage || !map.present()) return true;
-  return algorithms::heading_covered(map, algorithms::locate(map, p.x_m, p.y_m),
-                                     algorithms::seen_heading(p.yaw_rad));
+bool LocalizationCycle::camera_fresh(std::uint64_t t_ns) const {
+  return data_time_ns_ - t_ns <= static_cast<std::uint64_t>(config_.cycle.camera_timeout_ms * 1e6);
 }
 
 void LocalizationCycle::set_published_health() {
@@ -67,8 +63,7 @@ void LocalizationCycle::set_published_health() {
     h = Health::kInvalid;
     cause = HealthCause::kOffMap;
   } else if ((h == Health::kOdometryOnly || h == Health::kInvalid) && ever_fix_ &&
-             data_time_ns_ - last_view_ns_ <=
-                 static_cast<std::uint64_t>(config_.cycle.camera_timeout_ms * 1e6)) {
+             camera_fresh(last_view_ns_)) {
     cause = HealthCause::kHeadingNotCovered;
   }
   pose_.health = h;

@@ -49,7 +49,8 @@ void LocalizationCycle::update(const algorithms::AreaVector& areas, const Featur
     // A view counts as vision only where the map's heading coverage holds the estimate's
     // heading at its place: facing another way, the map's view there is a guess, and a pose
     // that agrees with a guess is not known to within the map's accuracy.
-    if (vision && estimate_covered(e.mean)) last_fix_ns_ = data_time_ns_;
+    if (vision && algorithms::heading_covered(map_.forward, e.mean.x_m, e.mean.y_m, e.mean.yaw_rad))
+      last_fix_ns_ = data_time_ns_;
     pose_.pose = e.mean;
     pose_.covariance = e.covariance;
     pose_.valid = true;

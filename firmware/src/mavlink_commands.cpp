@@ -98,8 +98,7 @@ mavlink::MavResult LocalizationCycle::execute(const mavlink::CommandLong& comman
 
 mavlink::MavResult LocalizationCycle::relocalize(std::int32_t& how) {
   const double sigma_m = init_sigma_m_;
-  const auto camera_timeout_ns = static_cast<std::uint64_t>(config_.cycle.camera_timeout_ms * 1e6);
-  if (ever_fix_ && data_time_ns_ - last_fix_ns_ <= camera_timeout_ns) {
+  if (ever_fix_ && camera_fresh(last_fix_ns_)) {
     // The camera sees a trained place now: that fix is a global position (Yang et al.'s recovery,
     // with the harmonic localizer as the global guess). The heading is the training run's there
     // when the map knows it, else unknown.

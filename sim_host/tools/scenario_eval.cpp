@@ -145,11 +145,10 @@ RunRecord replay_scenario(const Scenario& scenario, std::uint64_t seed,
     f.sigma_m = std::sqrt(std::max(0.0, 0.5 * (out.covariance(0, 0) + out.covariance(1, 1))));
     f.sigma_yaw_rad = std::sqrt(std::max(0.0, out.covariance(2, 2)));
     if (map.forward.has_heading_coverage && out.valid)
-      f.covered = algorithms::heading_covered(
-                      map.forward, algorithms::locate(map.forward, out.pose.x_m, out.pose.y_m),
-                      algorithms::seen_heading(out.pose.yaw_rad))
-                      ? 1
-                      : 0;
+      f.covered =
+          algorithms::heading_covered(map.forward, out.pose.x_m, out.pose.y_m, out.pose.yaw_rad)
+              ? 1
+              : 0;
     record.frames.push_back(f);
     ++k;
     if (progress && (k % 300 == 0 || k == run.frame_count())) progress(k, run.frame_count());

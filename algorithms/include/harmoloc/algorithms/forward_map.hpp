@@ -233,6 +233,9 @@ void expected_features(const ForwardMap& map, const GridPoint& point, const Seen
 /// Whether the map's coverage at @p point's heaviest stored corner holds @p heading (true for a
 /// map without coverage; false for a point with no stored corner).
 bool heading_covered(const ForwardMap& map, const GridPoint& point, const SeenHeading& heading);
+/// The same for a pose: whether the map's coverage holds heading @p yaw_rad at (@p x_m, @p y_m);
+/// true, without locating the pose, for a map without coverage.
+bool heading_covered(const ForwardMap& map, double x_m, double y_m, double yaw_rad);
 
 /// The distance to the training run at @p point (metres; bilinear, plus the distance beyond the
 /// grid for a position outside it).

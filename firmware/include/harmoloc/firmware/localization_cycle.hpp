@@ -262,9 +262,8 @@ class LocalizationCycle {
   // so (HealthCause::kHeadingNotCovered).
   void set_published_health();
   bool off_map(const algorithms::Pose2& pose) const;
-  // Whether the map's heading coverage holds the estimate's heading at its place (true for a
-  // map without coverage).
-  bool estimate_covered(const algorithms::Pose2& estimate) const;
+  // Whether a frame taken at @p t_ns is within cycle.camera_timeout_ms of the data clock.
+  bool camera_fresh(std::uint64_t t_ns) const;
   // The measurement update with the per-board model; returns whether the frame counts as vision.
   bool update_with_boards(
       const algorithms::AreaVector& areas,
