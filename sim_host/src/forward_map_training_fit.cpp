@@ -232,6 +232,109 @@ HeadingFit heading_fit(const KernelSums& k, std::size_t boards, double ridge) {
   return f;
 }
 
+// The heading terms from a wide kernel, local-linear in the place: per board
+// a0 + gx dx + gy dy + c cos(yaw) + s sin(yaw) around (x, y), dx and dy in kernel widths. A
+// floor driven in lanes sees a place at the headings of the lanes through it only; its other
+// headings were driven on the neighbouring lanes, a lane spacing away (a floor driven forth and
+// back: every other lane), which a kernel of a few centimetres never reaches. The wide kernel
+// reaches them and the slopes take out how the areas change over that distance, so that the
+// harmonic is the heading's share alone.
+struct WideSums {
+  double w = 0.0;
+  std::array<std::array<double, 5>, 5> m{};           // the normal matrix's upper triangle
+  std::array<std::array<double, 5>, kMaxBoards> r{};  // per board: sum w phi o
+};
+
+// Weights below e^-9 of the nearest frame's do not count (the kernel is wide: a longer cut
+// would take in the whole floor at every place).
+constexpr double kWideCut = 9.0;
+
+bool wide_sums(const FrameIndex& index, double x, double y, double bandwidth_m, std::size_t boards,
+               double t_s, double travel_m, double exclude_s, double exclude_m, WideSums& out) {
+  const bool exclude = exclude_s > 0.0 || exclude_m > 0.0;
+  const auto keep = [&](const Positioned& p) {
+    return p.has_yaw && (!exclude || !same_pass(p, t_s, travel_m, exclude_s, exclude_m));
+  };
+  out = WideSums{};
+  const double d2_min = index.nearest_d2(x, y, keep);
+  if (!std::isfinite(d2_min)) return false;
+  const double inv = 0.5 / (bandwidth_m * bandwidth_m);
+  index.within(x, y, std::sqrt(d2_min + kWideCut / inv), [&](const Positioned& p) {
+    if (!keep(p)) return;
+    const double dx = p.x_m - x, dy = p.y_m - y;
+    const double e = (dx * dx + dy * dy - d2_min) * inv;
+    if (e > kWideCut) return;
+    const double w = std::exp(-e);
+    const double phi[5] = {1.0, dx / bandwidth_m, dy / bandwidth_m, std::cos(p.yaw_rad),
+                           std::sin(p.yaw_rad)};
+    out.w += w;
+    for (int i = 0; i < 5; ++i)
+      for (int j = i; j < 5; ++j) out.m[i][j] += w * phi[i] * phi[j];
+    for (std::size_t b = 0; b < boards; ++b) {
+      const double wo = w * static_cast<double>((*p.features)[b]);
+      for (int i = 0; i < 5; ++i) out.r[b][i] += wo * phi[i];
+    }
+  });
+  return out.w > 0.0;
+}
+
+// Solves @p k's least squares with a ridge of @p ridge times the weight on (c, s) (infinite:
+// none fitted) and a small one on the slopes (so that a place seen along one line only keeps a
+// level across it). The fit's a0, c and s are the cell's (its slopes are zero at its centre).
+// False when singular.
+bool wide_fit(const WideSums& k, std::size_t boards, double ridge, HeadingFit& f) {
+  constexpr double kSlopeRidge = 1e-3;
+  double a[5][5];
+  for (int i = 0; i < 5; ++i)
+    for (int j = i; j < 5; ++j) a[i][j] = a[j][i] = k.m[i][j];
+  a[1][1] += kSlopeRidge * k.w;
+  a[2][2] += kSlopeRidge * k.w;
+  // An infinite ridge: no harmonic (a finite one this large leaves it below rounding).
+  const double r = std::isfinite(ridge) ? ridge : 1e12;
+  a[3][3] += r * k.w;
+  a[4][4] += r * k.w;
+  // Cholesky, in place in the lower triangle.
+  for (int j = 0; j < 5; ++j) {
+    double d = a[j][j];
+    for (int p = 0; p < j; ++p) d -= a[j][p] * a[j][p];
+    if (!(d > 1e-12 * k.w)) return false;
+    a[j][j] = std::sqrt(d);
+    for (int i = j + 1; i < 5; ++i) {
+      double v = a[i][j];
+      for (int p = 0; p < j; ++p) v -= a[i][p] * a[j][p];
+      a[i][j] = v / a[j][j];
+    }
+  }
+  f = HeadingFit{};
+  for (std::size_t b = 0; b < boards; ++b) {
+    double z[5];
+    for (int i = 0; i < 5; ++i) {
+      double v = k.r[b][i];
+      for (int p = 0; p < i; ++p) v -= a[i][p] * z[p];
+      z[i] = v / a[i][i];
+    }
+    for (int i = 4; i >= 0; --i) {
+      double v = z[i];
+      for (int p = i + 1; p < 5; ++p) v -= a[p][i] * z[p];
+      z[i] = v / a[i][i];
+    }
+    f.a0[b] = z[0];
+    f.c[b] = z[3];
+    f.s[b] = z[4];
+  }
+  return true;
+}
+
+// The wide fit's harmonic with the level of the narrow kernel's sums @p k (kernel_sums with
+// headings): a0 is the narrow mean of the areas less the harmonic, so the place keeps the
+// narrow kernel's sharpness and takes the other headings' change from the wide one.
+HeadingFit with_narrow_level(const HeadingFit& wide, const KernelSums& k, std::size_t boards) {
+  HeadingFit f = wide;
+  for (std::size_t b = 0; b < boards; ++b)
+    f.a0[b] = (k.a[b] - wide.c[b] * k.c - wide.s[b] * k.s) / k.w;
+  return f;
+}
+
 // Board bearings around a place: per board, the kernel-weighted sums of the unit vectors of the
 // world bearings of the frames that saw it whole, and the kernel weight of all frames.
 struct BearingSums {
@@ -409,6 +512,22 @@ void fit_bearings(const std::vector<Positioned>& frames, const std::vector<char>
   }
 }
 
+// Divides @p sq's per-board sums of squares over @p n frames by n and returns their mean over
+// the modelled boards (0 when none is).
+double mean_over_modelled(std::vector<double>& sq, std::size_t n,
+                          const std::vector<bool>& modelled) {
+  double total = 0.0;
+  std::size_t used = 0;
+  for (std::size_t b = 0; b < sq.size(); ++b) {
+    sq[b] /= static_cast<double>(n);
+    if (modelled[b]) {
+      total += sq[b];
+      ++used;
+    }
+  }
+  return used > 0 ? total / static_cast<double>(used) : 0.0;
+}
+
 }  // namespace
 
 ForwardMapReport fit_grid(std::vector<Positioned>& frames, std::size_t board_count,
@@ -512,16 +631,7 @@ ForwardMapReport fit_grid(std::vector<Positioned>& frames, std::size_t board_cou
     }
     if (n == 0) continue;
     for (std::size_t r = 0; r < ridges.size(); ++r) {
-      double total = 0.0;
-      std::size_t used = 0;
-      for (std::size_t b = 0; b < board_count; ++b) {
-        sq[r][b] /= static_cast<double>(n);
-        if (modelled[b]) {
-          total += sq[r][b];
-          ++used;
-        }
-      }
-      total = used > 0 ? total / static_cast<double>(used) : 0.0;
+      const double total = mean_over_modelled(sq[r], n, modelled);
       if (r == 0 && total < best) {
         best = total;
         report.bandwidth_m = h;
@@ -534,15 +644,80 @@ ForwardMapReport fit_grid(std::vector<Positioned>& frames, std::size_t board_cou
       }
     }
   }
+  // The heading terms from a wide kernel (wide_fit), alone or with the narrow kernel's level,
+  // validated on the same frames: a frame whose wide fit fails keeps the narrow mean. The same
+  // fits without the harmonic (an infinite ridge) are validated too: the terms must beat them as
+  // well, so that what they are kept for is the heading, not the wide fit's slopes over the
+  // place (on a route those alone can predict a little better than the narrow mean).
+  bool terms_wide = false, terms_narrow_level = false;
+  double terms_wide_h = 0.0, best_flat = std::numeric_limits<double>::infinity();
+  if (try_terms && !opt.heading_bandwidths_m.empty() && !best_sq.empty()) {
+    const double h_narrow = report.bandwidth_m;
+    // Per wide kernel: the ridges of the options, then the infinite one; each alone and on the
+    // narrow level.
+    std::vector<double> wide_ridges(ridges.begin() + 1, ridges.end());
+    wide_ridges.push_back(std::numeric_limits<double>::infinity());
+    const std::size_t nh = opt.heading_bandwidths_m.size(), nr = wide_ridges.size();
+    std::vector<std::vector<double>> sq(nh * nr * 2, std::vector<double>(board_count, 0.0));
+    std::size_t n = 0;
+    KernelSums narrow;
+    WideSums wide;
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+      const Positioned& p = frames[i];
+      if (!comparable[i]) continue;
+      if (!kernel_sums(index, p.x_m, p.y_m, h_narrow, board_count, p.t_s, p.travel_m,
+                       opt.exclude_same_pass_s, opt.exclude_same_pass_m, true, narrow)) {
+        continue;
+      }
+      ++n;
+      const double cos_yaw = std::cos(p.yaw_rad), sin_yaw = std::sin(p.yaw_rad);
+      for (std::size_t hi = 0; hi < nh; ++hi) {
+        const bool summed =
+            wide_sums(index, p.x_m, p.y_m, opt.heading_bandwidths_m[hi], board_count, p.t_s,
+                      p.travel_m, opt.exclude_same_pass_s, opt.exclude_same_pass_m, wide);
+        for (std::size_t ri = 0; ri < nr; ++ri) {
+          HeadingFit fit;
+          const bool ok = summed && wide_fit(wide, board_count, wide_ridges[ri], fit);
+          const HeadingFit level = ok ? with_narrow_level(fit, narrow, board_count) : fit;
+          for (std::size_t b = 0; b < board_count; ++b) {
+            const double o = static_cast<double>((*p.features)[b]);
+            const double fallback = narrow.a[b] / narrow.w;
+            const double r0 = o - (ok ? fit.predict(b, cos_yaw, sin_yaw) : fallback);
+            const double r1 = o - (ok ? level.predict(b, cos_yaw, sin_yaw) : fallback);
+            sq[(hi * nr + ri) * 2][b] += r0 * r0;
+            sq[(hi * nr + ri) * 2 + 1][b] += r1 * r1;
+          }
+        }
+      }
+    }
+    for (std::size_t k = 0; n > 0 && k < sq.size(); ++k) {
+      const double total = mean_over_modelled(sq[k], n, modelled);
+      const double ridge = wide_ridges[(k / 2) % nr];
+      if (!std::isfinite(ridge)) {
+        best_flat = std::min(best_flat, total);
+      } else if (total < best_terms) {
+        best_terms = total;
+        terms_h = h_narrow;
+        terms_wide = true;
+        terms_narrow_level = (k % 2) == 1;
+        terms_wide_h = opt.heading_bandwidths_m[k / 2 / nr];
+        terms_ridge = ridge;
+        terms_sq = sq[k];
+      }
+    }
+  }
   report.heading_terms_validation_rmse = std::isfinite(best_terms) ? std::sqrt(best_terms) : 0.0;
   const bool use_terms =
-      try_terms && !best_sq.empty() && best_terms < (1.0 - opt.heading_terms_min_gain) * best;
+      try_terms && !best_sq.empty() &&
+      best_terms < (1.0 - opt.heading_terms_min_gain) * std::min(best, best_flat);
   const std::vector<double> blind_sq = best_sq;
   if (use_terms) {
     report.mean_validation_rmse = std::sqrt(best);
     best = best_terms;
     report.bandwidth_m = terms_h;
     report.heading_ridge = terms_ridge;
+    report.heading_bandwidth_m = terms_wide ? terms_wide_h : 0.0;
+    report.heading_narrow_level = terms_narrow_level;
     best_sq = terms_sq;
   }
   if (best_sq.empty()) {
@@ -666,7 +841,16 @@ ForwardMapReport fit_grid(std::vector<Positioned>& frames, std::size_t board_cou
       if (use_terms) {
         KernelSums k;
         kernel_sums(index, x, y, report.bandwidth_m, board_count, 0.0, -1.0, 0.0, 0.0, true, k);
-        const HeadingFit fit = heading_fit(k, board_count, report.heading_ridge);
+        HeadingFit fit = heading_fit(k, board_count, report.heading_ridge);
+        WideSums wide;
+        HeadingFit wide_result;
+        if (report.heading_bandwidth_m > 0.0 &&
+            wide_sums(index, x, y, report.heading_bandwidth_m, board_count, 0.0, -1.0, 0.0, 0.0,
+                      wide) &&
+            wide_fit(wide, board_count, report.heading_ridge, wide_result)) {
+          fit = report.heading_narrow_level ? with_narrow_level(wide_result, k, board_count)
+                                            : wide_result;
+        }
         float* t = out.heading_terms.data() + at * algorithms::kMaxBoards * 2;
         for (std::size_t b = 0; b < board_count; ++b) {
           if (!modelled[b]) continue;
@@ -700,9 +884,11 @@ ForwardMapReport fit_grid(std::vector<Positioned>& frames, std::size_t board_cou
             }
           });
           const double h = report.bandwidth_m;
-          const double reach = yaw_reach + 2.0 * h;
+          const double reach = yaw_reach + 2.0 * std::max(h, report.heading_bandwidth_m);
           // The coverage: the headings of the frames weighed at least e^-2 of the nearest's.
-          const double cover_d2 = yaw_reach * yaw_reach + 4.0 * h * h;
+          // With heading terms from a wide kernel, those that kernel weighs so.
+          const double hc = std::max(h, report.heading_bandwidth_m);
+          const double cover_d2 = yaw_reach * yaw_reach + 4.0 * hc * hc;
           double sin_sum = 0.0, cos_sum = 0.0;
           index.within(x, y, reach, [&](const Positioned& p) {
             if (!p.has_yaw) return;

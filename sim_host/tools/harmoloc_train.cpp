@@ -80,8 +80,10 @@ int main(int argc, char** argv) {
   app.add_flag("--heading-terms", heading_terms,
                "model the boards' areas over the heading too where the run drove a place at\n"
                "several headings (a floor; map format 7), kept where they predict other passes\n"
-               "better. Experimental: not for the bare-metal kernels (no room), and on random\n"
-               "floors they bettered the heading and kidnaps but not the position (docs/sweep.md)");
+               "better, fitted over the lanes nearby too (kernels up to 35 cm; a floor trains\n"
+               "about 4 times longer). Experimental: not for the bare-metal kernels (no room);\n"
+               "on random floors they bettered the heading and kidnaps, the position only in\n"
+               "the median (docs/sweep.md)");
   app.add_option("--out", out, "map file to write")->required();
   std::string coverage_path;
   app.add_option("--coverage", coverage_path,
@@ -361,12 +363,17 @@ int main(int argc, char** argv) {
               "headings      %.0f%% of the circle covered near the run (mean over its cells: a "
               "place is known from the headings within about 45 deg of those it was driven at)\n",
               100.0 * fw.covered_heading_fraction);
-          if (map.forward.has_heading_terms)
+          if (map.forward.has_heading_terms) {
+            char kernel[96] = "";
+            if (fw.heading_bandwidth_m > 0.0)
+              std::snprintf(kernel, sizeof kernel, ", fitted over %.0f cm%s",
+                            100.0 * fw.heading_bandwidth_m,
+                            fw.heading_narrow_level ? " on the narrow kernel's level" : "");
             std::printf(
                 "heading terms the boards' areas modelled over the heading too: they predict "
-                "other passes to %.3g RMS against %.3g without (ridge %g)\n",
-                fw.validation_rmse, fw.mean_validation_rmse, fw.heading_ridge);
-          else if (fw.heading_terms_validation_rmse > 0.0)
+                "other passes to %.3g RMS against %.3g without (ridge %g%s)\n",
+                fw.validation_rmse, fw.mean_validation_rmse, fw.heading_ridge, kernel);
+          } else if (fw.heading_terms_validation_rmse > 0.0)
             std::printf(
                 "heading terms none: over the heading the areas predict other passes to %.3g RMS, "
                 "no better than %.3g without\n",

@@ -156,6 +156,7 @@ void floor_part(const Scenario& scene, const algorithms::ThresholdSet& threshold
     r.floor_pass_heading_spread_rad = trained.report.forward.pass_heading_spread_rad;
     const ForwardMapReport& fw = trained.report.forward;
     r.floor_heading_ridge = fw.heading_ridge;
+    r.floor_heading_bandwidth_m = fw.heading_bandwidth_m;
     r.floor_covered_heading_fraction = fw.covered_heading_fraction;
     r.floor_validation_rmse = fw.validation_rmse;
     r.floor_mean_validation_rmse =

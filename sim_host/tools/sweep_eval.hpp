@@ -97,6 +97,7 @@ struct SceneResult {
   /// The coverage run's forward map: its heading terms' ridge (0: none), its validation RMS
   /// (feature units, over the modelled boards) and the same without heading terms.
   double floor_heading_ridge = 0.0;
+  double floor_heading_bandwidth_m = 0.0;  ///< their wide kernel (0: the narrow one)
   double floor_validation_rmse = -1.0, floor_mean_validation_rmse = -1.0;
   /// The share of the circle of headings the floor map covers near the coverage run (-1: none).
   double floor_covered_heading_fraction = -1.0;

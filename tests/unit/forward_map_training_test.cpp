@@ -287,6 +287,56 @@ TEST(ForwardMapTraining, HeadingTermsWhereTheAreasChangeWithTheHeading) {
   EXPECT_FALSE(plain->has_heading_terms);
 }
 
+// A floor driven forth and back in lanes 0.35 m apart (a boustrophedon): each place was driven
+// at one heading, the lane through it; the opposite heading only on the neighbouring lanes. The
+// heading terms are then fitted over a wide kernel with the areas' change across the lanes taken
+// out (forward_map_training_fit.cpp, wide_fit), and a lane's place is predicted at both headings.
+TEST(ForwardMapTraining, HeadingTermsReachTheNeighbouringLanesOfAForthAndBackFloor) {
+  const double pi = 3.14159265358979323846;
+  PlacedRun run;
+  const double step = 0.005;
+  double travel = 0.0;
+  for (int lane = -2; lane <= 2; ++lane) {
+    const double y = 1.5 + 0.35 * lane;
+    const double h = lane % 2 == 0 ? 0.0 : pi;
+    for (int i = 0; i <= 280; ++i) {
+      const double s = -0.7 + step * i;
+      const double x = 1.5 + (lane % 2 == 0 ? s : -s);
+      add_frame(run, 1.0 + 0.1 * x, 2.0 + y + 0.8 * std::cos(h), x, y, h, travel);
+      travel += step;
+    }
+    travel += 1.0;
+  }
+  hs::ForwardMapOptions with;
+  with.heading_ridges = hs::kHeadingRidges;
+  auto map = std::make_unique<ha::ForwardMap>();
+  const hs::ForwardMapReport r =
+      hs::train_forward_map_placed(run.features, run.placed, 2, with, *map);
+  ASSERT_TRUE(map->has_heading_terms);
+  EXPECT_GT(r.heading_bandwidth_m, 0.0);
+  EXPECT_LT(r.validation_rmse, 0.2 * r.mean_validation_rmse)
+      << r.validation_rmse << " " << r.mean_validation_rmse;
+  std::array<float, ha::kMaxBoards> e{};
+  for (const double y : {1.5, 1.85}) {
+    for (const double h : {0.0, pi}) {
+      ha::SeenHeading seen = ha::seen_heading(h);
+      seen.keep_to_coverage = false;
+      ha::expected_features(*map, ha::locate(*map, 1.5, y), seen, e.data());
+      EXPECT_NEAR(e[1], 2.0 + y + 0.8 * std::cos(h), 0.05) << y << " " << h;
+      EXPECT_NEAR(e[0], 1.15, 0.02) << y << " " << h;
+    }
+  }
+  // Fitted over the narrow kernel alone (no wide kernel to try), the other heading is read from
+  // the lane's own: off by the heading's whole share.
+  with.heading_bandwidths_m.clear();
+  auto narrow = std::make_unique<ha::ForwardMap>();
+  hs::train_forward_map_placed(run.features, run.placed, 2, with, *narrow);
+  ha::SeenHeading back = ha::seen_heading(pi);
+  back.keep_to_coverage = false;
+  ha::expected_features(*narrow, ha::locate(*narrow, 1.5, 1.5), back, e.data());
+  EXPECT_GT(std::fabs(static_cast<double>(e[1]) - (2.0 + 1.5 - 0.8)), 0.4) << e[1];
+}
+
 // The coverage picture: the places within the known distance only, a wedge for each covered
 // sector, pointing the way the camera faced (map y up is page y down).
 TEST(CoveragePlot, WedgesForCoveredHeadingsAtKnownPlaces) {

@@ -32,8 +32,12 @@ struct ForwardMapOptions {
   /// on the harmonic's two coefficients, cross-validated with the bandwidths against other
   /// passes; empty (the default): no heading terms. kHeadingRidges is the trainer's list
   /// (`harmoloc-train --heading-terms`). Not the default: on the floor runs of 19 random scenes
-  /// they brought the heading and the kidnaps closer but the position further (docs/sweep.md).
+  /// they brought the heading and the kidnaps closer, the position only in the median
+  /// (docs/sweep.md).
   std::vector<double> heading_ridges;
+  /// Wide kernels tried for the heading terms too (with heading_ridges): a local-linear fit that
+  /// reaches the lanes driven at the place's other headings (forward_map_training_fit.cpp).
+  std::vector<double> heading_bandwidths_m{0.1, 0.2, 0.35};
   /// The heading terms are kept only when they lower the validation's mean square error by at
   /// least this share (a route's passes run one way: the terms fit its few degrees of wobble
   /// and gain nothing).
@@ -61,6 +65,10 @@ struct ForwardMapReport {
   double heading_ridge = 0.0;
   double mean_validation_rmse = 0.0;
   double heading_terms_validation_rmse = 0.0;
+  /// The heading terms' wide kernel (0: the narrow one, bandwidth_m), and whether the cells'
+  /// level comes from the narrow kernel (the wide fit's harmonic on the narrow mean).
+  double heading_bandwidth_m = 0.0;
+  bool heading_narrow_level = false;
   /// Median distance from a frame to the nearest frame of another pass (metres).
   double pass_spread_m = 0.0;
   /// Upper quartile of the heading difference between a frame and the nearest frame of another
