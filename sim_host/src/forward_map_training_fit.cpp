@@ -249,8 +249,12 @@ struct WideSums {
 // would take in the whole floor at every place).
 constexpr double kWideCut = 9.0;
 
-bool wide_sums(const FrameIndex& index, double x, double y, double bandwidth_m, std::size_t boards,
-               double t_s, double travel_m, double exclude_s, double exclude_m, WideSums& out) {
+// @p unit: every frame's cos and sin of its heading (in the order of @p frames, the frames the
+// index holds), computed once: the sums visit each frame many times.
+bool wide_sums(const FrameIndex& index, const std::vector<Positioned>& frames,
+               const std::vector<double>& unit, double x, double y, double bandwidth_m,
+               std::size_t boards, double t_s, double travel_m, double exclude_s, double exclude_m,
+               WideSums& out) {
   const bool exclude = exclude_s > 0.0 || exclude_m > 0.0;
   const auto keep = [&](const Positioned& p) {
     return p.has_yaw && (!exclude || !same_pass(p, t_s, travel_m, exclude_s, exclude_m));
@@ -265,8 +269,8 @@ bool wide_sums(const FrameIndex& index, double x, double y, double bandwidth_m, 
     const double e = (dx * dx + dy * dy - d2_min) * inv;
     if (e > kWideCut) return;
     const double w = std::exp(-e);
-    const double phi[5] = {1.0, dx / bandwidth_m, dy / bandwidth_m, std::cos(p.yaw_rad),
-                           std::sin(p.yaw_rad)};
+    const std::size_t at = static_cast<std::size_t>(&p - frames.data());
+    const double phi[5] = {1.0, dx / bandwidth_m, dy / bandwidth_m, unit[2 * at], unit[2 * at + 1]};
     out.w += w;
     for (int i = 0; i < 5; ++i)
       for (int j = i; j < 5; ++j) out.m[i][j] += w * phi[i] * phi[j];
@@ -559,6 +563,12 @@ ForwardMapReport fit_grid(std::vector<Positioned>& frames, std::size_t board_cou
   // extrapolation, not the noise a new run over the same place shows.
   std::vector<char> comparable(frames.size(), 0);
   const FrameIndex index(frames, 0.05);
+  // The frames' headings as unit vectors (wide_sums).
+  std::vector<double> unit(2 * frames.size(), 0.0);
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    unit[2 * i] = std::cos(frames[i].yaw_rad);
+    unit[2 * i + 1] = std::sin(frames[i].yaw_rad);
+  }
   {
     std::vector<double> nearest(frames.size(), std::numeric_limits<double>::infinity());
     // With it, how far that frame of another pass turned from this one's heading.
@@ -673,8 +683,8 @@ ForwardMapReport fit_grid(std::vector<Positioned>& frames, std::size_t board_cou
       const double cos_yaw = std::cos(p.yaw_rad), sin_yaw = std::sin(p.yaw_rad);
       for (std::size_t hi = 0; hi < nh; ++hi) {
         const bool summed =
-            wide_sums(index, p.x_m, p.y_m, opt.heading_bandwidths_m[hi], board_count, p.t_s,
-                      p.travel_m, opt.exclude_same_pass_s, opt.exclude_same_pass_m, wide);
+            wide_sums(index, frames, unit, p.x_m, p.y_m, opt.heading_bandwidths_m[hi], board_count,
+                      p.t_s, p.travel_m, opt.exclude_same_pass_s, opt.exclude_same_pass_m, wide);
         for (std::size_t ri = 0; ri < nr; ++ri) {
           HeadingFit fit;
           const bool ok = summed && wide_fit(wide, board_count, wide_ridges[ri], fit);
@@ -845,8 +855,8 @@ ForwardMapReport fit_grid(std::vector<Positioned>& frames, std::size_t board_cou
         WideSums wide;
         HeadingFit wide_result;
         if (report.heading_bandwidth_m > 0.0 &&
-            wide_sums(index, x, y, report.heading_bandwidth_m, board_count, 0.0, -1.0, 0.0, 0.0,
-                      wide) &&
+            wide_sums(index, frames, unit, x, y, report.heading_bandwidth_m, board_count, 0.0, -1.0,
+                      0.0, 0.0, wide) &&
             wide_fit(wide, board_count, report.heading_ridge, wide_result)) {
           fit = report.heading_narrow_level ? with_narrow_level(wide_result, k, board_count)
                                             : wide_result;
