@@ -232,6 +232,35 @@ HeadingFit heading_fit(const KernelSums& k, std::size_t boards, double ridge) {
   return f;
 }
 
+// Every frame's heading and bearings as unit vectors, computed once (the sums below visit each
+// frame many times).
+struct FrameVectors {
+  const Positioned* first = nullptr;
+  std::vector<double> heading;  // cos, sin per frame
+  std::vector<double> bearing;  // cos, sin per frame and board; NaN where none
+  std::size_t boards = 0;
+
+  FrameVectors(const std::vector<Positioned>& frames, std::size_t board_count)
+      : first(frames.data()),
+        heading(2 * frames.size()),
+        bearing(2 * frames.size() * board_count, std::numeric_limits<double>::quiet_NaN()),
+        boards(board_count) {
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+      const Positioned& p = frames[i];
+      heading[2 * i] = std::cos(p.yaw_rad);
+      heading[2 * i + 1] = std::sin(p.yaw_rad);
+      if (p.bearing_rad == nullptr) continue;
+      for (std::size_t b = 0; b < boards; ++b) {
+        const double v = static_cast<double>(p.bearing_rad[b]);
+        if (!std::isfinite(v)) continue;
+        bearing[2 * (i * boards + b)] = std::cos(v);
+        bearing[2 * (i * boards + b) + 1] = std::sin(v);
+      }
+    }
+  }
+  std::size_t of(const Positioned& p) const { return static_cast<std::size_t>(&p - first); }
+};
+
 // The heading terms from a wide kernel, local-linear in the place: per board
 // a0 + gx dx + gy dy + c cos(yaw) + s sin(yaw) around (x, y), dx and dy in kernel widths. A
 // floor driven in lanes sees a place at the headings of the lanes through it only; its other
@@ -249,12 +278,10 @@ struct WideSums {
 // would take in the whole floor at every place).
 constexpr double kWideCut = 9.0;
 
-// @p unit: every frame's cos and sin of its heading (in the order of @p frames, the frames the
-// index holds), computed once: the sums visit each frame many times.
-bool wide_sums(const FrameIndex& index, const std::vector<Positioned>& frames,
-               const std::vector<double>& unit, double x, double y, double bandwidth_m,
-               std::size_t boards, double t_s, double travel_m, double exclude_s, double exclude_m,
-               WideSums& out) {
+// @p v: the frames' headings as unit vectors (of the frames the index holds).
+bool wide_sums(const FrameIndex& index, const FrameVectors& v, double x, double y,
+               double bandwidth_m, std::size_t boards, double t_s, double travel_m,
+               double exclude_s, double exclude_m, WideSums& out) {
   const bool exclude = exclude_s > 0.0 || exclude_m > 0.0;
   const auto keep = [&](const Positioned& p) {
     return p.has_yaw && (!exclude || !same_pass(p, t_s, travel_m, exclude_s, exclude_m));
@@ -269,8 +296,9 @@ bool wide_sums(const FrameIndex& index, const std::vector<Positioned>& frames,
     const double e = (dx * dx + dy * dy - d2_min) * inv;
     if (e > kWideCut) return;
     const double w = std::exp(-e);
-    const std::size_t at = static_cast<std::size_t>(&p - frames.data());
-    const double phi[5] = {1.0, dx / bandwidth_m, dy / bandwidth_m, unit[2 * at], unit[2 * at + 1]};
+    const std::size_t at = v.of(p);
+    const double phi[5] = {1.0, dx / bandwidth_m, dy / bandwidth_m, v.heading[2 * at],
+                           v.heading[2 * at + 1]};
     out.w += w;
     for (int i = 0; i < 5; ++i)
       for (int j = i; j < 5; ++j) out.m[i][j] += w * phi[i] * phi[j];
@@ -346,35 +374,6 @@ struct BearingSums {
   double all = 0.0;
 };
 
-// Every frame's heading and bearings as unit vectors, computed once (the sums below visit each
-// frame many times).
-struct FrameVectors {
-  const Positioned* first = nullptr;
-  std::vector<double> heading;  // cos, sin per frame
-  std::vector<double> bearing;  // cos, sin per frame and board; NaN where none
-  std::size_t boards = 0;
-
-  FrameVectors(const std::vector<Positioned>& frames, std::size_t board_count)
-      : first(frames.data()),
-        heading(2 * frames.size()),
-        bearing(2 * frames.size() * board_count, std::numeric_limits<double>::quiet_NaN()),
-        boards(board_count) {
-    for (std::size_t i = 0; i < frames.size(); ++i) {
-      const Positioned& p = frames[i];
-      heading[2 * i] = std::cos(p.yaw_rad);
-      heading[2 * i + 1] = std::sin(p.yaw_rad);
-      if (p.bearing_rad == nullptr) continue;
-      for (std::size_t b = 0; b < boards; ++b) {
-        const double v = static_cast<double>(p.bearing_rad[b]);
-        if (!std::isfinite(v)) continue;
-        bearing[2 * (i * boards + b)] = std::cos(v);
-        bearing[2 * (i * boards + b) + 1] = std::sin(v);
-      }
-    }
-  }
-  std::size_t of(const Positioned& p) const { return static_cast<std::size_t>(&p - first); }
-};
-
 // Over the frames within @p reach_m of (x, y) that run within 25 degrees of the heading whose
 // unit vector is (@p anchor_cos, @p anchor_sin) and that @p keep accepts, weighted
 // exp(-(d^2 - d2_min) / 2h^2).
@@ -420,12 +419,11 @@ bool mean_bearing(const BearingSums& s, std::size_t b, double& out) {
 // the median absolute residual, at least 0.1 degree; a board needs 20 such residuals), then
 // every stored cell's bearings with the same kernel.
 void fit_bearings(const std::vector<Positioned>& frames, const std::vector<char>& comparable,
-                  const FrameIndex& index, std::size_t boards, const ForwardMapOptions& opt,
-                  const double* law, double x0, double y0, double cell, ForwardMap& out,
-                  ForwardMapReport& report) {
+                  const FrameIndex& index, const FrameVectors& vectors, std::size_t boards,
+                  const ForwardMapOptions& opt, const double* law, double x0, double y0,
+                  double cell, ForwardMap& out, ForwardMapReport& report) {
   const double h = report.bandwidth_m;
   constexpr double kCut = 30.0;  // weights below e^-30 of the nearest frame's do not count
-  const FrameVectors vectors(frames, boards);
   std::vector<std::vector<double>> residuals(boards);
   const double near_m = std::max(2.0 * report.pass_spread_m, 0.01);
   for (std::size_t i = 0; i < frames.size(); ++i) {
@@ -563,12 +561,7 @@ ForwardMapReport fit_grid(std::vector<Positioned>& frames, std::size_t board_cou
   // extrapolation, not the noise a new run over the same place shows.
   std::vector<char> comparable(frames.size(), 0);
   const FrameIndex index(frames, 0.05);
-  // The frames' headings as unit vectors (wide_sums).
-  std::vector<double> unit(2 * frames.size(), 0.0);
-  for (std::size_t i = 0; i < frames.size(); ++i) {
-    unit[2 * i] = std::cos(frames[i].yaw_rad);
-    unit[2 * i + 1] = std::sin(frames[i].yaw_rad);
-  }
+  const FrameVectors vectors(frames, board_count);
   {
     std::vector<double> nearest(frames.size(), std::numeric_limits<double>::infinity());
     // With it, how far that frame of another pass turned from this one's heading.
@@ -683,7 +676,7 @@ ForwardMapReport fit_grid(std::vector<Positioned>& frames, std::size_t board_cou
       const double cos_yaw = std::cos(p.yaw_rad), sin_yaw = std::sin(p.yaw_rad);
       for (std::size_t hi = 0; hi < nh; ++hi) {
         const bool summed =
-            wide_sums(index, frames, unit, p.x_m, p.y_m, opt.heading_bandwidths_m[hi], board_count,
+            wide_sums(index, vectors, p.x_m, p.y_m, opt.heading_bandwidths_m[hi], board_count,
                       p.t_s, p.travel_m, opt.exclude_same_pass_s, opt.exclude_same_pass_m, wide);
         for (std::size_t ri = 0; ri < nr; ++ri) {
           HeadingFit fit;
@@ -855,8 +848,8 @@ ForwardMapReport fit_grid(std::vector<Positioned>& frames, std::size_t board_cou
         WideSums wide;
         HeadingFit wide_result;
         if (report.heading_bandwidth_m > 0.0 &&
-            wide_sums(index, frames, unit, x, y, report.heading_bandwidth_m, board_count, 0.0, -1.0,
-                      0.0, 0.0, wide) &&
+            wide_sums(index, vectors, x, y, report.heading_bandwidth_m, board_count, 0.0, -1.0, 0.0,
+                      0.0, wide) &&
             wide_fit(wide, board_count, report.heading_ridge, wide_result)) {
           fit = report.heading_narrow_level ? with_narrow_level(wide_result, k, board_count)
                                             : wide_result;
@@ -929,7 +922,8 @@ ForwardMapReport fit_grid(std::vector<Positioned>& frames, std::size_t board_cou
                             static_cast<double>(known_cells * ForwardMap::kHeadingSectors)
                       : 0.0;
   if (law != nullptr && report.has_heading)
-    fit_bearings(frames, comparable, index, board_count, opt, law, x0, y0, cell, out, report);
+    fit_bearings(frames, comparable, index, vectors, board_count, opt, law, x0, y0, cell, out,
+                 report);
   return report;
 }
 
