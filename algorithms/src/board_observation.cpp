@@ -165,7 +165,9 @@ BoardAssessment BoardReliability::assess(const ForwardMap& map, const BoardFeatu
       params.bearings && map.has_bearings ? observed.angle_mask : 0U;
   std::array<double, kMaxBoards> bearing_residual{};
   bearing_residual.fill(std::numeric_limits<double>::infinity());
-  fit_bearings(map, at, observed, estimate.yaw_rad, bearing_boards, bearing_residual);
+  const double cos_yaw = std::cos(estimate.yaw_rad), sin_yaw = std::sin(estimate.yaw_rad);
+  fit_bearings(map, bearing_point(map, estimate.x_m, estimate.y_m, cos_yaw, sin_yaw), observed,
+               estimate.yaw_rad, bearing_boards, bearing_residual);
   if (params.position_spread_m > 0.0) {
     const double d = params.position_spread_m;
     const double offsets[4][2] = {{d, 0.0}, {-d, 0.0}, {0.0, d}, {0.0, -d}};
@@ -177,7 +179,9 @@ BoardAssessment BoardReliability::assess(const ForwardMap& map, const BoardFeatu
         lo[b] = std::min(lo[b], e[b]);
         hi[b] = std::max(hi[b], e[b]);
       }
-      fit_bearings(map, p, observed, estimate.yaw_rad, bearing_boards, bearing_residual);
+      fit_bearings(map,
+                   bearing_point(map, estimate.x_m + o[0], estimate.y_m + o[1], cos_yaw, sin_yaw),
+                   observed, estimate.yaw_rad, bearing_boards, bearing_residual);
     }
   }
 

@@ -86,6 +86,7 @@ bool lay_out_grid(ForwardMap& map, std::uint32_t columns, std::uint32_t rows,
   }
   map.has_bearings = false;
   map.bearing_a1_rad = map.bearing_a3_rad = 0.0F;
+  map.bearing_camera_forward_m = 0.0F;
   map.bearing_sigma_rad.fill(0.0F);
   if (ForwardMap::kBearingStorage) {
     std::fill_n(map.bearing_rad.begin(), cells * kMaxBoards, ForwardMap::kNoBearing);

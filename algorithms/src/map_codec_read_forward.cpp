@@ -45,10 +45,12 @@ MapError decode_cells(Reader& r, ForwardMap& f, std::size_t cells, CellAt cell_a
 
 // The board bearings (version 6), after the cells' other values: the lens's column-to-angle law
 // angle(t) = a1 t + a3 t^3, each board's bearing spread, then every stored cell's bearing of
-// every board, in storage order (version 6 is tiled).
-MapError decode_bearings(Reader& r, ForwardMap& f) {
+// every board, in storage order (version 6 is tiled). From version 9 the camera's offset ahead of
+// the axle follows the law: where the cells' bearings are seen from.
+MapError decode_bearings(Reader& r, std::uint32_t version, ForwardMap& f) {
   const std::size_t boards = f.board_count;
-  if (!r.need(8U + boards * 4U, "forward map bearings"))
+  const std::size_t offset_bytes = version >= 9 ? 4U : 0U;
+  if (!r.need(8U + offset_bytes + boards * 4U, "forward map bearings"))
     return MapError{"truncated: the forward map's bearing law is cut short", r.pos()};
   float a1 = 0.0F, a3 = 0.0F;
   r.f32(a1, "forward map bearings");
@@ -59,6 +61,12 @@ MapError decode_bearings(Reader& r, ForwardMap& f) {
   r.f32(a3, "forward map bearings");
   if (!finite_in(a3, -a1, 3.0F * a1))
     return MapError{"forward map bearing law: a3 not finite and in [-a1, 3 a1]", r.pos()};
+  float camera_forward = 0.0F;
+  if (version >= 9) {
+    r.f32(camera_forward, "forward map bearings");
+    if (!finite_in(camera_forward, -1.0F, 1.0F))
+      return MapError{"forward map bearings: camera offset not finite and within 1 m", r.pos()};
+  }
   std::array<float, kMaxBoards> sigma{};
   bool any = false;
   for (std::size_t b = 0; b < boards; ++b) {
@@ -83,6 +91,7 @@ MapError decode_bearings(Reader& r, ForwardMap& f) {
   }
   f.bearing_a1_rad = a1;
   f.bearing_a3_rad = a3;
+  f.bearing_camera_forward_m = camera_forward;
   f.bearing_sigma_rad = sigma;
   return MapError{};
 }
@@ -236,7 +245,7 @@ MapError decode_forward(Reader& r, std::uint32_t version, std::uint32_t boards, 
                                static_cast<std::uint32_t>(c / f.columns));
               });
   if (!e && (flag & 2U) != 0U) {
-    e = decode_bearings(r, f);
+    e = decode_bearings(r, version, f);
     f.has_bearings = !e;
   }
   if (!e && (flag & 4U) != 0U) {

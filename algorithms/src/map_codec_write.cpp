@@ -110,6 +110,7 @@ std::vector<std::uint8_t> encode_map(const MapFile& map) {
     if (f.has_bearings) {
       w.f32(f.bearing_a1_rad);
       w.f32(f.bearing_a3_rad);
+      w.f32(f.bearing_camera_forward_m);  // version 9
       for (std::size_t b = 0; b < f.board_count; ++b) w.f32(f.bearing_sigma_rad[b]);
       for (std::size_t c = 0; c < cells; ++c) {
         for (std::size_t b = 0; b < f.board_count; ++b) w.f32(f.bearing_rad[c * kMaxBoards + b]);

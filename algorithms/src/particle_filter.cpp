@@ -118,8 +118,18 @@ double ParticleFilter::update_boards(const BoardUpdate& u) {
   const ForwardMap& map = *u.map;
   std::array<float, kMaxBoards> expected{};
   double sum = 0.0, match = 0.0;
+  // The particle's heading as a unit vector, where the heading terms or the camera's place need
+  // it (in float, as both uses are: sinf and cosf cost fewer instructions than sin and cos).
+  const bool camera_bearings = u.bearing_mask != 0U && map.bearing_camera_forward_m != 0.0F;
+  const bool unit_heading = map.has_heading_terms || camera_bearings;
   for (std::size_t i = 0; i < count_; ++i) {
     const GridPoint at = locate(map, particles_[i].x_m, particles_[i].y_m);
+    float cos_yaw = 1.0F, sin_yaw = 0.0F;
+    if (unit_heading) {
+      const auto yaw = static_cast<float>(particles_[i].yaw_rad);
+      cos_yaw = std::cos(yaw);
+      sin_yaw = std::sin(yaw);
+    }
     if (map.has_heading_terms) {
       // Each particle at its own heading, the harmonic read beyond the covered headings too: a
       // particle facing a heading the run never drove there must still look unlike the view,
@@ -127,8 +137,8 @@ double ParticleFilter::update_boards(const BoardUpdate& u) {
       // median went 22.3 -> 25.3 cm with the edge, docs/sweep.md).
       // Not keeping to the coverage, the heading needs no sector: its cos and sin only.
       SeenHeading heading;
-      heading.cos_yaw = static_cast<float>(std::cos(particles_[i].yaw_rad));
-      heading.sin_yaw = static_cast<float>(std::sin(particles_[i].yaw_rad));
+      heading.cos_yaw = cos_yaw;
+      heading.sin_yaw = sin_yaw;
       heading.keep_to_coverage = false;
       expected_features(map, at, heading, expected.data());
     } else {
@@ -142,11 +152,15 @@ double ParticleFilter::update_boards(const BoardUpdate& u) {
           static_cast<double>(u.gain[b] * std::exp(-e * e * u.inv_two_var[b]) + u.floor[b]);
     }
     // Bearings: the particle sees board b at world bearing yaw - angle; the map says where the
-    // training run saw it from here.
+    // training run saw it from here (from the particle's camera place, where the map's bearings
+    // are seen from it).
+    const GridPoint seen_from =
+        camera_bearings ? bearing_point(map, particles_[i].x_m, particles_[i].y_m, cos_yaw, sin_yaw)
+                        : at;
     for (std::uint32_t mask = u.bearing_mask; mask != 0U; mask &= mask - 1U) {
       const auto b = static_cast<std::size_t>(__builtin_ctz(mask));
       float bearing = 0.0F;
-      if (!expected_bearing(map, at, b, bearing)) continue;
+      if (!expected_bearing(map, seen_from, b, bearing)) continue;
       double d = particles_[i].yaw_rad - static_cast<double>(u.angle_rad[b]) -
                  static_cast<double>(bearing);
       // yaw and bearing lie in [-pi, pi] and the law's angle within a half turn, so two turns

@@ -375,18 +375,20 @@ struct BearingSums {
 };
 
 // Over the frames within @p reach_m of (x, y) that run within 25 degrees of the heading whose
-// unit vector is (@p anchor_cos, @p anchor_sin) and that @p keep accepts, weighted
-// exp(-(d^2 - d2_min) / 2h^2).
+// unit vector is (@p anchor_cos, @p anchor_sin) (every frame when @p every_heading) and that
+// @p keep accepts, weighted exp(-(d^2 - d2_min) / 2h^2).
 template <typename Keep>
 BearingSums bearing_sums(const FrameIndex& index, const FrameVectors& v, double x, double y,
-                         double anchor_cos, double anchor_sin, double d2_min, double reach_m,
-                         double h, Keep keep) {
+                         double anchor_cos, double anchor_sin, bool every_heading, double d2_min,
+                         double reach_m, double h, Keep keep) {
   BearingSums s;
   const double inv = 0.5 / (h * h);
   index.within(x, y, reach_m, [&](const Positioned& p) {
     if (!p.has_yaw || p.bearing_rad == nullptr || !keep(p)) return;
     const std::size_t i = v.of(p);
-    if (v.heading[2 * i] * anchor_cos + v.heading[2 * i + 1] * anchor_sin < kSamePassCos) return;
+    if (!every_heading &&
+        v.heading[2 * i] * anchor_cos + v.heading[2 * i + 1] * anchor_sin < kSamePassCos)
+      return;
     const double d = (p.x_m - x) * (p.x_m - x) + (p.y_m - y) * (p.y_m - y);
     const double e = (d - d2_min) * inv;
     if (e > 30.0) return;  // below e^-30 of the nearest frame's weight
@@ -405,9 +407,13 @@ BearingSums bearing_sums(const FrameIndex& index, const FrameVectors& v, double 
 
 // The mean bearing of board b from @p s when most of the frames' weight saw it and their
 // bearings agree (the resultant of the unit vectors at least 0.95 of the weight, i.e. a spread
-// within about 18 degrees); false otherwise.
-bool mean_bearing(const BearingSums& s, std::size_t b, double& out) {
-  if (!(s.weight[b] > 0.0) || s.weight[b] < 0.5 * s.all) return false;
+// within about 18 degrees); false otherwise. With @p every_heading (bearings seen from the
+// camera's place, frames of every heading) a frame facing away from the board says nothing
+// against it: the board needs only some weight near the place, e^-2 of the nearest frame's (a
+// frame within two kernel widths of as near as the nearest).
+bool mean_bearing(const BearingSums& s, std::size_t b, bool every_heading, double& out) {
+  if (!(s.weight[b] > 0.0)) return false;
+  if (every_heading ? s.weight[b] < std::exp(-2.0) : s.weight[b] < 0.5 * s.all) return false;
   const double resultant = std::hypot(s.sin[b], s.cos[b]);
   if (resultant < 0.95 * s.weight[b]) return false;
   out = std::atan2(s.sin[b], s.cos[b]);
@@ -418,10 +424,13 @@ bool mean_bearing(const BearingSums& s, std::size_t b, double& out) {
 // passes running the same way, as the areas' noise is measured: a robust spread, 1.4826 times
 // the median absolute residual, at least 0.1 degree; a board needs 20 such residuals), then
 // every stored cell's bearings with the same kernel.
-void fit_bearings(const std::vector<Positioned>& frames, const std::vector<char>& comparable,
-                  const FrameIndex& index, const FrameVectors& vectors, std::size_t boards,
-                  const ForwardMapOptions& opt, const double* law, double x0, double y0,
-                  double cell, ForwardMap& out, ForwardMapReport& report) {
+// @p every_heading: @p frames are placed at the camera's place, and the bearings there are taken
+// from frames of every heading (fit_bearings below).
+void fit_bearings_from(const std::vector<Positioned>& frames, const std::vector<char>& comparable,
+                       const FrameIndex& index, const FrameVectors& vectors, bool every_heading,
+                       std::size_t boards, const ForwardMapOptions& opt, const double* law,
+                       double x0, double y0, double cell, ForwardMap& out,
+                       ForwardMapReport& report) {
   const double h = report.bandwidth_m;
   constexpr double kCut = 30.0;  // weights below e^-30 of the nearest frame's do not count
   std::vector<std::vector<double>> residuals(boards);
@@ -433,8 +442,9 @@ void fit_bearings(const std::vector<Positioned>& frames, const std::vector<char>
     const auto other = [&](const Positioned& q) {
       const std::size_t k = vectors.of(q);
       return q.has_yaw && q.bearing_rad != nullptr &&
-             heading[2 * k] * heading[2 * i] + heading[2 * k + 1] * heading[2 * i + 1] >=
-                 kSamePassCos &&
+             (every_heading ||
+              heading[2 * k] * heading[2 * i] + heading[2 * k + 1] * heading[2 * i + 1] >=
+                  kSamePassCos) &&
              !same_pass(q, p.t_s, p.travel_m, opt.exclude_same_pass_s, opt.exclude_same_pass_m);
     };
     // The nearest such frame, looked for only as far as another pass counts as near (the
@@ -447,12 +457,12 @@ void fit_bearings(const std::vector<Positioned>& frames, const std::vector<char>
     });
     if (!(d2_min <= near_m * near_m)) continue;
     const BearingSums s = bearing_sums(index, vectors, p.x_m, p.y_m, vectors.heading[2 * i],
-                                       vectors.heading[2 * i + 1], d2_min,
+                                       vectors.heading[2 * i + 1], every_heading, d2_min,
                                        std::sqrt(d2_min + 2.0 * kCut * h * h), h, other);
     for (std::size_t b = 0; b < boards; ++b) {
       double mean = 0.0;
       const double v = static_cast<double>(p.bearing_rad[b]);
-      if (!std::isfinite(v) || !mean_bearing(s, b, mean)) continue;
+      if (!std::isfinite(v) || !mean_bearing(s, b, every_heading, mean)) continue;
       residuals[b].push_back(std::fabs(algorithms::wrap_angle_rad(v - mean)));
     }
   }
@@ -500,17 +510,50 @@ void fit_bearings(const std::vector<Positioned>& frames, const std::vector<char>
       });
       if (!std::isfinite(d2_min)) continue;
       const BearingSums s = bearing_sums(index, vectors, x, y, vectors.heading[2 * anchor],
-                                         vectors.heading[2 * anchor + 1], d2_min,
+                                         vectors.heading[2 * anchor + 1], every_heading, d2_min,
                                          std::sqrt(d2_min + 2.0 * kCut * h * h), h, every);
       bool stored = false;
       for (std::size_t b = 0; b < boards; ++b) {
         double mean = 0.0;
-        if (!(out.bearing_sigma_rad[b] > 0.0F) || !mean_bearing(s, b, mean)) continue;
+        if (!(out.bearing_sigma_rad[b] > 0.0F) || !mean_bearing(s, b, every_heading, mean))
+          continue;
         out.bearing_rad[at * kMaxBoards + b] = static_cast<float>(mean);
         stored = true;
       }
       report.bearing_cells += stored ? 1U : 0U;
     }
+  }
+}
+
+// Fills @p out's bearings (fit_bearings_from). Seen from the axle's place, a board's world
+// bearing changes with the heading (the camera is ahead of the axle), so a cell takes it only
+// from the frames running the way its nearest frame does: on a floor driven at several headings
+// about half of the places the robot faces a board from have none. Given the camera's offset
+// (opt.camera_forward_m), every frame is put at its camera's place, where the bearing depends on
+// the place alone, and a cell takes the bearings of every heading.
+void fit_bearings(const std::vector<Positioned>& frames, const std::vector<char>& comparable,
+                  const FrameIndex& index, const FrameVectors& vectors, std::size_t boards,
+                  const ForwardMapOptions& opt, const double* law, double x0, double y0,
+                  double cell, ForwardMap& out, ForwardMapReport& report) {
+  const double d = opt.camera_forward_m;
+  if (!(std::isfinite(d) && d != 0.0)) {
+    fit_bearings_from(frames, comparable, index, vectors, false, boards, opt, law, x0, y0, cell,
+                      out, report);
+    return;
+  }
+  std::vector<Positioned> seen(frames);
+  for (std::size_t i = 0; i < seen.size(); ++i) {
+    if (!seen[i].has_yaw) continue;
+    seen[i].x_m += d * vectors.heading[2 * i];
+    seen[i].y_m += d * vectors.heading[2 * i + 1];
+  }
+  const FrameIndex seen_index(seen, 0.05);
+  const FrameVectors seen_vectors(seen, boards);
+  fit_bearings_from(seen, comparable, seen_index, seen_vectors, true, boards, opt, law, x0, y0,
+                    cell, out, report);
+  if (out.has_bearings) {
+    out.bearing_camera_forward_m = static_cast<float>(d);
+    report.bearing_camera_forward_m = d;
   }
 }
 

@@ -177,7 +177,10 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<dataset::Sta
   }
   if (opt.forward_map) {
     const auto t_forward = std::chrono::steady_clock::now();
-    forward_report = train_forward_map_placed(all, frames, boards, opt.forward, *forward,
+    ForwardMapOptions forward_opt = opt.forward;
+    if (std::isnan(forward_opt.camera_forward_m))
+      forward_opt.camera_forward_m = run.camera_forward_m;
+    forward_report = train_forward_map_placed(all, frames, boards, forward_opt, *forward,
                                               with_bearings ? &observations : nullptr);
     forward_ms = ms_since(t_forward);
     have_forward = true;

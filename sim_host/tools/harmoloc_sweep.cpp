@@ -76,6 +76,9 @@ int main(int argc, char** argv) {
                  "into this folder: seed-N-nominal.csv, -kidnap, -dynamic, -long");
   app.add_flag("--heading-terms", opt.heading_terms,
                "floor: train the floor's map with heading terms (harmoloc-train --heading-terms)");
+  app.add_flag("--axle-bearings", opt.axle_bearings,
+               "keep the maps' bearings over the axle's place, as when the camera's offset is\n"
+               "not given (harmoloc-train --camera-forward-m 0), for comparison");
   app.add_flag("--quick", quick, "a short sweep: 5 kidnaps, a 1-minute long run");
   app.add_flag("--no-default-scene", no_default, "leave out the project's own default scene");
   app.add_flag("--quiet", quiet, "no progress on stderr");
@@ -147,6 +150,7 @@ int main(int argc, char** argv) {
                     {"long_minutes", opt.long_minutes},
                     {"parts", parts},
                     {"heading_terms", opt.heading_terms},
+                    {"axle_bearings", opt.axle_bearings},
                     {"roams", opt.roams}};
     j["results"] = nlohmann::json::array();
     for (const SceneResult& r : finished) j["results"].push_back(to_json(r));

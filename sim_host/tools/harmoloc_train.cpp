@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <limits>
 #include <memory>
 #include <sstream>
 
@@ -84,6 +85,14 @@ int main(int argc, char** argv) {
                "about 4 times longer). Experimental: not for the bare-metal kernels (no room);\n"
                "on random floors they bettered the heading and kidnaps, the position only in\n"
                "the median (docs/sweep.md)");
+  double camera_forward = std::numeric_limits<double>::quiet_NaN();
+  app.add_option(
+         "--camera-forward-m", camera_forward,
+         "the camera's offset ahead of the wheel axle's centre (metres; default: the\n"
+         "dataset's camera.forward_offset_m). Given, the boards' bearings are mapped from\n"
+         "the camera's place and from every heading the run drove (map format 9);\n"
+         "0, or no offset known: from the axle's place, each from the run's own heading there")
+      ->check(CLI::Range(-1.0, 1.0));
   app.add_option("--out", out, "map file to write")->required();
   std::string coverage_path;
   app.add_option("--coverage", coverage_path,
@@ -139,6 +148,7 @@ int main(int argc, char** argv) {
     opt.use_odometry = !no_odometry;
     opt.bearings = !no_bearings;
     if (heading_terms) opt.forward.heading_ridges = sim_host::kHeadingRidges;
+    opt.forward.camera_forward_m = camera_forward;
     opt.label_tolerance_ns = static_cast<std::uint64_t>(std::llround(label_tolerance_ms * 1e6));
     if (label_offset == "auto") {
       opt.label_offset_auto = true;
@@ -389,8 +399,14 @@ int main(int argc, char** argv) {
                           fw.bearing_sigma_rad[b] * 180.0 / algorithms::kPi);
             spread += item;
           }
-          std::printf("bearing noise %s (deg, against other passes; %zu of %zu cells hold one)\n",
-                      spread.c_str(), fw.bearing_cells, grid.stored_cells());
+          char from[64] = "the axle's place";
+          if (fw.bearing_camera_forward_m != 0.0)
+            std::snprintf(from, sizeof from, "the camera's place, %.0f mm ahead of the axle",
+                          1000.0 * fw.bearing_camera_forward_m);
+          std::printf(
+              "bearing noise %s (deg, against other passes; %zu of %zu cells hold one, seen from "
+              "%s)\n",
+              spread.c_str(), fw.bearing_cells, grid.stored_cells(), from);
         } else {
           std::printf("bearing noise none in the map (%s)\n",
                       !opt.bearings   ? "--no-bearings"

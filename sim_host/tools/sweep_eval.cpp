@@ -148,6 +148,7 @@ void floor_part(const Scenario& scene, const algorithms::ThresholdSet& threshold
         d.substr(d.find("coverage run") == std::string::npos ? 0 : d.find("coverage run"));
     TrainOptions train;
     if (opt.heading_terms) train.forward.heading_ridges = kHeadingRidges;
+    if (opt.axle_bearings) train.forward.camera_forward_m = 0.0;
     const TrainedMap trained =
         train_on_scenario(coverage, kCoverageSeed, nullptr, &thresholds, &train);
     r.floor_train_frames = trained.frames;
@@ -258,7 +259,9 @@ void route_runs(const Scenario& scene, const algorithms::ThresholdSet& threshold
                 const std::function<void(const std::string&)>& step) {
   {
     step("training");
-    const TrainedMap trained = train_on_scenario(scene, kTrainSeed, nullptr, &thresholds);
+    TrainOptions train;
+    if (opt.axle_bearings) train.forward.camera_forward_m = 0.0;
+    const TrainedMap trained = train_on_scenario(scene, kTrainSeed, nullptr, &thresholds, &train);
     const TrainReport& tr = trained.report;
     r.train_ms = tr.train_ms + tr.forward_ms;
     r.train_frames = trained.frames;

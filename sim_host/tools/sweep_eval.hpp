@@ -29,6 +29,9 @@ struct SweepOptions {
   int floor_kidnaps = 5;  ///< kidnaps in one more roam of the floor (0: none)
   /// The floor's map trained with heading terms (harmoloc-train --heading-terms).
   bool heading_terms = false;
+  /// The maps keep the bearings over the axle's place, as without the camera's offset
+  /// (harmoloc-train --camera-forward-m 0), for comparison.
+  bool axle_bearings = false;
   int kidnaps = 20;            ///< kidnaps in the kidnap run (each >= 1 m)
   double long_minutes = 10.0;  ///< length of the long nominal run
   std::uint64_t filter_seed = 1;

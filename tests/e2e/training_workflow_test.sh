@@ -10,7 +10,12 @@ rm -rf "$out"; mkdir -p "$out"
 frames=$(($(wc -l < "$WORK/train/frames.csv") - 1))
 [ "$(($(wc -l < "$out/areas.csv") - 3))" -eq "$frames" ] || fail "area log has not one line per frame"
 [ "$(json_number "$out/rec.json" localizer.fixes)" -eq 0 ] || fail "a run without a map used fixes"
-"$BIN/harmoloc-train" --areas "$out/areas.csv" --encoders "$WORK/train/encoders.log" --labels "$WORK/train/labels.tum" --out "$out/from_areas.hmap" > "$out/train.txt"
+# An area log carries no robot geometry: the camera's offset ahead of the axle comes from the
+# robot (here the dataset's metadata), as the wheel geometry comes from the config.
+offset=$(sed -n 's/^forward_offset_m = //p' "$WORK/train/metadata.toml")
+[ -n "$offset" ] || fail "the simulator's metadata.toml gives no camera.forward_offset_m"
+"$BIN/harmoloc-train" --areas "$out/areas.csv" --encoders "$WORK/train/encoders.log" --labels "$WORK/train/labels.tum" --camera-forward-m "$offset" --out "$out/from_areas.hmap" > "$out/train.txt"
+grep -q "seen from the camera's place, 100 mm ahead of the axle" "$out/train.txt" || fail "harmoloc-train did not map the bearings from the camera's place"
 cat "$out/train.txt"
 cmp "$out/from_areas.hmap" "$WORK/tiny.hmap" || fail "the map trained from the area log differs from the one trained from the frames"
 grep -q "^boards  *start with" "$out/train.txt" || fail "the trainer did not say which boards it started from"

@@ -73,8 +73,8 @@ bool same_model(const MapFile& a, const MapFile& b) {
   const std::size_t cells = f.stored_cells();
   if (f.has_bearings) {
     // Version 6: the law, each board's spread and every stored cell's bearings.
-    const float fb[] = {f.bearing_a1_rad, f.bearing_a3_rad};
-    const float gb[] = {g.bearing_a1_rad, g.bearing_a3_rad};
+    const float fb[] = {f.bearing_a1_rad, f.bearing_a3_rad, f.bearing_camera_forward_m};
+    const float gb[] = {g.bearing_a1_rad, g.bearing_a3_rad, g.bearing_camera_forward_m};
     if (!same_bits(fb, gb, sizeof fb) ||
         !same_bits(f.bearing_sigma_rad.data(), g.bearing_sigma_rad.data(),
                    sizeof f.bearing_sigma_rad) ||
@@ -119,6 +119,7 @@ void check_added_bearings(const std::vector<std::uint8_t>& input) {
   f.has_bearings = true;
   f.bearing_a1_rad = 0.5F + 0.005F * static_cast<float>(input[input.size() / 2]);
   f.bearing_a3_rad = -0.25F * f.bearing_a1_rad;
+  f.bearing_camera_forward_m = 0.001F * static_cast<float>(input[0]);
   for (std::size_t b = 0; b < f.board_count; ++b)
     f.bearing_sigma_rad[b] = b == 0 ? 0.05F : 0.002F * static_cast<float>(input[b % input.size()]);
   const std::size_t cells = f.stored_cells();

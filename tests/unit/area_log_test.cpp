@@ -248,6 +248,9 @@ TEST(Trainer, FromAreaLogEqualsFromFrames) {
   opt.encoders_path = run + "/encoders.log";
   opt.can_layout = meta.encoder_layout;
   opt.geometry = meta.geometry;
+  // Nor the camera's offset, which the dataset's metadata gives (harmoloc-train
+  // --camera-forward-m).
+  opt.forward.camera_forward_m = meta.camera_forward_m;
   const hs::TrainReport rb = hs::train_map(opt, *b);
   EXPECT_TRUE(ra.placement.used);
   EXPECT_TRUE(rb.placement.used);

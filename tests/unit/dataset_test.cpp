@@ -510,6 +510,13 @@ TEST(EncoderCsv, ReadNamesFileAndLine) {
 
 // --- metadata.toml -----------------------------------------------------------------------------
 
+namespace {
+// The least a metadata.toml must hold (rate_hz last of its table, for tests that add camera keys).
+const std::string kMinimalMetadata =
+    "format_version = 1\n[camera]\nwidth_px = 160\nheight_px = 120\nrate_hz = 30\n"
+    "[robot]\nwheel_radius_m = 0.05\ntrack_m = 0.3\nticks_per_rev = 4096\n";
+}  // namespace
+
 TEST(Metadata, WriteReadRoundTrip) {
   ht::TempDir dir;
   hd::DatasetMetadata m;
@@ -576,9 +583,7 @@ TEST(Metadata, WriteReadRoundTrip) {
 
 TEST(Metadata, EncoderSourceSelectsTheRecordingAndItsDefaultFile) {
   ht::TempDir dir;
-  const std::string base =
-      "format_version = 1\n[camera]\nwidth_px = 160\nheight_px = 120\nrate_hz = 30\n"
-      "[robot]\nwheel_radius_m = 0.05\ntrack_m = 0.3\nticks_per_rev = 4096\n";
+  const std::string base = kMinimalMetadata;
   dir.write("metadata.toml", base);
   hd::DatasetMetadata m = hd::read_metadata(dir.dir());
   EXPECT_EQ(m.encoder_source, hd::EncoderSource::kCan);
@@ -591,6 +596,27 @@ TEST(Metadata, EncoderSourceSelectsTheRecordingAndItsDefaultFile) {
   dir.write("metadata.toml", base + "[encoders]\nsource = \"quadrature\"\n");
   ht::expect_one_line(ht::error_of([&] { hd::read_metadata(dir.dir()); }),
                       "metadata.toml: ", "encoders.source");
+}
+
+// camera.forward_offset_m is optional (the trainer then maps bearings from the axle's place):
+// absent it reads NaN and is not written; given it reads back; beyond 1 m it is refused.
+TEST(Metadata, CameraOffsetIsOptional) {
+  ht::TempDir dir;
+  const std::string base = kMinimalMetadata;
+  dir.write("metadata.toml", base);
+  hd::DatasetMetadata m = hd::read_metadata(dir.dir());
+  EXPECT_TRUE(std::isnan(m.camera_forward_m));
+  hd::write_metadata(dir.dir(), m);
+  const std::vector<std::uint8_t> plain = ht::read_bytes(dir.path("metadata.toml"));
+  EXPECT_EQ(std::string(plain.begin(), plain.end()).find("forward_offset_m"), std::string::npos);
+  m.camera_forward_m = 0.125;
+  hd::write_metadata(dir.dir(), m);
+  EXPECT_DOUBLE_EQ(hd::read_metadata(dir.dir()).camera_forward_m, 0.125);
+  std::string far = base;
+  far.insert(far.find("rate_hz"), "forward_offset_m = 1.5\n");
+  dir.write("metadata.toml", far);
+  ht::expect_one_line(ht::error_of([&] { hd::read_metadata(dir.dir()); }),
+                      "metadata.toml: ", "camera.forward_offset_m");
 }
 
 TEST(Metadata, CalibratedGeometryKeepsItsPrecision) {
@@ -624,9 +650,7 @@ TEST(Metadata, ErrorsStartWithMetadataToml) {
   // Missing file.
   expect_meta_error(ht::error_of([&] { hd::read_metadata(dir.path("nothing-here")); }),
                     "not found");
-  const std::string good =
-      "format_version = 1\n[camera]\nwidth_px = 160\nheight_px = 120\nrate_hz = 30\n"
-      "[robot]\nwheel_radius_m = 0.05\ntrack_m = 0.3\nticks_per_rev = 4096\n";
+  const std::string good = kMinimalMetadata;
   dir.write("metadata.toml", good);
   EXPECT_NO_THROW(hd::read_metadata(dir.dir()));
   expect_meta_error(msg_for("format_version = 2\n" + good.substr(good.find('\n') + 1)),
@@ -660,9 +684,7 @@ TEST(Metadata, ErrorsStartWithMetadataToml) {
 // [encoders] log could name /dev/zero (start-up grew to gigabytes) or a FIFO (start-up blocked).
 TEST(Metadata, NamedFilesStayInsideTheDataset) {
   ht::TempDir dir;
-  const std::string good =
-      "format_version = 1\n[camera]\nwidth_px = 160\nheight_px = 120\nrate_hz = 30\n"
-      "[robot]\nwheel_radius_m = 0.05\ntrack_m = 0.3\nticks_per_rev = 4096\n";
+  const std::string good = kMinimalMetadata;
   const std::string data = dir.mkdir("data");
   const auto error_for = [&](const std::string& section, const std::string& key,
                              const std::string& value) {

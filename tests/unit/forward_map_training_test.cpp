@@ -144,6 +144,64 @@ TEST(ForwardMapTraining, CellHeadingIsTheMeanOfItsOwnPass) {
   EXPECT_LT(std::min(std::fabs(at), std::fabs(at - 90.0 * deg)), 3.5 * deg) << at / deg;
 }
 
+// Given the camera's offset ahead of the axle, a cell's bearings are kept over the camera's place
+// and taken from every heading: a lane driven forth and back (the camera 15 cm ahead, so the two
+// directions see the board from places 30 cm apart) is predicted at both headings, where the
+// bearings over the axle's place fit one direction's view only.
+TEST(ForwardMapTraining, BearingsOverTheCameraPlaceHoldAtEveryHeading) {
+  const double deg = 3.14159265358979323846 / 180.0, d = 0.15;
+  PlacedRun run;
+  double travel = 0.0;
+  for (int pass = 0; pass < 4; ++pass) {  // forth, back, forth, back along y = 0.5
+    for (int i = 0; i <= 400; ++i) {
+      const double s = 0.005 * (pass % 2 == 0 ? i : 400 - i);
+      const double wobble = 0.01 * std::sin(1.3 * static_cast<double>(run.features.size()));
+      add_frame(run, 1.0 + 0.1 * s + wobble, 2.0 + std::sin(2.0 * s), 0.5 + s, 0.5,
+                pass % 2 == 0 ? 0.0 : 180.0 * deg, travel);
+      travel += 0.005;
+    }
+  }
+  const double bx = 1.5, by = 1.3;  // board 0, 0.8 m beside the lane's middle
+  const auto truth = [&](double x, double y) { return std::atan2(by - y, bx - x); };
+  hs::BearingObservations bearings;
+  bearings.a1_rad = 1.2;
+  bearings.world_rad.resize(run.features.size());
+  for (const hs::PlacedFrame& f : run.placed) {
+    const double noise = 0.1 * deg * std::sin(1.7 * static_cast<double>(f.index));
+    const double cx = f.pose.x_m + d * std::cos(f.pose.yaw_rad);
+    const double cy = f.pose.y_m + d * std::sin(f.pose.yaw_rad);
+    bearings.world_rad[f.index] = {static_cast<float>(truth(cx, cy) + noise), std::nanf("")};
+  }
+  hs::ForwardMapOptions camera;
+  camera.camera_forward_m = d;
+  auto map = std::make_unique<ha::ForwardMap>();
+  const hs::ForwardMapReport report =
+      hs::train_forward_map_placed(run.features, run.placed, 2, camera, *map, &bearings);
+  ASSERT_TRUE(map->has_bearings);
+  EXPECT_FLOAT_EQ(map->bearing_camera_forward_m, static_cast<float>(d));
+  EXPECT_DOUBLE_EQ(report.bearing_camera_forward_m, d);
+  auto axle = std::make_unique<ha::ForwardMap>();
+  hs::train_forward_map_placed(run.features, run.placed, 2, hs::ForwardMapOptions{}, *axle,
+                               &bearings);
+  ASSERT_TRUE(axle->has_bearings);
+  EXPECT_EQ(axle->bearing_camera_forward_m, 0.0F);
+  double axle_worst = 0.0;
+  for (const double x : {0.9, 1.2, 1.5, 1.8, 2.1}) {
+    for (const double yaw : {0.0, 180.0 * deg}) {
+      const double c = std::cos(yaw), sn = std::sin(yaw);
+      float b = 0.0F;
+      ASSERT_TRUE(ha::expected_bearing(*map, ha::bearing_point(*map, x, 0.5, c, sn), 0, b))
+          << x << " " << yaw;
+      EXPECT_NEAR(b, truth(x + d * c, 0.5 + d * sn), 0.3 * deg) << x << " " << yaw / deg;
+      ASSERT_TRUE(ha::expected_bearing(*axle, ha::bearing_point(*axle, x, 0.5, c, sn), 0, b));
+      axle_worst = std::max(axle_worst, std::fabs(b - truth(x + d * c, 0.5 + d * sn)));
+    }
+  }
+  // Over the axle's place a cell holds one direction's bearing (or a mix): 30 cm along the lane
+  // at 0.8 m is about 20 degrees.
+  EXPECT_GT(axle_worst, 5.0 * deg);
+}
+
 // Bearings: each cell keeps the world bearing at which the training run saw a board from near
 // it, and each board the spread of its bearing between passes; a board never seen whole gets
 // none, and a stretch where a board was cut by the frame holds none.

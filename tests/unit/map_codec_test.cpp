@@ -1041,6 +1041,7 @@ std::unique_ptr<ha::MapFile> make_map_with_bearings() {
   f.has_bearings = true;
   f.bearing_a1_rad = 1.2F;
   f.bearing_a3_rad = -0.15F;
+  f.bearing_camera_forward_m = 0.12F;
   f.bearing_sigma_rad = {0.05F, 0.1F, 0.02F, 0.0F, 0.03F, 0.04F, 0.0F, 0.0F};
   for (std::uint32_t r = 0; r < 2; ++r) {
     for (std::uint32_t c = 0; c < 3; ++c) {
@@ -1061,7 +1062,8 @@ std::unique_ptr<ha::MapFile> make_map_with_bearings() {
 // Offsets of the version 6 bearings, after the headings of make_map_with_forward's map.
 constexpr std::size_t kOffBearingA1 = kOffHeading + kTileCells * 4;
 constexpr std::size_t kOffBearingA3 = kOffBearingA1 + 4;
-constexpr std::size_t kOffBearingSigma = kOffBearingA3 + 4;
+constexpr std::size_t kOffBearingCamera = kOffBearingA3 + 4;  // version 9
+constexpr std::size_t kOffBearingSigma = kOffBearingCamera + 4;
 constexpr std::size_t kOffBearings = kOffBearingSigma + 4 * kBoards;
 constexpr std::size_t kOffBearingsEnd = kOffBearings + kTileCells * kBoards * 4;
 
@@ -1096,6 +1098,8 @@ TEST(MapCodec, ForwardMapBearingsRoundTripAndLayout) {
   EXPECT_EQ(get_u32(bytes, kOffBearingA1), bits);
   std::memcpy(&bits, &map->forward.bearing_a3_rad, 4);
   EXPECT_EQ(get_u32(bytes, kOffBearingA3), bits);
+  std::memcpy(&bits, &map->forward.bearing_camera_forward_m, 4);
+  EXPECT_EQ(get_u32(bytes, kOffBearingCamera), bits);
   std::memcpy(&bits, &map->forward.bearing_sigma_rad[1], 4);
   EXPECT_EQ(get_u32(bytes, kOffBearingSigma + 4), bits);
   // Cell (1, 0), board 2: storage index 1, its third value.
@@ -1179,6 +1183,32 @@ TEST(MapCodec, ForwardMapWithoutBearingsRoundTrip) {
   EXPECT_FALSE(out->forward.has_bearings);
 }
 
+// Version 9 put the camera's offset after the law; a version 6-8 map's bearings, without it, still
+// read, seen from the axle's place (offset 0), and are written back as version 9 with a 0.
+TEST(MapCodec, ForwardMapBearingsBeforeVersion9ReadFromTheAxle) {
+  auto map = make_map_with_bearings();
+  const std::vector<std::uint8_t> v9 = ha::encode_map(*map);
+  std::vector<std::uint8_t> v8 = v9;
+  v8.erase(v8.begin() + static_cast<std::ptrdiff_t>(kOffBearingCamera),
+           v8.begin() + static_cast<std::ptrdiff_t>(kOffBearingCamera + 4));
+  put_u32(v8, kOffVersion, 8);
+  fix_crc(v8);
+  auto out = std::make_unique<ha::MapFile>();
+  ASSERT_FALSE(ha::decode_map(v9.data(), v9.size(), *out));
+  EXPECT_FLOAT_EQ(out->forward.bearing_camera_forward_m, 0.12F);
+  const ha::MapError e = ha::decode_map(v8.data(), v8.size(), *out);
+  ASSERT_FALSE(e) << e.what;
+  EXPECT_TRUE(out->forward.has_bearings);
+  EXPECT_EQ(out->forward.bearing_camera_forward_m, 0.0F);
+  EXPECT_EQ(out->forward.bearing_rad, map->forward.bearing_rad);
+  map->forward.bearing_camera_forward_m = 0.0F;
+  EXPECT_EQ(ha::encode_map(*out), ha::encode_map(*map));
+  // Read as version 9, the same bytes are one float short: refused, not misread.
+  put_u32(v8, kOffVersion, 9);
+  fix_crc(v8);
+  EXPECT_NE(decode_error(v8), "");
+}
+
 TEST(MapCodec, ForwardMapBearingsCorruptionWithValidChecksum) {
   const std::vector<std::uint8_t> good = ha::encode_map(*make_map_with_bearings());
   ASSERT_EQ(decode_error(good), "");
@@ -1209,6 +1239,11 @@ TEST(MapCodec, ForwardMapBearingsCorruptionWithValidChecksum) {
       "a3 above 3 a1", [](auto& b) { put_f32(b, kOffBearingA3, 3.61F); }, "bearing law: a3");
   reject(
       "a3 NaN", [&](auto& b) { put_f32(b, kOffBearingA3, nan); }, "bearing law: a3");
+  reject(
+      "camera offset NaN", [&](auto& b) { put_f32(b, kOffBearingCamera, nan); }, "camera offset");
+  reject(
+      "camera offset beyond 1 m", [](auto& b) { put_f32(b, kOffBearingCamera, -1.01F); },
+      "camera offset");
   reject(
       "bearing sigma negative", [](auto& b) { put_f32(b, kOffBearingSigma + 4, -0.1F); },
       "bearing sigma");
@@ -1255,6 +1290,7 @@ TEST(MapCodec, ForwardMapBearingsCorruptionWithValidChecksum) {
   put_f32(b, kOffBearingA3, -4.0F);
   put_f32(b, kOffBearingSigma, 1.0F);
   put_f32(b, kOffBearings, ha::ForwardMap::kNoBearing);
+  put_f32(b, kOffBearingCamera, 1.0F);
   fix_crc(b);
   EXPECT_EQ(decode_error(b), "");
   put_f32(b, kOffBearingA3, 9.0F);

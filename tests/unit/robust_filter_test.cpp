@@ -552,6 +552,43 @@ TEST(ParticleFilterBoards, ABoardsBearingTellsPlacesAndHeadingsApart) {
   EXPECT_NEAR(weights(params, seen, truth, beside, u), 1.0, 1e-9);
 }
 
+// A map whose bearings are seen from the camera's place (map version 9) is read at each
+// particle's camera place: the particle at the truth explains the bearing, and the one whose axle
+// stands where the truth's camera is does not; read at the axle's place it is the other way round.
+TEST(ParticleFilterBoards, BearingsSeenFromTheCameraAreReadAtTheParticlesCamera) {
+  const auto map = make_bearing_map();  // each cell: board 0's bearing from the cell's centre
+  const double yaw = 0.5, d = 0.2;
+  const ha::Pose2 truth{1.30, 0.65, yaw};
+  const ha::Pose2 ahead{truth.x_m + d * std::cos(yaw), truth.y_m + d * std::sin(yaw), yaw};
+  ha::BoardFeatures seen = observe(truth.x_m, truth.y_m);
+  seen.angle_rad[0] = static_cast<float>(yaw - world_bearing(ahead.x_m, ahead.y_m));
+  seen.angle_mask = 1U;
+  ha::BoardModelParams params;
+  params.route_heading_sigma_deg = 0.0;
+  params.tempering = 1.0;
+  const auto ratio = [&](float camera_forward_m) {
+    map->bearing_camera_forward_m = camera_forward_m;
+    ha::BoardReliability reliability;
+    reliability.reset(params);
+    ha::BoardUpdate u;
+    // The board judged at the pose that explains its bearing in each reading (a board whose
+    // bearing misses the estimate is distrusted, and its term flattened).
+    reliability.assess(*map, seen, camera_forward_m != 0.0F ? truth : ahead, params, u);
+    EXPECT_EQ(u.bearing_mask, 1U);
+    for (std::size_t k = 0; k < u.boards; ++k) u.use[k] = false;  // the bearing alone
+    ha::ParticleFilter pf;
+    pf.configure(100, 3, ha::MotionNoise{});
+    pf.initialize_between(truth, ahead, 0.0, 0.0, false);
+    pf.update_boards(u);
+    double at_truth = 0.0, at_ahead = 0.0;
+    for (std::size_t i = 0; i < pf.size(); ++i)
+      (std::fabs(pf.particle(i).x_m - truth.x_m) < 1e-9 ? at_truth : at_ahead) += pf.weight(i);
+    return at_ahead / at_truth;
+  };
+  EXPECT_LT(ratio(static_cast<float>(d)), 0.1);
+  EXPECT_GT(ratio(0.0F), 10.0);
+}
+
 // A board moved along its wall shows the same area; only where it appears gives it away. With
 // bearings its chi2 at the estimate (with the estimate's heading) grows, it leaves the
 // consensus and, frame after frame, is distrusted; without them it is trusted for ever.

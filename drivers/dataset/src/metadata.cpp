@@ -1,5 +1,6 @@
 #include "harmoloc/dataset/metadata.hpp"
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -108,6 +109,8 @@ DatasetMetadata read_metadata(const std::string& dataset_dir) {
     fail("camera.width_px must be even for yuyv");
   m.frame_rate_hz = number<double>(t, "camera", "rate_hz", 1.0, 1000.0, 30.0, true);
   m.frames_index = text(t, "camera", "frames_index", "frames.csv");
+  m.camera_forward_m =
+      number<double>(t, "camera", "forward_offset_m", -1.0, 1.0, m.camera_forward_m, false);
 
   const std::string source = text(t, "encoders", "source", "can");
   if (source == "can")
@@ -169,6 +172,7 @@ std::string metadata_toml(const DatasetMetadata& m) {
       .set("pixel_format", m.pixel_format == hal::PixelFormat::kRgb24 ? "rgb24" : "yuyv")
       .set("rate_hz", m.frame_rate_hz)
       .set("frames_index", m.frames_index);
+  if (std::isfinite(m.camera_forward_m)) w.set("forward_offset_m", m.camera_forward_m);
   // A CAN dataset's metadata does not name the source (the files written before it existed).
   w.table("encoders");
   if (m.encoder_source == EncoderSource::kGpio) w.set("source", "gpio");

@@ -96,6 +96,11 @@ struct ForwardMap {
   /// in a frame W pixels wide (positive to the right of the optical axis).
   float bearing_a1_rad = 0.0F;
   float bearing_a3_rad = 0.0F;
+  /// Where the cells' bearings are seen from (map version 9): the camera's place, this far ahead
+  /// of the axle along the heading (metres), so that a cell's bearing holds at every heading and
+  /// the trainer takes it from frames of every heading; 0: the axle's place (maps before 9, and
+  /// training runs whose camera offset was not given).
+  float bearing_camera_forward_m = 0.0F;
   /// Per board, the spread of its world bearing between passes over one place (radians); 0: the
   /// board's bearings are not modelled.
   std::array<float, kMaxBoards> bearing_sigma_rad{};
@@ -252,5 +257,13 @@ bool route_heading(const ForwardMap& map, const GridPoint& point, float& heading
 /// at +-pi); false when no corner holds one.
 bool expected_bearing(const ForwardMap& map, const GridPoint& point, std::size_t b,
                       float& bearing_rad);
+
+/// Where @p map's bearings are read for a robot at (@p x_m, @p y_m) facing (@p cos_yaw,
+/// @p sin_yaw): the camera's place when the map's bearings are seen from it, else the axle's.
+inline GridPoint bearing_point(const ForwardMap& map, double x_m, double y_m, double cos_yaw,
+                               double sin_yaw) {
+  const double d = static_cast<double>(map.bearing_camera_forward_m);
+  return locate(map, x_m + d * cos_yaw, y_m + d * sin_yaw);
+}
 
 }  // namespace harmoloc::algorithms

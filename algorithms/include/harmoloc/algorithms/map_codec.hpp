@@ -16,10 +16,11 @@ namespace harmoloc::algorithms {
 /// Version 2 added the known-place dissimilarity bound, version 3 the forward map, version 4
 /// the calibration measured on the training run, version 5 stores the forward map's tiles near
 /// the training run instead of its whole grid, version 6 adds the board bearings, version 7 the
-/// heading terms of a floor map, version 8 the headings each place was trained from; versions 1
-/// to 7 are still read (without what they lack; a version 3 or 4 forward map as a grid of which
-/// every tile is stored, a forward map before version 6 without bearings).
-constexpr std::uint32_t kMapFormatVersion = 8;
+/// heading terms of a floor map, version 8 the headings each place was trained from, version 9
+/// the camera's place the bearings are seen from; versions 1 to 8 are still read (without what they
+/// lack; a version 3 or 4 forward map as a grid of which every tile is stored, a forward map before
+/// version 6 without bearings).
+constexpr std::uint32_t kMapFormatVersion = 9;
 
 /// What the trainer measured on the training run that the firmware derives its scene-dependent
 /// settings from (docs/map-format.md): nothing of it is a constant tuned to one scene.
@@ -57,7 +58,7 @@ inline bool is_floor_map(const MapCalibration& calibration) {
 /// Most calibration entries a map may hold (version 4).
 constexpr std::uint32_t kMaxCalibrationEntries = 64;
 
-/// The largest map file this build reads (every count at its capacity, version 8): the loader
+/// The largest map file this build reads (every count at its capacity, version 9): the loader
 /// refuses a larger file before reading it.
 constexpr std::size_t kMaxMapFileBytes =
     8U + 4U * 4U + kMaxBoards * 12U + 8U + HarmonicModel::kMaxFeatures + 7U * 4U +
@@ -65,8 +66,9 @@ constexpr std::size_t kMaxMapFileBytes =
     HarmonicModel::kMaxSamples * (HarmonicModel::kMaxFeatures + 2U) * 4U + 8U + 16U +
     kMaxBoards * 4U + 4U + 4U + (ForwardMap::kMaxTileGrid + 7U) / 8U +
     ForwardMap::kMaxCells * (kMaxBoards + 2U) * 4U +
-    // Version 6: the bearing law (a1, a3), each board's bearing spread, every cell's bearings.
-    8U + kMaxBoards * 4U + ForwardMap::kMaxCells * kMaxBoards * 4U +
+    // Version 6: the bearing law (a1, a3), each board's bearing spread, every cell's bearings;
+    // version 9 the camera's offset.
+    8U + 4U + kMaxBoards * 4U + ForwardMap::kMaxCells * kMaxBoards * 4U +
     // Version 7: every cell's heading terms.
     ForwardMap::kMaxCells * kMaxBoards * 8U +
     // Version 8: every cell's heading coverage.

@@ -7,6 +7,7 @@
 /// (docs/filter.md).
 
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "harmoloc/algorithms/forward_map.hpp"
@@ -46,6 +47,11 @@ struct ForwardMapOptions {
   /// With frames placed by odometry: validation leaves out frames this close in travel instead
   /// (a robot that stands still does not start another pass).
   double exclude_same_pass_m = 0.10;
+  /// The camera's offset ahead of the axle (metres; the dataset's camera.forward_offset_m or
+  /// `harmoloc-train --camera-forward-m`); NaN: not given. Given, the boards' bearings are kept
+  /// over the camera's place and taken from frames of every heading (ForwardMap's
+  /// bearing_camera_forward_m).
+  double camera_forward_m = std::numeric_limits<double>::quiet_NaN();
 };
 
 struct ForwardMapReport {
@@ -87,6 +93,8 @@ struct ForwardMapReport {
   std::vector<double> bearing_sigma_rad;
   std::size_t bearing_cells = 0;
   std::size_t bearing_residuals = 0;  ///< frames x boards the spreads were measured on
+  /// Where the bearings are seen from: the camera's offset ahead of the axle (0: the axle).
+  double bearing_camera_forward_m = 0.0;
 };
 
 /// Fits @p out for @p board_count boards. @p areas_features holds every frame's board features

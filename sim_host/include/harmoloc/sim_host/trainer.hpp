@@ -6,6 +6,7 @@
 /// (docs/training.md).
 
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -155,6 +156,9 @@ struct AreaSeries {
   std::vector<algorithms::AreaVector> areas;
   double segment_ms = 0;
   OdometryTrack odometry;  ///< the run's wheel odometry; empty when unknown
+  /// The camera's offset ahead of the axle (metres; the dataset's camera.forward_offset_m); NaN
+  /// when unknown. TrainOptions::forward.camera_forward_m, when given, comes first.
+  double camera_forward_m = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// Segments a dataset folder with @p thresholds (the firmware's own segmentation).

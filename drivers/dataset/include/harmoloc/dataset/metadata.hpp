@@ -3,6 +3,7 @@
 /// rate, robot geometry, encoder frame layout). Schema in docs/dataset-format.md.
 
 #include <cstdint>
+#include <limits>
 #include <string>
 
 #include "harmoloc/algorithms/can_encoder_layout.hpp"
@@ -31,6 +32,9 @@ struct DatasetMetadata {
   algorithms::DiffDriveGeometry geometry;
   algorithms::EncoderFrameLayout encoder_layout;
   std::uint64_t seed = 0;
+  /// camera.forward_offset_m: the camera's offset ahead of the wheel axle's centre along the
+  /// heading (metres); NaN when the file does not give it (optional).
+  double camera_forward_m = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// Reads DIR/metadata.toml. Throws std::runtime_error("metadata.toml: reason") when it is
