@@ -548,7 +548,9 @@ void fit_bearings(const std::vector<Positioned>& frames, const std::vector<char>
     seen[i].y_m += d * vectors.heading[2 * i + 1];
   }
   const FrameIndex seen_index(seen, 0.05);
-  const FrameVectors seen_vectors(seen, boards);
+  // The same headings and bearings, frame for frame: only where the frames stand moved.
+  FrameVectors seen_vectors = vectors;
+  seen_vectors.first = seen.data();
   fit_bearings_from(seen, comparable, seen_index, seen_vectors, true, boards, opt, law, x0, y0,
                     cell, out, report);
   if (out.has_bearings) {
