@@ -84,8 +84,8 @@ double board_preference(const ForwardMap& map, const BoardFeatures& observed, do
                         std::uint32_t leave_out, double yaw_rad) {
   std::array<float, kMaxBoards> ea{}, eb{};
   const SeenHeading heading = seen_heading(yaw_rad);
-  expected_features(map, locate(map, ax_m, ay_m), heading, ea.data());
-  expected_features(map, locate(map, bx_m, by_m), heading, eb.data());
+  expected_at_pose(map, locate(map, ax_m, ay_m), ax_m, ay_m, heading, ea.data());
+  expected_at_pose(map, locate(map, bx_m, by_m), bx_m, by_m, heading, eb.data());
   return preference(map, observed, ea.data(), eb.data(), params, leave_out);
 }
 
@@ -101,7 +101,7 @@ PlacePreference board_preference_near(const ForwardMap& map, const BoardFeatures
   // Place b and the heading are the same for every candidate.
   const SeenHeading heading = seen_heading(yaw_rad);
   std::array<float, kMaxBoards> ea{}, eb{};
-  expected_features(map, locate(map, bx_m, by_m), heading, eb.data());
+  expected_at_pose(map, locate(map, bx_m, by_m), bx_m, by_m, heading, eb.data());
   // A grid of at most 25 x 25 places over the disc, none finer than the map's cells.
   const double step = std::max(static_cast<double>(map.cell_m), radius_m / 12.0);
   const int reach = static_cast<int>(std::floor(radius_m / step));
@@ -114,7 +114,7 @@ PlacePreference board_preference_near(const ForwardMap& map, const BoardFeatures
       if (std::hypot(x - bx_m, y - by_m) < min_distance_m) continue;
       const GridPoint at = locate(map, x, y);
       if (static_cast<double>(route_distance(map, at)) > on_route_m) continue;
-      expected_features(map, at, heading, ea.data());
+      expected_at_pose(map, at, x, y, heading, ea.data());
       const double nats = preference(map, observed, ea.data(), eb.data(), params, leave_out);
       if (nats > best.nats) best = PlacePreference{nats, x, y};
     }
@@ -155,7 +155,7 @@ BoardAssessment BoardReliability::assess(const ForwardMap& map, const BoardFeatu
   const GridPoint at = locate(map, estimate.x_m, estimate.y_m);
   std::array<float, kMaxBoards> expected{};
   const SeenHeading heading = seen_heading(estimate.yaw_rad);
-  expected_features(map, at, heading, expected.data());
+  expected_at_pose(map, at, estimate.x_m, estimate.y_m, heading, expected.data());
   // The range of what the map expects within the spread around the estimate (a cross of four
   // points): a board whose area falls inside it, or nearest its edge, is judged by that.
   std::array<float, kMaxBoards> lo = expected, hi = expected;
@@ -174,7 +174,7 @@ BoardAssessment BoardReliability::assess(const ForwardMap& map, const BoardFeatu
     std::array<float, kMaxBoards> e{};
     for (const auto& o : offsets) {
       const GridPoint p = locate(map, estimate.x_m + o[0], estimate.y_m + o[1]);
-      expected_features(map, p, heading, e.data());
+      expected_at_pose(map, p, estimate.x_m + o[0], estimate.y_m + o[1], heading, e.data());
       for (std::size_t b = 0; b < kMaxBoards; ++b) {
         lo[b] = std::min(lo[b], e[b]);
         hi[b] = std::max(hi[b], e[b]);

@@ -145,6 +145,7 @@ SeenHeading seen_heading(double yaw_rad) {
   SeenHeading h;
   h.sector = std::min(static_cast<int>(at), ForwardMap::kHeadingSectors - 1);
   h.within = static_cast<float>(std::min(1.0, at - h.sector));
+  h.yaw_rad = static_cast<float>((u - 0.5) * two_pi);
   h.cos_yaw = static_cast<float>(std::cos(yaw_rad));
   h.sin_yaw = static_cast<float>(std::sin(yaw_rad));
   return h;
@@ -241,6 +242,51 @@ bool expected_bearing(const ForwardMap& map, const GridPoint& point, std::size_t
   if (!any) return false;
   bearing_rad = reference + sum / weight;
   return true;
+}
+
+void expected_at_pose(const ForwardMap& map, const GridPoint& point, double x_m, double y_m,
+                      const SeenHeading& heading, float* out) {
+  expected_features(map, point, heading, out);
+  if (!map.has_visibility) return;
+  apply_visibility(map, bearing_point(map, x_m, y_m, heading.cos_yaw, heading.sin_yaw),
+                   heading.yaw_rad, out);
+}
+
+void apply_visibility(const ForwardMap& map, const GridPoint& seen_from, float yaw_rad,
+                      float* out) {
+  if (!ForwardMap::kHeadingTermStorage || !ForwardMap::kBearingStorage || !map.has_visibility)
+    return;
+  const float half_fov = half_field_of_view(map);
+  const std::size_t n = map.board_count;
+  for (std::size_t b = 0; b < n; ++b) {
+    float reference = 0.0F, turn = 0.0F, weight = 0.0F, area = 0.0F, half_width = 0.0F;
+    bool any = false;
+    for (int k = 0; k < 4; ++k) {
+      const std::size_t at = seen_from.index[k];
+      const float v = map.bearing_rad[at * kMaxBoards + b];
+      const float w = seen_from.weight[k];
+      if (v == ForwardMap::kNoBearing || !(w > 0.0F)) continue;
+      if (!any) {
+        reference = v;
+        any = true;
+      }
+      float d = v - reference;  // both in [-pi, pi]: one turn at most
+      d = d > kPiF ? d - 2.0F * kPiF : (d < -kPiF ? d + 2.0F * kPiF : d);
+      turn += w * d;
+      weight += w;
+      const float* t = map.heading_terms.data() + (at * kMaxBoards + b) * 2;
+      area += w * t[0];
+      half_width += w * t[1];
+    }
+    if (!any) continue;
+    const float inv = 1.0F / weight;
+    // yaw in [-pi, pi] (particles are kept wrapped; a pose may not be), the bearing within a
+    // turn of it: two turns at most, and a value that is not finite reads as out of view.
+    float a = yaw_rad - (reference + turn * inv);
+    for (int k = 0; k < 2; ++k) a = a > kPiF ? a - 2.0F * kPiF : (a < -kPiF ? a + 2.0F * kPiF : a);
+    out[b] = area * inv * angle_gain(map.visibility_angle_gain, a) *
+             visible_share(half_fov, half_width * inv, a < 0.0F ? -a : a);
+  }
 }
 
 float route_distance(const ForwardMap& map, const GridPoint& point) {

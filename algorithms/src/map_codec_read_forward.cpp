@@ -114,6 +114,34 @@ MapError decode_heading_terms(Reader& r, ForwardMap& f) {
   return MapError{};
 }
 
+// The visibility (version 10), in the heading terms' place: the angle gain, then every stored
+// cell's feature seen whole on the axis and angular half-width of every board, in storage order.
+MapError decode_visibility(Reader& r, ForwardMap& f) {
+  const std::size_t boards = f.board_count, cells = f.stored_cells();
+  float gain = 0.0F;
+  if (!r.f32(gain, "forward map visibility"))
+    return MapError{"truncated: the forward map's visibility is cut short", r.pos()};
+  if (!finite_in(gain, -2.0F, 2.0F))
+    return MapError{"forward map visibility: angle gain not finite and in -2..2", r.pos()};
+  f.visibility_angle_gain = gain;
+  if (!r.need(cells * boards * 8U, "forward map visibility"))
+    return MapError{"truncated: the forward map's visibility is shorter than its size says",
+                    r.pos()};
+  for (std::size_t c = 0; c < cells; ++c) {
+    float* t = f.heading_terms.data() + c * kMaxBoards * 2;
+    for (std::size_t b = 0; b < boards; ++b) {
+      r.f32(t[2 * b], "forward map visibility");
+      if (!finite_in(t[2 * b], 0.0F, 1.0e6F))
+        return MapError{"forward map visibility: a feature not finite and in 0..1e6", r.pos()};
+      r.f32(t[2 * b + 1], "forward map visibility");
+      if (!finite_in(t[2 * b + 1], 0.0F, 3.2F))
+        return MapError{"forward map visibility: a half-width not finite and in 0..3.2 rad",
+                        r.pos()};
+    }
+  }
+  return MapError{};
+}
+
 // The heading coverage (version 8), after the heading terms: every stored cell's sectors, kept
 // only where this build holds heading terms (without them nothing reads it).
 MapError decode_heading_coverage(Reader& r, ForwardMap& f) {
@@ -138,6 +166,7 @@ MapError decode_forward(Reader& r, std::uint32_t version, std::uint32_t boards, 
   f.has_bearings = false;
   f.has_heading_terms = false;
   f.has_heading_coverage = false;
+  f.has_visibility = false;
   if (!r.u32(columns, "forward map size") || !r.u32(rows, "forward map size"))
     return MapError{"truncated: no room for the forward map's size", r.pos()};
   if (columns == 0 && rows == 0) return MapError{};
@@ -182,12 +211,18 @@ MapError decode_forward(Reader& r, std::uint32_t version, std::uint32_t boards, 
     return MapError{"truncated: the forward map's flags are cut short", r.pos()};
   }
   // Bit 0: headings; bit 1 (version 6 on): bearings; bit 2 (version 7 on): heading terms; bit 3
-  // (version 8 on): heading coverage.
-  const unsigned known = version >= 8 ? 15U : version >= 7 ? 7U : version >= 6 ? 3U : 1U;
+  // (version 8 on): heading coverage; bit 4 (version 10 on): visibility.
+  const unsigned known = version >= 10  ? 31U
+                         : version >= 8 ? 15U
+                         : version >= 7 ? 7U
+                         : version >= 6 ? 3U
+                                        : 1U;
   if ((flag & ~known) != 0U || pad[0] != 0 || pad[1] != 0 || pad[2] != 0)
     return MapError{"forward map flags: unknown bits set", r.pos()};
   if ((flag & 8U) != 0U && (flag & 1U) == 0U)
     return MapError{"forward map holds heading coverage but no headings", r.pos()};
+  if ((flag & 16U) != 0U && ((flag & 2U) == 0U || (flag & 4U) != 0U))
+    return MapError{"forward map holds visibility without bearings or with heading terms", r.pos()};
   if ((flag & 2U) != 0U && !ForwardMap::kBearingStorage)
     return MapError{
         "forward map holds bearings this build has no room for (train it with "
@@ -197,6 +232,11 @@ MapError decode_forward(Reader& r, std::uint32_t version, std::uint32_t boards, 
     return MapError{
         "forward map holds heading terms (a floor map) this build has no room for (train it "
         "without --heading-terms)",
+        r.pos()};
+  if ((flag & 16U) != 0U && !ForwardMap::kHeadingTermStorage)
+    return MapError{
+        "forward map holds visibility (a floor map) this build has no room for (train it "
+        "without --visibility)",
         r.pos()};
 
   // The layout: every tile (versions 3 and 4), or the stored tiles' bitmap (version 5).
@@ -251,6 +291,10 @@ MapError decode_forward(Reader& r, std::uint32_t version, std::uint32_t boards, 
   if (!e && (flag & 4U) != 0U) {
     e = decode_heading_terms(r, f);
     f.has_heading_terms = !e;
+  }
+  if (!e && (flag & 16U) != 0U) {
+    e = decode_visibility(r, f);
+    f.has_visibility = !e;
   }
   if (!e && (flag & 8U) != 0U) {
     e = decode_heading_coverage(r, f);

@@ -79,10 +79,13 @@ std::vector<std::uint8_t> encode_map(const MapFile& map) {
     for (std::size_t b = 0; b < f.board_count; ++b) w.f32(f.sigma[b]);
     // Bit 0: headings follow the route distances; bit 1 (version 6): the board bearings follow;
     // bit 2 (version 7): the heading terms follow; bit 3 (version 8): the heading coverage.
+    // Bit 4 (version 10): the visibility follows, in the heading terms' place.
     const bool terms = ForwardMap::kHeadingTermStorage && f.has_heading_terms;
     const bool cover = ForwardMap::kHeadingTermStorage && f.has_heading && f.has_heading_coverage;
+    const bool seen = ForwardMap::kHeadingTermStorage && f.has_bearings && f.has_visibility &&
+                      !f.has_heading_terms;
     w.u8(static_cast<std::uint8_t>((f.has_heading ? 1U : 0U) | (f.has_bearings ? 2U : 0U) |
-                                   (terms ? 4U : 0U) | (cover ? 8U : 0U)));
+                                   (terms ? 4U : 0U) | (cover ? 8U : 0U) | (seen ? 16U : 0U)));
     w.u8(0);
     w.u8(0);
     w.u8(0);
@@ -116,8 +119,11 @@ std::vector<std::uint8_t> encode_map(const MapFile& map) {
         for (std::size_t b = 0; b < f.board_count; ++b) w.f32(f.bearing_rad[c * kMaxBoards + b]);
       }
     }
-    // Version 7: every stored cell's heading terms, per board c then s.
-    if (terms) {
+    // Version 7: every stored cell's heading terms, per board c then s; version 10: in their
+    // place, the visibility: its angle gain, then per board the feature seen whole on the axis
+    // and the angular half-width.
+    if (seen) w.f32(f.visibility_angle_gain);
+    if (terms || seen) {
       for (std::size_t c = 0; c < cells; ++c) {
         for (std::size_t b = 0; b < 2 * f.board_count; ++b)
           w.f32(f.heading_terms[c * kMaxBoards * 2 + b]);

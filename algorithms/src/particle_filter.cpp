@@ -120,7 +120,8 @@ double ParticleFilter::update_boards(const BoardUpdate& u) {
   double sum = 0.0, match = 0.0;
   // The particle's heading as a unit vector, where the heading terms or the camera's place need
   // it (in float, as both uses are: sinf and cosf cost fewer instructions than sin and cos).
-  const bool camera_bearings = u.bearing_mask != 0U && map.bearing_camera_forward_m != 0.0F;
+  const bool camera_bearings =
+      (u.bearing_mask != 0U || map.has_visibility) && map.bearing_camera_forward_m != 0.0F;
   const bool unit_heading = map.has_heading_terms || camera_bearings;
   for (std::size_t i = 0; i < count_; ++i) {
     const GridPoint at = locate(map, particles_[i].x_m, particles_[i].y_m);
@@ -144,6 +145,12 @@ double ParticleFilter::update_boards(const BoardUpdate& u) {
     } else {
       expected_features(map, at, expected.data());
     }
+    // Where the map's bearings are read: the particle's camera place when they are seen from it.
+    const GridPoint seen_from =
+        camera_bearings ? bearing_point(map, particles_[i].x_m, particles_[i].y_m, cos_yaw, sin_yaw)
+                        : at;
+    if (map.has_visibility)
+      apply_visibility(map, seen_from, static_cast<float>(particles_[i].yaw_rad), expected.data());
     double likelihood = 1.0;
     for (std::size_t b = 0; b < u.boards; ++b) {
       if (!u.use[b]) continue;
@@ -154,9 +161,6 @@ double ParticleFilter::update_boards(const BoardUpdate& u) {
     // Bearings: the particle sees board b at world bearing yaw - angle; the map says where the
     // training run saw it from here (from the particle's camera place, where the map's bearings
     // are seen from it).
-    const GridPoint seen_from =
-        camera_bearings ? bearing_point(map, particles_[i].x_m, particles_[i].y_m, cos_yaw, sin_yaw)
-                        : at;
     for (std::uint32_t mask = u.bearing_mask; mask != 0U; mask &= mask - 1U) {
       const auto b = static_cast<std::size_t>(__builtin_ctz(mask));
       float bearing = 0.0F;

@@ -92,16 +92,30 @@ ForwardMapReport train_forward_map_placed(const std::vector<std::vector<float>>&
     ++report.frames;
     ++report.by_odometry;
     const float* bearing = nullptr;
+    const float* half_width = nullptr;
     if (bearings != nullptr && f.index < bearings->world_rad.size() &&
-        bearings->world_rad[f.index].size() >= board_count)
+        bearings->world_rad[f.index].size() >= board_count) {
       bearing = bearings->world_rad[f.index].data();
-    frames.push_back(
-        Positioned{f.pose.x_m, f.pose.y_m, f.pose.yaw_rad, f.t_s, true, &v, f.travel_m, bearing});
+      if (f.index < bearings->half_width_rad.size() &&
+          bearings->half_width_rad[f.index].size() >= board_count)
+        half_width = bearings->half_width_rad[f.index].data();
+    }
+    frames.push_back(Positioned{f.pose.x_m, f.pose.y_m, f.pose.yaw_rad, f.t_s, true, &v, f.travel_m,
+                                bearing, half_width});
   }
   report.has_heading = true;
   const double law[2] = {bearings != nullptr ? bearings->a1_rad : 0.0,
                          bearings != nullptr ? bearings->a3_rad : 0.0};
-  return fit_grid(frames, board_count, opt, out, report, bearings != nullptr ? law : nullptr);
+  std::vector<double> places(2 * board_count, std::numeric_limits<double>::quiet_NaN());
+  if (bearings != nullptr) {
+    for (std::size_t b = 0; b < board_count && b < bearings->placements.size(); ++b) {
+      if (!bearings->placements[b].placed) continue;
+      places[2 * b] = bearings->placements[b].x_m;
+      places[2 * b + 1] = bearings->placements[b].y_m;
+    }
+  }
+  return fit_grid(frames, board_count, opt, out, report, bearings != nullptr ? law : nullptr,
+                  places.data());
 }
 
 }  // namespace harmoloc::sim_host

@@ -371,16 +371,46 @@ HeadingFit with_narrow_level(const HeadingFit& wide, const KernelSums& k, std::s
 // world bearings of the frames that saw it whole, and the kernel weight of all frames.
 struct BearingSums {
   std::array<double, kMaxBoards> sin{}, cos{}, weight{};
+  // The same frames' weighted features (each over its angle_gain) and angular half-widths, and
+  // the squares of their image angles (visibility).
+  std::array<double, kMaxBoards> feature{}, half_width{}, angle_sq{};
   double all = 0.0;
 };
 
+// A frame's view of a board carried from where it stood to a nearby place (x, y) by where the
+// board stands: its feature scales with the inverse square of the distance (within 4 times
+// either way), its angular half-width with the inverse distance, and its bearing turns by the
+// change of the board's direction. Between the lanes of a coverage run the nearest frames stand
+// 10-20 cm away: a board 2 m off shows 10-20% more or less area there.
+struct Carry {
+  double area = 1.0, width = 1.0, cos = 1.0, sin = 0.0;
+};
+
+Carry carry(const double* places, std::size_t b, double from_x, double from_y, double x, double y) {
+  Carry c;
+  if (places == nullptr || std::isnan(places[2 * b])) return c;
+  const double fx = places[2 * b] - from_x, fy = places[2 * b + 1] - from_y;
+  const double tx = places[2 * b] - x, ty = places[2 * b + 1] - y;
+  const double f2 = fx * fx + fy * fy, t2 = tx * tx + ty * ty;
+  if (!(f2 > 1e-4 && t2 > 1e-4)) return c;
+  c.area = std::clamp(f2 / t2, 0.25, 4.0);
+  c.width = std::sqrt(c.area);
+  const double inv = 1.0 / std::sqrt(f2 * t2);
+  c.cos = (fx * tx + fy * ty) * inv;
+  c.sin = (fx * ty - fy * tx) * inv;
+  return c;
+}
+
 // Over the frames within @p reach_m of (x, y) that run within 25 degrees of the heading whose
 // unit vector is (@p anchor_cos, @p anchor_sin) (every frame when @p every_heading) and that
-// @p keep accepts, weighted exp(-(d^2 - d2_min) / 2h^2).
+// @p keep accepts, weighted exp(-(d^2 - d2_min) / 2h^2); with @p places (where the boards stand,
+// x and y per board, NaN: not placed), each frame's view carried to (x, y); each frame's feature
+// taken back to the axis by @p angle_gain (ForwardMap::visibility_angle_gain).
 template <typename Keep>
 BearingSums bearing_sums(const FrameIndex& index, const FrameVectors& v, double x, double y,
                          double anchor_cos, double anchor_sin, bool every_heading, double d2_min,
-                         double reach_m, double h, Keep keep) {
+                         double reach_m, double h, Keep keep, const double* places = nullptr,
+                         float angle_gain = 0.0F) {
   BearingSums s;
   const double inv = 0.5 / (h * h);
   index.within(x, y, reach_m, [&](const Positioned& p) {
@@ -397,9 +427,17 @@ BearingSums bearing_sums(const FrameIndex& index, const FrameVectors& v, double 
     const double* unit = v.bearing.data() + 2 * i * v.boards;
     for (std::size_t b = 0; b < v.boards; ++b) {
       if (std::isnan(unit[2 * b])) continue;
-      s.cos[b] += w * unit[2 * b];
-      s.sin[b] += w * unit[2 * b + 1];
+      const Carry c = carry(places, b, p.x_m, p.y_m, x, y);
+      s.cos[b] += w * (unit[2 * b] * c.cos - unit[2 * b + 1] * c.sin);
+      s.sin[b] += w * (unit[2 * b + 1] * c.cos + unit[2 * b] * c.sin);
       s.weight[b] += w;
+      const auto angle = static_cast<float>(
+          algorithms::wrap_angle_rad(p.yaw_rad - static_cast<double>(p.bearing_rad[b])));
+      s.angle_sq[b] += w * static_cast<double>(angle * angle);
+      s.feature[b] += w * c.area * static_cast<double>((*p.features)[b]) /
+                      static_cast<double>(algorithms::angle_gain(angle_gain, angle));
+      if (p.half_width_rad != nullptr)
+        s.half_width[b] += w * c.width * static_cast<double>(p.half_width_rad[b]);
     }
   });
   return s;
@@ -429,43 +467,103 @@ bool mean_bearing(const BearingSums& s, std::size_t b, bool every_heading, doubl
 void fit_bearings_from(const std::vector<Positioned>& frames, const std::vector<char>& comparable,
                        const FrameIndex& index, const FrameVectors& vectors, bool every_heading,
                        std::size_t boards, const ForwardMapOptions& opt, const double* law,
-                       double x0, double y0, double cell, ForwardMap& out,
+                       const double* places, double x0, double y0, double cell, ForwardMap& out,
                        ForwardMapReport& report) {
   const double h = report.bandwidth_m;
   constexpr double kCut = 30.0;  // weights below e^-30 of the nearest frame's do not count
   std::vector<std::vector<double>> residuals(boards);
   const double near_m = std::max(2.0 * report.pass_spread_m, 0.01);
-  for (std::size_t i = 0; i < frames.size(); ++i) {
-    const Positioned& p = frames[i];
-    if (!comparable[i] || p.bearing_rad == nullptr) continue;
-    const double* heading = vectors.heading.data();
-    const auto other = [&](const Positioned& q) {
-      const std::size_t k = vectors.of(q);
-      return q.has_yaw && q.bearing_rad != nullptr &&
-             (every_heading ||
-              heading[2 * k] * heading[2 * i] + heading[2 * k + 1] * heading[2 * i + 1] >=
-                  kSamePassCos) &&
-             !same_pass(q, p.t_s, p.travel_m, opt.exclude_same_pass_s, opt.exclude_same_pass_m);
-    };
-    // The nearest such frame, looked for only as far as another pass counts as near (the
-    // comparable bound): a search over the whole run for each frame would take minutes.
-    double d2_min = std::numeric_limits<double>::infinity();
-    index.within(p.x_m, p.y_m, near_m, [&](const Positioned& q) {
-      if (other(q))
-        d2_min =
-            std::min(d2_min, (q.x_m - p.x_m) * (q.x_m - p.x_m) + (q.y_m - p.y_m) * (q.y_m - p.y_m));
+  // Visibility needs the bearings seen from the camera's place (there a board's whole feature
+  // holds at every heading) and takes the heading terms' storage.
+  const bool visibility =
+      every_heading && opt.visibility && ForwardMap::kHeadingTermStorage && !out.has_heading_terms;
+  const auto half_fov = static_cast<float>(std::fabs(0.5 * law[0] + 0.125 * law[1]));
+  // Per board, the squared residuals of the areas as the visibility predicts them from other
+  // passes, and how many frames it could not predict (no bearing from other passes there).
+  std::vector<double> seen_sq(boards, 0.0);
+  std::vector<std::size_t> seen_n(boards, 0), unseen_n(boards, 0);
+  // With visibility, the frames' views are carried to the place by where the boards stand.
+  const double* carried = visibility ? places : nullptr;
+  // Each comparable frame with the sums of the other passes near it (taken back to the axis by
+  // @p gain), for @p visit(i, sums).
+  const auto over_frames = [&](float gain, auto visit) {
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+      const Positioned& p = frames[i];
+      if (!comparable[i] || p.bearing_rad == nullptr) continue;
+      const double* heading = vectors.heading.data();
+      const auto other = [&](const Positioned& q) {
+        const std::size_t k = vectors.of(q);
+        return q.has_yaw && q.bearing_rad != nullptr &&
+               (every_heading ||
+                heading[2 * k] * heading[2 * i] + heading[2 * k + 1] * heading[2 * i + 1] >=
+                    kSamePassCos) &&
+               !same_pass(q, p.t_s, p.travel_m, opt.exclude_same_pass_s, opt.exclude_same_pass_m);
+      };
+      // The nearest such frame, looked for only as far as another pass counts as near (the
+      // comparable bound): a search over the whole run for each frame would take minutes.
+      double d2_min = std::numeric_limits<double>::infinity();
+      index.within(p.x_m, p.y_m, near_m, [&](const Positioned& q) {
+        if (other(q))
+          d2_min = std::min(d2_min,
+                            (q.x_m - p.x_m) * (q.x_m - p.x_m) + (q.y_m - p.y_m) * (q.y_m - p.y_m));
+      });
+      if (!(d2_min <= near_m * near_m)) continue;
+      visit(i, bearing_sums(index, vectors, p.x_m, p.y_m, vectors.heading[2 * i],
+                            vectors.heading[2 * i + 1], every_heading, d2_min,
+                            std::sqrt(d2_min + 2.0 * kCut * h * h), h, other, carried, gain));
+    }
+  };
+  // The angle gain: a board seen whole shows more (or less) towards the frame's edge than its
+  // neighbours' views at other angles predict; the least-squares slope of the log of the ratio
+  // over the difference of the squared angles, over every board.
+  float gain = 0.0F;
+  if (visibility) {
+    double xy = 0.0, xx = 0.0;
+    std::size_t n = 0;
+    over_frames(0.0F, [&](std::size_t i, const BearingSums& s) {
+      const Positioned& p = frames[i];
+      for (std::size_t b = 0; b < boards; ++b) {
+        double mean = 0.0;
+        const double v = static_cast<double>((*p.features)[b]);
+        if (!std::isfinite(static_cast<double>(p.bearing_rad[b])) || !(v > 0.0) ||
+            !mean_bearing(s, b, every_heading, mean) || !(s.feature[b] > 0.0))
+          continue;
+        const double a =
+            algorithms::wrap_angle_rad(p.yaw_rad - static_cast<double>(p.bearing_rad[b]));
+        const double x = a * a - s.angle_sq[b] / s.weight[b];
+        xy += x * std::log(v * s.weight[b] / s.feature[b]);
+        xx += x * x;
+        ++n;
+      }
     });
-    if (!(d2_min <= near_m * near_m)) continue;
-    const BearingSums s = bearing_sums(index, vectors, p.x_m, p.y_m, vectors.heading[2 * i],
-                                       vectors.heading[2 * i + 1], every_heading, d2_min,
-                                       std::sqrt(d2_min + 2.0 * kCut * h * h), h, other);
+    if (n >= 50 && xx > 0.0) gain = static_cast<float>(std::clamp(xy / xx, -2.0, 2.0));
+  }
+  over_frames(gain, [&](std::size_t i, const BearingSums& s) {
+    const Positioned& p = frames[i];
     for (std::size_t b = 0; b < boards; ++b) {
       double mean = 0.0;
+      const bool known = mean_bearing(s, b, every_heading, mean);
+      if (visibility) {
+        if (known) {
+          const auto a = static_cast<float>(algorithms::wrap_angle_rad(p.yaw_rad - mean));
+          const double predicted =
+              s.feature[b] / s.weight[b] *
+              static_cast<double>(
+                  algorithms::angle_gain(gain, a) *
+                  algorithms::visible_share(
+                      half_fov, static_cast<float>(s.half_width[b] / s.weight[b]), std::fabs(a)));
+          const double r = static_cast<double>((*p.features)[b]) - predicted;
+          seen_sq[b] += r * r;
+          ++seen_n[b];
+        } else {
+          ++unseen_n[b];
+        }
+      }
       const double v = static_cast<double>(p.bearing_rad[b]);
-      if (!std::isfinite(v) || !mean_bearing(s, b, every_heading, mean)) continue;
+      if (!std::isfinite(v) || !known) continue;
       residuals[b].push_back(std::fabs(algorithms::wrap_angle_rad(v - mean)));
     }
-  }
+  });
   report.bearing_sigma_rad.assign(boards, 0.0);
   bool any = false;
   for (std::size_t b = 0; b < boards; ++b) {
@@ -487,6 +585,21 @@ void fit_bearings_from(const std::vector<Positioned>& frames, const std::vector<
   out.bearing_a1_rad = static_cast<float>(law[0]);
   out.bearing_a3_rad = static_cast<float>(law[1]);
   report.has_bearings = true;
+  out.has_visibility = visibility;
+  out.visibility_angle_gain = visibility ? gain : 0.0F;
+  report.visibility = visibility;
+  report.visibility_angle_gain = visibility ? static_cast<double>(gain) : 0.0;
+  // With visibility each board's noise is that of the areas it predicts from other passes, and
+  // the old noise where it predicts none (those places keep the cell's expected feature).
+  for (std::size_t b = 0; visibility && b < boards; ++b) {
+    const std::size_t n = seen_n[b] + unseen_n[b];
+    if (!(out.sigma[b] > 0.0F) || seen_n[b] < 20 || n == 0) continue;
+    const double old = static_cast<double>(out.sigma[b]);
+    const double ms =
+        (seen_sq[b] + static_cast<double>(unseen_n[b]) * old * old) / static_cast<double>(n);
+    report.sigma[b] = std::max(std::sqrt(ms), std::max(1e-2 * old, 1e-4));
+    out.sigma[b] = static_cast<float>(report.sigma[b]);
+  }
   const auto with_yaw = [](const Positioned& p) { return p.has_yaw && p.bearing_rad != nullptr; };
   const auto every = [](const Positioned&) { return true; };
   for (std::uint32_t r = 0; r < out.rows; ++r) {
@@ -509,15 +622,20 @@ void fit_bearings_from(const std::vector<Positioned>& frames, const std::vector<
         }
       });
       if (!std::isfinite(d2_min)) continue;
-      const BearingSums s = bearing_sums(index, vectors, x, y, vectors.heading[2 * anchor],
-                                         vectors.heading[2 * anchor + 1], every_heading, d2_min,
-                                         std::sqrt(d2_min + 2.0 * kCut * h * h), h, every);
+      const BearingSums s = bearing_sums(
+          index, vectors, x, y, vectors.heading[2 * anchor], vectors.heading[2 * anchor + 1],
+          every_heading, d2_min, std::sqrt(d2_min + 2.0 * kCut * h * h), h, every, carried, gain);
       bool stored = false;
       for (std::size_t b = 0; b < boards; ++b) {
         double mean = 0.0;
         if (!(out.bearing_sigma_rad[b] > 0.0F) || !mean_bearing(s, b, every_heading, mean))
           continue;
         out.bearing_rad[at * kMaxBoards + b] = static_cast<float>(mean);
+        if (visibility) {
+          float* t = out.heading_terms.data() + (at * kMaxBoards + b) * 2;
+          t[0] = static_cast<float>(s.feature[b] / s.weight[b]);
+          t[1] = static_cast<float>(s.half_width[b] / s.weight[b]);
+        }
         stored = true;
       }
       report.bearing_cells += stored ? 1U : 0U;
@@ -533,12 +651,12 @@ void fit_bearings_from(const std::vector<Positioned>& frames, const std::vector<
 // the place alone, and a cell takes the bearings of every heading.
 void fit_bearings(const std::vector<Positioned>& frames, const std::vector<char>& comparable,
                   const FrameIndex& index, const FrameVectors& vectors, std::size_t boards,
-                  const ForwardMapOptions& opt, const double* law, double x0, double y0,
-                  double cell, ForwardMap& out, ForwardMapReport& report) {
+                  const ForwardMapOptions& opt, const double* law, const double* places, double x0,
+                  double y0, double cell, ForwardMap& out, ForwardMapReport& report) {
   const double d = opt.camera_forward_m;
   if (!(std::isfinite(d) && d != 0.0)) {
-    fit_bearings_from(frames, comparable, index, vectors, false, boards, opt, law, x0, y0, cell,
-                      out, report);
+    fit_bearings_from(frames, comparable, index, vectors, false, boards, opt, law, places, x0, y0,
+                      cell, out, report);
     return;
   }
   std::vector<Positioned> seen(frames);
@@ -551,8 +669,8 @@ void fit_bearings(const std::vector<Positioned>& frames, const std::vector<char>
   // The same headings and bearings, frame for frame: only where the frames stand moved.
   FrameVectors seen_vectors = vectors;
   seen_vectors.first = seen.data();
-  fit_bearings_from(seen, comparable, seen_index, seen_vectors, true, boards, opt, law, x0, y0,
-                    cell, out, report);
+  fit_bearings_from(seen, comparable, seen_index, seen_vectors, true, boards, opt, law, places, x0,
+                    y0, cell, out, report);
   if (out.has_bearings) {
     out.bearing_camera_forward_m = static_cast<float>(d);
     report.bearing_camera_forward_m = d;
@@ -579,7 +697,7 @@ double mean_over_modelled(std::vector<double>& sq, std::size_t n,
 
 ForwardMapReport fit_grid(std::vector<Positioned>& frames, std::size_t board_count,
                           const ForwardMapOptions& opt, algorithms::ForwardMap& out,
-                          ForwardMapReport report, const double* law) {
+                          ForwardMapReport report, const double* law, const double* board_places) {
   if (frames.size() < 8) {
     throw std::runtime_error("forward map: only " + std::to_string(frames.size()) +
                              " frames could be positioned (at least 8 needed)");
@@ -967,8 +1085,8 @@ ForwardMapReport fit_grid(std::vector<Positioned>& frames, std::size_t board_cou
                             static_cast<double>(known_cells * ForwardMap::kHeadingSectors)
                       : 0.0;
   if (law != nullptr && report.has_heading)
-    fit_bearings(frames, comparable, index, vectors, board_count, opt, law, x0, y0, cell, out,
-                 report);
+    fit_bearings(frames, comparable, index, vectors, board_count, opt, law, board_places, x0, y0,
+                 cell, out, report);
   return report;
 }
 

@@ -19,13 +19,17 @@ struct Positioned {
   double travel_m;  // < 0: unknown (then passes are told apart by time)
   // Per board, the world bearing the frame saw it at (NaN: none); nullptr: no bearings.
   const float* bearing_rad = nullptr;
+  // Per board, its angular half-width in the frame (radians, where bearing_rad holds one).
+  const float* half_width_rad = nullptr;
 };
 
 // forward_map_training_fit.cpp
 // Fits the grid to frames that already have a position (shared by both ways of placing them).
-// With @p law (a1, a3; nullptr: none) and frames' bearing_rad, also the boards' bearings.
+// With @p law (a1, a3; nullptr: none) and frames' bearing_rad, also the boards' bearings;
+// @p board_places: where each board stands (x, y per board, NaN: not placed; nullptr: none).
 ForwardMapReport fit_grid(std::vector<Positioned>& frames, std::size_t board_count,
                           const ForwardMapOptions& opt, algorithms::ForwardMap& out,
-                          ForwardMapReport report, const double* law = nullptr);
+                          ForwardMapReport report, const double* law = nullptr,
+                          const double* board_places = nullptr);
 
 }  // namespace harmoloc::sim_host::forward_map_training_detail

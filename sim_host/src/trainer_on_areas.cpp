@@ -163,15 +163,23 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<dataset::Sta
   if (with_bearings) {
     observations.a1_rad = report.bearings.a1_rad;
     observations.a3_rad = report.bearings.a3_rad;
+    observations.placements = report.bearings.placements;
     observations.world_rad.resize(run.areas.size());
+    observations.half_width_rad.resize(run.areas.size());
     for (const PlacedFrame& f : frames) {
       const algorithms::AreaVector& a = run.areas[f.index];
       std::vector<float>& out = observations.world_rad[f.index];
+      std::vector<float>& half = observations.half_width_rad[f.index];
       out.assign(boards, std::numeric_limits<float>::quiet_NaN());
+      half.assign(boards, 0.0F);
       for (std::size_t b = 0; b < boards; ++b) {
         if (!algorithms::gives_bearing(a, b)) continue;
         out[b] = static_cast<float>(algorithms::wrap_angle_rad(
             f.pose.yaw_rad - report.bearings.angle_rad(a.centroid_column_px(b), a.width_px)));
+        // A board about as wide as high spans the square root of its pixels in columns.
+        half[b] = static_cast<float>(0.5 * std::fabs(report.bearings.a1_rad) *
+                                     std::sqrt(static_cast<double>(a.pixels[b])) /
+                                     static_cast<double>(a.width_px));
       }
     }
   }

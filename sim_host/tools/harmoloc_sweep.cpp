@@ -76,6 +76,8 @@ int main(int argc, char** argv) {
                  "into this folder: seed-N-nominal.csv, -kidnap, -dynamic, -long");
   app.add_flag("--heading-terms", opt.heading_terms,
                "floor: train the floor's map with heading terms (harmoloc-train --heading-terms)");
+  app.add_flag("--visibility", opt.visibility,
+               "floor: train the floor's map with visibility (harmoloc-train --visibility)");
   app.add_flag("--axle-bearings", opt.axle_bearings,
                "keep the maps' bearings over the axle's place, as when the camera's offset is\n"
                "not given (harmoloc-train --camera-forward-m 0), for comparison");
@@ -151,6 +153,7 @@ int main(int argc, char** argv) {
                     {"parts", parts},
                     {"heading_terms", opt.heading_terms},
                     {"axle_bearings", opt.axle_bearings},
+                    {"visibility", opt.visibility},
                     {"roams", opt.roams}};
     j["results"] = nlohmann::json::array();
     for (const SceneResult& r : finished) j["results"].push_back(to_json(r));

@@ -78,13 +78,21 @@ int main(int argc, char** argv) {
                "do not store the boards' bearings (where each board is seen across the frame) in\n"
                "the map: the filter then weighs by areas alone, as maps before version 6");
   bool heading_terms = false;
-  app.add_flag("--heading-terms", heading_terms,
-               "model the boards' areas over the heading too where the run drove a place at\n"
-               "several headings (a floor; map format 7), kept where they predict other passes\n"
-               "better, fitted over the lanes nearby too (kernels up to 35 cm; a floor trains\n"
-               "about 4 times longer). Experimental: not for the bare-metal kernels (no room);\n"
-               "on random floors they bettered the heading and kidnaps, the position only in\n"
-               "the median (docs/sweep.md)");
+  CLI::Option* terms_flag = app.add_flag(
+      "--heading-terms", heading_terms,
+      "model the boards' areas over the heading too where the run drove a place at\n"
+      "several headings (a floor; map format 7), kept where they predict other passes\n"
+      "better, fitted over the lanes nearby too (kernels up to 35 cm; a floor trains\n"
+      "about 4 times longer). Experimental: not for the bare-metal kernels (no room);\n"
+      "on random floors they bettered the heading and kidnaps, the position only in\n"
+      "the median (docs/sweep.md)");
+  bool visibility = false;
+  app.add_flag("--visibility", visibility,
+               "model each board's area on a floor by whether the lens sees it at the heading:\n"
+               "per place its area seen whole from the camera's place, its bearing and width\n"
+               "(map format 10; needs bearings and the camera's offset; not with\n"
+               "--heading-terms, not for the bare-metal kernels). docs/filter.md")
+      ->excludes(terms_flag);
   double camera_forward = std::numeric_limits<double>::quiet_NaN();
   app.add_option(
          "--camera-forward-m", camera_forward,
@@ -148,6 +156,7 @@ int main(int argc, char** argv) {
     opt.use_odometry = !no_odometry;
     opt.bearings = !no_bearings;
     if (heading_terms) opt.forward.heading_ridges = sim_host::kHeadingRidges;
+    opt.forward.visibility = visibility;
     opt.forward.camera_forward_m = camera_forward;
     opt.label_tolerance_ns = static_cast<std::uint64_t>(std::llround(label_tolerance_ms * 1e6));
     if (label_offset == "auto") {
@@ -407,6 +416,15 @@ int main(int argc, char** argv) {
               "bearing noise %s (deg, against other passes; %zu of %zu cells hold one, seen from "
               "%s)\n",
               spread.c_str(), fw.bearing_cells, grid.stored_cells(), from);
+          if (fw.visibility)
+            std::printf(
+                "visibility    each board's area seen whole from the camera's place, in view by "
+                "its bearing; towards the frame's edge it grows by 1 + %.2f a^2\n",
+                fw.visibility_angle_gain);
+          else if (visibility)
+            std::printf(
+                "visibility    none: it needs the bearings seen from the camera's place "
+                "(--camera-forward-m) and no heading terms\n");
         } else {
           std::printf("bearing noise none in the map (%s)\n",
                       !opt.bearings   ? "--no-bearings"

@@ -148,6 +148,7 @@ void floor_part(const Scenario& scene, const algorithms::ThresholdSet& threshold
         d.substr(d.find("coverage run") == std::string::npos ? 0 : d.find("coverage run"));
     TrainOptions train;
     if (opt.heading_terms) train.forward.heading_ridges = kHeadingRidges;
+    train.forward.visibility = opt.visibility;
     if (opt.axle_bearings) train.forward.camera_forward_m = 0.0;
     const TrainedMap trained =
         train_on_scenario(coverage, kCoverageSeed, nullptr, &thresholds, &train);

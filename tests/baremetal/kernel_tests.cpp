@@ -684,7 +684,8 @@ struct MapSpec {
   float sigma_y = 0.6F;
   float first_feature = 0.25F;
   bool trailing = false;
-  /// Forward map flag bits beyond the heading (bit 0): 4 heading terms, 8 heading coverage.
+  /// Forward map flag bits beyond the heading (bit 0): 4 heading terms, 8 heading coverage (2
+  /// bearings and 16 visibility only for maps this build refuses: no sections are written).
   std::uint8_t forward_flags = 0;
 };
 
@@ -887,6 +888,12 @@ void test_map_codec() {
   s.forward = true;
   s.forward_flags = 4;
   BM_CHECK(ha::ForwardMap::kHeadingTermStorage || rejected(s, "without --heading-terms"));
+  // A floor map's visibility (version 10) needs the bearings, which this build has no room for:
+  // refused before its sections are read; without them it is refused as malformed anywhere.
+  s.forward_flags = 2 | 16;
+  BM_CHECK(ha::ForwardMap::kBearingStorage || rejected(s, "no room for"));
+  s.forward_flags = 16;
+  BM_CHECK(rejected(s, "visibility without bearings"));
   s.forward_flags = 8;
   {
     static MapBytes cover;

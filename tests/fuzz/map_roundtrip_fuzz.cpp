@@ -86,6 +86,13 @@ bool same_model(const MapFile& a, const MapFile& b) {
   if (f.has_heading_terms && !same_bits(f.heading_terms.data(), g.heading_terms.data(),
                                         cells * kMaxBoards * 2 * sizeof(float)))
     return false;
+  if (f.has_visibility != g.has_visibility) return false;
+  // Version 10: the angle gain and every stored cell's visibility, in the heading terms' place.
+  if (f.has_visibility &&
+      (!same_bits(&f.visibility_angle_gain, &g.visibility_angle_gain, sizeof(float)) ||
+       !same_bits(f.heading_terms.data(), g.heading_terms.data(),
+                  cells * kMaxBoards * 2 * sizeof(float))))
+    return false;
   if (f.has_heading_coverage != g.has_heading_coverage) return false;
   // Version 8: every stored cell's heading coverage.
   if (f.has_heading_coverage &&
@@ -159,6 +166,22 @@ void check_added_heading_coverage(const std::vector<std::uint8_t>& input) {
   check_given_round_trip("heading coverage");
 }
 
+// A decoded forward map with bearings and without visibility is given it in place of any heading
+// terms (map version 10), drawn from the input's bytes, and must survive encode and decode.
+void check_added_visibility(const std::vector<std::uint8_t>& input) {
+  ForwardMap& f = g_map.forward;
+  if (!f.present() || !f.has_bearings || f.has_visibility) return;
+  f.has_heading_terms = false;
+  f.has_visibility = true;
+  f.visibility_angle_gain = 0.01F * static_cast<float>(input[0]) - 1.28F;
+  const std::size_t cells = f.stored_cells();
+  for (std::size_t i = 0; i < cells * f.board_count * 2; ++i) {
+    const std::size_t c = i / (2 * f.board_count), k = i % (2 * f.board_count);
+    f.heading_terms[c * kMaxBoards * 2 + k] = 0.01F * static_cast<float>(input[i % input.size()]);
+  }
+  check_given_round_trip("visibility");
+}
+
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
@@ -182,7 +205,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     // what it lacked: the same model, a version 1 map's dissimilarity bound at 1, no forward map
     // before version 3, every feature weight 1 and no calibration before version 4, a forward
     // map of versions 3 and 4 with every tile of its grid stored, no bearings before version 6,
-    // no heading terms before version 7, no heading coverage before version 8.
+    // no heading terms before version 7, no heading coverage before version 8, no visibility
+    // before version 10.
     HARMOLOC_FUZZ_CHECK(input[8] != 1 || g_map.model.max_dissimilarity == 1.0F,
                         "a version 1 map decodes with a dissimilarity bound");
     HARMOLOC_FUZZ_CHECK(input[8] >= 3 || !g_map.forward.present(),
@@ -201,13 +225,16 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
                         "a map before version 6 decodes with bearings");
     HARMOLOC_FUZZ_CHECK(input[8] >= 7 || !f.has_heading_terms,
                         "a map before version 7 decodes with heading terms");
-    HARMOLOC_FUZZ_CHECK(!f.has_heading_coverage, "a map before version 8 decodes with coverage");
+    HARMOLOC_FUZZ_CHECK(input[8] >= 8 || !f.has_heading_coverage,
+                        "a map before version 8 decodes with coverage");
+    HARMOLOC_FUZZ_CHECK(!f.has_visibility, "a map before version 10 decodes with visibility");
     HARMOLOC_FUZZ_CHECK(!decode_map(encoded.data(), encoded.size(), g_again),
                         "a re-encoded older map does not decode");
     HARMOLOC_FUZZ_CHECK(same_model(g_map, g_again), "decode(encode(older map)) differs");
     check_added_bearings(input);
     check_added_heading_terms(input);
     check_added_heading_coverage(input);
+    check_added_visibility(input);
     return 0;
   }
   HARMOLOC_FUZZ_CHECK(encoded.size() == input.size(),
@@ -220,5 +247,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   check_added_bearings(input);
   check_added_heading_terms(input);
   check_added_heading_coverage(input);
+  check_added_visibility(input);
   return 0;
 }

@@ -434,3 +434,79 @@ TEST(CoveragePlot, WedgesForCoveredHeadingsAtKnownPlaces) {
   const std::string none = hs::coverage_svg(*map, -1.0, "test");
   EXPECT_EQ(none.find(" 0 0 0 "), std::string::npos);
 }
+
+// Visibility: a lane driven forth and back with a board ahead at one end. Driving towards it the
+// camera sees it whole, driving away not at all; the map's features over every heading mix the
+// two, visibility keeps the board's whole feature at the camera's place and predicts both
+// directions, and a heading never driven (across the lane) as out of view. Its noise is the
+// spread of those predictions, far narrower than the mix's.
+TEST(ForwardMapTraining, VisibilityPredictsABoardInViewAndOutOfView) {
+  const double deg = 3.14159265358979323846 / 180.0, d = 0.15;
+  const double bx = 3.2, by = 0.7;  // board 0, ahead of the lane's +x end
+  const auto whole = [&](double cx, double cy) {
+    return 0.3 / ((bx - cx) * (bx - cx) + (by - cy) * (by - cy));
+  };
+  PlacedRun run;
+  std::vector<float> bearing;
+  hs::BearingObservations bearings;
+  bearings.a1_rad = 1.2;  // half field of view 0.6 rad
+  double travel = 0.0;
+  for (int pass = 0; pass < 4; ++pass) {
+    for (int i = 0; i <= 400; ++i) {
+      const double x = 0.5 + 0.005 * (pass % 2 == 0 ? i : 400 - i);
+      const double yaw = pass % 2 == 0 ? 0.0 : 180.0 * deg;
+      const double cx = x + d * std::cos(yaw), cy = 0.5 + d * std::sin(yaw);
+      const double wobble = 1.0 + 0.01 * std::sin(1.3 * static_cast<double>(run.features.size()));
+      const bool in_view = pass % 2 == 0;
+      add_frame(run, in_view ? whole(cx, cy) * wobble : 0.0, 2.0 + std::sin(2.0 * x), x, 0.5, yaw,
+                travel);
+      travel += 0.005;
+      bearings.world_rad.push_back(
+          {in_view ? static_cast<float>(std::atan2(by - cy, bx - cx)) : std::nanf(""),
+           std::nanf("")});
+      bearings.half_width_rad.push_back({in_view ? 0.02F : 0.0F, 0.0F});
+    }
+  }
+  // Where the boards stand, as the bearings' calibration places them: board 0 only.
+  bearings.placements.resize(2);
+  bearings.placements[0].placed = true;
+  bearings.placements[0].x_m = bx;
+  bearings.placements[0].y_m = by;
+  hs::ForwardMapOptions opt;
+  opt.camera_forward_m = d;
+  opt.visibility = true;
+  auto map = std::make_unique<ha::ForwardMap>();
+  const hs::ForwardMapReport report =
+      hs::train_forward_map_placed(run.features, run.placed, 2, opt, *map, &bearings);
+  ASSERT_TRUE(map->has_visibility);
+  ASSERT_TRUE(report.visibility);
+  auto mixed = std::make_unique<ha::ForwardMap>();
+  opt.visibility = false;
+  const hs::ForwardMapReport mixed_report =
+      hs::train_forward_map_placed(run.features, run.placed, 2, opt, *mixed, &bearings);
+  ASSERT_FALSE(mixed->has_visibility);
+  double mixed_worst = 0.0;
+  for (const double x : {1.0, 1.5, 2.0}) {
+    const double in_view = whole(x + d, 0.5);
+    const auto at = [&](const ha::ForwardMap& m, double yaw) {
+      std::array<float, ha::kMaxBoards> e{};
+      ha::expected_at_pose(m, ha::locate(m, x, 0.5), x, 0.5, ha::seen_heading(yaw), e.data());
+      return static_cast<double>(e[0]);
+    };
+    EXPECT_NEAR(at(*map, 0.0), in_view, 0.03 * in_view) << x;
+    EXPECT_LT(at(*map, 180.0 * deg), 0.01 * in_view) << x;
+    EXPECT_LT(at(*map, 90.0 * deg), 0.01 * in_view) << x;  // never driven: out of view
+    // Turned 10 degrees from the lane the board is still whole in view; the camera stands 2.6
+    // cm off the lane, and the lane's views are carried there by where the board stands.
+    const double turned = whole(x + d * std::cos(10.0 * deg), 0.5 - d * std::sin(10.0 * deg));
+    EXPECT_NEAR(at(*map, -10.0 * deg), turned, 0.03 * turned) << x;
+    mixed_worst = std::max({mixed_worst, std::fabs(at(*mixed, 0.0) - in_view) / in_view,
+                            at(*mixed, 180.0 * deg) / in_view});
+  }
+  EXPECT_GT(mixed_worst, 0.3);
+  // The feature does not change across the frame here: no angle gain to speak of.
+  EXPECT_NEAR(report.visibility_angle_gain, 0.0, 0.1);
+  EXPECT_LT(report.sigma[0], 0.25 * mixed_report.sigma[0]);
+  // Board 1 gives no bearing: it keeps the mixed map's noise and features.
+  EXPECT_DOUBLE_EQ(report.sigma[1], mixed_report.sigma[1]);
+}

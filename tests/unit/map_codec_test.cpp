@@ -609,7 +609,8 @@ TEST(MapCodec, LargestMapFitsTheSizeCap) {
   f.has_bearings = true;
   f.bearing_a1_rad = 1.0F;
   f.bearing_sigma_rad.fill(0.05F);
-  f.has_heading_terms = true;     // version 7
+  // Version 10: the visibility, the heading terms' (version 7) size and its angle gain.
+  f.has_visibility = true;
   f.has_heading_coverage = true;  // version 8
   const std::vector<std::uint8_t> b = ha::encode_map(*map);
   // Every count at its capacity but the calibration's (the trainer writes 3 of the 64 allowed).
@@ -995,7 +996,7 @@ TEST(MapCodec, ForwardMapCorruptionWithValidChecksum) {
       },
       "models no board");
   reject(
-      "unknown flag", [](auto& b) { b[kOffFlags] = 17; }, "flags");
+      "unknown flag", [](auto& b) { b[kOffFlags] = 33; }, "flags");
   reject(
       "unknown high flag", [](auto& b) { b[kOffFlags] = 0x81; }, "flags");
   reject(
@@ -1320,4 +1321,73 @@ TEST(MapCodec, ForwardMapBearingsTruncatedAtEveryLength) {
     EXPECT_LE(e.offset, n);
     EXPECT_FALSE(out->forward.has_bearings);
   }
+}
+
+// Version 10: a floor map's visibility (bit 4) takes the heading terms' place after the
+// bearings, per board the feature seen whole and the angular half-width, and reads back exactly.
+// It needs bearings, excludes heading terms, and a value out of range is refused; before version
+// 10 the bit is unknown.
+TEST(MapCodec, VisibilityRoundTripAndChecks) {
+  auto map = make_map_with_bearings();
+  const std::vector<std::uint8_t> plain = ha::encode_map(*map);
+  ha::ForwardMap& f = map->forward;
+  f.has_visibility = true;
+  f.visibility_angle_gain = 0.4F;
+  for (std::size_t c = 0; c < f.stored_cells(); ++c) {
+    for (std::size_t b = 0; b < kBoards; ++b) {
+      f.heading_terms[(c * ha::kMaxBoards + b) * 2] = 0.01F * static_cast<float>(c + b);
+      f.heading_terms[(c * ha::kMaxBoards + b) * 2 + 1] = 0.001F * static_cast<float>(b);
+    }
+  }
+  const std::vector<std::uint8_t> bytes = ha::encode_map(*map);
+  ASSERT_EQ(bytes.size(), plain.size() + 4 + f.stored_cells() * kBoards * 8);
+  EXPECT_EQ(bytes[kOffFlags], plain[kOffFlags] | 16U);
+  auto out = std::make_unique<ha::MapFile>();
+  ASSERT_FALSE(ha::decode_map(bytes.data(), bytes.size(), *out));
+  EXPECT_TRUE(out->forward.has_visibility);
+  EXPECT_FLOAT_EQ(out->forward.visibility_angle_gain, 0.4F);
+  EXPECT_FALSE(out->forward.has_heading_terms);
+  for (std::size_t i = 0; i < f.stored_cells() * ha::kMaxBoards * 2; ++i)
+    ASSERT_EQ(out->forward.heading_terms[i], f.heading_terms[i]) << i;
+  EXPECT_EQ(ha::encode_map(*out), bytes);
+  // The angle gain sits right after the bearings, before the CRC and the calibration count;
+  // then the first cell's first feature and its half-width.
+  const std::size_t first = plain.size() - 4 - 4 + 4;
+  const auto refused = [&](std::size_t at, float v, const char* what) {
+    std::vector<std::uint8_t> b = bytes;
+    put_f32(b, at, v);
+    fix_crc(b);
+    EXPECT_NE(decode_error(b).find(what), std::string::npos) << v << ": " << decode_error(b);
+  };
+  for (float v : {std::numeric_limits<float>::quiet_NaN(), -2.1F, 2.1F})
+    refused(first - 4, v, "visibility: angle gain");
+  for (float v : {std::numeric_limits<float>::quiet_NaN(), -0.1F, 2.0e6F})
+    refused(first, v, "visibility: a feature");
+  for (float v : {std::numeric_limits<float>::infinity(), -0.01F, 3.3F})
+    refused(first + 4, v, "visibility: a half-width");
+  for (const std::size_t length : {first - 2, first + 8}) {
+    std::vector<std::uint8_t> cut(bytes.begin(),
+                                  bytes.begin() + static_cast<std::ptrdiff_t>(length));
+    EXPECT_FALSE(decode_error(cut).empty());
+  }
+  // With heading terms too, without bearings, or in a version 9 map: refused.
+  std::vector<std::uint8_t> b = bytes;
+  b[kOffFlags] |= 4U;
+  fix_crc(b);
+  EXPECT_NE(decode_error(b).find("visibility without bearings or with heading terms"),
+            std::string::npos)
+      << decode_error(b);
+  b = bytes;
+  b[kOffFlags] &= static_cast<std::uint8_t>(~2U);
+  fix_crc(b);
+  EXPECT_NE(decode_error(b).find("visibility without bearings"), std::string::npos)
+      << decode_error(b);
+  b = bytes;
+  put_u32(b, kOffVersion, 9);
+  fix_crc(b);
+  EXPECT_NE(decode_error(b).find("unknown bits"), std::string::npos) << decode_error(b);
+  // Written only with bearings: a map that lost them writes no visibility.
+  map->forward.has_bearings = false;
+  ASSERT_FALSE(ha::decode_map(ha::encode_map(*map).data(), ha::encode_map(*map).size(), *out));
+  EXPECT_FALSE(out->forward.has_visibility);
 }

@@ -140,6 +140,21 @@ struct ForwardMap {
   static constexpr float kHeadingReach_rad = 3.14159265358979F / 4.0F;
   std::array<std::uint16_t, kHeadingTermStorage ? kMaxCells + 1 : 1> heading_cover{};
 
+  /// Visibility (map version 10; docs/filter.md), instead of heading terms: what a board shows
+  /// depends on the heading mostly through whether the lens sees it. Each stored cell then holds
+  /// in heading_terms' storage, per board, the board's feature when seen whole from the camera's
+  /// place at the cell and its angular half-width there (radians): seen at image angle
+  /// a = yaw - bearing, it shows that feature times clamp((half_fov - |a|) / (2 half_width) +
+  /// 1/2, 0, 1), half_fov from the bearings' law. Only where the cell holds the board's bearing
+  /// (seen from the camera's place); elsewhere the cell's expected feature holds. Needs bearings
+  /// seen from the camera's place; not with heading terms.
+  bool has_visibility = false;
+  /// How a board's feature grows towards the frame's edge (the projection stretches it there;
+  /// distortion and vignetting change it as well): seen whole at image angle a it shows the
+  /// cell's feature times 1 + visibility_angle_gain a^2 (angle_gain; at least 1/4). Measured by
+  /// the trainer over the training run.
+  float visibility_angle_gain = 0.0F;
+
   bool present() const { return columns > 0 && rows > 0; }
   /// Stored cells (whole tiles, including the cells of border tiles beyond the grid).
   std::size_t stored_cells() const { return static_cast<std::size_t>(tile_count) * kTileCells; }
@@ -218,7 +233,8 @@ struct SeenHeading {
   float cos_yaw = 1.0F;
   float sin_yaw = 0.0F;
   int sector = 0;
-  float within = 0.0F;  ///< where in its sector, 0 (its lower edge) to 1
+  float within = 0.0F;   ///< where in its sector, 0 (its lower edge) to 1
+  float yaw_rad = 0.0F;  ///< the heading itself, in [-pi, pi]
   /// Whether a cell reads it only within the headings it covers (else at their nearest edge).
   bool keep_to_coverage = true;
 };
@@ -257,6 +273,41 @@ bool route_heading(const ForwardMap& map, const GridPoint& point, float& heading
 /// at +-pi); false when no corner holds one.
 bool expected_bearing(const ForwardMap& map, const GridPoint& point, std::size_t b,
                       float& bearing_rad);
+
+/// The lens's half field of view under @p map's bearing law (radians): the angle of a centroid
+/// on the frame's left or right edge.
+inline float half_field_of_view(const ForwardMap& map) {
+  const float a = 0.5F * map.bearing_a1_rad + 0.125F * map.bearing_a3_rad;
+  return a < 0.0F ? -a : a;
+}
+
+/// What a robot at (@p x_m, @p y_m) (@p point: that place on the grid, locate) facing @p heading
+/// expects: expected_features at its place and, where the map has visibility, apply_visibility
+/// at its camera's place.
+void expected_at_pose(const ForwardMap& map, const GridPoint& point, double x_m, double y_m,
+                      const SeenHeading& heading, float* out);
+
+/// What share of a board the lens sees (0..1) with its centre at @p abs_angle_rad (>= 0) from
+/// the optical axis, the lens's half field of view @p half_fov_rad and the board's angular
+/// half-width @p half_width_rad: half of it with its centre on the frame's edge (the soft edge
+/// keeps the filter's weights smooth). A value that is not finite reads as 0.
+inline float visible_share(float half_fov_rad, float half_width_rad, float abs_angle_rad) {
+  const float seen = (half_fov_rad - abs_angle_rad) / (2.0F * half_width_rad + 1e-4F) + 0.5F;
+  return seen > 1.0F ? 1.0F : (seen > 0.0F ? seen : 0.0F);
+}
+
+/// A board's feature seen whole at image angle @p angle_rad relative to its feature on the axis:
+/// 1 + @p gain a^2, at least 1/4 (ForwardMap::visibility_angle_gain).
+inline float angle_gain(float gain, float angle_rad) {
+  const float g = 1.0F + gain * angle_rad * angle_rad;
+  return g > 0.25F ? g : 0.25F;
+}
+
+/// Where @p map has visibility: every board's feature as the camera at @p seen_from (its place,
+/// bearing_point) facing @p yaw_rad sees it (the cell's feature on the axis, times angle_gain and
+/// visible_share at its image angle), written to @p out[b] for the boards whose bearing
+/// the corners of @p seen_from hold (the others keep @p out's value).
+void apply_visibility(const ForwardMap& map, const GridPoint& seen_from, float yaw_rad, float* out);
 
 /// Where @p map's bearings are read for a robot at (@p x_m, @p y_m) facing (@p cos_yaw,
 /// @p sin_yaw): the camera's place when the map's bearings are seen from it, else the axle's.

@@ -17,10 +17,11 @@ namespace harmoloc::algorithms {
 /// the calibration measured on the training run, version 5 stores the forward map's tiles near
 /// the training run instead of its whole grid, version 6 adds the board bearings, version 7 the
 /// heading terms of a floor map, version 8 the headings each place was trained from, version 9
-/// the camera's place the bearings are seen from; versions 1 to 8 are still read (without what they
+/// the camera's place the bearings are seen from, version 10 the visibility of a floor map;
+/// versions 1 to 9 are still read (without what they
 /// lack; a version 3 or 4 forward map as a grid of which every tile is stored, a forward map before
 /// version 6 without bearings).
-constexpr std::uint32_t kMapFormatVersion = 9;
+constexpr std::uint32_t kMapFormatVersion = 10;
 
 /// What the trainer measured on the training run that the firmware derives its scene-dependent
 /// settings from (docs/map-format.md): nothing of it is a constant tuned to one scene.
@@ -69,8 +70,9 @@ constexpr std::size_t kMaxMapFileBytes =
     // Version 6: the bearing law (a1, a3), each board's bearing spread, every cell's bearings;
     // version 9 the camera's offset.
     8U + 4U + kMaxBoards * 4U + ForwardMap::kMaxCells * kMaxBoards * 4U +
-    // Version 7: every cell's heading terms.
-    ForwardMap::kMaxCells * kMaxBoards * 8U +
+    // Version 7: every cell's heading terms (version 10: or the visibility, in their place, and
+    // its angle gain).
+    4U + ForwardMap::kMaxCells * kMaxBoards * 8U +
     // Version 8: every cell's heading coverage.
     ForwardMap::kMaxCells * 2U + 4U + kMaxCalibrationEntries * 8U + 4U;
 

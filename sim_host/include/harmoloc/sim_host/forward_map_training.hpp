@@ -10,6 +10,7 @@
 #include <limits>
 #include <vector>
 
+#include "harmoloc/algorithms/bearing_calibration.hpp"
 #include "harmoloc/algorithms/forward_map.hpp"
 #include "harmoloc/algorithms/geometry.hpp"
 #include "harmoloc/algorithms/harmonic_model.hpp"
@@ -52,6 +53,10 @@ struct ForwardMapOptions {
   /// over the camera's place and taken from frames of every heading (ForwardMap's
   /// bearing_camera_forward_m).
   double camera_forward_m = std::numeric_limits<double>::quiet_NaN();
+  /// Visibility instead of heading terms (ForwardMap::has_visibility): where the bearings are
+  /// seen from the camera's place, each cell also keeps every board's feature seen whole from
+  /// there and its angular half-width.
+  bool visibility = false;
 };
 
 struct ForwardMapReport {
@@ -90,6 +95,9 @@ struct ForwardMapReport {
   /// Bearings (train_forward_map_placed with a law): per board, the spread of its world bearing
   /// between passes (radians, 0: not modelled), and the stored cells holding any bearing.
   bool has_bearings = false;
+  /// Whether the map holds visibility (ForwardMapOptions::visibility), and its angle gain.
+  bool visibility = false;
+  double visibility_angle_gain = 0.0;
   std::vector<double> bearing_sigma_rad;
   std::size_t bearing_cells = 0;
   std::size_t bearing_residuals = 0;  ///< frames x boards the spreads were measured on
@@ -121,6 +129,13 @@ struct BearingObservations {
   /// Per frame of the run (PlacedFrame::index) and board: the world bearing the frame saw the
   /// board at (yaw - angle of its centroid column), NaN where the board gave none.
   std::vector<std::vector<float>> world_rad;
+  /// The same frames' boards' angular half-widths (radians): half the angle the square root of
+  /// the board's pixels spans at the optical axis (the visibility's soft edge).
+  std::vector<std::vector<float>> half_width_rad;
+  /// Where each board stands (algorithms/bearing_calibration.hpp; empty: not known). The
+  /// visibility carries a frame's view of a placed board to a nearby place by its distance and
+  /// direction from there.
+  std::vector<algorithms::BoardPlacement> placements;
 };
 
 /// Fits @p out to frames placed by odometry (every frame has a pose with heading); the kernel
