@@ -125,6 +125,8 @@ MapError decode_map(const std::uint8_t* data, std::size_t size, MapFile& map) {
   map.forward.has_bearings = false;          // before version 6 (and without a forward map): none
   map.forward.has_heading_terms = false;     // before version 7: none
   map.forward.has_heading_coverage = false;  // before version 8: none
+  map.forward.has_visibility = false;        // before version 10: none
+  map.forward.visibility_angle_gain = 0.0F;
   if (version >= 3) {
     if (const MapError e = decode_forward(r, version, boards, map.forward)) return e;
   }

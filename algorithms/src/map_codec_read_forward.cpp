@@ -167,6 +167,7 @@ MapError decode_forward(Reader& r, std::uint32_t version, std::uint32_t boards, 
   f.has_heading_terms = false;
   f.has_heading_coverage = false;
   f.has_visibility = false;
+  f.visibility_angle_gain = 0.0F;
   if (!r.u32(columns, "forward map size") || !r.u32(rows, "forward map size"))
     return MapError{"truncated: no room for the forward map's size", r.pos()};
   if (columns == 0 && rows == 0) return MapError{};

@@ -390,9 +390,15 @@ TEST(MapCodec, ReadsVersionTwo) {
   fix_crc(b);
   auto out = std::make_unique<ha::MapFile>();
   out->forward.columns = 3;  // whatever the object held before is replaced
+  out->forward.has_heading_terms = true;
+  out->forward.has_visibility = true;
+  out->forward.visibility_angle_gain = 0.5F;
   const ha::MapError e = ha::decode_map(b.data(), b.size(), *out);
   ASSERT_FALSE(e) << e.what;
   EXPECT_FALSE(out->forward.present());
+  EXPECT_FALSE(out->forward.has_heading_terms);
+  EXPECT_FALSE(out->forward.has_visibility);
+  EXPECT_EQ(out->forward.visibility_angle_gain, 0.0F);
   EXPECT_EQ(out->model.max_dissimilarity, map->model.max_dissimilarity);
   // The same bytes as version 3 miss the forward map's size.
   put_u32(b, kOffVersion, 3);
