@@ -252,8 +252,8 @@ void expected_at_pose(const ForwardMap& map, const GridPoint& point, double x_m,
                    heading.yaw_rad, out);
 }
 
-void apply_visibility(const ForwardMap& map, const GridPoint& seen_from, float yaw_rad,
-                      float* out) {
+void apply_visibility(const ForwardMap& map, const GridPoint& seen_from, float yaw_rad, float* out,
+                      float* bearing_rad) {
   if (!ForwardMap::kHeadingTermStorage || !ForwardMap::kBearingStorage || !map.has_visibility)
     return;
   const float half_fov = half_field_of_view(map);
@@ -278,6 +278,8 @@ void apply_visibility(const ForwardMap& map, const GridPoint& seen_from, float y
       area += w * t[0];
       half_width += w * t[1];
     }
+    if (bearing_rad != nullptr)
+      bearing_rad[b] = any ? reference + turn / weight : ForwardMap::kNoBearing;
     if (!any) continue;
     const float inv = 1.0F / weight;
     // yaw in [-pi, pi] (particles are kept wrapped; a pose may not be), the bearing within a

@@ -149,8 +149,11 @@ double ParticleFilter::update_boards(const BoardUpdate& u) {
     const GridPoint seen_from =
         camera_bearings ? bearing_point(map, particles_[i].x_m, particles_[i].y_m, cos_yaw, sin_yaw)
                         : at;
+    // With visibility the bearings are read there already: the bearing term below takes them.
+    std::array<float, kMaxBoards> seen_bearing{};
     if (map.has_visibility)
-      apply_visibility(map, seen_from, static_cast<float>(particles_[i].yaw_rad), expected.data());
+      apply_visibility(map, seen_from, static_cast<float>(particles_[i].yaw_rad), expected.data(),
+                       seen_bearing.data());
     double likelihood = 1.0;
     for (std::size_t b = 0; b < u.boards; ++b) {
       if (!u.use[b]) continue;
@@ -164,7 +167,12 @@ double ParticleFilter::update_boards(const BoardUpdate& u) {
     for (std::uint32_t mask = u.bearing_mask; mask != 0U; mask &= mask - 1U) {
       const auto b = static_cast<std::size_t>(__builtin_ctz(mask));
       float bearing = 0.0F;
-      if (!expected_bearing(map, seen_from, b, bearing)) continue;
+      if (map.has_visibility) {
+        bearing = seen_bearing[b];
+        if (bearing == ForwardMap::kNoBearing) continue;
+      } else if (!expected_bearing(map, seen_from, b, bearing)) {
+        continue;
+      }
       double d = particles_[i].yaw_rad - static_cast<double>(u.angle_rad[b]) -
                  static_cast<double>(bearing);
       // yaw and bearing lie in [-pi, pi] and the law's angle within a half turn, so two turns

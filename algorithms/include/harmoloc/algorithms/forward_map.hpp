@@ -306,8 +306,10 @@ inline float angle_gain(float gain, float angle_rad) {
 /// Where @p map has visibility: every board's feature as the camera at @p seen_from (its place,
 /// bearing_point) facing @p yaw_rad sees it (the cell's feature on the axis, times angle_gain and
 /// visible_share at its image angle), written to @p out[b] for the boards whose bearing
-/// the corners of @p seen_from hold (the others keep @p out's value).
-void apply_visibility(const ForwardMap& map, const GridPoint& seen_from, float yaw_rad, float* out);
+/// the corners of @p seen_from hold (the others keep @p out's value). With @p bearing_rad, each
+/// board's expected_bearing there as well (ForwardMap::kNoBearing where none), read on the way.
+void apply_visibility(const ForwardMap& map, const GridPoint& seen_from, float yaw_rad, float* out,
+                      float* bearing_rad = nullptr);
 
 /// Where @p map's bearings are read for a robot at (@p x_m, @p y_m) facing (@p cos_yaw,
 /// @p sin_yaw): the camera's place when the map's bearings are seen from it, else the axle's.
