@@ -13,6 +13,7 @@ set(HARMOLOC_ALGORITHMS_SOURCES
   src/map_codec_write.cpp
   src/odometry.cpp
   src/board_observation.cpp
+  src/floor_search.cpp
   src/forward_map.cpp
   src/fix_board_check.cpp
   src/kidnap_detector.cpp

@@ -257,7 +257,7 @@ void read_kidnap(const Checker& check, const toml::table& root, KidnapConfig& k)
   check.only(*t, w,
              {"enabled", "change_threshold", "confirm", "window_frames", "evidence_frames",
               "fix_distance_m", "preference_min", "consistency_m", "divergence_frames",
-              "lost_frames", "reseed", "position_sigma_m", "yaw_sigma_deg"});
+              "lost_frames", "reseed", "position_sigma_m", "yaw_sigma_deg", "floor_search"});
   k.enabled = flag(check, *t, "enabled", w, k.enabled);
   auto& d = k.detector;
   d.change_threshold = check.number(*t, "change_threshold", w, d.change_threshold, 0.0, 1.0);
@@ -284,6 +284,7 @@ void read_kidnap(const Checker& check, const toml::table& root, KidnapConfig& k)
   k.position_sigma_m =
       check.number_or_auto(*t, "position_sigma_m", w, k.position_sigma_m, 0.001, 10.0);
   k.yaw_sigma_deg = check.number(*t, "yaw_sigma_deg", w, k.yaw_sigma_deg, 0.0, 360.0);
+  k.floor_search = flag(check, *t, "floor_search", w, k.floor_search);
 }
 
 // [realtime]: scheduling, CPU and memory locking.

@@ -112,6 +112,25 @@ LocalizationCycle::LocalizationCycle(const FirmwareConfig& config, const algorit
     board_params_.route_sigma_m = 0.0;
     board_params_.route_heading_sigma_deg = 0.0;
   }
+  floor_search_on_ = use_boards_ && !route_terms_ && config.kidnap.floor_search &&
+                     algorithms::floor_search_possible(map.forward);
+  if (floor_search_on_) {
+    // A pass tries at most kFloorPassPlaces places, kFloorPlacesPerCycle a cycle (12 cycles,
+    // 0.4 s at 30 Hz): the stride is the finest that covers the grid with that many.
+    const algorithms::ForwardMap& f = map.forward;
+    const auto places = [&](std::uint32_t s) {
+      return static_cast<std::size_t>((f.columns + s - 1U) / s) * ((f.rows + s - 1U) / s);
+    };
+    while (places(floor_stride_) > kFloorPassPlaces) ++floor_stride_;
+    floor_refine_m_ = static_cast<double>(floor_stride_) * static_cast<double>(f.cell_m);
+    floor_margin_nats_ =
+        std::log(static_cast<double>(std::max<std::size_t>(places(floor_stride_), 1)));
+    // The search's pose is good to a few centimetres, not the harmonic fix's tens: the distances
+    // derived from the fix's error would hide kidnaps of less than a metre. "auto" takes the
+    // values of maps without a calibration.
+    if (config.kidnap.detector.fix_distance_m < 0.0) kidnap_params_.fix_distance_m = 0.25;
+    if (config.kidnap.detector.consistency_m < 0.0) kidnap_params_.consistency_m = 0.15;
+  }
   // The fix's own error per axis on the training run (0 without a calibration).
   const double fix_rmse = map.calibration.present
                               ? std::hypot(static_cast<double>(map.calibration.fix_rmse_x_m),

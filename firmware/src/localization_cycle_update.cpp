@@ -124,8 +124,17 @@ bool LocalizationCycle::update_with_boards(
   // moved or hidden board cannot fake a kidnap with it: the boards must also prefer the fix's
   // place (board_preference, where a board showing less than expected does not count).
   const algorithms::HarmonicFix& evidence_fix = fix_.fix;
+  // Without the boards the filter has written off (moved, or hidden by someone walking away),
+  // unless it has written off most of them: then the estimate is the suspect.
+  const std::uint32_t leave_out = 2 * distrusted <= modelled ? distrusted_mask : 0U;
+  // The floor search runs in every cycle: after a kidnap on a floor most boards can still agree
+  // with the old estimate within their widened noise (on a random floor the consensus held for
+  // 1.5 s and more after four of five kidnaps), so the consensus cannot tell it when to look.
+  if (floor_search_on_) follow_floor(observed, leave_out);
 
-  if (config_.kidnap.enabled) {
+  if (config_.kidnap.enabled && floor_search_on_) {
+    floor_kidnap_test(observed, estimate, match, leave_out);
+  } else if (config_.kidnap.enabled) {
     algorithms::KidnapInput in;
     in.match = match;
     in.consensus = assessment_.consensus;
@@ -139,9 +148,6 @@ bool LocalizationCycle::update_with_boards(
         fix_finite ? std::hypot(evidence_fix.x_m - estimate.x_m, evidence_fix.y_m - estimate.y_m)
                    : 0.0;
     if (fix_finite && in.fix_distance_m >= kidnap_params_.fix_distance_m) {
-      // Without the boards the filter has written off (moved, or hidden by someone walking
-      // away), unless it has written off most of them: then the estimate is the suspect.
-      const std::uint32_t leave_out = 2 * distrusted <= modelled ? distrusted_mask : 0U;
       // The boards' best place near the fix (as far from it as the kidnap distance, and as
       // far from the estimate), not the fix's own place alone: where few boards are in view the
       // fix can be off by more than its training error while the boards tell the place apart.
@@ -155,25 +161,93 @@ bool LocalizationCycle::update_with_boards(
       in.place_y_m = best.y_m;
     }
     in.contradiction = assessment_.exceeding > 0;
-    kidnap_input_ = in;
-    kidnap_verdict_ = kidnap_.step(in, kidnap_params_);
-    const algorithms::KidnapCounters& k = kidnap_.counters();
-    counters_.kidnap_triggers = k.triggers;
-    counters_.kidnaps = k.kidnaps;
-    counters_.lost = k.lost;
-    if (kidnap_verdict_ == algorithms::KidnapVerdict::kKidnapped) {
+    if (step_kidnap_test(in) == algorithms::KidnapVerdict::kKidnapped) {
       if (config_.kidnap.reseed == ReseedStrategy::kAroundFix && evidence_fix.known_place)
         reseed_between(kidnap_.evidence_x_m(), kidnap_.evidence_y_m(), kidnap_.evidence_fix_x_m(),
                        kidnap_.evidence_fix_y_m());
       else
         reseed_globally();
-      pending_text_ = "harmoloc: kidnap detected, relocalized";
-    } else if (kidnap_verdict_ == algorithms::KidnapVerdict::kLost) {
-      reseed_globally();
-      pending_text_ = "harmoloc: lost (boards disagree, no fix), relocalizing over the map";
     }
   }
   return assessment_.consensus || robust_fix_.known_place;
+}
+
+void LocalizationCycle::follow_floor(const algorithms::BoardFeatures& observed,
+                                     std::uint32_t leave_out) {
+  using algorithms::FloorSearch;
+  const algorithms::BoardModelParams& params = board_params_;
+  // The pose followed so far, refined on this frame (the robot moved), against the best of a
+  // pass that completed this cycle, refined too (the pass saw several frames).
+  algorithms::FloorPose followed =
+      FloorSearch::refine(map_.forward, observed, floor_fix_, floor_refine_m_, params, leave_out);
+  if (floor_search_.step(map_.forward, observed, params, leave_out, kFloorPlacesPerCycle,
+                         floor_stride_)) {
+    const algorithms::FloorPose pass = FloorSearch::refine(
+        map_.forward, observed, floor_search_.last_pass(), floor_refine_m_, params, leave_out);
+    if (pass.valid && (!followed.valid || pass.nats > followed.nats)) followed = pass;
+  }
+  floor_fix_ = followed;
+}
+
+void LocalizationCycle::floor_kidnap_test(const algorithms::BoardFeatures& observed,
+                                          const algorithms::Pose2& estimate, double match,
+                                          std::uint32_t leave_out) {
+  // The floor search's pose stands for the harmonic fix: a known place where it is valid, far
+  // when it is, and the boards (areas and bearings) prefer it to the estimate by the difference
+  // of their fits.
+  algorithms::KidnapInput in;
+  in.match = match;
+  in.consensus = assessment_.consensus;
+  in.contradiction = assessment_.exceeding > 0;
+  in.fix_known = floor_fix_.valid;
+  if (floor_fix_.valid) {
+    in.fix_x_m = floor_fix_.x_m;
+    in.fix_y_m = floor_fix_.y_m;
+    in.fix_distance_m = std::hypot(floor_fix_.x_m - estimate.x_m, floor_fix_.y_m - estimate.y_m);
+    if (in.fix_distance_m >= kidnap_params_.fix_distance_m) {
+      // The estimate searched as the search's pose was: its own heading may be a few degrees
+      // off, which the bearings' narrow noise would count as many nats against it.
+      algorithms::FloorPose near{estimate.x_m, estimate.y_m, estimate.yaw_rad, 0.0, true};
+      near.nats = algorithms::floor_fit(map_.forward, observed, estimate.x_m, estimate.y_m,
+                                        estimate.yaw_rad, board_params_, leave_out);
+      const algorithms::FloorPose refined = algorithms::FloorSearch::refine(
+          map_.forward, observed, near, floor_refine_m_, board_params_, leave_out);
+      if (refined.valid && refined.nats > near.nats) near = refined;
+      // The best of a pass is the luckiest of its places: it must beat the estimate by the log
+      // of their number more (the chance that some place fits the frame that well by accident).
+      in.preference = floor_fix_.nats - near.nats - floor_margin_nats_;
+      in.place_x_m = floor_fix_.x_m;
+      in.place_y_m = floor_fix_.y_m;
+    }
+  }
+  if (step_kidnap_test(in) != algorithms::KidnapVerdict::kKidnapped) return;
+  // At the search's pose of this frame, not the evidence's mean over the frames that confirmed
+  // it: the robot moved on meanwhile, and the pose carries the heading.
+  if (config_.kidnap.reseed == ReseedStrategy::kAroundFix && floor_fix_.valid) {
+    const double sigma_m = config_.kidnap.position_sigma_m >= 0.0 ? config_.kidnap.position_sigma_m
+                                                                  : std::max(floor_refine_m_, 0.03);
+    filter_.initialize(algorithms::Pose2{floor_fix_.x_m, floor_fix_.y_m, floor_fix_.yaw_rad},
+                       sigma_m, config_.kidnap.yaw_sigma_deg * algorithms::kPi / 180.0, false);
+    after_reseed();
+  } else {
+    reseed_globally();
+  }
+}
+
+algorithms::KidnapVerdict LocalizationCycle::step_kidnap_test(const algorithms::KidnapInput& in) {
+  kidnap_input_ = in;
+  kidnap_verdict_ = kidnap_.step(in, kidnap_params_);
+  const algorithms::KidnapCounters& k = kidnap_.counters();
+  counters_.kidnap_triggers = k.triggers;
+  counters_.kidnaps = k.kidnaps;
+  counters_.lost = k.lost;
+  if (kidnap_verdict_ == algorithms::KidnapVerdict::kKidnapped) {
+    pending_text_ = "harmoloc: kidnap detected, relocalized";
+  } else if (kidnap_verdict_ == algorithms::KidnapVerdict::kLost) {
+    reseed_globally();
+    pending_text_ = "harmoloc: lost (boards disagree, no fix), relocalizing over the map";
+  }
+  return kidnap_verdict_;
 }
 
 }  // namespace harmoloc::firmware

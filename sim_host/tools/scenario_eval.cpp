@@ -142,6 +142,10 @@ RunRecord replay_scenario(const Scenario& scenario, std::uint64_t seed,
     }
     f.robust_fix = algorithms::Pose2{cycle->robust_fix().x_m, cycle->robust_fix().y_m, 0.0};
     f.preference = cycle->kidnap_input().preference;
+    f.evidence_known = cycle->kidnap_input().fix_known;
+    f.evidence =
+        algorithms::Pose2{cycle->kidnap_input().fix_x_m, cycle->kidnap_input().fix_y_m, 0.0};
+    f.evidence_distance_m = cycle->kidnap_input().fix_distance_m;
     f.match = cycle->kidnap_input().match;
     f.sigma_m = std::sqrt(std::max(0.0, 0.5 * (out.covariance(0, 0) + out.covariance(1, 1))));
     f.sigma_yaw_rad = std::sqrt(std::max(0.0, out.covariance(2, 2)));
@@ -169,7 +173,8 @@ void write_trace(const RunRecord& run, const std::string& path) {
   std::fprintf(f,
                "t_s,truth_x_m,truth_y_m,truth_yaw_rad,x_m,y_m,yaw_rad,error_m,valid,health,"
                "fix_present,fix_known,fix_x_m,fix_y_m,verdict,distrusted,consensus,robust_fix_x_m,"
-               "robust_fix_y_m,preference,sigma_m,sigma_yaw_rad,match,covered");
+               "robust_fix_y_m,preference,sigma_m,sigma_yaw_rad,match,covered,evidence_known,"
+               "evidence_x_m,evidence_y_m,evidence_distance_m");
   const std::size_t boards = run.frames.empty() ? 0 : run.frames.front().boards;
   for (std::size_t b = 0; b < boards; ++b) std::fprintf(f, ",chi2_%zu", b + 1);
   for (std::size_t b = 0; b < boards; ++b) std::fprintf(f, ",static_%zu", b + 1);
@@ -178,13 +183,14 @@ void write_trace(const RunRecord& run, const std::string& path) {
     std::fprintf(f,
                  "%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%d,%s,%d,%d,%.4f,%.4f,%d,%u,%d,%.4f,%.4f,"
                  "%.3f,%.4f,"
-                 "%.4f,%.4g,%d",
+                 "%.4f,%.4g,%d,%d,%.4f,%.4f,%.4f",
                  r.t_s, r.truth.x_m, r.truth.y_m, r.truth.yaw_rad, r.estimate.x_m, r.estimate.y_m,
                  r.estimate.yaw_rad, r.position_error_m(), r.valid ? 1 : 0,
                  firmware::health_name(r.health), r.fix_present ? 1 : 0, r.fix_known ? 1 : 0,
                  r.fix.x_m, r.fix.y_m, static_cast<int>(r.verdict),
                  static_cast<unsigned>(r.distrusted), r.consensus ? 1 : 0, r.robust_fix.x_m,
-                 r.robust_fix.y_m, r.preference, r.sigma_m, r.sigma_yaw_rad, r.match, r.covered);
+                 r.robust_fix.y_m, r.preference, r.sigma_m, r.sigma_yaw_rad, r.match, r.covered,
+                 r.evidence_known ? 1 : 0, r.evidence.x_m, r.evidence.y_m, r.evidence_distance_m);
     for (std::size_t b = 0; b < boards; ++b)
       std::fprintf(f, ",%.3g", static_cast<double>(r.chi2[b]));
     for (std::size_t b = 0; b < boards; ++b)

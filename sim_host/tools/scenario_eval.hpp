@@ -60,9 +60,14 @@ struct FrameRecord {
   std::array<float, algorithms::kMaxBoards> static_probability{};
   algorithms::Pose2 robust_fix;  ///< the fix without the distrusted boards (x, y)
   double preference = 0.0;       ///< the kidnap test's: the boards' preference for the fix's place
-  double sigma_m = 0.0;          ///< the published position spread (root of the mean variance)
-  double sigma_yaw_rad = 0.0;    ///< the published heading spread
-  double match = 0.0;            ///< the kidnap test's d_t (the particles' summed weights)
+  /// The kidnap test's evidence pose: the harmonic fix, or on a floor the floor search's pose
+  /// (KidnapInput's fix), whether it counts as a known place, and its distance to the estimate.
+  bool evidence_known = false;
+  algorithms::Pose2 evidence;
+  double evidence_distance_m = 0.0;
+  double sigma_m = 0.0;        ///< the published position spread (root of the mean variance)
+  double sigma_yaw_rad = 0.0;  ///< the published heading spread
+  double match = 0.0;          ///< the kidnap test's d_t (the particles' summed weights)
   /// The map's heading coverage at the estimate: 1 covered, 0 not, -1 the map has none.
   int covered = -1;
   double position_error_m() const;

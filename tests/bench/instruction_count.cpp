@@ -85,11 +85,17 @@ const Table& table_for(std::size_t boards, algorithms::SegmentPath path) {
   return table;
 }
 
+// @p floor: the map read as a floor map (route terms off) with the floor search on
+// (kidnap.floor_search, algorithms/floor_search.hpp): what it adds to a cycle.
 int run_cycle(const bench::Frames& f, hal::PixelFormat format, std::size_t boards,
-              std::size_t particles, std::size_t samples) {
+              std::size_t particles, std::size_t samples, bool floor = false) {
   bench::synthetic_map(samples, f.width_px, f.height_px, g_map, boards);
   firmware::FirmwareConfig config = firmware::default_config();
   config.filter.particles = particles;
+  if (floor) {
+    config.observation.route_terms = firmware::RouteTerms::kOff;
+    config.kidnap.floor_search = true;
+  }
   bench::MemoryCamera camera(f, format);
   bench::MemoryEncoders encoders;
   bench::NullLink link;
@@ -176,6 +182,8 @@ int main(int argc, char** argv) {
 #endif
     } else if (kernel == "cycle") {
       return run_cycle(f, hal::PixelFormat::kRgb24, 6, 1024, 204);
+    } else if (kernel == "cycle_floor") {
+      return run_cycle(f, hal::PixelFormat::kRgb24, 6, 1024, 204, true);
     } else if (kernel == "cycle_yuyv") {
       return run_cycle(f, hal::PixelFormat::kYuyv, 6, 1024, 204);
     } else if (kernel == "cycle_boards") {
@@ -194,11 +202,28 @@ int main(int argc, char** argv) {
     const std::array<float, algorithms::HarmonicModel::kMaxFeatures> features{0.5F, 1.0F, 0.2F,
                                                                               1.5F, 0.3F, 0.8F};
     measure([&] { (void)algorithms::harmonic_query(g_map.model, features); });
-  } else if (kernel == "filter_boards" || kernel == "filter_boards_kld") {
+  } else if (kernel == "filter_boards" || kernel == "filter_boards_kld" ||
+             kernel == "filter_boards_vis") {
     // The default measurement update: every board against the forward map, robust weights.
     // _kld: with KLD-sampling on a cloud as tight as in steady tracking (1 cm, 1 degree), n the
     // capacity: the count it settles at decides the cost (the bins' pass included).
+    // _vis: on a floor map with visibility in every cell (harmoloc-train --visibility).
     bench::synthetic_map(204, 320, 240, g_map);
+    if (kernel == "filter_boards_vis") {
+      if constexpr (!algorithms::ForwardMap::kHeadingTermStorage) {
+        std::fprintf(stderr, "filter_boards_vis: this build keeps no visibility storage\n");
+        return 2;
+      }
+      algorithms::ForwardMap& f = g_map.forward;
+      f.has_visibility = true;
+      f.visibility_angle_gain = 0.3F;
+      for (std::size_t at = 0; at < f.stored_cells(); ++at)
+        for (std::size_t b = 0; b < f.board_count; ++b) {
+          float* t = f.heading_terms.data() + (at * algorithms::kMaxBoards + b) * 2;
+          t[0] = 1.5F;   // the board's feature seen whole
+          t[1] = 0.05F;  // its angular half-width
+        }
+    }
     static algorithms::ParticleFilter filter;
     filter.configure(n, 1, algorithms::MotionNoise{});
     if (kernel == "filter_boards_kld") {

@@ -16,11 +16,11 @@ kernels=(
   "harmonic 204" "harmonic 1024" "harmonic 4096"
   "filter 256" "filter 1024" "filter 4096"
   "filter_boards 256" "filter_boards 1024" "filter_boards 4096"
-  "filter_boards_kld 1024" "filter_boards_kld 4096"
-  "cycle 320x240" "cycle 640x480" "cycle_yuyv 640x480"
+  "filter_boards_kld 1024" "filter_boards_kld 4096" "filter_boards_vis 1024"
+  "cycle 320x240" "cycle 640x480" "cycle_yuyv 640x480" "cycle_floor 320x240"
 )
 # Kernels whose count depends on the CPU's best segmentation path.
-on_best_path() { case $1 in seg_table|seg_yuyv_table|cycle|cycle_yuyv) return 0;; *) return 1;; esac; }
+on_best_path() { case $1 in seg_table|seg_yuyv_table|cycle|cycle_yuyv|cycle_floor) return 0;; *) return 1;; esac; }
 repeat=4
 best=$("$bin" path 0)
 declare -A count
@@ -52,6 +52,8 @@ echo "  segmentation, scalar YUYV table / OpenCV (YUYV)    $(ratio 'seg_yuyv_tab
 echo "  segmentation, HSV arithmetic / OpenCV (RGB)        $(ratio 'seg_rgb 640x480' 'seg_rgb_opencv 640x480')"
 echo "  filter step, per-board update / harmonic-fix update (1024 particles) $(ratio 'filter_boards 1024' 'filter 1024')"
 echo "  filter step, KLD-sampling in steady tracking / fixed count (1024 particles) $(ratio 'filter_boards_kld 1024' 'filter_boards 1024')"
+echo "  filter step, floor map with visibility / without (1024 particles) $(ratio 'filter_boards_vis 1024' 'filter_boards 1024')"
+echo "  whole cycle, floor map (floor search) / route map (320x240) $(ratio 'cycle_floor 320x240' 'cycle 320x240')"
 echo "  whole cycle / OpenCV segmentation alone (RGB)      $(ratio 'cycle 640x480' 'seg_rgb_opencv 640x480')"
 echo "  whole cycle / OpenCV segmentation alone (YUYV)     $(ratio 'cycle_yuyv 640x480' 'seg_yuyv_opencv 640x480')"
 

@@ -58,7 +58,7 @@ count() {  # count KERNEL ARG: instructions (and misses) per run into ir/d1/ll[K
   ll[$1_$2]=$(( ${#t[@]} > 1 ? t[7] / repeat : 0 ))
 }
 
-for k in "harmonic 204" "filter 1024" "filter_boards 1024" "seg_table 320x240" "seg_table 640x480" \
+for k in "harmonic 204" "filter 1024" "filter_boards 1024" "filter_boards_vis 1024" "seg_table 320x240" "seg_table 640x480" \
   "seg_yuyv_table 640x480" "seg_table_noise 320x240" "seg_table_noise 640x480" \
   "cycle 320x240" "cycle 640x480" "cycle_yuyv 640x480"; do
   count $k
@@ -66,7 +66,7 @@ done
 
 echo "per run ($([ "$mode" = --aarch64 ] && echo "aarch64 build, callgrind under qemu-aarch64, A53-like caches" || echo "this build, callgrind")), segmentation path $("${run_bin[@]}" "$bin" path 0)"
 printf '%-26s %12s %12s %12s\n' kernel instructions "L1D misses" "L2 misses"
-for k in harmonic_204 filter_1024 filter_boards_1024 seg_table_320x240 seg_table_640x480 seg_yuyv_table_640x480 \
+for k in harmonic_204 filter_1024 filter_boards_1024 filter_boards_vis_1024 seg_table_320x240 seg_table_640x480 seg_yuyv_table_640x480 \
   seg_table_noise_320x240 seg_table_noise_640x480 cycle_320x240 cycle_640x480 cycle_yuyv_640x480; do
   printf '%-26s %12d %12d %12d\n' "$k" "${ir[$k]}" "${d1[$k]}" "${ll[$k]}"
 done

@@ -362,6 +362,7 @@ lost_frames = 120
 reseed = "uniform"
 position_sigma_m = 0.1
 yaw_sigma_deg = 30
+floor_search = true
 )");
   const hf::FirmwareConfig c = hf::load_config(path);
   EXPECT_EQ(c.observation.model, hf::ObservationModel::kFix);
@@ -393,11 +394,13 @@ yaw_sigma_deg = 30
   EXPECT_EQ(k.reseed, hf::ReseedStrategy::kUniform);
   EXPECT_DOUBLE_EQ(k.position_sigma_m, 0.1);
   EXPECT_DOUBLE_EQ(k.yaw_sigma_deg, 30.0);
+  EXPECT_TRUE(k.floor_search);
 
   // Defaults: the robust per-board model, kidnap test on, re-seed around the fix.
   const hf::FirmwareConfig d = hf::default_config();
   EXPECT_EQ(d.observation.model, hf::ObservationModel::kBoards);
   EXPECT_EQ(d.observation.route_terms, hf::RouteTerms::kAuto);
+  EXPECT_FALSE(d.kidnap.floor_search);
   EXPECT_EQ(hf::load_config(dir.write("on.toml", "[observation]\nroute_terms = \"on\"\n"))
                 .observation.route_terms,
             hf::RouteTerms::kOn);
@@ -424,6 +427,7 @@ TEST(Config, ObservationAndKidnapValuesAreChecked) {
       {"[kidnap]\nwindow_frames = 2\nevidence_frames = 3\n", "evidence_frames"},
       {"[kidnap]\nchange_threshold = 1.5\n", "kidnap.change_threshold"},
       {"[kidnap]\nlost_frames = 0\n", "kidnap.lost_frames"},
+      {"[kidnap]\nfloor_search = \"on\"\n", "kidnap.floor_search must be true or false"},
       {"[filter]\nkld = \"yes\"\n", "filter.kld must be true or false"},
       {"[filter]\nkld_min_particles = 8\n", "filter.kld_min_particles"},
       {"[filter]\nkld_epsilon = 0\n", "filter.kld_epsilon"},

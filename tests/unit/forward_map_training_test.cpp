@@ -194,7 +194,8 @@ TEST(ForwardMapTraining, BearingsOverTheCameraPlaceHoldAtEveryHeading) {
           << x << " " << yaw;
       EXPECT_NEAR(b, truth(x + d * c, 0.5 + d * sn), 0.3 * deg) << x << " " << yaw / deg;
       ASSERT_TRUE(ha::expected_bearing(*axle, ha::bearing_point(*axle, x, 0.5, c, sn), 0, b));
-      axle_worst = std::max(axle_worst, std::fabs(b - truth(x + d * c, 0.5 + d * sn)));
+      axle_worst =
+          std::max(axle_worst, std::fabs(static_cast<double>(b) - truth(x + d * c, 0.5 + d * sn)));
     }
   }
   // Over the axle's place a cell holds one direction's bearing (or a mix): 30 cm along the lane

@@ -94,6 +94,11 @@ struct KidnapConfig {
   /// Spread of the heading around the training run's heading at the fix (uniform when the map
   /// has no heading).
   double yaw_sigma_deg = 15.0;
+  /// On a floor map with bearings (route terms off): the evidence and the re-seed come from a
+  /// search over the whole floor (algorithms/floor_search.hpp) instead of the harmonic fix.
+  /// Experimental, off: on random floors its one-frame pose was often 0.2-1.5 m off and it
+  /// re-seeded right estimates (docs/filter.md, "The floor search").
+  bool floor_search = false;
 };
 
 struct LinkConfig {

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "harmoloc/algorithms/fix_board_check.hpp"
+#include "harmoloc/algorithms/floor_search.hpp"
 #include "harmoloc/algorithms/harmonic_localizer.hpp"
 #include "harmoloc/algorithms/map_codec.hpp"
 #include "harmoloc/algorithms/particle_filter.hpp"
@@ -268,6 +269,14 @@ class LocalizationCycle {
   bool update_with_boards(
       const algorithms::AreaVector& areas,
       const std::array<float, algorithms::HarmonicModel::kMaxFeatures>& features);
+  // On a floor: the search's slice of this cycle and the pose it follows (floor_fix_), then the
+  // kidnap test with that pose as its evidence.
+  void follow_floor(const algorithms::BoardFeatures& observed, std::uint32_t leave_out);
+  // The kidnap test's step on @p in (its counters; on "lost" the re-seed over the map and the
+  // STATUSTEXT, on a kidnap the STATUSTEXT: the caller re-seeds).
+  algorithms::KidnapVerdict step_kidnap_test(const algorithms::KidnapInput& in);
+  void floor_kidnap_test(const algorithms::BoardFeatures& observed,
+                         const algorithms::Pose2& estimate, double match, std::uint32_t leave_out);
   // Re-seeds: around a global fix (heading from the map where it knows one), around both the
   // boards' place and the fix's after a kidnap, or over the map; after_reseed() forgets what
   // was learnt against the old cloud.
@@ -314,6 +323,19 @@ class LocalizationCycle {
   /// Spread of the particles around a fix at start-up and at a kidnap's re-seed (metres).
   double init_sigma_m_ = 0.05;
   double reseed_sigma_m_ = 0.04;
+  /// On a floor map with bearings (route terms off, kidnap.floor_search): the search over the
+  /// whole floor that gives the kidnap test its evidence in place of the harmonic fix, whose
+  /// error on a floor is tens of centimetres. It scans a slice of the grid each cycle; the best
+  /// pose of its last pass (or the one followed since, if that fits better) is refined on each
+  /// frame.
+  static constexpr std::size_t kFloorPassPlaces = 3072;
+  static constexpr std::size_t kFloorPlacesPerCycle = 256;
+  bool floor_search_on_ = false;
+  std::uint32_t floor_stride_ = 1;  ///< cells between the places a pass tries, along each axis
+  double floor_refine_m_ = 0.02;    ///< the refinement's reach: a stride
+  double floor_margin_nats_ = 0.0;  ///< ln of the places a pass tries (the luckiest's margin)
+  algorithms::FloorSearch floor_search_;
+  algorithms::FloorPose floor_fix_{};
   algorithms::KidnapVerdict kidnap_verdict_ = algorithms::KidnapVerdict::kNone;
   algorithms::KidnapInput kidnap_input_{};
   const char* pending_text_ = nullptr;  ///< a STATUSTEXT this cycle's publish sends

@@ -1,0 +1,149 @@
+// The search over a whole floor map (algorithms/floor_search.hpp): the heading from the boards'
+// bearings at each place, the pose from the boards' fit, a slice of the grid a cycle.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <memory>
+
+#include "harmoloc/algorithms/floor_search.hpp"
+#include "harmoloc/algorithms/geometry.hpp"
+
+namespace ha = harmoloc::algorithms;
+
+namespace {
+
+constexpr double kCameraForward = 0.1;
+constexpr double kHalfView = 1.0;  // the image angle within which a board gives a bearing
+constexpr std::array<double, 8> kBoards = {-0.5, 1.0, 1.5, 2.5, 3.5, 1.0, 1.5, -0.5};  // x, y
+
+double feature(std::size_t b, double x, double y) {
+  const double dx = kBoards[2 * b] - x, dy = kBoards[2 * b + 1] - y;
+  return 4.0 / (dx * dx + dy * dy);
+}
+
+double world_bearing(std::size_t b, double x, double y) {
+  return std::atan2(kBoards[2 * b + 1] - y, kBoards[2 * b] - x);
+}
+
+// A 3 x 2 m floor of 2 cm cells from (0, 0), four boards around it: each board's feature falls
+// with the square of the distance from the axle's place, its bearing is seen from the camera's
+// place 10 cm ahead (as the trainer stores them).
+std::unique_ptr<ha::ForwardMap> make_floor(bool bearings = true) {
+  auto f = std::make_unique<ha::ForwardMap>();
+  EXPECT_TRUE(ha::lay_out_grid(*f, 151, 101));
+  f->cell_m = 0.02F;
+  f->board_count = 4;
+  f->has_bearings = bearings;
+  f->bearing_a1_rad = 2.0F;
+  f->bearing_camera_forward_m = static_cast<float>(kCameraForward);
+  for (std::size_t b = 0; b < 4; ++b) {
+    f->sigma[b] = 0.02F;
+    f->bearing_sigma_rad[b] = 0.01F;
+  }
+  for (std::uint32_t r = 0; r < f->rows; ++r) {
+    for (std::uint32_t c = 0; c < f->columns; ++c) {
+      const std::size_t at = f->index(c, r);
+      const double x = 0.02 * c, y = 0.02 * r;
+      for (std::size_t b = 0; b < 4; ++b) {
+        f->expected[at * ha::kMaxBoards + b] = static_cast<float>(feature(b, x, y));
+        f->bearing_rad[at * ha::kMaxBoards + b] = static_cast<float>(world_bearing(b, x, y));
+      }
+    }
+  }
+  return f;
+}
+
+// What a robot at (x, y) facing yaw sees: every board's feature, and the image angle of those
+// within kHalfView of the axis.
+ha::BoardFeatures seen(double x, double y, double yaw) {
+  ha::BoardFeatures o;
+  o.count = 4;
+  const double cx = x + kCameraForward * std::cos(yaw), cy = y + kCameraForward * std::sin(yaw);
+  for (std::size_t b = 0; b < 4; ++b) {
+    o.value[b] = static_cast<float>(feature(b, x, y));
+    const double a = ha::wrap_angle_rad(yaw - world_bearing(b, cx, cy));
+    if (std::fabs(a) >= kHalfView) continue;
+    o.angle_rad[b] = static_cast<float>(a);
+    o.angle_mask |= 1U << b;
+  }
+  return o;
+}
+
+}  // namespace
+
+TEST(FloorSearch, FindsThePoseAndHeadingOverTheWholeFloorFromOneFrame) {
+  const auto map = make_floor();
+  const ha::BoardModelParams params;
+  const double x = 2.13, y = 0.71, yaw = 1.0;
+  const ha::BoardFeatures o = seen(x, y, yaw);
+  ASSERT_GE(__builtin_popcount(o.angle_mask), 2);
+  ha::FloorSearch search;
+  // A stride of 4 cells: 38 x 26 places, 256 a step: the fourth step completes the pass.
+  int steps = 0;
+  while (!search.step(*map, o, params, 0U, 256, 4)) ASSERT_LE(++steps, 3);
+  EXPECT_EQ(steps, 3);
+  const ha::FloorPose& pass = search.last_pass();
+  ASSERT_TRUE(pass.valid);
+  EXPECT_LT(std::hypot(pass.x_m - x, pass.y_m - y), 0.06);
+  EXPECT_LT(std::fabs(ha::wrap_angle_rad(pass.yaw_rad - yaw)), 0.02);
+  // Refined on the frame (a stride's reach), twice: within a centimetre and a half-degree.
+  ha::FloorPose fine = ha::FloorSearch::refine(*map, o, pass, 0.08, params, 0U);
+  fine = ha::FloorSearch::refine(*map, o, fine, 0.02, params, 0U);
+  ASSERT_TRUE(fine.valid);
+  EXPECT_LT(std::hypot(fine.x_m - x, fine.y_m - y), 0.01);
+  EXPECT_LT(std::fabs(ha::wrap_angle_rad(fine.yaw_rad - yaw)), 0.01);
+  EXPECT_GE(fine.nats, pass.nats);
+  // The fit prefers the truth to a place half a metre off, and to the truth turned (its two
+  // bearings then each at the robust floor, ln 0.01).
+  const double at_truth = ha::floor_fit(*map, o, x, y, yaw, params, 0U);
+  EXPECT_GT(at_truth, ha::floor_fit(*map, o, x - 0.5, y + 0.3, yaw, params, 0U) + 10.0);
+  EXPECT_GT(at_truth, ha::floor_fit(*map, o, x, y, yaw + 0.3, params, 0U) + 8.0);
+}
+
+TEST(FloorSearch, AMovedBoardLeftOutDoesNotMislead) {
+  const auto map = make_floor();
+  const ha::BoardModelParams params;
+  const double x = 1.2, y = 1.1, yaw = 0.8;
+  ha::BoardFeatures o = seen(x, y, yaw);
+  ASSERT_EQ(o.angle_mask, 0b0110U);
+  // Board 2 moved: it shows twice its area, and its bearing turned 0.3 rad.
+  o.value[2] *= 2.0F;
+  o.angle_rad[2] += 0.3F;
+  ha::FloorSearch search;
+  while (!search.step(*map, o, params, 1U << 2, 4096, 2)) {
+  }
+  const ha::FloorPose fine =
+      ha::FloorSearch::refine(*map, o, search.last_pass(), 0.04, params, 1U << 2);
+  ASSERT_TRUE(fine.valid);
+  EXPECT_LT(std::hypot(fine.x_m - x, fine.y_m - y), 0.03);
+  EXPECT_LT(std::fabs(ha::wrap_angle_rad(fine.yaw_rad - yaw)), 0.02);
+}
+
+TEST(FloorSearch, StepsAreBoundedAndNothingWithoutBearings) {
+  const auto map = make_floor();
+  const ha::BoardModelParams params;
+  ha::FloorSearch search;
+  const ha::BoardFeatures o = seen(1.0, 1.0, 0.0);
+  // 151 x 101 places at stride 1, ten a step: 1525 steps without completing, the 1526th does.
+  for (int i = 0; i < 1525; ++i) ASSERT_FALSE(search.step(*map, o, params, 0U, 10, 1));
+  EXPECT_FALSE(search.last_pass().valid);
+  EXPECT_TRUE(search.step(*map, o, params, 0U, 10, 1));
+  EXPECT_TRUE(search.last_pass().valid);
+  search.reset();
+  EXPECT_FALSE(search.last_pass().valid);
+
+  // No board gives a bearing: no heading, no pose.
+  ha::BoardFeatures blind = o;
+  blind.angle_mask = 0;
+  EXPECT_FALSE(ha::floor_pose_seen_from(*map, blind, 1.0, 1.0, params, 0U).valid);
+  // Every bearing's board left out: the same.
+  EXPECT_FALSE(ha::floor_pose_seen_from(*map, o, 1.0, 1.0, params, 0xFFU).valid);
+  // Off the grid: none.
+  EXPECT_FALSE(ha::floor_pose_seen_from(*map, o, -1.0, 1.0, params, 0U).valid);
+  // A map without bearings: the search cannot run.
+  const auto plain = make_floor(false);
+  EXPECT_FALSE(ha::floor_search_possible(*plain));
+  EXPECT_FALSE(search.step(*plain, o, params, 0U, 1000000, 1));
+  EXPECT_FALSE(ha::FloorSearch::refine(*plain, o, ha::FloorPose{}, 0.1, params, 0U).valid);
+}
