@@ -45,12 +45,14 @@ void read_bearings(const ForwardMap& map, const BoardFeatures& observed, const G
   }
 }
 
-// floor_fit with the bearings at the pose's camera place already read.
+// floor_fit with the heading as the map reads it and the bearings at the pose's camera place
+// already read.
 double fit(const ForwardMap& map, const BoardFeatures& observed, double x_m, double y_m,
-           double yaw_rad, const Bearings& phi, const BoardModelParams& params,
+           const SeenHeading& heading, const Bearings& phi, const BoardModelParams& params,
            std::uint32_t leave_out) {
+  const auto yaw_rad = static_cast<double>(heading.yaw_rad);
   std::array<float, kMaxBoards> expected{};
-  expected_at_pose(map, locate(map, x_m, y_m), x_m, y_m, seen_heading(yaw_rad), expected.data());
+  expected_at_pose(map, locate(map, x_m, y_m), x_m, y_m, heading, expected.data());
   const double c = params.outlier_floor;
   double product = 1.0;
   for (std::size_t b = 0; b < boards_of(map, observed); ++b) {
@@ -70,7 +72,8 @@ double fit(const ForwardMap& map, const BoardFeatures& observed, double x_m, dou
 // The pose whose camera stands at (@p cx_m, @p cy_m), where the observed boards' world bearings
 // are @p phi: the heading they give (each board's world bearing plus its image angle, weighed by
 // its trained spread; averaged as offsets from the first board's, which needs no trigonometry),
-// then its fit. Invalid when no board has a bearing there.
+// then its fit. Invalid when no board has a bearing there. The heading's cosine and sine serve
+// both the axle's place and the fit.
 FloorPose pose_from(const ForwardMap& map, const BoardFeatures& observed, double cx_m, double cy_m,
                     const Bearings& phi, const BoardModelParams& params, std::uint32_t leave_out) {
   FloorPose pose;
@@ -84,12 +87,13 @@ FloorPose pose_from(const ForwardMap& map, const BoardFeatures& observed, double
     weight += 1.0 / (s * s);
   }
   if (!(weight > 0.0)) return pose;
-  pose.yaw_rad = wrap_angle_rad(first + offset / weight);
+  const SeenHeading heading = seen_heading(first + offset / weight);
+  pose.yaw_rad = static_cast<double>(heading.yaw_rad);
   // (cx, cy) is the camera's place where the map's bearings are seen from it.
   const auto d = static_cast<double>(map.bearing_camera_forward_m);
-  pose.x_m = cx_m - d * std::cos(pose.yaw_rad);
-  pose.y_m = cy_m - d * std::sin(pose.yaw_rad);
-  pose.nats = fit(map, observed, pose.x_m, pose.y_m, pose.yaw_rad, phi, params, leave_out);
+  pose.x_m = cx_m - d * static_cast<double>(heading.cos_yaw);
+  pose.y_m = cy_m - d * static_cast<double>(heading.sin_yaw);
+  pose.nats = fit(map, observed, pose.x_m, pose.y_m, heading, phi, params, leave_out);
   pose.valid = true;
   return pose;
 }
@@ -108,7 +112,7 @@ double floor_fit(const ForwardMap& map, const BoardFeatures& observed, double x_
   if (map.has_bearings && observed.angle_mask != 0U)
     read_bearings(map, observed, bearing_point(map, x_m, y_m, std::cos(yaw_rad), std::sin(yaw_rad)),
                   leave_out, phi);
-  return fit(map, observed, x_m, y_m, yaw_rad, phi, params, leave_out);
+  return fit(map, observed, x_m, y_m, seen_heading(yaw_rad), phi, params, leave_out);
 }
 
 FloorPose floor_pose_seen_from(const ForwardMap& map, const BoardFeatures& observed, double cx_m,
@@ -140,20 +144,24 @@ bool FloorSearch::step(const ForwardMap& map, const BoardFeatures& observed,
   if (cursor_ >= total) cursor_ = 0;  // another map or stride since the last call
   const auto x0 = static_cast<double>(map.origin_x_m), y0 = static_cast<double>(map.origin_y_m);
   const auto cell = static_cast<double>(map.cell_m);
+  // The boards whose bearings this frame's search weighs: the same at every place.
+  std::uint32_t bearing_boards = 0;
+  for (std::size_t b = 0; b < boards_of(map, observed); ++b)
+    if (bearing_counts(map, observed, b, leave_out)) bearing_boards |= 1U << b;
   for (std::size_t n = 0; n < places; ++n) {
     const auto c = static_cast<std::uint32_t>(cursor_ % columns) * stride;
     const auto r = static_cast<std::uint32_t>(cursor_ / columns) * stride;
     const std::size_t at = map.index(c, r);
-    if (at != ForwardMap::kVoidCell && observed.angle_mask != 0U) {
+    if (at != ForwardMap::kVoidCell && bearing_boards != 0U) {
       // On a cell the bearings are the cell's own (no corners to weigh).
       Bearings phi;
       phi.fill(ForwardMap::kNoBearing);
-      for (std::size_t b = 0; b < boards_of(map, observed); ++b)
-        if (bearing_counts(map, observed, b, leave_out))
-          phi[b] = map.bearing_rad[at * kMaxBoards + b];
-      const FloorPose pose =
-          pose_from(map, observed, x0 + cell * c, y0 + cell * r, phi, params, leave_out);
-      if (pose.valid && (!best_.valid || pose.nats > best_.nats)) best_ = pose;
+      for (std::uint32_t mask = bearing_boards; mask != 0U; mask &= mask - 1U) {
+        const auto b = static_cast<std::size_t>(__builtin_ctz(mask));
+        phi[b] = map.bearing_rad[at * kMaxBoards + b];
+      }
+      best_ = better_of(
+          best_, pose_from(map, observed, x0 + cell * c, y0 + cell * r, phi, params, leave_out));
     }
     if (++cursor_ == total) {
       last_ = best_;
@@ -176,9 +184,8 @@ FloorPose FloorSearch::refine(const ForwardMap& map, const BoardFeatures& observ
   const double step = radius_m / 2.0;
   for (int j = -2; j <= 2; ++j) {
     for (int i = -2; i <= 2; ++i) {
-      const FloorPose pose =
-          floor_pose_seen_from(map, observed, cx + i * step, cy + j * step, params, leave_out);
-      if (pose.valid && (!best.valid || pose.nats > best.nats)) best = pose;
+      best = better_of(best, floor_pose_seen_from(map, observed, cx + i * step, cy + j * step,
+                                                  params, leave_out));
     }
   }
   return best;

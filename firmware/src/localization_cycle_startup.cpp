@@ -103,7 +103,6 @@ LocalizationCycle::LocalizationCycle(const FirmwareConfig& config, const algorit
       budget_ns_(static_cast<std::uint64_t>(std::llround(config.cycle.budget_ms * 1e6))) {
   filter_.configure(config.filter.particles, config.filter.seed, config.filter.noise);
   filter_.set_kld_sampling(config.filter.kld);
-  kidnap_params_ = derived_kidnap_params(config.kidnap.detector, map.calibration);
   geometry_ = effective_geometry(config, map.calibration);
   board_params_ = config.observation.boards;
   // A floor map's places between its passes, at the headings it drove, are the map's too.
@@ -125,12 +124,10 @@ LocalizationCycle::LocalizationCycle(const FirmwareConfig& config, const algorit
     floor_refine_m_ = static_cast<double>(floor_stride_) * static_cast<double>(f.cell_m);
     floor_margin_nats_ =
         std::log(static_cast<double>(std::max<std::size_t>(places(floor_stride_), 1)));
-    // The search's pose is good to a few centimetres, not the harmonic fix's tens: the distances
-    // derived from the fix's error would hide kidnaps of less than a metre. "auto" takes the
-    // values of maps without a calibration.
-    if (config.kidnap.detector.fix_distance_m < 0.0) kidnap_params_.fix_distance_m = 0.25;
-    if (config.kidnap.detector.consistency_m < 0.0) kidnap_params_.consistency_m = 0.15;
   }
+  kidnap_params_ = derived_kidnap_params(
+      config.kidnap.detector, map.calibration,
+      floor_search_on_ ? KidnapEvidence::kFloorSearch : KidnapEvidence::kHarmonicFix);
   // The fix's own error per axis on the training run (0 without a calibration).
   const double fix_rmse = map.calibration.present
                               ? std::hypot(static_cast<double>(map.calibration.fix_rmse_x_m),
@@ -196,11 +193,14 @@ LocalizationCycle::LocalizationCycle(const FirmwareConfig& config, const algorit
 }
 
 algorithms::KidnapParams derived_kidnap_params(const algorithms::KidnapParams& configured,
-                                               const algorithms::MapCalibration& calibration) {
+                                               const algorithms::MapCalibration& calibration,
+                                               KidnapEvidence evidence) {
   algorithms::KidnapParams p = configured;
   // The harmonic fix's own error on frames of other passes, measured by the trainer. Without a
-  // calibration (maps before version 4) the values of those versions' defaults.
-  const double fix_rmse_m = calibration.present
+  // calibration (maps before version 4) the values of those versions' defaults. The floor
+  // search's pose is good to a few centimetres, not the harmonic fix's tens: distances derived
+  // from the fix's error would hide kidnaps of less than a metre, so it takes those values too.
+  const double fix_rmse_m = calibration.present && evidence == KidnapEvidence::kHarmonicFix
                                 ? std::hypot(static_cast<double>(calibration.fix_rmse_x_m),
                                              static_cast<double>(calibration.fix_rmse_y_m))
                                 : -1.0;

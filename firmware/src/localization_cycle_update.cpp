@@ -182,9 +182,9 @@ void LocalizationCycle::follow_floor(const algorithms::BoardFeatures& observed,
       FloorSearch::refine(map_.forward, observed, floor_fix_, floor_refine_m_, params, leave_out);
   if (floor_search_.step(map_.forward, observed, params, leave_out, kFloorPlacesPerCycle,
                          floor_stride_)) {
-    const algorithms::FloorPose pass = FloorSearch::refine(
-        map_.forward, observed, floor_search_.last_pass(), floor_refine_m_, params, leave_out);
-    if (pass.valid && (!followed.valid || pass.nats > followed.nats)) followed = pass;
+    followed = algorithms::better_of(
+        followed, FloorSearch::refine(map_.forward, observed, floor_search_.last_pass(),
+                                      floor_refine_m_, params, leave_out));
   }
   floor_fix_ = followed;
 }
@@ -210,9 +210,9 @@ void LocalizationCycle::floor_kidnap_test(const algorithms::BoardFeatures& obser
       algorithms::FloorPose near{estimate.x_m, estimate.y_m, estimate.yaw_rad, 0.0, true};
       near.nats = algorithms::floor_fit(map_.forward, observed, estimate.x_m, estimate.y_m,
                                         estimate.yaw_rad, board_params_, leave_out);
-      const algorithms::FloorPose refined = algorithms::FloorSearch::refine(
-          map_.forward, observed, near, floor_refine_m_, board_params_, leave_out);
-      if (refined.valid && refined.nats > near.nats) near = refined;
+      near = algorithms::better_of(
+          near, algorithms::FloorSearch::refine(map_.forward, observed, near, floor_refine_m_,
+                                                board_params_, leave_out));
       // The best of a pass is the luckiest of its places: it must beat the estimate by the log
       // of their number more (the chance that some place fits the frame that well by accident).
       in.preference = floor_fix_.nats - near.nats - floor_margin_nats_;

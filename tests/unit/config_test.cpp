@@ -465,6 +465,29 @@ TEST(Config, AutoKidnapDistanceFollowsTheMapCalibrationWithin25cmAnd1m) {
   EXPECT_DOUBLE_EQ(hf::derived_kidnap_params(fixed, c).fix_distance_m, 0.12);
 }
 
+// With the floor search as the kidnap test's evidence, "auto" ignores the harmonic fix's error:
+// the search's pose is good to centimetres, so 25 cm far and 15 cm consistent, as without a
+// calibration; numbers in the config are still taken as they are.
+TEST(Config, AutoKidnapDistancesForTheFloorSearchIgnoreTheFixCalibration) {
+  const harmoloc::algorithms::KidnapParams automatic = hf::default_config().kidnap.detector;
+  harmoloc::algorithms::MapCalibration c;
+  c.present = true;
+  c.fix_rmse_x_m = 0.12F;
+  c.fix_rmse_y_m = 0.09F;
+  const auto fix = hf::derived_kidnap_params(automatic, c, hf::KidnapEvidence::kHarmonicFix);
+  EXPECT_NEAR(fix.fix_distance_m, 0.9, 1e-6);  // 6 x 15 cm
+  EXPECT_NEAR(fix.consistency_m, 0.5, 1e-6);   // 4 x 15 cm + 3 cm, at most 50 cm
+  const auto search = hf::derived_kidnap_params(automatic, c, hf::KidnapEvidence::kFloorSearch);
+  EXPECT_DOUBLE_EQ(search.fix_distance_m, 0.25);
+  EXPECT_DOUBLE_EQ(search.consistency_m, 0.15);
+  harmoloc::algorithms::KidnapParams fixed = automatic;
+  fixed.fix_distance_m = 0.4;
+  fixed.consistency_m = 0.2;
+  const auto kept = hf::derived_kidnap_params(fixed, c, hf::KidnapEvidence::kFloorSearch);
+  EXPECT_DOUBLE_EQ(kept.fix_distance_m, 0.4);
+  EXPECT_DOUBLE_EQ(kept.consistency_m, 0.2);
+}
+
 // The map's odometry calibration scales the configured wheels and track, unless the config
 // turns it off; a map without one leaves the configured geometry as it is.
 TEST(Config, OdometryRunsOnTheMapsCalibrationUnlessTurnedOff) {

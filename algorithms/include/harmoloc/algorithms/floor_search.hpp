@@ -28,6 +28,12 @@ struct FloorPose {
   bool valid = false;  ///< false: no place tried, or no board gave a bearing
 };
 
+/// The better of two poses: the valid one, or of two valid ones the one with more nats (@p a on a
+/// tie).
+inline const FloorPose& better_of(const FloorPose& a, const FloorPose& b) {
+  return b.valid && (!a.valid || b.nats > a.nats) ? b : a;
+}
+
 /// The fit of the boards @p observed at pose (@p x_m, @p y_m, @p yaw_rad) on @p map (FloorPose's
 /// nats; boards whose bit is set in @p leave_out do not count). 0 for a map that is not present.
 double floor_fit(const ForwardMap& map, const BoardFeatures& observed, double x_m, double y_m,

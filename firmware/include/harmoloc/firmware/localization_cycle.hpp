@@ -103,11 +103,18 @@ struct CycleCounters {
 
 enum class CycleResult : std::uint8_t { kRan, kEnded };
 
-/// The kidnap test's parameters with those left "auto" in the config (negative) derived from the
-/// map's calibration: how far a fix must be, and how close successive fixes, measured against
-/// the harmonic fix's own error on the training run.
-algorithms::KidnapParams derived_kidnap_params(const algorithms::KidnapParams& configured,
-                                               const algorithms::MapCalibration& calibration);
+/// What the kidnap test takes as its fix: the harmonic localizer's, or the floor search's pose
+/// (kidnap.floor_search on a floor map with bearings).
+enum class KidnapEvidence : std::uint8_t { kHarmonicFix, kFloorSearch };
+
+/// The kidnap test's parameters with those left "auto" in the config (negative) derived from
+/// what the evidence is: for the harmonic fix, from the map's calibration (how far a fix must
+/// be, and how close successive fixes, measured against the fix's own error on the training
+/// run); for the floor search, whose pose is good to a few centimetres, the values of maps
+/// without a calibration.
+algorithms::KidnapParams derived_kidnap_params(
+    const algorithms::KidnapParams& configured, const algorithms::MapCalibration& calibration,
+    KidnapEvidence evidence = KidnapEvidence::kHarmonicFix);
 
 /// The geometry the odometry runs on: the configured one with the map's odometry calibration
 /// applied (unless the config turns it off, or the map has none).
