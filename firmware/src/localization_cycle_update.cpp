@@ -78,8 +78,8 @@ bool LocalizationCycle::update_with_boards(
   const algorithms::BoardModelParams& params = board_params_;
   double yaw_variance_rad2 = 0.0;
   const algorithms::Pose2 estimate = filter_.mean_pose(&yaw_variance_rad2);
-  const algorithms::BoardFeatures observed =
-      algorithms::board_features(map_.forward, map_.model.area_scale, areas);
+  observed_ = algorithms::board_features(map_.forward, map_.model.area_scale, areas);
+  const algorithms::BoardFeatures& observed = observed_;
   assessment_ = reliability_.assess(map_.forward, observed, estimate, params, board_update_,
                                     yaw_variance_rad2);
   if (!assessment_.consensus) ++counters_.no_consensus;

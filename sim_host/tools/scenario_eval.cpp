@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <stdexcept>
 
+#include "harmoloc/algorithms/floor_search.hpp"
 #include "harmoloc/algorithms/forward_map.hpp"
 #include "harmoloc/algorithms/geometry.hpp"
 #include "harmoloc/algorithms/segmentation.hpp"
@@ -146,6 +147,14 @@ RunRecord replay_scenario(const Scenario& scenario, std::uint64_t seed,
     f.evidence =
         algorithms::Pose2{cycle->kidnap_input().fix_x_m, cycle->kidnap_input().fix_y_m, 0.0};
     f.evidence_distance_m = cycle->kidnap_input().fix_distance_m;
+    if (cycle->uses_boards()) {
+      const algorithms::BoardFeatures& seen = cycle->board_observation();
+      const algorithms::BoardModelParams& params = config.observation.boards;
+      f.truth_nats = algorithms::floor_fit(map.forward, seen, f.truth.x_m, f.truth.y_m,
+                                           f.truth.yaw_rad, params, 0U);
+      f.estimate_nats = algorithms::floor_fit(map.forward, seen, out.pose.x_m, out.pose.y_m,
+                                              out.pose.yaw_rad, params, 0U);
+    }
     f.match = cycle->kidnap_input().match;
     f.sigma_m = std::sqrt(std::max(0.0, 0.5 * (out.covariance(0, 0) + out.covariance(1, 1))));
     f.sigma_yaw_rad = std::sqrt(std::max(0.0, out.covariance(2, 2)));
@@ -174,7 +183,7 @@ void write_trace(const RunRecord& run, const std::string& path) {
                "t_s,truth_x_m,truth_y_m,truth_yaw_rad,x_m,y_m,yaw_rad,error_m,valid,health,"
                "fix_present,fix_known,fix_x_m,fix_y_m,verdict,distrusted,consensus,robust_fix_x_m,"
                "robust_fix_y_m,preference,sigma_m,sigma_yaw_rad,match,covered,evidence_known,"
-               "evidence_x_m,evidence_y_m,evidence_distance_m");
+               "evidence_x_m,evidence_y_m,evidence_distance_m,truth_nats,estimate_nats");
   const std::size_t boards = run.frames.empty() ? 0 : run.frames.front().boards;
   for (std::size_t b = 0; b < boards; ++b) std::fprintf(f, ",chi2_%zu", b + 1);
   for (std::size_t b = 0; b < boards; ++b) std::fprintf(f, ",static_%zu", b + 1);
@@ -183,14 +192,15 @@ void write_trace(const RunRecord& run, const std::string& path) {
     std::fprintf(f,
                  "%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%d,%s,%d,%d,%.4f,%.4f,%d,%u,%d,%.4f,%.4f,"
                  "%.3f,%.4f,"
-                 "%.4f,%.4g,%d,%d,%.4f,%.4f,%.4f",
+                 "%.4f,%.4g,%d,%d,%.4f,%.4f,%.4f,%.3f,%.3f",
                  r.t_s, r.truth.x_m, r.truth.y_m, r.truth.yaw_rad, r.estimate.x_m, r.estimate.y_m,
                  r.estimate.yaw_rad, r.position_error_m(), r.valid ? 1 : 0,
                  firmware::health_name(r.health), r.fix_present ? 1 : 0, r.fix_known ? 1 : 0,
                  r.fix.x_m, r.fix.y_m, static_cast<int>(r.verdict),
                  static_cast<unsigned>(r.distrusted), r.consensus ? 1 : 0, r.robust_fix.x_m,
                  r.robust_fix.y_m, r.preference, r.sigma_m, r.sigma_yaw_rad, r.match, r.covered,
-                 r.evidence_known ? 1 : 0, r.evidence.x_m, r.evidence.y_m, r.evidence_distance_m);
+                 r.evidence_known ? 1 : 0, r.evidence.x_m, r.evidence.y_m, r.evidence_distance_m,
+                 r.truth_nats, r.estimate_nats);
     for (std::size_t b = 0; b < boards; ++b)
       std::fprintf(f, ",%.3g", static_cast<double>(r.chi2[b]));
     for (std::size_t b = 0; b < boards; ++b)

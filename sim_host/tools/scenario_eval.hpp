@@ -65,6 +65,12 @@ struct FrameRecord {
   bool evidence_known = false;
   algorithms::Pose2 evidence;
   double evidence_distance_m = 0.0;
+  /// How well the frame's boards fit the forward map at the true pose and at the estimate
+  /// (algorithms::floor_fit: nats, at most ln(1 + c) a term, in the map's trained noise; 0 without a forward
+  /// map). The estimate fitting better than the truth says the map is wrong there, an equal fit
+  /// that the boards cannot tell the two apart.
+  double truth_nats = 0.0;
+  double estimate_nats = 0.0;
   double sigma_m = 0.0;        ///< the published position spread (root of the mean variance)
   double sigma_yaw_rad = 0.0;  ///< the published heading spread
   double match = 0.0;          ///< the kidnap test's d_t (the particles' summed weights)

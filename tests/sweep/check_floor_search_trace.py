@@ -1,8 +1,10 @@
 #!/usr/bin/env python3
 """Checks the trace of a floor's kidnap roam run with the floor search on (kidnap.floor_search,
 docs/filter.md, "The floor search"): the search gave the kidnap test its evidence pose, found the
-robot within 10 cm of its new place after a kidnap, and a kidnap was confirmed from it. The
-figures themselves are the sweep's (docs/sweep.md); this only shows the path works end to end."""
+robot within 10 cm of its new place after a kidnap, and a kidnap was confirmed from it; and the
+boards' fit columns (truth_nats, estimate_nats) hold fits, the truth's the better just after a
+kidnap. The figures themselves are the sweep's (docs/sweep.md); this only shows the path works
+end to end."""
 import csv
 import math
 import sys
@@ -33,13 +35,26 @@ def main():
                 break
     if found == 0:
         problems.append("after no kidnap did the search's pose come within 10 cm of the robot")
+    # The boards' fit at the truth and at the estimate (nats, at most ln(1 + c) a term: 16 terms
+    # at c = 0.01 make 0.16): while the estimate is still at the old place just after a kidnap,
+    # the frame must fit the truth better.
+    fits = [(float(r["truth_nats"]), float(r["estimate_nats"])) for r in rows]
+    if any(not (t <= 0.16 and e <= 0.16) for t, e in fits):
+        problems.append("a fit above a perfect one (0.16 nats) or not a number")
+    away = [r for r in rows if float(r["error_m"]) > 0.5 and r["valid"] == "1" and any(
+        t <= float(r["t_s"]) <= t + 0.3 for t in kidnaps)]
+    truth_better = sum(1 for r in away if float(r["truth_nats"]) > float(r["estimate_nats"]))
+    if not away or 2 * truth_better <= len(away):
+        problems.append(f"the truth fitted better than an estimate 0.5 m off in {truth_better} "
+                        f"of {len(away)} frames just after a kidnap")
     confirmed = sum(1 for r in rows if r["verdict"] == "2")
     if confirmed == 0:
         problems.append("no kidnap confirmed")
     for p in problems:
         print("check_floor_search_trace: " + p)
     print(f"check_floor_search_trace: {len(kidnaps)} kidnaps, evidence in {len(evidence)} of "
-          f"{len(rows)} frames, the robot found within 10 cm after {found}, {confirmed} confirmed")
+          f"{len(rows)} frames, the robot found within 10 cm after {found}, {confirmed} confirmed; "
+          f"the truth fitted better in {truth_better} of {len(away)} frames 0.5 m off")
     return 1 if problems else 0
 
 

@@ -21,7 +21,8 @@ namespace harmoloc::algorithms {
 
 /// A pose the boards fit, and how well: the sum over the boards of log(exp(-r^2 / 2) + c), r the
 /// residual of each board's area and of each observed bearing in the map's trained widths (the
-/// robust term with every board trusted; c = BoardModelParams::outlier_floor). Nats, at most 0.
+/// robust term with every board trusted; c = BoardModelParams::outlier_floor). Nats: at most
+/// ln(1 + c) a term (0.16 for eight boards' areas and bearings at c = 0.01), a perfect fit.
 struct FloorPose {
   double x_m = 0.0, y_m = 0.0, yaw_rad = 0.0;
   double nats = 0.0;

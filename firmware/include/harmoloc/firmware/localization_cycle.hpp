@@ -168,6 +168,9 @@ class LocalizationCycle {
     return reliability_.static_probability(b);
   }
   const algorithms::BoardAssessment& board_assessment() const { return assessment_; }
+  /// The boards as the last frame weighed against the forward map showed them (features and
+  /// image angles; nothing seen before the first such frame).
+  const algorithms::BoardFeatures& board_observation() const { return observed_; }
   /// The global fix the kidnap test compares with (computed without distrusted boards).
   const algorithms::HarmonicFix& robust_fix() const { return robust_fix_; }
   /// The check of the fix's boards (which it holds suspect).
@@ -315,6 +318,7 @@ class LocalizationCycle {
   algorithms::BoardReliability reliability_;
   std::array<float, algorithms::kMaxBoards> board_maxima_{};  ///< per board, over the map
   algorithms::BoardUpdate board_update_{};
+  algorithms::BoardFeatures observed_{};
   algorithms::BoardAssessment assessment_{};
   algorithms::HarmonicFix robust_fix_{};
   algorithms::FixBoardCheck fix_check_;
