@@ -103,7 +103,7 @@ TrainedMap train_on_scenario(const Scenario& scenario, std::uint64_t seed, const
 
 RunRecord replay_scenario(const Scenario& scenario, std::uint64_t seed,
                           const algorithms::MapFile& map, const firmware::FirmwareConfig& base,
-                          const Progress& progress) {
+                          const Progress& progress, ReplayDetail detail) {
   ScenarioRun run(scenario, seed);
   firmware::FirmwareConfig config = base;
   config.geometry = scenario.robot;  // the simulated robot, as a dataset's metadata gives it
@@ -119,6 +119,7 @@ RunRecord replay_scenario(const Scenario& scenario, std::uint64_t seed,
   record.frames.reserve(run.frame_count());
   const double t0 = static_cast<double>(run.frame_timestamp_ns(0)) * 1e-9;
   std::size_t k = 0;
+  std::uint64_t frames_with_fix = 0;
   while (cycle->run_once() == firmware::CycleResult::kRan) {
     const firmware::PoseOutput& out = cycle->pose();
     FrameRecord f;
@@ -147,7 +148,13 @@ RunRecord replay_scenario(const Scenario& scenario, std::uint64_t seed,
     f.evidence =
         algorithms::Pose2{cycle->kidnap_input().fix_x_m, cycle->kidnap_input().fix_y_m, 0.0};
     f.evidence_distance_m = cycle->kidnap_input().fix_distance_m;
-    if (cycle->uses_boards()) {
+    // The cycle weighs the boards on the cycles that took a frame with a fix (used or not);
+    // on the others its observation is the last frame's, so no fit is written for them.
+    const std::uint64_t seen_frames =
+        cycle->counters().fixes_used + cycle->counters().unknown_place;
+    const bool weighed = seen_frames != frames_with_fix;
+    frames_with_fix = seen_frames;
+    if (detail == ReplayDetail::kBoardFits && cycle->uses_boards() && weighed) {
       const algorithms::BoardFeatures& seen = cycle->board_observation();
       const algorithms::BoardModelParams& params = config.observation.boards;
       f.truth_nats = algorithms::floor_fit(map.forward, seen, f.truth.x_m, f.truth.y_m,
@@ -169,12 +176,18 @@ RunRecord replay_scenario(const Scenario& scenario, std::uint64_t seed,
   }
   record.counters = cycle->counters();
   record.uses_boards = cycle->uses_boards();
+  if (detail == ReplayDetail::kBoardFits && record.uses_boards)
+    record.fit_bound_nats = 2.0 * static_cast<double>(map.thresholds.count) *
+                            std::log1p(config.observation.boards.outlier_floor);
   return record;
 }
 
 void write_trace(const RunRecord& run, const std::string& path) {
   std::FILE* f = std::fopen(path.c_str(), "w");
   if (f == nullptr) throw std::runtime_error(path + ": cannot write the trace");
+  if (run.fit_bound_nats > 0.0)
+    std::fprintf(f, "# fit bound %.4f nats (a perfect fit of every board's area and bearing)\n",
+                 run.fit_bound_nats);
   for (const KidnapEvent& k : run.kidnaps) {
     std::fprintf(f, "# kidnap at %.3f s: %.4f %.4f %.4f -> %.4f %.4f %.4f\n", k.t_s, k.from.x_m,
                  k.from.y_m, k.from.yaw_rad, k.to.x_m, k.to.y_m, k.to.yaw_rad);

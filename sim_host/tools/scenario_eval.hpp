@@ -9,6 +9,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -66,11 +67,12 @@ struct FrameRecord {
   algorithms::Pose2 evidence;
   double evidence_distance_m = 0.0;
   /// How well the frame's boards fit the forward map at the true pose and at the estimate
-  /// (algorithms::floor_fit: nats, at most ln(1 + c) a term, in the map's trained noise; 0 without a forward
-  /// map). The estimate fitting better than the truth says the map is wrong there, an equal fit
-  /// that the boards cannot tell the two apart.
-  double truth_nats = 0.0;
-  double estimate_nats = 0.0;
+  /// (algorithms::floor_fit: nats, at most ln(1 + c) a term, in the map's trained noise). NaN
+  /// where they were not computed: a replay without board fits, a map without a forward map, or
+  /// a cycle that did not weigh the boards (no new frame). The estimate fitting better than the
+  /// truth says the map is wrong there, an equal fit that the boards cannot tell the two apart.
+  double truth_nats = std::numeric_limits<double>::quiet_NaN();
+  double estimate_nats = std::numeric_limits<double>::quiet_NaN();
   double sigma_m = 0.0;        ///< the published position spread (root of the mean variance)
   double sigma_yaw_rad = 0.0;  ///< the published heading spread
   double match = 0.0;          ///< the kidnap test's d_t (the particles' summed weights)
@@ -84,12 +86,22 @@ struct RunRecord {
   std::vector<KidnapEvent> kidnaps;
   firmware::CycleCounters counters;
   bool uses_boards = false;
+  /// The largest fit truth_nats and estimate_nats can take (a perfect fit: ln(1 + c) for each
+  /// board's area and bearing); 0 when the replay computed no fits.
+  double fit_bound_nats = 0.0;
+};
+
+/// What a replay records beyond the cycle's own outputs.
+enum class ReplayDetail {
+  kOutputs,    ///< the cycle's outputs and inputs to its tests
+  kBoardFits,  ///< also truth_nats and estimate_nats, for a trace (two fits a frame)
 };
 
 /// Replays @p scenario (seed @p seed) through the cycle with @p map and @p config.
 RunRecord replay_scenario(const Scenario& scenario, std::uint64_t seed,
                           const algorithms::MapFile& map, const firmware::FirmwareConfig& config,
-                          const Progress& progress = nullptr);
+                          const Progress& progress = nullptr,
+                          ReplayDetail detail = ReplayDetail::kOutputs);
 
 /// Writes @p run frame by frame as CSV (truth, estimate, fix, health, the kidnap test's verdict,
 /// the distrusted boards), its kidnaps as `#` lines first: for looking at one scene's run

@@ -131,6 +131,11 @@ struct FixErrors {
   double known_mse_y_m2() const { return known_y_m2 / static_cast<double>(known); }
 };
 
+// The boards' fits at the truth and at the estimate are only written to traces.
+ReplayDetail detail(const SweepOptions& opt) {
+  return opt.trace_dir.empty() ? ReplayDetail::kOutputs : ReplayDetail::kBoardFits;
+}
+
 void trace(const SweepOptions& opt, std::uint64_t seed, const char* part, const RunRecord& run) {
   if (opt.trace_dir.empty()) return;
   write_trace(run, opt.trace_dir + "/seed-" + std::to_string(seed) + "-" + part + ".csv");
@@ -172,8 +177,8 @@ void floor_part(const Scenario& scene, const algorithms::ThresholdSet& threshold
       step("floor: roam " + std::to_string(k));
       const Scenario roam =
           with_other_lighting(roam_variant(scene, static_cast<std::uint64_t>(k)), kRoamSeed + k);
-      const RunRecord run =
-          replay_scenario(roam, kRoamSeed + static_cast<std::uint64_t>(k), *trained.map, config);
+      const RunRecord run = replay_scenario(roam, kRoamSeed + static_cast<std::uint64_t>(k),
+                                            *trained.map, config, nullptr, detail(opt));
       trace(opt, seed, ("floor-roam" + std::to_string(k)).c_str(), run);
       if (!run.frames.empty()) r.floor_roam_s += run.frames.back().t_s;
       fixes.add(run);
@@ -210,7 +215,8 @@ void floor_part(const Scenario& scene, const algorithms::ThresholdSet& threshold
         step("floor: roam with kidnaps");
         const Scenario roam = with_other_lighting(
             roam_variant(scene, kKidnapRoam, 8, opt.floor_kidnaps), kRoamSeed + kKidnapRoam);
-        const RunRecord run = replay_scenario(roam, kRoamSeed + kKidnapRoam, *trained.map, config);
+        const RunRecord run = replay_scenario(roam, kRoamSeed + kKidnapRoam, *trained.map, config,
+                                              nullptr, detail(opt));
         trace(opt, seed, "floor-kidnap", run);
         const KidnapSummary ks = kidnap_summary(run, 0.10, 0.5, 2.0);
         r.floor_kidnaps = ks.outcomes.size();
@@ -280,8 +286,8 @@ void route_runs(const Scenario& scene, const algorithms::ThresholdSet& threshold
 
     if (opt.nominal) {
       step("test run");
-      const RunRecord run =
-          replay_scenario(with_other_lighting(scene, kTestSeed), kTestSeed, map, config);
+      const RunRecord run = replay_scenario(with_other_lighting(scene, kTestSeed), kTestSeed, map,
+                                            config, nullptr, detail(opt));
       trace(opt, seed, "nominal", run);
       FixErrors fixes;
       fixes.add(run);
@@ -308,7 +314,7 @@ void route_runs(const Scenario& scene, const algorithms::ThresholdSet& threshold
     if (opt.kidnap && opt.kidnaps > 0) {
       step("kidnaps");
       const Scenario k = kidnap_variant(scene, opt.kidnaps);
-      const RunRecord run = replay_scenario(k, kKidnapSeed, map, config);
+      const RunRecord run = replay_scenario(k, kKidnapSeed, map, config, nullptr, detail(opt));
       trace(opt, seed, "kidnap", run);
       const KidnapSummary ks = kidnap_summary(run, 0.10, 0.5, 1.0);
       r.kidnaps = ks.outcomes.size();
@@ -322,7 +328,8 @@ void route_runs(const Scenario& scene, const algorithms::ThresholdSet& threshold
     }
     if (opt.dynamic) {
       step("dynamic");
-      const RunRecord run = replay_scenario(dynamic_variant(scene), kDynamicSeed, map, config);
+      const RunRecord run =
+          replay_scenario(dynamic_variant(scene), kDynamicSeed, map, config, nullptr, detail(opt));
       trace(opt, seed, "dynamic", run);
       const Settled s = settle(run, opt.settle_s, kSettledBound_m, kStartupHold_s);
       if (s.after.frames > 0) {
@@ -333,7 +340,7 @@ void route_runs(const Scenario& scene, const algorithms::ThresholdSet& threshold
     if (opt.long_run && opt.long_minutes > 0.0) {
       step("long run");
       const Scenario l = long_variant(scene, opt.long_minutes);
-      const RunRecord run = replay_scenario(l, kLongSeed, map, config);
+      const RunRecord run = replay_scenario(l, kLongSeed, map, config, nullptr, detail(opt));
       trace(opt, seed, "long", run);
       r.long_minutes = run.frames.empty() ? 0.0 : run.frames.back().t_s / 60.0;
       r.long_false_alarms = run.counters.kidnaps;

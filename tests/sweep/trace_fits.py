@@ -2,7 +2,8 @@
 """Sorts a sweep's floor-roam frames with a large error by what the boards said (docs/sweep.md).
 
 For each seed-N-floor-roam1.csv in TRACE_DIR (harmoloc-sweep --parts floor --trace TRACE_DIR),
-from the 61st valid frame on, the frames whose error exceeds --error-cm are split by the boards'
+from the 61st valid frame on, the frames whose error exceeds --error-cm (of those on which the
+cycle weighed the boards: the others have no fit) are split by the boards'
 fit at the truth against the estimate (truth_nats - estimate_nats, floor_fit in the map's
 trained noise): within --nats of each other (the boards cannot tell the two apart), the truth
 better (evidence the filter did not follow), the estimate better (the map is wrong at the
@@ -40,7 +41,8 @@ def main():
         errors = [float(r["error_m"]) for r in rows]
         rmse = math.sqrt(sum(e * e for e in errors) / len(errors))
         big = [float(r["truth_nats"]) - float(r["estimate_nats"]) for r in rows
-               if float(r["error_m"]) > args.error_cm / 100 and float(r["truth_nats"]) != 0.0]
+               if float(r["error_m"]) > args.error_cm / 100
+               and not math.isnan(float(r["truth_nats"]))]
         equal = sum(1 for d in big if abs(d) < args.nats)
         truth = sum(1 for d in big if d >= args.nats)
         estimate = sum(1 for d in big if d <= -args.nats)
