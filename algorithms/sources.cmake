@@ -14,6 +14,7 @@ set(HARMOLOC_ALGORITHMS_SOURCES
   src/odometry.cpp
   src/board_observation.cpp
   src/floor_search.cpp
+  src/nearby_pose_test.cpp
   src/forward_map.cpp
   src/fix_board_check.cpp
   src/kidnap_detector.cpp

@@ -82,6 +82,42 @@ void ParticleFilter::predict(const OdometryDelta& delta) {
   }
 }
 
+void ParticleFilter::replace_some(const Pose2& centre, double position_sigma_m,
+                                  double yaw_sigma_rad, std::size_t count, double total_weight) {
+  if (!initialized_ || count_ < 2 || count == 0 || !(total_weight > 0.0 && total_weight < 1.0))
+    return;
+  count = std::min(count, count_ - 1);
+  // The slots first (marked with a negative weight), then the others' weight, then the draws.
+  const double step = static_cast<double>(count_) / static_cast<double>(count);
+  double at = rng_.uniform() * step;
+  for (std::size_t k = 0; k < count; ++k, at += step)
+    weights_[std::min(count_ - 1, static_cast<std::size_t>(at))] = -1.0;
+  double rest = 0.0;
+  std::size_t slots = 0;
+  for (std::size_t i = 0; i < count_; ++i) {
+    if (weights_[i] < 0.0)
+      ++slots;
+    else
+      rest += weights_[i];
+  }
+  const double each = total_weight / static_cast<double>(slots);
+  // Others without weight (or not finite) share the rest evenly.
+  const bool even = !(rest > 0.0 && std::isfinite(rest));
+  const double scale = even ? 0.0 : (1.0 - total_weight) / rest;
+  const double even_weight = (1.0 - total_weight) / static_cast<double>(count_ - slots);
+  for (std::size_t i = 0; i < count_; ++i) {
+    if (!(weights_[i] < 0.0)) {
+      weights_[i] = even ? even_weight : weights_[i] * scale;
+      continue;
+    }
+    Particle& p = particles_[i];
+    p.x_m = rng_.normal(centre.x_m, position_sigma_m);
+    p.y_m = rng_.normal(centre.y_m, position_sigma_m);
+    p.yaw_rad = wrap_angle_rad(rng_.normal(centre.yaw_rad, yaw_sigma_rad));
+    weights_[i] = each;
+  }
+}
+
 void ParticleFilter::diffuse(double position_sigma_m, double yaw_sigma_rad) {
   for (std::size_t i = 0; i < count_; ++i) {
     Particle& p = particles_[i];
@@ -114,15 +150,100 @@ void ParticleFilter::update_position(double x_m, double y_m, double sigma_m,
   normalize(sum);
 }
 
-double ParticleFilter::update_boards(const BoardUpdate& u) {
+namespace {
+
+// Whether the map's bearings are read at the camera's place (bearings or visibility, and a
+// camera ahead of the axle).
+bool camera_bearings_of(const BoardUpdate& u) {
+  const ForwardMap& map = *u.map;
+  return (u.bearing_mask != 0U || map.has_visibility) && map.bearing_camera_forward_m != 0.0F;
+}
+
+// Whether the boards' likelihood needs the pose's heading as a unit vector: the heading terms,
+// or the camera's place.
+bool needs_unit_heading(const BoardUpdate& u) {
+  return u.map->has_heading_terms || camera_bearings_of(u);
+}
+
+// The boards' untempered likelihood at one pose, its cell @p at located and its heading's
+// cosine and sine given (in float, as both uses are: sinf and cosf cost fewer instructions than
+// sin and cos; 1 and 0 where needs_unit_heading is false); @p camera_bearings as
+// camera_bearings_of says, taken once per update.
+inline double likelihood_at(const BoardUpdate& u, const GridPoint& at, const Pose2& pose,
+                            float cos_yaw, float sin_yaw, bool camera_bearings) {
   const ForwardMap& map = *u.map;
   std::array<float, kMaxBoards> expected{};
+  if (map.has_heading_terms) {
+    // Each particle at its own heading, the harmonic read beyond the covered headings too: a
+    // particle facing a heading the run never drove there must still look unlike the view,
+    // and read at the covered edge it looked like it (on 19 random floors the position's
+    // median went 22.3 -> 25.3 cm with the edge, docs/sweep.md).
+    // Not keeping to the coverage, the heading needs no sector: its cos and sin only.
+    SeenHeading heading;
+    heading.cos_yaw = cos_yaw;
+    heading.sin_yaw = sin_yaw;
+    heading.keep_to_coverage = false;
+    expected_features(map, at, heading, expected.data());
+  } else {
+    expected_features(map, at, expected.data());
+  }
+  // Where the map's bearings are read: the particle's camera place when they are seen from it.
+  const GridPoint seen_from =
+      camera_bearings ? bearing_point(map, pose.x_m, pose.y_m, cos_yaw, sin_yaw) : at;
+  // With visibility the bearings are read there already: the bearing term below takes them.
+  std::array<float, kMaxBoards> seen_bearing{};
+  if (map.has_visibility)
+    apply_visibility(map, seen_from, static_cast<float>(pose.yaw_rad), expected.data(),
+                     seen_bearing.data());
+  double likelihood = 1.0;
+  for (std::size_t b = 0; b < u.boards; ++b) {
+    if (!u.use[b]) continue;
+    const float e = u.observed[b] - expected[b];
+    likelihood *= static_cast<double>(u.gain[b] * std::exp(-e * e * u.inv_two_var[b]) + u.floor[b]);
+  }
+  // Bearings: the particle sees board b at world bearing yaw - angle; the map says where the
+  // training run saw it from here (from the particle's camera place, where the map's bearings
+  // are seen from it).
+  for (std::uint32_t mask = u.bearing_mask; mask != 0U; mask &= mask - 1U) {
+    const auto b = static_cast<std::size_t>(__builtin_ctz(mask));
+    float bearing = 0.0F;
+    if (map.has_visibility) {
+      bearing = seen_bearing[b];
+      if (bearing == ForwardMap::kNoBearing) continue;
+    } else if (!expected_bearing(map, seen_from, b, bearing)) {
+      continue;
+    }
+    double d = pose.yaw_rad - static_cast<double>(u.angle_rad[b]) - static_cast<double>(bearing);
+    // yaw and bearing lie in [-pi, pi] and the law's angle within a half turn, so two turns
+    // at most bring d back (and a value that is not finite stays bounded in work).
+    d = wrap_once_rad(wrap_once_rad(d));
+    const auto r = static_cast<float>(d);
+    likelihood *=
+        static_cast<double>(u.gain[b] * std::exp(-r * r * u.bearing_inv_two_var[b]) + u.floor[b]);
+  }
+  return likelihood;
+}
+
+}  // namespace
+
+double ParticleFilter::board_likelihood(const BoardUpdate& u, const Pose2& pose) {
+  if (u.map == nullptr) return 1.0;
+  float cos_yaw = 1.0F, sin_yaw = 0.0F;
+  if (needs_unit_heading(u)) {
+    const auto yaw = static_cast<float>(wrap_angle_rad(pose.yaw_rad));
+    cos_yaw = std::cos(yaw);
+    sin_yaw = std::sin(yaw);
+  }
+  Pose2 p = pose;
+  p.yaw_rad = wrap_angle_rad(pose.yaw_rad);
+  return likelihood_at(u, locate(*u.map, p.x_m, p.y_m), p, cos_yaw, sin_yaw, camera_bearings_of(u));
+}
+
+double ParticleFilter::update_boards(const BoardUpdate& u) {
+  const ForwardMap& map = *u.map;
   double sum = 0.0, match = 0.0;
-  // The particle's heading as a unit vector, where the heading terms or the camera's place need
-  // it (in float, as both uses are: sinf and cosf cost fewer instructions than sin and cos).
-  const bool camera_bearings =
-      (u.bearing_mask != 0U || map.has_visibility) && map.bearing_camera_forward_m != 0.0F;
-  const bool unit_heading = map.has_heading_terms || camera_bearings;
+  const bool unit_heading = needs_unit_heading(u);
+  const bool camera_bearings = camera_bearings_of(u);
   for (std::size_t i = 0; i < count_; ++i) {
     const GridPoint at = locate(map, particles_[i].x_m, particles_[i].y_m);
     float cos_yaw = 1.0F, sin_yaw = 0.0F;
@@ -131,57 +252,8 @@ double ParticleFilter::update_boards(const BoardUpdate& u) {
       cos_yaw = std::cos(yaw);
       sin_yaw = std::sin(yaw);
     }
-    if (map.has_heading_terms) {
-      // Each particle at its own heading, the harmonic read beyond the covered headings too: a
-      // particle facing a heading the run never drove there must still look unlike the view,
-      // and read at the covered edge it looked like it (on 19 random floors the position's
-      // median went 22.3 -> 25.3 cm with the edge, docs/sweep.md).
-      // Not keeping to the coverage, the heading needs no sector: its cos and sin only.
-      SeenHeading heading;
-      heading.cos_yaw = cos_yaw;
-      heading.sin_yaw = sin_yaw;
-      heading.keep_to_coverage = false;
-      expected_features(map, at, heading, expected.data());
-    } else {
-      expected_features(map, at, expected.data());
-    }
-    // Where the map's bearings are read: the particle's camera place when they are seen from it.
-    const GridPoint seen_from =
-        camera_bearings ? bearing_point(map, particles_[i].x_m, particles_[i].y_m, cos_yaw, sin_yaw)
-                        : at;
-    // With visibility the bearings are read there already: the bearing term below takes them.
-    std::array<float, kMaxBoards> seen_bearing{};
-    if (map.has_visibility)
-      apply_visibility(map, seen_from, static_cast<float>(particles_[i].yaw_rad), expected.data(),
-                       seen_bearing.data());
-    double likelihood = 1.0;
-    for (std::size_t b = 0; b < u.boards; ++b) {
-      if (!u.use[b]) continue;
-      const float e = u.observed[b] - expected[b];
-      likelihood *=
-          static_cast<double>(u.gain[b] * std::exp(-e * e * u.inv_two_var[b]) + u.floor[b]);
-    }
-    // Bearings: the particle sees board b at world bearing yaw - angle; the map says where the
-    // training run saw it from here (from the particle's camera place, where the map's bearings
-    // are seen from it).
-    for (std::uint32_t mask = u.bearing_mask; mask != 0U; mask &= mask - 1U) {
-      const auto b = static_cast<std::size_t>(__builtin_ctz(mask));
-      float bearing = 0.0F;
-      if (map.has_visibility) {
-        bearing = seen_bearing[b];
-        if (bearing == ForwardMap::kNoBearing) continue;
-      } else if (!expected_bearing(map, seen_from, b, bearing)) {
-        continue;
-      }
-      double d = particles_[i].yaw_rad - static_cast<double>(u.angle_rad[b]) -
-                 static_cast<double>(bearing);
-      // yaw and bearing lie in [-pi, pi] and the law's angle within a half turn, so two turns
-      // at most bring d back (and a value that is not finite stays bounded in work).
-      d = wrap_once_rad(wrap_once_rad(d));
-      const auto r = static_cast<float>(d);
-      likelihood *=
-          static_cast<double>(u.gain[b] * std::exp(-r * r * u.bearing_inv_two_var[b]) + u.floor[b]);
-    }
+    const Pose2 pose{particles_[i].x_m, particles_[i].y_m, particles_[i].yaw_rad};
+    double likelihood = likelihood_at(u, at, pose, cos_yaw, sin_yaw, camera_bearings);
     // The match is the observation model's own (untempered): tempering compresses exactly the
     // change the kidnap test looks for.
     match += weights_[i] * likelihood;

@@ -37,6 +37,7 @@ void LocalizationCycle::reseed_around(double x_m, double y_m) {
 void LocalizationCycle::after_reseed() {
   if (gap_ == EncoderGap::kDiffused) gap_ = EncoderGap::kReseeded;
   kidnap_.reset();
+  nearby_.reset();
   // What the boards' motion indices learnt was learnt against the old, wrong estimate.
   reliability_.reset(board_params_);
   fix_check_.reset();

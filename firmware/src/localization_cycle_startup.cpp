@@ -111,6 +111,8 @@ LocalizationCycle::LocalizationCycle(const FirmwareConfig& config, const algorit
     board_params_.route_sigma_m = 0.0;
     board_params_.route_heading_sigma_deg = 0.0;
   }
+  nearby_on_ = use_boards_ && !route_terms_ && config.filter.nearby_test &&
+               algorithms::floor_search_possible(map.forward);
   floor_search_on_ = use_boards_ && !route_terms_ && config.kidnap.floor_search &&
                      algorithms::floor_search_possible(map.forward);
   if (floor_search_on_) {

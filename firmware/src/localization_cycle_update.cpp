@@ -131,6 +131,17 @@ bool LocalizationCycle::update_with_boards(
   // with the old estimate within their widened noise (on a random floor the consensus held for
   // 1.5 s and more after four of five kidnaps), so the consensus cannot tell it when to look.
   if (floor_search_on_) follow_floor(observed, leave_out);
+  // On a floor the cloud cannot follow boards that keep preferring a place 10 cm or more away
+  // (no particle is there to be weighed); the nearby pose test draws some there when they do.
+  algorithms::Pose2 draw_at;
+  if (nearby_on_ && nearby_.step(map_.forward, observed, board_update_, estimate, params, leave_out,
+                                 config_.filter.nearby, draw_at)) {
+    // A quarter of the particles holding half the weight: the following frames weigh them as
+    // any other, so a wrong draw fades and a right one takes over.
+    filter_.replace_some(draw_at, config_.filter.nearby.refine_step_m, kNearbyDrawYawSigmaRad,
+                         std::max<std::size_t>(filter_.size() / 4, 1), 0.5);
+    ++counters_.nearby_draws;
+  }
 
   if (config_.kidnap.enabled && floor_search_on_) {
     floor_kidnap_test(observed, estimate, match, leave_out);

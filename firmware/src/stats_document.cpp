@@ -221,7 +221,8 @@ void to_json(Json& j, const Document& d) {
                      {"fix_board_suspicions", f.fix_board_suspicions},
                      {"kidnap_triggers", f.kidnap_triggers},
                      {"kidnaps", f.kidnaps},
-                     {"lost", f.lost}};
+                     {"lost", f.lost},
+                     {"nearby_draws", f.nearby_draws}};
   const mavlink::InboundCounters& in = d.inbound;
   j["inbound"] = Json{{"bytes_in", in.bytes_in},
                       {"frames_in", in.frames_in},

@@ -94,7 +94,8 @@ stats::Document stats_document(const StatsSnapshot& snapshot) {
               c.fix_board_suspicions,
               c.kidnap_triggers,
               c.kidnaps,
-              c.lost};
+              c.lost,
+              c.nearby_draws};
   d.inbound = snapshot.inbound;
   if (run.wakeup_latency != nullptr && run.wakeup_latency->count() > 0)
     d.wakeup_latency = latency(*run.wakeup_latency);

@@ -31,6 +31,8 @@ for f in index.html trajectory.svg error.svg timing.svg; do test -s "$out/report
 for k in particles_min particles_max; do
   [ "$(json_number "$out/stats.json" filter.$k)" -eq 1024 ] || fail "filter.$k is not the default capacity 1024"
 done
+# The nearby pose test runs on floor maps only: the tiny route map never draws.
+[ "$(json_number "$out/stats.json" filter.nearby_draws)" -eq 0 ] || fail "filter.nearby_draws is not 0 on a route map"
 printf '[filter]\nkld = true\nkld_min_particles = 128\n' > "$out/kld.toml"
 "$BIN/harmoloc" --dataset "$WORK/test" --map "$WORK/tiny.hmap" --config "$out/kld.toml" --trajectory "$out/kld.tum" \
   --stats "$out/kld.json" --quiet > /dev/null

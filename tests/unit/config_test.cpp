@@ -109,6 +109,9 @@ kld_min_particles = 64
 kld_epsilon = 0.1
 kld_bin_m = 0.1
 kld_bin_deg = 15
+nearby_test = false
+nearby_bound_nats = 35
+nearby_frames = 90
 
 [link]
 system_id = 7
@@ -171,6 +174,9 @@ heartbeat_hz = 2
   EXPECT_DOUBLE_EQ(c.filter.kld.epsilon, 0.1);
   EXPECT_DOUBLE_EQ(c.filter.kld.bin_xy_m, 0.1);
   EXPECT_NEAR(c.filter.kld.bin_yaw_rad, 15.0 * 3.14159265358979323846 / 180.0, 1e-12);
+  EXPECT_FALSE(c.filter.nearby_test);
+  EXPECT_DOUBLE_EQ(c.filter.nearby.bound_nats, 35.0);
+  EXPECT_EQ(c.filter.nearby.max_frames, 90U);
 
   EXPECT_EQ(c.link.system_id, 7);
   EXPECT_EQ(c.link.component_id, 100);
@@ -433,6 +439,9 @@ TEST(Config, ObservationAndKidnapValuesAreChecked) {
       {"[filter]\nkld_epsilon = 0\n", "filter.kld_epsilon"},
       {"[filter]\nkld_bin_m = 2\n", "filter.kld_bin_m"},
       {"[filter]\nkld_bin_deg = 0.5\n", "filter.kld_bin_deg"},
+      {"[filter]\nnearby_test = 1\n", "filter.nearby_test must be true or false"},
+      {"[filter]\nnearby_bound_nats = 0.5\n", "filter.nearby_bound_nats"},
+      {"[filter]\nnearby_frames = 0\n", "filter.nearby_frames"},
   };
   for (const auto& [text, want] : bad) {
     const std::string path = dir.write("bad.toml", text);

@@ -229,6 +229,62 @@ TEST(ParticleFilter, FixFarFromEveryParticleDoesNotProduceNaN) {
   EXPECT_NEAR(pf->estimate().effective_particles, 100.0, 1e-6);
 }
 
+// A second hypothesis beside the cloud: count particles drawn around it share the weight given,
+// so the published mean hardly moves; evidence for it over a few frames carries the cloud there,
+// and evidence against it leaves the cloud where it was.
+TEST(ParticleFilter, ReplaceSomeAddsAWeakSecondHypothesisThatEvidenceCanCarry) {
+  const ha::Pose2 here{0.0, 0.0, 0.0}, there{2.0, 1.0, 1.0};
+  const auto near_there = [&](const ha::ParticleFilter& pf, std::size_t i) {
+    return std::hypot(pf.particle(i).x_m - there.x_m, pf.particle(i).y_m - there.y_m) < 0.1;
+  };
+  for (const bool evidence_for_it : {true, false}) {
+    auto pf = make_filter(1024, 9);
+    pf->initialize(here, 0.02, 0.01, false);
+    pf->replace_some(there, 0.02, 0.02, 32, 1e-3);
+    std::size_t moved = 0;
+    double moved_weight = 0.0, total = 0.0;
+    for (std::size_t i = 0; i < pf->size(); ++i) {
+      total += pf->weight(i);
+      if (!near_there(*pf, i)) continue;
+      ++moved;
+      moved_weight += pf->weight(i);
+      EXPECT_NEAR(pf->particle(i).yaw_rad, there.yaw_rad, 0.1);
+    }
+    EXPECT_EQ(moved, 32U);
+    EXPECT_NEAR(moved_weight, 1e-3, 1e-12);
+    EXPECT_NEAR(total, 1.0, 1e-12);
+    // 0.1% of the weight 2.2 m away moves the mean by about 2 mm.
+    EXPECT_LT(std::hypot(pf->estimate().mean.x_m, pf->estimate().mean.y_m), 0.01);
+    expect_estimate_matches_reference(*pf);
+    const ha::Pose2 seen = evidence_for_it ? there : here;
+    for (int frame = 0; frame < 5; ++frame) pf->update_position(seen.x_m, seen.y_m, 0.3, 0.0);
+    const ha::Pose2 mean = pf->estimate().mean;
+    EXPECT_LT(std::hypot(mean.x_m - seen.x_m, mean.y_m - seen.y_m), 0.1) << evidence_for_it;
+  }
+}
+
+TEST(ParticleFilter, ReplaceSomeRefusesWhatItCannotDo) {
+  auto pf = make_filter(64, 3);
+  pf->replace_some(ha::Pose2{1.0, 1.0, 0.0}, 0.01, 0.01, 8, 0.5);  // not initialised
+  EXPECT_FALSE(pf->initialized());
+  pf->initialize(ha::Pose2{0.0, 0.0, 0.0}, 0.01, 0.01, false);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (const double w : {0.0, 1.0, -0.5, 2.0, nan}) {
+    pf->replace_some(ha::Pose2{1.0, 1.0, 0.0}, 0.01, 0.01, 8, w);
+    for (std::size_t i = 0; i < pf->size(); ++i) ASSERT_LT(std::fabs(pf->particle(i).x_m), 0.1);
+  }
+  // More than the cloud: all but one move, and the one left keeps the rest of the weight.
+  pf->replace_some(ha::Pose2{1.0, 1.0, 0.0}, 0.01, 0.01, 1000, 0.25);
+  std::size_t stayed = 0;
+  for (std::size_t i = 0; i < pf->size(); ++i) {
+    if (std::fabs(pf->particle(i).x_m) < 0.1) {
+      ++stayed;
+      EXPECT_NEAR(pf->weight(i), 0.75, 1e-12);
+    }
+  }
+  EXPECT_EQ(stayed, 1U);
+}
+
 TEST(ParticleFilter, ResamplingIsLowVarianceAndEqualisesWeights) {
   const std::size_t n = 400;
   auto pf = make_filter(n, 21);

@@ -90,6 +90,14 @@ class ParticleFilter {
 
   /// Random walk of every particle (motion unknown, e.g. while odometry is missing).
   void diffuse(double position_sigma_m, double yaw_sigma_rad);
+
+  /// Moves @p count particles (at most all but one; evenly spread over the cloud from a random
+  /// start) to draws around @p centre, sharing @p total_weight (0..1) of the cloud's weight, the
+  /// others the rest: a second hypothesis beside the cloud, as likely as @p total_weight says,
+  /// that the following frames weigh like any other particle (sensor resetting, Lenser and
+  /// Veloso 2000). Does nothing before initialisation.
+  void replace_some(const Pose2& centre, double position_sigma_m, double yaw_sigma_rad,
+                    std::size_t count, double total_weight);
   /// Moves every particle by (@p dx_m, @p dy_m) and turns it by @p dyaw_rad: the cloud keeps its
   /// shape and weights, its centre moves.
   void shift(double dx_m, double dy_m, double dyaw_rad);
@@ -103,6 +111,11 @@ class ParticleFilter {
   /// likelihood: the match between the frame and the cloud that the kidnap test watches (seed
   /// 004's d_t).
   double update_boards(const BoardUpdate& update);
+
+  /// The boards' untempered likelihood of @p update at one pose, exactly as update_boards
+  /// weighs a particle there (without the route terms): for comparing two poses in the filter's
+  /// own model.
+  static double board_likelihood(const BoardUpdate& update, const Pose2& pose);
 
   /// Low-variance (systematic) resampling when the effective sample size falls below
   /// @p threshold_fraction of the particle count. Returns true if it resampled. With

@@ -11,6 +11,7 @@
 #include "harmoloc/algorithms/board_observation.hpp"
 #include "harmoloc/algorithms/can_encoder_layout.hpp"
 #include "harmoloc/algorithms/kidnap_detector.hpp"
+#include "harmoloc/algorithms/nearby_pose_test.hpp"
 #include "harmoloc/algorithms/odometry.hpp"
 #include "harmoloc/algorithms/particle_filter.hpp"
 #include "harmoloc/algorithms/segmentation.hpp"
@@ -51,6 +52,11 @@ struct FilterConfig {
   /// How far beyond the mapped region (the box around the map's training positions and its
   /// forward map) a pose may lie and still be published as more than invalid.
   double map_margin_m = 1.0;
+  /// On a floor map with bearings (route terms off): the sequential test between the estimate
+  /// and the best pose near it that draws particles there when the boards keep preferring it
+  /// (algorithms/nearby_pose_test.hpp, docs/filter.md "The nearby pose test").
+  bool nearby_test = true;
+  algorithms::NearbyPoseParams nearby;
 };
 
 /// What the particles are weighed by.

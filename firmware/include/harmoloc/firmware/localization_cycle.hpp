@@ -14,6 +14,7 @@
 #include "harmoloc/algorithms/floor_search.hpp"
 #include "harmoloc/algorithms/harmonic_localizer.hpp"
 #include "harmoloc/algorithms/map_codec.hpp"
+#include "harmoloc/algorithms/nearby_pose_test.hpp"
 #include "harmoloc/algorithms/particle_filter.hpp"
 #include "harmoloc/algorithms/segmentation.hpp"
 #include "harmoloc/firmware/config.hpp"
@@ -90,6 +91,8 @@ struct CycleCounters {
   std::uint64_t kidnap_triggers = 0;  ///< frames where Yang et al.'s change rate exceeded 0.5
   std::uint64_t kidnaps = 0;          ///< confirmed kidnaps (the filter was re-seeded)
   std::uint64_t lost = 0;             ///< of those, re-seeded over the whole map (no fix)
+  /// Particles drawn around a nearby pose the boards kept preferring (floor maps).
+  std::uint64_t nearby_draws = 0;
   std::uint64_t link_dropped = 0;
   std::array<std::uint64_t, 5> cycles_in_health{};
 
@@ -341,12 +344,18 @@ class LocalizationCycle {
   /// frame.
   static constexpr std::size_t kFloorPassPlaces = 3072;
   static constexpr std::size_t kFloorPlacesPerCycle = 256;
+  /// The heading spread of the particles the nearby pose test draws: its pose's heading comes
+  /// from the bearings, a degree or two.
+  static constexpr double kNearbyDrawYawSigmaRad = 2.0 * algorithms::kPi / 180.0;
   bool floor_search_on_ = false;
   std::uint32_t floor_stride_ = 1;  ///< cells between the places a pass tries, along each axis
   double floor_refine_m_ = 0.02;    ///< the refinement's reach: a stride
   double floor_margin_nats_ = 0.0;  ///< ln of the places a pass tries (the luckiest's margin)
   algorithms::FloorSearch floor_search_;
   algorithms::FloorPose floor_fix_{};
+  // On a floor map: the sequential test between the estimate and the best pose near it.
+  bool nearby_on_ = false;
+  algorithms::NearbyPoseTest nearby_;
   algorithms::KidnapVerdict kidnap_verdict_ = algorithms::KidnapVerdict::kNone;
   algorithms::KidnapInput kidnap_input_{};
   const char* pending_text_ = nullptr;  ///< a STATUSTEXT this cycle's publish sends

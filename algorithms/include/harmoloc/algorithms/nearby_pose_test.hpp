@@ -1,0 +1,54 @@
+#pragma once
+/// @file A sequential test between the filter's estimate and the best pose near it, for floor
+/// maps. A particle cloud a few centimetres wide cannot follow boards that fit a place 10 to
+/// 40 cm away better: no particle is there to be weighed, and a frame's evidence alone is too
+/// flat to tell a better place from noise. So the test keeps one alternative pose, carried with
+/// the estimate's motion, and sums the log-ratio of the boards' likelihood there and at the
+/// estimate, frame by frame, in the filter's own model (untempered; each pose the best of a few
+/// places around it, so that neither gains from being searched). When the sum passes a bound,
+/// particles are drawn around the alternative and the filter's own weighing decides between
+/// the two; when it falls below minus the bound, or after a number of frames, the alternative
+/// is dropped and another sought. No heap; bounded work per frame.
+
+#include <cstdint>
+
+#include "harmoloc/algorithms/board_observation.hpp"
+#include "harmoloc/algorithms/floor_search.hpp"
+#include "harmoloc/algorithms/forward_map.hpp"
+#include "harmoloc/algorithms/geometry.hpp"
+
+namespace harmoloc::algorithms {
+
+struct NearbyPoseParams {
+  double bound_nats = 20.0;       ///< the summed log-ratio that draws particles (and drops at -)
+  std::uint32_t max_frames = 60;  ///< frames an alternative is tested before another is sought
+  double search_radius_m = 0.20;  ///< where an alternative is sought around the estimate
+  double min_distance_m = 0.05;   ///< an alternative nearer the estimate than this is none
+  double refine_step_m = 0.02;    ///< both poses: the best of 3 x 3 places this far apart
+};
+
+class NearbyPoseTest {
+ public:
+  /// Forgets the alternative (after a re-seed).
+  void reset();
+
+  /// One frame: seeks an alternative when none is held (the floor search's refinement around
+  /// @p estimate, the heading from the bearings), else carries it by the estimate's motion;
+  /// refines both on @p update (the filter's board update of this frame) and adds the
+  /// log-ratio. Returns true, with the pose in @p draw_at, when the sum passed the bound (the
+  /// alternative is then dropped).
+  bool step(const ForwardMap& map, const BoardFeatures& observed, const BoardUpdate& update,
+            const Pose2& estimate, const BoardModelParams& params, std::uint32_t leave_out,
+            const NearbyPoseParams& test, Pose2& draw_at);
+
+  bool holding() const { return holding_; }
+  double summed_nats() const { return sum_nats_; }
+
+ private:
+  bool holding_ = false;
+  double dx_m_ = 0.0, dy_m_ = 0.0, dyaw_rad_ = 0.0;  ///< the alternative less the estimate
+  double sum_nats_ = 0.0;
+  std::uint32_t frames_ = 0;
+};
+
+}  // namespace harmoloc::algorithms

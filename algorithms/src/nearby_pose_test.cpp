@@ -1,0 +1,82 @@
+#include "harmoloc/algorithms/nearby_pose_test.hpp"
+
+#include <cmath>
+
+#include "harmoloc/algorithms/particle_filter.hpp"
+
+namespace harmoloc::algorithms {
+
+namespace {
+
+// The boards' log-likelihood of the best of 3 x 3 places @p step_m apart around @p around, at
+// its heading. The likelihood is at least the product of the boards' floors, so its log is
+// finite.
+Pose2 best_near(const BoardUpdate& update, const Pose2& around, double step_m, double& nats) {
+  Pose2 best = around;
+  nats = -HUGE_VAL;
+  for (int j = -1; j <= 1; ++j) {
+    for (int i = -1; i <= 1; ++i) {
+      const Pose2 p{around.x_m + i * step_m, around.y_m + j * step_m, around.yaw_rad};
+      const double l = std::log(ParticleFilter::board_likelihood(update, p));
+      if (l > nats) {
+        nats = l;
+        best = p;
+      }
+    }
+  }
+  return best;
+}
+
+}  // namespace
+
+void NearbyPoseTest::reset() {
+  holding_ = false;
+  sum_nats_ = 0.0;
+  frames_ = 0;
+}
+
+bool NearbyPoseTest::step(const ForwardMap& map, const BoardFeatures& observed,
+                          const BoardUpdate& update, const Pose2& estimate,
+                          const BoardModelParams& params, std::uint32_t leave_out,
+                          const NearbyPoseParams& test, Pose2& draw_at) {
+  if (update.map == nullptr || !floor_search_possible(map)) return false;
+  Pose2 alternative;
+  if (!holding_) {
+    const FloorPose around{estimate.x_m, estimate.y_m, estimate.yaw_rad, 0.0, true};
+    const FloorPose found =
+        FloorSearch::refine(map, observed, around, test.search_radius_m, params, leave_out);
+    if (!found.valid ||
+        std::hypot(found.x_m - estimate.x_m, found.y_m - estimate.y_m) < test.min_distance_m)
+      return false;
+    alternative = Pose2{found.x_m, found.y_m, found.yaw_rad};
+    holding_ = true;
+    sum_nats_ = 0.0;
+    frames_ = 0;
+  } else {
+    alternative = Pose2{estimate.x_m + dx_m_, estimate.y_m + dy_m_,
+                        wrap_angle_rad(estimate.yaw_rad + dyaw_rad_)};
+  }
+  double here_nats = 0.0, there_nats = 0.0;
+  best_near(update, estimate, test.refine_step_m, here_nats);
+  alternative = best_near(update, alternative, test.refine_step_m, there_nats);
+  const double ratio = there_nats - here_nats;
+  // A frame the model cannot weigh (no finite likelihood) tells nothing.
+  if (std::isfinite(ratio)) sum_nats_ += ratio;
+  ++frames_;
+  if (sum_nats_ > test.bound_nats) {
+    draw_at = alternative;
+    reset();
+    return true;
+  }
+  const double away_m = std::hypot(alternative.x_m - estimate.x_m, alternative.y_m - estimate.y_m);
+  if (sum_nats_ < -test.bound_nats || frames_ >= test.max_frames || away_m < test.min_distance_m) {
+    reset();
+    return false;
+  }
+  dx_m_ = alternative.x_m - estimate.x_m;
+  dy_m_ = alternative.y_m - estimate.y_m;
+  dyaw_rad_ = wrap_angle_rad(alternative.yaw_rad - estimate.yaw_rad);
+  return false;
+}
+
+}  // namespace harmoloc::algorithms

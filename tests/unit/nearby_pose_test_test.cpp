@@ -1,0 +1,123 @@
+// The nearby pose test (algorithms/nearby_pose_test.hpp): the boards' likelihood of one pose as
+// the filter weighs it, and the sequential test that draws particles at a nearby pose only
+// when the boards keep preferring it.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <memory>
+
+#include "harmoloc/algorithms/board_observation.hpp"
+#include "harmoloc/algorithms/geometry.hpp"
+#include "harmoloc/algorithms/nearby_pose_test.hpp"
+#include "harmoloc/algorithms/particle_filter.hpp"
+#include "synthetic_floor.hpp"
+
+namespace ha = harmoloc::algorithms;
+using harmoloc::test_floor::make_floor;
+using harmoloc::test_floor::seen;
+
+namespace {
+
+// The filter's board update of one frame, as the cycle makes it (the estimate's assessment).
+ha::BoardUpdate update_for(const ha::ForwardMap& map, const ha::BoardFeatures& o,
+                           const ha::Pose2& estimate, const ha::BoardModelParams& params) {
+  ha::BoardReliability reliability;
+  reliability.reset(params);
+  ha::BoardUpdate u;
+  reliability.assess(map, o, estimate, params, u);
+  return u;
+}
+
+}  // namespace
+
+TEST(NearbyPoseTest, BoardLikelihoodIsTheWeightAParticleGets) {
+  const auto map = make_floor();
+  ha::BoardModelParams params;
+  const ha::BoardFeatures o = seen(1.3, 0.9, 0.6);
+  ha::BoardUpdate u = update_for(*map, o, ha::Pose2{1.3, 0.9, 0.6}, params);
+  u.inv_tempering = 1.0;  // the weight itself, untempered
+  ha::ParticleFilter filter;
+  filter.configure(64, 3, ha::MotionNoise{});
+  filter.initialize(ha::Pose2{1.3, 0.9, 0.6}, 0.1, 0.2, false);
+  const double before_0 = filter.weight(0), before_1 = filter.weight(1);
+  filter.update_boards(u);
+  const auto pose = [&](std::size_t i) {
+    const ha::ParticleFilter::Particle& p = filter.particle(i);
+    return ha::Pose2{p.x_m, p.y_m, p.yaw_rad};
+  };
+  const double l0 = ha::ParticleFilter::board_likelihood(u, pose(0));
+  const double l1 = ha::ParticleFilter::board_likelihood(u, pose(1));
+  ASSERT_GT(l0, 0.0);
+  ASSERT_GT(l1, 0.0);
+  // The weights are normalised: their ratio is the likelihoods' ratio.
+  EXPECT_NEAR((filter.weight(0) / before_0) / (filter.weight(1) / before_1), l0 / l1,
+              1e-5 * l0 / l1);
+  // The truth fits better than a place 15 cm off.
+  EXPECT_GT(ha::ParticleFilter::board_likelihood(u, ha::Pose2{1.3, 0.9, 0.6}),
+            ha::ParticleFilter::board_likelihood(u, ha::Pose2{1.45, 0.9, 0.6}));
+}
+
+TEST(NearbyPoseTest, DrawsAtTheRobotWhenTheEstimateIsOffAndNeverWhenItIsRight) {
+  const auto map = make_floor();
+  const ha::BoardModelParams params;
+  const ha::NearbyPoseParams test;
+  // The robot drives along x; the estimate is 12 cm off across its path.
+  ha::NearbyPoseTest off;
+  bool drew = false;
+  ha::Pose2 at;
+  int frames = 0;
+  for (; frames < 60 && !drew; ++frames) {
+    const double x = 0.8 + 0.01 * frames, y = 0.9, yaw = 0.3;
+    const ha::Pose2 estimate{x, y + 0.12, yaw};
+    const ha::BoardFeatures o = seen(x, y, yaw);
+    drew = off.step(*map, o, update_for(*map, o, estimate, params), estimate, params, 0U, test, at);
+    if (drew) {
+      EXPECT_LT(std::hypot(at.x_m - x, at.y_m - y), 0.03);
+    }
+  }
+  EXPECT_TRUE(drew) << "after " << frames << " frames";
+  EXPECT_FALSE(off.holding());
+
+  // The estimate right, the areas noisy (up to three times the boards' sigma): no draw in 600
+  // frames, and never more than the bound summed.
+  ha::NearbyPoseTest right;
+  std::uint64_t state = 7;
+  const auto noise = [&]() {
+    state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+    return (static_cast<double>(state >> 11) / 9007199254740992.0 - 0.5) * 0.12;
+  };
+  for (int k = 0; k < 600; ++k) {
+    const double x = 0.6 + 0.002 * k, y = 1.0, yaw = -0.2;
+    const ha::Pose2 estimate{x, y, yaw};
+    const ha::BoardFeatures o = seen(x, y, yaw, {noise(), noise(), noise(), noise()});
+    ASSERT_FALSE(
+        right.step(*map, o, update_for(*map, o, estimate, params), estimate, params, 0U, test, at))
+        << "frame " << k;
+    ASSERT_LE(right.summed_nats(), test.bound_nats);
+  }
+}
+
+TEST(NearbyPoseTest, DropsTheAlternativeAfterItsFramesAndWithoutAMap) {
+  const auto map = make_floor();
+  const ha::BoardModelParams params;
+  ha::NearbyPoseParams test;
+  test.bound_nats = 1e6;  // never decides: only the frame limit ends a test
+  test.max_frames = 5;
+  ha::NearbyPoseTest t;
+  ha::Pose2 at;
+  const ha::Pose2 estimate{1.0, 1.0, 0.0};
+  const ha::BoardFeatures o = seen(1.0, 1.1, 0.0);
+  const ha::BoardUpdate u = update_for(*map, o, estimate, params);
+  for (int k = 0; k < 5; ++k) {
+    EXPECT_FALSE(t.step(*map, o, u, estimate, params, 0U, test, at));
+    EXPECT_EQ(t.holding(), k < 4) << "frame " << k;
+  }
+  // A board update without a map, or a map without bearings: nothing to test.
+  ha::NearbyPoseTest none;
+  EXPECT_FALSE(none.step(*map, o, ha::BoardUpdate{}, estimate, params, 0U, test, at));
+  EXPECT_FALSE(none.holding());
+  ha::ForwardMap plain;
+  EXPECT_FALSE(none.step(plain, o, u, estimate, params, 0U, test, at));
+  EXPECT_FALSE(none.holding());
+}
