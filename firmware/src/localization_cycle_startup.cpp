@@ -111,10 +111,11 @@ LocalizationCycle::LocalizationCycle(const FirmwareConfig& config, const algorit
     board_params_.route_sigma_m = 0.0;
     board_params_.route_heading_sigma_deg = 0.0;
   }
-  nearby_on_ = use_boards_ && !route_terms_ && config.filter.nearby_test &&
-               algorithms::floor_search_possible(map.forward);
-  floor_search_on_ = use_boards_ && !route_terms_ && config.kidnap.floor_search &&
-                     algorithms::floor_search_possible(map.forward);
+  // A floor the boards are weighed on, with the bearings the floor's pose searches need.
+  const bool searchable_floor =
+      use_boards_ && !route_terms_ && algorithms::floor_search_possible(map.forward);
+  nearby_on_ = searchable_floor && config.filter.nearby_test;
+  floor_search_on_ = searchable_floor && config.kidnap.floor_search;
   if (floor_search_on_) {
     // A pass tries at most kFloorPassPlaces places, kFloorPlacesPerCycle a cycle (12 cycles,
     // 0.4 s at 30 Hz): the stride is the finest that covers the grid with that many.

@@ -136,10 +136,11 @@ bool LocalizationCycle::update_with_boards(
   algorithms::Pose2 draw_at;
   if (nearby_on_ && nearby_.step(map_.forward, observed, board_update_, estimate, params, leave_out,
                                  config_.filter.nearby, draw_at)) {
-    // A quarter of the particles holding half the weight: the following frames weigh them as
-    // any other, so a wrong draw fades and a right one takes over.
-    filter_.replace_some(draw_at, config_.filter.nearby.refine_step_m, kNearbyDrawYawSigmaRad,
-                         std::max<std::size_t>(filter_.size() / 4, 1), 0.5);
+    const algorithms::NearbyPoseParams& np = config_.filter.nearby;
+    const auto count =
+        static_cast<std::size_t>(static_cast<double>(filter_.size()) * np.draw_share);
+    filter_.replace_some(draw_at, np.refine_step_m, np.draw_yaw_sigma_rad,
+                         std::max<std::size_t>(count, 1), np.draw_weight);
     ++counters_.nearby_draws;
   }
 

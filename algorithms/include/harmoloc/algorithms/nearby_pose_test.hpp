@@ -25,6 +25,13 @@ struct NearbyPoseParams {
   double search_radius_m = 0.20;  ///< where an alternative is sought around the estimate
   double min_distance_m = 0.05;   ///< an alternative nearer the estimate than this is none
   double refine_step_m = 0.02;    ///< both poses: the best of 3 x 3 places this far apart
+  /// The draw: this share of the particles, around the pose (position spread refine_step_m,
+  /// heading spread draw_yaw_sigma_rad: its heading comes from the bearings, a degree or two),
+  /// holding this share of the weight. The following frames weigh them as any other, so a
+  /// wrong draw fades and a right one takes over.
+  double draw_share = 0.25;
+  double draw_yaw_sigma_rad = 2.0 * kPi / 180.0;
+  double draw_weight = 0.5;
 };
 
 class NearbyPoseTest {
