@@ -181,6 +181,7 @@ void floor_part(const Scenario& scene, const algorithms::ThresholdSet& threshold
                                             *trained.map, config, nullptr, detail(opt));
       trace(opt, seed, ("floor-roam" + std::to_string(k)).c_str(), run);
       if (!run.frames.empty()) r.floor_roam_s += run.frames.back().t_s;
+      r.floor_nearby_draws += run.counters.nearby_draws;
       fixes.add(run);
       const Settled st = settle(run, opt.settle_s, kSettledBound_m, kStartupHold_s);
       if (st.first_fix_s < 0.0) continue;

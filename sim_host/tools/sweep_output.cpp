@@ -68,6 +68,7 @@ nlohmann::json to_json(const SceneResult& r) {
   j["floor_mean_validation_rmse"] = r.floor_mean_validation_rmse;
   j["floor_cv_rmse_y_m"] = r.floor_cv_rmse_y_m;
   j["floor_roam_s"] = r.floor_roam_s;
+  j["floor_nearby_draws"] = r.floor_nearby_draws;
   j["floor_fix_mse_x_m2"] = r.floor_fix_mse_x_m2;
   j["floor_fix_mse_y_m2"] = r.floor_fix_mse_y_m2;
   j["floor_rmse_m"] = r.floor_rmse_m;

@@ -137,6 +137,7 @@ struct PassResult {
   std::uint64_t kidnaps = 0;  ///< re-seeds by the kidnap test (the set-pose commands put the
                               ///< cloud far from where the boards say the robot is)
   bool uses_boards = false;
+  bool uses_nearby_test = false, uses_floor_search = false;
   std::size_t fewest_particles = 0, most_particles = 0;  ///< over the run's cycles
   firmware::CycleCounters counters;                      ///< the cycle's own, at the end
 };
@@ -148,6 +149,8 @@ struct PassResult {
 // allocating; the writer thread's allocations are not counted.
 // kLiveClock: the cycle runs as on a live board (set_live_clock): it measures capture to send
 // and reports each heartbeat period's latencies on the link (NAMED_VALUE_FLOAT).
+// kFloorSearch: on a floor map, the kidnap test takes its evidence from the search over the
+// whole floor (kidnap.floor_search) instead of the harmonic fix.
 enum class Fault {
   kNone,
   kCameraStallMidRun,
@@ -155,7 +158,8 @@ enum class Fault {
   kRecording,
   kStatsOnRequest,
   kLiveClock,
-  kKldSampling
+  kKldSampling,
+  kFloorSearch
 };
 
 // A monotonic clock an hour ahead of the recording's first frame: a live board's clock, as far
@@ -240,11 +244,17 @@ std::uint64_t first_frame_ns(const std::string& dataset, const dataset::DatasetM
 }
 
 // One start-up (allowed to allocate) and one run of the cycle over a whole dataset (not).
-PassResult run_pass(const std::string& dataset, Fault fault) {
+// @p config_file: the scene's config (a random scene's colour thresholds), else the defaults.
+PassResult run_pass(const std::string& dataset, Fault fault, const std::string& config_file = "") {
   const auto meta = dataset::read_metadata(dataset);
-  firmware::FirmwareConfig config = firmware::default_config();
+  firmware::FirmwareConfig config =
+      config_file.empty() ? firmware::default_config() : firmware::load_config(config_file);
+  config.kidnap.floor_search = fault == Fault::kFloorSearch;
   config.geometry = meta.geometry;
   config.can_layout = meta.encoder_layout;
+  // As the board mains refuse it: a map trained with other thresholds than the config's.
+  EXPECT_EQ(firmware::check_map_matches(g_map, config, meta.image_width_px, meta.image_height_px),
+            "");
   config.filter.kld.enabled = fault == Fault::kKldSampling;
   host::FileCamera file_camera(dataset, meta);
   // Frames 100..200 go missing: odometry only for a while, then back to nominal.
@@ -360,6 +370,8 @@ PassResult run_pass(const std::string& dataset, Fault fault) {
     r.health[h] = cycle->counters().cycles_in_health[h];
   r.kidnaps = cycle->counters().kidnaps;
   r.uses_boards = cycle->uses_boards();
+  r.uses_nearby_test = cycle->uses_nearby_test();
+  r.uses_floor_search = cycle->uses_floor_search();
   EXPECT_TRUE(trajectory.close());
   std::filesystem::remove(out + ".link");
   std::filesystem::remove(out + ".in");
@@ -487,6 +499,40 @@ TEST(StaticMemory, NoAllocationAfterStartUp) {
       "%llu kidnap re-seeds)\n",
       static_cast<unsigned long long>(total), static_cast<unsigned long long>(health[1]),
       static_cast<unsigned long long>(health[2]), static_cast<unsigned long long>(health[3]),
+      static_cast<unsigned long long>(kidnaps));
+}
+
+// The same on a floor map (a random scene's coverage run, trained with bearings): the floor's
+// own work in the cycle, the nearby pose test's refinements and draws and the floor search's
+// slices, refinements and re-seeds, runs on a roam with kidnaps to anywhere on the floor.
+TEST(StaticMemory, NoAllocationAfterStartUpOnAFloor) {
+  const std::string work = work_dir();
+  ASSERT_FALSE(work.empty())
+      << "HARMOLOC_E2E_WORK not set (the static_memory.floor_setup fixture provides the floor)";
+  ASSERT_EQ(firmware::load_map(work + "/floor.hmap", g_map), "");
+  const std::string roam = work + "/floor-roam";
+  const std::string config = work + "/floor-coverage/harmoloc.toml";
+  std::uint64_t total = 0, draws = 0, kidnaps = 0;
+  for (const Fault fault : {Fault::kNone, Fault::kFloorSearch}) {
+    const PassResult r = run_pass(roam, fault, config);
+    EXPECT_EQ(r.allocations, 0U) << r.allocations << " allocations after start-up on a floor, "
+                                 << "the first of " << r.first_size << " bytes";
+    EXPECT_TRUE(r.uses_boards);
+    EXPECT_TRUE(r.uses_nearby_test) << "a floor map with bearings: the nearby pose test must run";
+    EXPECT_EQ(r.uses_floor_search, fault == Fault::kFloorSearch);
+    total += r.cycles;
+    draws += r.counters.nearby_draws;
+    if (fault == Fault::kFloorSearch) kidnaps += r.kidnaps;
+  }
+  EXPECT_GE(total, 1000U);
+  // The work that only a floor has ran under the counting allocator: the test drew particles,
+  // and the floor search's evidence re-seeded the filter after a carry.
+  EXPECT_GT(draws, 0U);
+  EXPECT_GT(kidnaps, 0U);
+  std::printf(
+      "floor: %llu cycles without an allocation (%llu nearby draws, %llu kidnap re-seeds "
+      "from the floor search)\n",
+      static_cast<unsigned long long>(total), static_cast<unsigned long long>(draws),
       static_cast<unsigned long long>(kidnaps));
 }
 

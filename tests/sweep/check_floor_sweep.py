@@ -2,7 +2,8 @@
 """Checks a floor sweep's sweep.json (harmoloc-sweep --parts floor, issue 20): every scene's
 coverage run trained into a floor map (its passes 10 degrees or more apart in heading, so that
 the firmware drops the route terms) and its roams replayed and scored. No accuracy bound yet:
-the floor maps localize to tens of centimetres (docs/sweep.md, "Floor runs").
+the floor maps localize to tens of centimetres (docs/sweep.md, "Floor runs"). The nearby pose
+test must have drawn on some floor.
 """
 import json
 import sys
@@ -42,6 +43,12 @@ def main():
             problems.append(f"seed {seed}: no kidnap in the floor's kidnap roam")
         if r.get("fused_rmse_m", -1.0) >= 0.0:
             problems.append(f"seed {seed}: a route part ran although only the floor was asked for")
+    # The nearby pose test (filter.nearby_test, on by default) runs on every floor map with
+    # bearings; a floor off by tens of centimetres gives it places to draw at.
+    if results and not any("floor_nearby_draws" in r for r in results):
+        problems.append("floor_nearby_draws not recorded")
+    elif results and sum(r.get("floor_nearby_draws", 0) for r in results) == 0:
+        problems.append("the nearby pose test drew on no floor")
     for p in problems:
         print("check_floor_sweep: " + p)
     print(f"check_floor_sweep: {len(results)} scenes, {len(problems)} problems")

@@ -163,6 +163,10 @@ class LocalizationCycle {
   const PoseOutput& pose() const { return pose_; }
   /// Whether the particles are weighed board by board (a forward map and that model chosen).
   bool uses_boards() const { return use_boards_; }
+  /// On a floor map with bearings: whether the nearby pose test runs (filter.nearby_test), and
+  /// whether the kidnap test takes the floor search's pose as its evidence (kidnap.floor_search).
+  bool uses_nearby_test() const { return nearby_on_; }
+  bool uses_floor_search() const { return floor_search_on_; }
   /// The particles the filter uses now (the capacity, `filter.particles`, unless KLD-sampling
   /// has adapted it).
   std::size_t particle_count() const { return filter_.size(); }
@@ -344,9 +348,6 @@ class LocalizationCycle {
   /// frame.
   static constexpr std::size_t kFloorPassPlaces = 3072;
   static constexpr std::size_t kFloorPlacesPerCycle = 256;
-  /// The heading spread of the particles the nearby pose test draws: its pose's heading comes
-  /// from the bearings, a degree or two.
-  static constexpr double kNearbyDrawYawSigmaRad = 2.0 * algorithms::kPi / 180.0;
   bool floor_search_on_ = false;
   std::uint32_t floor_stride_ = 1;  ///< cells between the places a pass tries, along each axis
   double floor_refine_m_ = 0.02;    ///< the refinement's reach: a stride
