@@ -79,6 +79,7 @@ bool LocalizationCycle::update_with_boards(
   double yaw_variance_rad2 = 0.0;
   const algorithms::Pose2 estimate = filter_.mean_pose(&yaw_variance_rad2);
   observed_ = algorithms::board_features(map_.forward, map_.model.area_scale, areas);
+  ++observations_;
   const algorithms::BoardFeatures& observed = observed_;
   assessment_ = reliability_.assess(map_.forward, observed, estimate, params, board_update_,
                                     yaw_variance_rad2);

@@ -119,7 +119,7 @@ RunRecord replay_scenario(const Scenario& scenario, std::uint64_t seed,
   record.frames.reserve(run.frame_count());
   const double t0 = static_cast<double>(run.frame_timestamp_ns(0)) * 1e-9;
   std::size_t k = 0;
-  std::uint64_t frames_with_fix = 0;
+  std::uint64_t observations = 0;
   while (cycle->run_once() == firmware::CycleResult::kRan) {
     const firmware::PoseOutput& out = cycle->pose();
     FrameRecord f;
@@ -148,12 +148,10 @@ RunRecord replay_scenario(const Scenario& scenario, std::uint64_t seed,
     f.evidence =
         algorithms::Pose2{cycle->kidnap_input().fix_x_m, cycle->kidnap_input().fix_y_m, 0.0};
     f.evidence_distance_m = cycle->kidnap_input().fix_distance_m;
-    // The cycle weighs the boards on the cycles that took a frame with a fix (used or not);
-    // on the others its observation is the last frame's, so no fit is written for them.
-    const std::uint64_t seen_frames =
-        cycle->counters().fixes_used + cycle->counters().unknown_place;
-    const bool weighed = seen_frames != frames_with_fix;
-    frames_with_fix = seen_frames;
+    // On the cycles that did not weigh the boards (no frame, or the first frame, which seeds
+    // the filter) the observation is an older frame's, so no fit is written for them.
+    const bool weighed = cycle->board_observations() != observations;
+    observations = cycle->board_observations();
     if (detail == ReplayDetail::kBoardFits && cycle->uses_boards() && weighed) {
       const algorithms::BoardFeatures& seen = cycle->board_observation();
       const algorithms::BoardModelParams& params = config.observation.boards;

@@ -69,8 +69,9 @@ struct FrameRecord {
   /// How well the frame's boards fit the forward map at the true pose and at the estimate
   /// (algorithms::floor_fit: nats, at most ln(1 + c) a term, in the map's trained noise). NaN
   /// where they were not computed: a replay without board fits, a map without a forward map, or
-  /// a cycle that did not weigh the boards (no new frame). The estimate fitting better than the
-  /// truth says the map is wrong there, an equal fit that the boards cannot tell the two apart.
+  /// a cycle that did not weigh the boards (no new frame, or the first frame, which seeds the
+  /// filter). The estimate fitting better than the truth says the map is wrong there, an equal
+  /// fit that the boards cannot tell the two apart.
   double truth_nats = std::numeric_limits<double>::quiet_NaN();
   double estimate_nats = std::numeric_limits<double>::quiet_NaN();
   double sigma_m = 0.0;        ///< the published position spread (root of the mean variance)

@@ -46,6 +46,10 @@ def main():
     fitted = [r for r in rows if not math.isnan(float(r["truth_nats"]))]
     if len(fitted) * 2 < len(rows):
         problems.append(f"fits in only {len(fitted)} of {len(rows)} frames")
+    # The first frame seeds the filter without weighing the boards: no fit is written for it
+    # (there is no frame's observation yet to fit).
+    if rows and not math.isnan(float(rows[0]["truth_nats"])):
+        problems.append("a fit written for the first frame, which weighed no boards")
     if any(math.isnan(float(r["estimate_nats"])) for r in fitted):
         problems.append("a fit at the truth without one at the estimate")
     if any(not (float(r["truth_nats"]) <= bound and float(r["estimate_nats"]) <= bound)

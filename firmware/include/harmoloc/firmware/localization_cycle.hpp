@@ -178,6 +178,9 @@ class LocalizationCycle {
   /// The boards as the last frame weighed against the forward map showed them (features and
   /// image angles; nothing seen before the first such frame).
   const algorithms::BoardFeatures& board_observation() const { return observed_; }
+  /// Frames whose boards were weighed against the forward map so far (board_observation()
+  /// changed): a replay tells from it which cycles weighed the boards.
+  std::uint64_t board_observations() const { return observations_; }
   /// The global fix the kidnap test compares with (computed without distrusted boards).
   const algorithms::HarmonicFix& robust_fix() const { return robust_fix_; }
   /// The check of the fix's boards (which it holds suspect).
@@ -326,6 +329,7 @@ class LocalizationCycle {
   std::array<float, algorithms::kMaxBoards> board_maxima_{};  ///< per board, over the map
   algorithms::BoardUpdate board_update_{};
   algorithms::BoardFeatures observed_{};
+  std::uint64_t observations_ = 0;  ///< board_observations()
   algorithms::BoardAssessment assessment_{};
   algorithms::HarmonicFix robust_fix_{};
   algorithms::FixBoardCheck fix_check_;
