@@ -155,12 +155,16 @@ bool LocalizationCycle::update_with_boards(
     in.fix_x_m = evidence_fix.x_m;
     in.fix_y_m = evidence_fix.y_m;
     // Also for a fix that is not a known place: without a known fix, "lost" needs the boards to
-    // prefer the fix's place as well (algorithms/kidnap_detector.hpp).
-    const bool fix_finite = std::isfinite(evidence_fix.x_m) && std::isfinite(evidence_fix.y_m);
+    // prefer the fix's place as well (algorithms/kidnap_detector.hpp). A fix beyond the mapped
+    // region (a local linear correction extrapolates) is no evidence either way: a re-seed there
+    // would be published as off the map.
+    const bool fix_usable = std::isfinite(evidence_fix.x_m) && std::isfinite(evidence_fix.y_m) &&
+                            !off_map(algorithms::Pose2{evidence_fix.x_m, evidence_fix.y_m, 0.0});
+    if (!fix_usable) in.fix_known = false;
     in.fix_distance_m =
-        fix_finite ? std::hypot(evidence_fix.x_m - estimate.x_m, evidence_fix.y_m - estimate.y_m)
+        fix_usable ? std::hypot(evidence_fix.x_m - estimate.x_m, evidence_fix.y_m - estimate.y_m)
                    : 0.0;
-    if (fix_finite && in.fix_distance_m >= kidnap_params_.fix_distance_m) {
+    if (fix_usable && in.fix_distance_m >= kidnap_params_.fix_distance_m) {
       // The boards' best place near the fix (as far from it as the kidnap distance, and as
       // far from the estimate), not the fix's own place alone: where few boards are in view the
       // fix can be off by more than its training error while the boards tell the place apart.
