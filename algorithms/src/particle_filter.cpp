@@ -228,14 +228,14 @@ inline double likelihood_at(const BoardUpdate& u, const GridPoint& at, const Pos
 
 double ParticleFilter::board_likelihood(const BoardUpdate& u, const Pose2& pose) {
   if (u.map == nullptr) return 1.0;
+  Pose2 p = pose;
+  p.yaw_rad = wrap_angle_rad(pose.yaw_rad);
   float cos_yaw = 1.0F, sin_yaw = 0.0F;
   if (needs_unit_heading(u)) {
-    const auto yaw = static_cast<float>(wrap_angle_rad(pose.yaw_rad));
+    const auto yaw = static_cast<float>(p.yaw_rad);
     cos_yaw = std::cos(yaw);
     sin_yaw = std::sin(yaw);
   }
-  Pose2 p = pose;
-  p.yaw_rad = wrap_angle_rad(pose.yaw_rad);
   return likelihood_at(u, locate(*u.map, p.x_m, p.y_m), p, cos_yaw, sin_yaw, camera_bearings_of(u));
 }
 

@@ -91,7 +91,8 @@ struct CycleCounters {
   std::uint64_t kidnap_triggers = 0;  ///< frames where Yang et al.'s change rate exceeded 0.5
   std::uint64_t kidnaps = 0;          ///< confirmed kidnaps (the filter was re-seeded)
   std::uint64_t lost = 0;             ///< of those, re-seeded over the whole map (no fix)
-  /// Particles drawn around a nearby pose the boards kept preferring (floor maps).
+  /// Draws of particles around a nearby pose the boards kept preferring (floor maps): times,
+  /// not particles.
   std::uint64_t nearby_draws = 0;
   std::uint64_t link_dropped = 0;
   std::array<std::uint64_t, 5> cycles_in_health{};

@@ -113,7 +113,7 @@ struct Filter {
   std::uint64_t kidnap_triggers = 0;
   std::uint64_t kidnaps = 0;
   std::uint64_t lost = 0;
-  std::uint64_t nearby_draws = 0;  ///< particles drawn at a nearby pose the boards preferred
+  std::uint64_t nearby_draws = 0;  ///< draws at a nearby pose the boards preferred (times)
 };
 
 struct Recording {
