@@ -237,7 +237,7 @@ MapError decode_forward(Reader& r, std::uint32_t version, std::uint32_t boards, 
   if ((flag & 16U) != 0U && !ForwardMap::kHeadingTermStorage)
     return MapError{
         "forward map holds visibility (a floor map) this build has no room for (train it "
-        "without --visibility)",
+        "with --no-visibility)",
         r.pos()};
 
   // The layout: every tile (versions 3 and 4), or the stored tiles' bitmap (version 5).

@@ -9,6 +9,7 @@
 #include "forward_map_training_parts.hpp"
 #include "harmoloc/algorithms/geometry.hpp"
 #include "harmoloc/algorithms/harmonic_localizer.hpp"
+#include "harmoloc/algorithms/map_codec.hpp"
 
 namespace harmoloc::sim_host::forward_map_training_detail {
 
@@ -475,8 +476,11 @@ void fit_bearings_from(const std::vector<Positioned>& frames, const std::vector<
   const double near_m = std::max(2.0 * report.pass_spread_m, 0.01);
   // Visibility needs the bearings seen from the camera's place (there a board's whole feature
   // holds at every heading) and takes the heading terms' storage.
-  const bool visibility =
-      every_heading && opt.visibility && ForwardMap::kHeadingTermStorage && !out.has_heading_terms;
+  const bool floor = report.pass_heading_spread_rad >=
+                     static_cast<double>(algorithms::kFloorMapPassHeadingSpread_rad);
+  const bool visibility = every_heading &&
+                          (opt.visibility || (opt.visibility_on_floors && floor)) &&
+                          ForwardMap::kHeadingTermStorage && !out.has_heading_terms;
   const auto half_fov = static_cast<float>(std::fabs(0.5 * law[0] + 0.125 * law[1]));
   // Per board, the squared residuals of the areas as the visibility predicts them from other
   // passes, and how many frames it could not predict (no bearing from other passes there).

@@ -76,8 +76,14 @@ int main(int argc, char** argv) {
                  "into this folder: seed-N-nominal.csv, -kidnap, -dynamic, -long");
   app.add_flag("--heading-terms", opt.heading_terms,
                "floor: train the floor's map with heading terms (harmoloc-train --heading-terms)");
-  app.add_flag("--visibility", opt.visibility,
-               "floor: train the floor's map with visibility (harmoloc-train --visibility)");
+  CLI::Option* visibility_flag =
+      app.add_flag("--visibility", opt.visibility,
+                   "floor: train the floor's map with visibility (harmoloc-train --visibility; a\n"
+                   "floor map has it by default)");
+  app.add_flag("--no-visibility", opt.no_visibility,
+               "floor: train the floor's map without visibility (harmoloc-train --no-visibility),\n"
+               "for comparison")
+      ->excludes(visibility_flag);
   app.add_flag("--axle-bearings", opt.axle_bearings,
                "keep the maps' bearings over the axle's place, as when the camera's offset is\n"
                "not given (harmoloc-train --camera-forward-m 0), for comparison");
@@ -154,6 +160,7 @@ int main(int argc, char** argv) {
                     {"heading_terms", opt.heading_terms},
                     {"axle_bearings", opt.axle_bearings},
                     {"visibility", opt.visibility},
+                    {"no_visibility", opt.no_visibility},
                     {"roams", opt.roams}};
     j["results"] = nlohmann::json::array();
     for (const SceneResult& r : finished) j["results"].push_back(to_json(r));

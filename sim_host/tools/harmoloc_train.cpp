@@ -86,13 +86,20 @@ int main(int argc, char** argv) {
       "about 4 times longer). Experimental: not for the bare-metal kernels (no room);\n"
       "on random floors they bettered the heading and kidnaps, the position only in\n"
       "the median (docs/sweep.md)");
-  bool visibility = false;
-  app.add_flag("--visibility", visibility,
-               "model each board's area on a floor by whether the lens sees it at the heading:\n"
-               "per place its area seen whole from the camera's place, its bearing and width\n"
-               "(map format 10; needs bearings and the camera's offset; not with\n"
-               "--heading-terms, not for the bare-metal kernels). docs/filter.md")
-      ->excludes(terms_flag);
+  bool visibility = false, no_visibility = false;
+  CLI::Option* visibility_flag =
+      app.add_flag("--visibility", visibility,
+                   "model each board's area by whether the lens sees it at the heading, on a\n"
+                   "route map too: per place its area seen whole from the camera's place, its\n"
+                   "bearing and width (map format 10; needs bearings and the camera's offset;\n"
+                   "not with --heading-terms, not for the bare-metal kernels). docs/filter.md.\n"
+                   "A floor map has it by default")
+          ->excludes(terms_flag);
+  app.add_flag("--no-visibility", no_visibility,
+               "a floor map without visibility: the boards' areas averaged over the headings\n"
+               "driven at each place (as before map format 10; what the bare-metal kernels\n"
+               "can hold)")
+      ->excludes(visibility_flag);
   double camera_forward = std::numeric_limits<double>::quiet_NaN();
   app.add_option(
          "--camera-forward-m", camera_forward,
@@ -157,6 +164,7 @@ int main(int argc, char** argv) {
     opt.bearings = !no_bearings;
     if (heading_terms) opt.forward.heading_ridges = sim_host::kHeadingRidges;
     opt.forward.visibility = visibility;
+    opt.forward.visibility_on_floors = !no_visibility;
     opt.forward.camera_forward_m = camera_forward;
     opt.label_tolerance_ns = static_cast<std::uint64_t>(std::llround(label_tolerance_ms * 1e6));
     if (label_offset == "auto") {
@@ -421,7 +429,7 @@ int main(int argc, char** argv) {
                 "visibility    each board's area seen whole from the camera's place, in view by "
                 "its bearing; towards the frame's edge it grows by 1 + %.2f a^2\n",
                 fw.visibility_angle_gain);
-          else if (visibility)
+          else if (visibility || (!no_visibility && algorithms::is_floor_map(map.calibration)))
             std::printf(
                 "visibility    none: it needs the bearings seen from the camera's place "
                 "(--camera-forward-m) and no heading terms\n");

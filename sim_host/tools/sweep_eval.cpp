@@ -154,6 +154,7 @@ void floor_part(const Scenario& scene, const algorithms::ThresholdSet& threshold
     TrainOptions train;
     if (opt.heading_terms) train.forward.heading_ridges = kHeadingRidges;
     train.forward.visibility = opt.visibility;
+    train.forward.visibility_on_floors = !opt.no_visibility;
     if (opt.axle_bearings) train.forward.camera_forward_m = 0.0;
     const TrainedMap trained =
         train_on_scenario(coverage, kCoverageSeed, nullptr, &thresholds, &train);

@@ -32,7 +32,8 @@ struct SweepOptions {
   /// The maps keep the bearings over the axle's place, as without the camera's offset
   /// (harmoloc-train --camera-forward-m 0), for comparison.
   bool axle_bearings = false;
-  bool visibility = false;     ///< floor: the map's visibility instead of heading terms
+  bool visibility = false;     ///< the maps' visibility asked for (harmoloc-train --visibility)
+  bool no_visibility = false;  ///< floor: no visibility (harmoloc-train --no-visibility)
   int kidnaps = 20;            ///< kidnaps in the kidnap run (each >= 1 m)
   double long_minutes = 10.0;  ///< length of the long nominal run
   std::uint64_t filter_seed = 1;
@@ -105,7 +106,7 @@ struct SceneResult {
   double floor_validation_rmse = -1.0, floor_mean_validation_rmse = -1.0;
   /// The share of the circle of headings the floor map covers near the coverage run (-1: none).
   double floor_covered_heading_fraction = -1.0;
-  double floor_roam_s = 0.0;                                    ///< the roams' run time
+  double floor_roam_s = 0.0;  ///< the roams' run time
   /// The nearby pose test's draws in the roams, not the kidnap roam (filter.nearby_draws).
   std::uint64_t floor_nearby_draws = 0;
   double floor_fix_mse_x_m2 = -1.0, floor_fix_mse_y_m2 = -1.0;  ///< every frame with a fix

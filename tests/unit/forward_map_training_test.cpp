@@ -447,42 +447,46 @@ TEST(ForwardMapTraining, VisibilityPredictsABoardInViewAndOutOfView) {
   const auto whole = [&](double cx, double cy) {
     return 0.3 / ((bx - cx) * (bx - cx) + (by - cy) * (by - cy));
   };
-  PlacedRun run;
-  std::vector<float> bearing;
-  hs::BearingObservations bearings;
-  bearings.a1_rad = 1.2;  // half field of view 0.6 rad
-  double travel = 0.0;
-  for (int pass = 0; pass < 4; ++pass) {
-    for (int i = 0; i <= 400; ++i) {
-      const double x = 0.5 + 0.005 * (pass % 2 == 0 ? i : 400 - i);
-      const double yaw = pass % 2 == 0 ? 0.0 : 180.0 * deg;
-      const double cx = x + d * std::cos(yaw), cy = 0.5 + d * std::sin(yaw);
-      const double wobble = 1.0 + 0.01 * std::sin(1.3 * static_cast<double>(run.features.size()));
-      const bool in_view = pass % 2 == 0;
-      add_frame(run, in_view ? whole(cx, cy) * wobble : 0.0, 2.0 + std::sin(2.0 * x), x, 0.5, yaw,
-                travel);
-      travel += 0.005;
-      bearings.world_rad.push_back(
-          {in_view ? static_cast<float>(std::atan2(by - cy, bx - cx)) : std::nanf(""),
-           std::nanf("")});
-      bearings.half_width_rad.push_back({in_view ? 0.02F : 0.0F, 0.0F});
+  // The lane driven both ways (four passes: a floor map), or only towards the board (passes
+  // 0 and 2: a route map).
+  const auto drive = [&](PlacedRun& run, hs::BearingObservations& bearings, int step) {
+    bearings.a1_rad = 1.2;  // half field of view 0.6 rad
+    double travel = 0.0;
+    for (int pass = 0; pass < 4; pass += step) {
+      for (int i = 0; i <= 400; ++i) {
+        const double x = 0.5 + 0.005 * (pass % 2 == 0 ? i : 400 - i);
+        const double yaw = pass % 2 == 0 ? 0.0 : 180.0 * deg;
+        const double cx = x + d * std::cos(yaw), cy = 0.5 + d * std::sin(yaw);
+        const double wobble = 1.0 + 0.01 * std::sin(1.3 * static_cast<double>(run.features.size()));
+        const bool in_view = pass % 2 == 0;
+        add_frame(run, in_view ? whole(cx, cy) * wobble : 0.0, 2.0 + std::sin(2.0 * x), x, 0.5, yaw,
+                  travel);
+        travel += 0.005;
+        bearings.world_rad.push_back(
+            {in_view ? static_cast<float>(std::atan2(by - cy, bx - cx)) : std::nanf(""),
+             std::nanf("")});
+        bearings.half_width_rad.push_back({in_view ? 0.02F : 0.0F, 0.0F});
+      }
     }
-  }
-  // Where the boards stand, as the bearings' calibration places them: board 0 only.
-  bearings.placements.resize(2);
-  bearings.placements[0].placed = true;
-  bearings.placements[0].x_m = bx;
-  bearings.placements[0].y_m = by;
+    // Where the boards stand, as the bearings' calibration places them: board 0 only.
+    bearings.placements.resize(2);
+    bearings.placements[0].placed = true;
+    bearings.placements[0].x_m = bx;
+    bearings.placements[0].y_m = by;
+  };
+  PlacedRun run;
+  hs::BearingObservations bearings;
+  drive(run, bearings, 1);
   hs::ForwardMapOptions opt;
   opt.camera_forward_m = d;
-  opt.visibility = true;
   auto map = std::make_unique<ha::ForwardMap>();
   const hs::ForwardMapReport report =
       hs::train_forward_map_placed(run.features, run.placed, 2, opt, *map, &bearings);
   ASSERT_TRUE(map->has_visibility);
   ASSERT_TRUE(report.visibility);
+  // Lanes at opposite headings make a floor map: visibility by default; without it, the mix.
   auto mixed = std::make_unique<ha::ForwardMap>();
-  opt.visibility = false;
+  opt.visibility_on_floors = false;
   const hs::ForwardMapReport mixed_report =
       hs::train_forward_map_placed(run.features, run.placed, 2, opt, *mixed, &bearings);
   ASSERT_FALSE(mixed->has_visibility);
@@ -510,4 +514,21 @@ TEST(ForwardMapTraining, VisibilityPredictsABoardInViewAndOutOfView) {
   EXPECT_LT(report.sigma[0], 0.25 * mixed_report.sigma[0]);
   // Board 1 gives no bearing: it keeps the mixed map's noise and features.
   EXPECT_DOUBLE_EQ(report.sigma[1], mixed_report.sigma[1]);
+  // A route map holds visibility only when asked for.
+  PlacedRun route;
+  hs::BearingObservations route_bearings;
+  drive(route, route_bearings, 2);
+  hs::ForwardMapOptions route_opt;
+  route_opt.camera_forward_m = d;
+  auto route_map = std::make_unique<ha::ForwardMap>();
+  EXPECT_FALSE(hs::train_forward_map_placed(route.features, route.placed, 2, route_opt, *route_map,
+                                            &route_bearings)
+                   .visibility);
+  EXPECT_FALSE(route_map->has_visibility);
+  EXPECT_TRUE(route_map->has_bearings);
+  route_opt.visibility = true;
+  EXPECT_TRUE(hs::train_forward_map_placed(route.features, route.placed, 2, route_opt, *route_map,
+                                           &route_bearings)
+                  .visibility);
+  EXPECT_TRUE(route_map->has_visibility);
 }
