@@ -32,7 +32,7 @@ struct SweepOptions {
   /// The maps keep the bearings over the axle's place, as without the camera's offset
   /// (harmoloc-train --camera-forward-m 0), for comparison.
   bool axle_bearings = false;
-  bool visibility = false;     ///< the maps' visibility asked for (harmoloc-train --visibility)
+  bool visibility = false;     ///< floor: visibility asked for (harmoloc-train --visibility)
   bool no_visibility = false;  ///< floor: no visibility (harmoloc-train --no-visibility)
   int kidnaps = 20;            ///< kidnaps in the kidnap run (each >= 1 m)
   double long_minutes = 10.0;  ///< length of the long nominal run
