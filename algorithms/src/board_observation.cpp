@@ -52,9 +52,95 @@ bool frame_implausible(const ForwardMap& map, const std::array<float, kMaxBoards
 
 namespace {
 
-// board_preference from what the map expects at place a (@p ea) and at place b (@p eb).
+/// Each board's bearing log-likelihood at one place, free of the robot's heading (bit b of mask:
+/// board b has one there).
+struct BearingFit {
+  std::array<double, kMaxBoards> log_like{};
+  std::uint32_t mask = 0;
+  double heading_rad = 0.0;  ///< the heading the bearings agree on
+};
+
+/// The boards' bearings at a place, weighed without knowing the heading: each board seen whole
+/// implies one (its image angle plus the map's world bearing of it there), and at the right place
+/// they agree. The heading is the one that fits most boards (each board's own tried, each other
+/// board costing its chi2 up to that of the outlier floor; then moved to the mean of those within
+/// three widths), so a single moved board costs only itself. With fewer than two such boards
+/// there is nothing to compare: none. With @p heading_hint_rad (the heading found at a place
+/// nearby: the robot has one heading, and within the kidnap test's reach it moves the camera's
+/// place by millimetres) the bearings are read at the camera's place at once.
+BearingFit bearing_fit(const ForwardMap& map, const BoardFeatures& observed, double x_m, double y_m,
+                       const BoardModelParams& params, std::uint32_t leave_out,
+                       const double* heading_hint_rad = nullptr) {
+  BearingFit fit;
+  if (!params.bearings || !map.has_bearings) return fit;
+  const std::size_t boards = std::min<std::size_t>({map.board_count, observed.count, kMaxBoards});
+  const double c = params.outlier_floor;
+  // Beyond this chi2 a board's likelihood is mostly the floor's: -2 ln c.
+  const double chi2_cap = c > 0.0 ? -2.0 * std::log(c) : std::numeric_limits<double>::infinity();
+  std::array<double, kMaxBoards> implied{}, inv_var{};
+  std::uint32_t mask = 0;
+  double heading = heading_hint_rad != nullptr ? *heading_hint_rad : 0.0;
+  // Where the bearings are read depends on the heading when the camera sits ahead of the axle:
+  // without a hint, a first pass at the axle's place gives the heading, a second at the camera's.
+  const bool ahead = map.bearing_camera_forward_m != 0.0F;
+  const int passes = ahead && heading_hint_rad == nullptr ? 2 : 1;
+  for (int pass = 0; pass < passes; ++pass) {
+    const bool at_camera = ahead && (pass == 1 || heading_hint_rad != nullptr);
+    const GridPoint at = at_camera
+                             ? bearing_point(map, x_m, y_m, std::cos(heading), std::sin(heading))
+                             : locate(map, x_m, y_m);
+    mask = 0;
+    for (std::size_t b = 0; b < boards; ++b) {
+      const double sigma = static_cast<double>(map.bearing_sigma_rad[b]);
+      float bearing = 0.0F;
+      if (((observed.angle_mask >> b) & 1U) == 0U || ((leave_out >> b) & 1U) != 0U ||
+          !(map.sigma[b] > 0.0F) || !(sigma > 0.0) || !expected_bearing(map, at, b, bearing))
+        continue;
+      implied[b] =
+          wrap_once_rad(static_cast<double>(observed.angle_rad[b]) + static_cast<double>(bearing));
+      inv_var[b] = 1.0 / (sigma * sigma);
+      mask |= 1U << b;
+    }
+    if (__builtin_popcount(mask) < 2) return fit;
+    double best_cost = std::numeric_limits<double>::infinity();
+    for (std::uint32_t m = mask; m != 0U; m &= m - 1U) {
+      const double h = implied[static_cast<std::size_t>(__builtin_ctz(m))];
+      double cost = 0.0;
+      for (std::uint32_t n = mask; n != 0U; n &= n - 1U) {
+        const auto b = static_cast<std::size_t>(__builtin_ctz(n));
+        const double r = wrap_once_rad(implied[b] - h);
+        cost += std::min(r * r * inv_var[b], chi2_cap);
+      }
+      if (cost < best_cost) {
+        best_cost = cost;
+        heading = h;
+      }
+    }
+    double shift = 0.0, weight = 0.0;
+    for (std::uint32_t n = mask; n != 0U; n &= n - 1U) {
+      const auto b = static_cast<std::size_t>(__builtin_ctz(n));
+      const double r = wrap_once_rad(implied[b] - heading);
+      if (r * r * inv_var[b] > 9.0) continue;
+      shift += r * inv_var[b];
+      weight += inv_var[b];
+    }
+    if (weight > 0.0) heading = wrap_once_rad(heading + shift / weight);
+  }
+  for (std::uint32_t n = mask; n != 0U; n &= n - 1U) {
+    const auto b = static_cast<std::size_t>(__builtin_ctz(n));
+    const double r = wrap_once_rad(implied[b] - heading);
+    fit.log_like[b] = std::log(std::exp(-0.5 * r * r * inv_var[b]) + c);
+  }
+  fit.mask = mask;
+  fit.heading_rad = heading;
+  return fit;
+}
+
+// board_preference from what the map expects at place a (@p ea) and at place b (@p eb), and the
+// boards' bearings' fits there (@p bearing_a, @p bearing_b).
 double preference(const ForwardMap& map, const BoardFeatures& observed, const float* ea,
-                  const float* eb, const BoardModelParams& params, std::uint32_t leave_out) {
+                  const float* eb, const BearingFit& bearing_a, const BearingFit& bearing_b,
+                  const BoardModelParams& params, std::uint32_t leave_out) {
   const std::size_t boards = std::min<std::size_t>({map.board_count, observed.count, kMaxBoards});
   const double c = params.outlier_floor;
   const double hidden = std::max(params.hidden_floor, c);
@@ -73,6 +159,10 @@ double preference(const ForwardMap& map, const BoardFeatures& observed, const fl
     // is likelier than an arbitrary outlier, so b loses less by it.
     if (rb < 0.0) lb = std::max(lb, hidden);
     sum += std::log(la) - std::log(lb);
+    // A board seen whole shows where it is, hidden or not elsewhere: its bearing counts where
+    // both places have one.
+    if (((bearing_a.mask & bearing_b.mask) >> b) & 1U)
+      sum += bearing_a.log_like[b] - bearing_b.log_like[b];
   }
   return sum;
 }
@@ -86,7 +176,9 @@ double board_preference(const ForwardMap& map, const BoardFeatures& observed, do
   const SeenHeading heading = seen_heading(yaw_rad);
   expected_at_pose(map, locate(map, ax_m, ay_m), ax_m, ay_m, heading, ea.data());
   expected_at_pose(map, locate(map, bx_m, by_m), bx_m, by_m, heading, eb.data());
-  return preference(map, observed, ea.data(), eb.data(), params, leave_out);
+  return preference(map, observed, ea.data(), eb.data(),
+                    bearing_fit(map, observed, ax_m, ay_m, params, leave_out),
+                    bearing_fit(map, observed, bx_m, by_m, params, leave_out), params, leave_out);
 }
 
 PlacePreference board_preference_near(const ForwardMap& map, const BoardFeatures& observed,
@@ -94,14 +186,18 @@ PlacePreference board_preference_near(const ForwardMap& map, const BoardFeatures
                                       double by_m, double min_distance_m,
                                       const BoardModelParams& params, std::uint32_t leave_out,
                                       double yaw_rad) {
-  PlacePreference best{
-      board_preference(map, observed, ax_m, ay_m, bx_m, by_m, params, leave_out, yaw_rad), ax_m,
-      ay_m};
-  if (!(radius_m > 0.0) || !map.present()) return best;
   // Place b and the heading are the same for every candidate.
   const SeenHeading heading = seen_heading(yaw_rad);
   std::array<float, kMaxBoards> ea{}, eb{};
   expected_at_pose(map, locate(map, bx_m, by_m), bx_m, by_m, heading, eb.data());
+  const BearingFit bearing_b = bearing_fit(map, observed, bx_m, by_m, params, leave_out);
+  expected_at_pose(map, locate(map, ax_m, ay_m), ax_m, ay_m, heading, ea.data());
+  const BearingFit bearing_a = bearing_fit(map, observed, ax_m, ay_m, params, leave_out);
+  PlacePreference best{
+      preference(map, observed, ea.data(), eb.data(), bearing_a, bearing_b, params, leave_out),
+      ax_m, ay_m};
+  if (!(radius_m > 0.0) || !map.present()) return best;
+  const double* hint = bearing_a.mask != 0U ? &bearing_a.heading_rad : nullptr;
   // A grid of at most 25 x 25 places over the disc, none finer than the map's cells.
   const double step = std::max(static_cast<double>(map.cell_m), radius_m / 12.0);
   const int reach = static_cast<int>(std::floor(radius_m / step));
@@ -115,7 +211,9 @@ PlacePreference board_preference_near(const ForwardMap& map, const BoardFeatures
       const GridPoint at = locate(map, x, y);
       if (static_cast<double>(route_distance(map, at)) > on_route_m) continue;
       expected_at_pose(map, at, x, y, heading, ea.data());
-      const double nats = preference(map, observed, ea.data(), eb.data(), params, leave_out);
+      const double nats = preference(map, observed, ea.data(), eb.data(),
+                                     bearing_fit(map, observed, x, y, params, leave_out, hint),
+                                     bearing_b, params, leave_out);
       if (nats > best.nats) best = PlacePreference{nats, x, y};
     }
   }

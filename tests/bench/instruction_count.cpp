@@ -17,6 +17,10 @@
 //   harmonic N                 harmonic query over N samples, 6 boards
 //   harmonic_linear N          the same with the local linear correction (ridge 0.01)
 //   filter N                   particle filter step with N particles
+//   kidnap_preference R        the kidnap test's board preference over the places within R cm of
+//                              a fix 60 cm along the route from the estimate (areas and bearings;
+//                              only while a fix is that far)
+//   kidnap_preference_areas R  the same from the areas alone
 //   cycle RES, cycle_yuyv RES  the whole cycle, steady state: 6 boards, 1024 particles, 204 samples
 //   cycle_boards N, cycle_particles N, cycle_samples N   the whole cycle at 640x480 RGB24 with
 //                              one of those changed
@@ -36,6 +40,7 @@
 #endif
 
 #include "bench_fixtures.hpp"
+#include "harmoloc/algorithms/board_observation.hpp"
 #include "harmoloc/algorithms/harmonic_localizer.hpp"
 #include "harmoloc/algorithms/particle_filter.hpp"
 #include "harmoloc/algorithms/random.hpp"
@@ -246,6 +251,18 @@ int main(int argc, char** argv) {
       (void)filter.update_boards(update);
       filter.resample_if_needed(1.1);
       (void)filter.estimate();
+    });
+  } else if (kernel == "kidnap_preference" || kernel == "kidnap_preference_areas") {
+    bench::synthetic_map(204, 320, 240, g_map);
+    algorithms::BoardModelParams params;
+    params.bearings = kernel == "kidnap_preference";
+    algorithms::BoardFeatures observed;
+    bench::bench_observation(g_map.forward, observed);
+    const double reach_m = 0.01 * static_cast<double>(n);
+    // The synthetic map's route runs along x = 2.1.
+    measure([&] {
+      (void)algorithms::board_preference_near(g_map.forward, observed, 2.1, 1.6, reach_m, 2.1, 1.0,
+                                              reach_m, params);
     });
   } else if (kernel == "filter") {
     static algorithms::ParticleFilter filter;

@@ -816,6 +816,66 @@ TEST(BoardPreference, NearAFixThatIsOffTheBoardsFindTheirPlace) {
   EXPECT_EQ(own.x_m, 1.6);
 }
 
+// The kidnap test's preference weighs the boards' bearings too, without the robot's heading
+// (after a carry it is not the estimate's): each board seen whole implies a heading at a place,
+// and at the right place they agree. A board whose bearing is off costs only itself.
+TEST(BoardPreference, BearingsTellThePlaceWhateverTheHeading) {
+  auto map = make_bearing_map();
+  // Boards 0-2 (board 3 is not modelled): board 0 as make_bearing_map places it.
+  constexpr std::size_t kSeen = 3;
+  const double board_x[kSeen] = {1.5, 3.0, 1.4}, board_y[kSeen] = {2.0, 1.0, -0.8};
+  for (std::size_t b = 1; b < kSeen; ++b) {
+    map->bearing_sigma_rad[b] = 0.005F;
+    for (std::uint32_t r = 0; r < map->rows; ++r) {
+      for (std::uint32_t c = 0; c < map->columns; ++c)
+        map->bearing_rad[map->index(c, r) * ha::kMaxBoards + b] = static_cast<float>(
+            std::atan2(board_y[b] - (0.5 + 0.05 * r), board_x[b] - (1.0 + 0.05 * c)));
+    }
+  }
+  const auto seen_from = [&](double x, double y, double yaw_rad) {
+    ha::BoardFeatures o = observe(x, y);
+    for (std::size_t b = 0; b < kSeen; ++b) {
+      // The residual the filter weighs is yaw - angle - bearing.
+      o.angle_rad[b] = static_cast<float>(
+          ha::wrap_once_rad(yaw_rad - std::atan2(board_y[b] - y, board_x[b] - x)));
+      o.angle_mask |= 1U << b;
+    }
+    return o;
+  };
+  const ha::BoardModelParams params;
+  ha::BoardModelParams areas_only = params;
+  areas_only.bearings = false;
+  // Carried to (1.8, 0.75), the estimate at (1.2, 0.75), at three headings the estimate's is not.
+  const double first =
+      ha::board_preference(*map, seen_from(1.8, 0.75, 0.0), 1.8, 0.75, 1.2, 0.75, params);
+  for (const double yaw : {0.0, 1.2, -2.5}) {
+    const ha::BoardFeatures o = seen_from(1.8, 0.75, yaw);
+    const double with = ha::board_preference(*map, o, 1.8, 0.75, 1.2, 0.75, params, 0U, 0.3);
+    const double without = ha::board_preference(*map, o, 1.8, 0.75, 1.2, 0.75, areas_only, 0U, 0.3);
+    // Two of the three bearings disagree at the estimate whatever its heading: 2 ln(1 / c).
+    EXPECT_GT(with, without + 2.0 * std::log(10.0)) << yaw;
+    EXPECT_NEAR(with, first, 1e-3) << "depends on the heading " << yaw;
+    // Board 0's bearing 0.5 rad off (moved): the other two still agree at the robot's place.
+    ha::BoardFeatures moved = o;
+    moved.angle_rad[0] += 0.5F;
+    const double with_moved =
+        ha::board_preference(*map, moved, 1.8, 0.75, 1.2, 0.75, params, 0U, 0.3);
+    EXPECT_GT(with_moved, without + std::log(10.0)) << yaw;
+    EXPECT_LT(with_moved, with - std::log(10.0)) << yaw;
+    // One bearing alone fits any place at some heading: no evidence.
+    ha::BoardFeatures one = o;
+    one.angle_mask = 1U;
+    EXPECT_NEAR(ha::board_preference(*map, one, 1.8, 0.75, 1.2, 0.75, params, 0U, 0.3), without,
+                1e-9);
+  }
+  // Not carried: seen from the estimate with board 0's bearing off, the bearings do not favour
+  // another place.
+  ha::BoardFeatures home = seen_from(1.2, 0.75, 0.4);
+  home.angle_rad[0] += 0.5F;
+  EXPECT_LT(ha::board_preference(*map, home, 1.8, 0.75, 1.2, 0.75, params),
+            ha::board_preference(*map, home, 1.8, 0.75, 1.2, 0.75, areas_only));
+}
+
 // ---- kidnap test -------------------------------------------------------------------------------
 
 namespace {

@@ -142,6 +142,14 @@ struct BoardAssessment {
 /// has found moved or hidden: a board a person is walking away from is still partly hidden, and
 /// with three boards its shortfall alone can favour a place a few centimetres off). Both places
 /// are seen at heading @p yaw_rad (what a map with heading terms expects depends on it).
+///
+/// Where the map holds bearings (and params.bearings), each board seen whole adds the same
+/// robust log-ratio for its bearing, free of the heading: at each place the heading is the one
+/// most boards' bearings agree on (each implies one: its image angle plus the map's world bearing
+/// there), and a board's chi2 is its disagreement with it in the trained bearing sigma. A hidden
+/// board shows no bearing, so a robot carried to where the boards look smaller (which the area
+/// terms let cost the estimate little) is still told apart; with fewer than two such boards the
+/// bearings say nothing.
 double board_preference(const ForwardMap& map, const BoardFeatures& observed, double ax_m,
                         double ay_m, double bx_m, double by_m, const BoardModelParams& params,
                         std::uint32_t leave_out = 0, double yaw_rad = 0.0);
