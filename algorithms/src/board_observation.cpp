@@ -66,8 +66,9 @@ struct BearingFit {
 /// board costing its chi2 up to that of the outlier floor; then moved to the mean of those within
 /// three widths), so a single moved board costs only itself. With fewer than two such boards
 /// there is nothing to compare: none. With @p heading_hint_rad (the heading found at a place
-/// nearby: the robot has one heading, and within the kidnap test's reach it moves the camera's
-/// place by millimetres) the bearings are read at the camera's place at once.
+/// nearby: the robot has one heading) the bearings are read at the camera's place at once. Near
+/// the robot's own place, where it matters, the hint is within degrees of the heading found there,
+/// which moves the camera's place by millimetres.
 BearingFit bearing_fit(const ForwardMap& map, const BoardFeatures& observed, double x_m, double y_m,
                        const BoardModelParams& params, std::uint32_t leave_out,
                        const double* heading_hint_rad = nullptr) {
