@@ -478,8 +478,8 @@ void fit_bearings_from(const std::vector<Positioned>& frames, const std::vector<
   // holds at every heading) and takes the heading terms' storage.
   const bool floor = report.pass_heading_spread_rad >=
                      static_cast<double>(algorithms::kFloorMapPassHeadingSpread_rad);
-  const bool visibility = every_heading &&
-                          (opt.visibility || (opt.visibility_on_floors && floor)) &&
+  report.visibility_wanted = opt.visibility || (opt.visibility_on_floors && floor);
+  const bool visibility = every_heading && report.visibility_wanted &&
                           ForwardMap::kHeadingTermStorage && !out.has_heading_terms;
   const auto half_fov = static_cast<float>(std::fabs(0.5 * law[0] + 0.125 * law[1]));
   // Per board, the squared residuals of the areas as the visibility predicts them from other

@@ -429,7 +429,7 @@ int main(int argc, char** argv) {
                 "visibility    each board's area seen whole from the camera's place, in view by "
                 "its bearing; towards the frame's edge it grows by 1 + %.2f a^2\n",
                 fw.visibility_angle_gain);
-          else if (visibility || (!no_visibility && algorithms::is_floor_map(map.calibration)))
+          else if (fw.visibility_wanted)
             std::printf(
                 "visibility    none: it needs the bearings seen from the camera's place "
                 "(--camera-forward-m) and no heading terms\n");

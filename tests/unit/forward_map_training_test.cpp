@@ -474,22 +474,26 @@ TEST(ForwardMapTraining, VisibilityPredictsABoardInViewAndOutOfView) {
     bearings.placements[0].x_m = bx;
     bearings.placements[0].y_m = by;
   };
+  const auto train = [](const PlacedRun& r, const hs::BearingObservations& b,
+                        const hs::ForwardMapOptions& o, ha::ForwardMap& m) {
+    return hs::train_forward_map_placed(r.features, r.placed, 2, o, m, &b);
+  };
   PlacedRun run;
   hs::BearingObservations bearings;
   drive(run, bearings, 1);
   hs::ForwardMapOptions opt;
   opt.camera_forward_m = d;
   auto map = std::make_unique<ha::ForwardMap>();
-  const hs::ForwardMapReport report =
-      hs::train_forward_map_placed(run.features, run.placed, 2, opt, *map, &bearings);
+  const hs::ForwardMapReport report = train(run, bearings, opt, *map);
   ASSERT_TRUE(map->has_visibility);
   ASSERT_TRUE(report.visibility);
+  EXPECT_TRUE(report.visibility_wanted);
   // Lanes at opposite headings make a floor map: visibility by default; without it, the mix.
   auto mixed = std::make_unique<ha::ForwardMap>();
   opt.visibility_on_floors = false;
-  const hs::ForwardMapReport mixed_report =
-      hs::train_forward_map_placed(run.features, run.placed, 2, opt, *mixed, &bearings);
+  const hs::ForwardMapReport mixed_report = train(run, bearings, opt, *mixed);
   ASSERT_FALSE(mixed->has_visibility);
+  EXPECT_FALSE(mixed_report.visibility_wanted);
   double mixed_worst = 0.0;
   for (const double x : {1.0, 1.5, 2.0}) {
     const double in_view = whole(x + d, 0.5);
@@ -521,14 +525,12 @@ TEST(ForwardMapTraining, VisibilityPredictsABoardInViewAndOutOfView) {
   hs::ForwardMapOptions route_opt;
   route_opt.camera_forward_m = d;
   auto route_map = std::make_unique<ha::ForwardMap>();
-  EXPECT_FALSE(hs::train_forward_map_placed(route.features, route.placed, 2, route_opt, *route_map,
-                                            &route_bearings)
-                   .visibility);
+  const hs::ForwardMapReport route_report = train(route, route_bearings, route_opt, *route_map);
+  EXPECT_FALSE(route_report.visibility);
+  EXPECT_FALSE(route_report.visibility_wanted);
   EXPECT_FALSE(route_map->has_visibility);
   EXPECT_TRUE(route_map->has_bearings);
   route_opt.visibility = true;
-  EXPECT_TRUE(hs::train_forward_map_placed(route.features, route.placed, 2, route_opt, *route_map,
-                                           &route_bearings)
-                  .visibility);
+  EXPECT_TRUE(train(route, route_bearings, route_opt, *route_map).visibility);
   EXPECT_TRUE(route_map->has_visibility);
 }

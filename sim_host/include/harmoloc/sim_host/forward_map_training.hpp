@@ -101,6 +101,8 @@ struct ForwardMapReport {
   bool has_bearings = false;
   /// Whether the map holds visibility (ForwardMapOptions::visibility), and its angle gain.
   bool visibility = false;
+  /// Whether the options asked for it on this run (always, or on a floor), held or not.
+  bool visibility_wanted = false;
   double visibility_angle_gain = 0.0;
   std::vector<double> bearing_sigma_rad;
   std::size_t bearing_cells = 0;
