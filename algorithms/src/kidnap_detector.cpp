@@ -12,6 +12,7 @@ void KidnapDetector::reset() {
   window_evidence_ = 0;
   window_lost_evidence_ = 0;
   evidence_run_ = 0;
+  evidence_gap_ = 0;
   lost_run_ = 0;
   sum_x_ = sum_y_ = sum_fix_x_ = sum_fix_y_ = 0.0;
   consistent_ = 0;
@@ -56,6 +57,7 @@ KidnapVerdict KidnapDetector::step(const KidnapInput& in, const KidnapParams& p)
       consistent_ = 0;
       sum_x_ = sum_y_ = sum_fix_x_ = sum_fix_y_ = 0.0;
       evidence_run_ = 0;
+      evidence_gap_ = 0;
       window_evidence_ = 0;
     }
     sum_x_ += place_x_m;
@@ -71,7 +73,13 @@ KidnapVerdict KidnapDetector::step(const KidnapInput& in, const KidnapParams& p)
     consistent_ = 0;
     sum_x_ = sum_y_ = sum_fix_x_ = sum_fix_y_ = 0.0;
   }
-  evidence_run_ = evidence ? evidence_run_ + 1 : 0;
+  if (evidence) {
+    ++evidence_run_;
+    evidence_gap_ = 0;
+  } else if (evidence_run_ > 0 && ++evidence_gap_ > p.divergence_gap_frames) {
+    evidence_run_ = 0;
+    evidence_gap_ = 0;
+  }
   lost_run_ = lost_evidence ? lost_run_ + 1 : 0;
   if (triggered && window_left_ == 0) {
     window_left_ = p.window_frames;

@@ -262,7 +262,8 @@ void read_kidnap(const Checker& check, const toml::table& root, KidnapConfig& k)
   check.only(*t, w,
              {"enabled", "change_threshold", "confirm", "window_frames", "evidence_frames",
               "fix_distance_m", "preference_min", "consistency_m", "divergence_frames",
-              "lost_frames", "reseed", "position_sigma_m", "yaw_sigma_deg", "floor_search"});
+              "divergence_gap_frames", "lost_frames", "reseed", "position_sigma_m", "yaw_sigma_deg",
+              "floor_search"});
   k.enabled = flag(check, *t, "enabled", w, k.enabled);
   auto& d = k.detector;
   d.change_threshold = check.number(*t, "change_threshold", w, d.change_threshold, 0.0, 1.0);
@@ -278,6 +279,8 @@ void read_kidnap(const Checker& check, const toml::table& root, KidnapConfig& k)
   d.consistency_m = check.number_or_auto(*t, "consistency_m", w, d.consistency_m, 0.0, 100.0);
   d.divergence_frames =
       static_cast<int>(check.integer(*t, "divergence_frames", w, d.divergence_frames, 1, 100000));
+  d.divergence_gap_frames = static_cast<int>(
+      check.integer(*t, "divergence_gap_frames", w, d.divergence_gap_frames, 0, 100000));
   d.lost_frames = static_cast<int>(check.integer(*t, "lost_frames", w, d.lost_frames, 1, 100000));
   const std::string reseed = check.text(*t, "reseed", w, "fix");
   if (reseed == "fix")

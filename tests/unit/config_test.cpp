@@ -364,6 +364,7 @@ window_frames = 10
 evidence_frames = 4
 fix_distance_m = 0.5
 divergence_frames = 60
+divergence_gap_frames = 0
 lost_frames = 120
 reseed = "uniform"
 position_sigma_m = 0.1
@@ -396,6 +397,7 @@ floor_search = true
   EXPECT_EQ(k.detector.evidence_frames, 4);
   EXPECT_DOUBLE_EQ(k.detector.fix_distance_m, 0.5);
   EXPECT_EQ(k.detector.divergence_frames, 60);
+  EXPECT_EQ(k.detector.divergence_gap_frames, 0);
   EXPECT_EQ(k.detector.lost_frames, 120);
   EXPECT_EQ(k.reseed, hf::ReseedStrategy::kUniform);
   EXPECT_DOUBLE_EQ(k.position_sigma_m, 0.1);

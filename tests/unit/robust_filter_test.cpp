@@ -9,6 +9,7 @@
 #include <cstring>
 #include <limits>
 #include <memory>
+#include <vector>
 
 #include "harmoloc/algorithms/board_observation.hpp"
 #include "harmoloc/algorithms/forward_map.hpp"
@@ -1033,6 +1034,40 @@ TEST(KidnapDetector, LongEvidenceWithoutATriggerIsADivergence) {
   EXPECT_EQ(frame, p.divergence_frames);
   EXPECT_EQ(d.counters().triggers, 0U);
   EXPECT_EQ(d.counters().divergences, 1U);
+}
+
+// After a carry the match can sink by a quarter a frame, never by half (no trigger), while the
+// boards' preference dips under preference_min for a frame or two (random scene 29 at 150 s: 5
+// frames of evidence, 2 without, 6 with). Gaps of up to divergence_gap_frames do not end the
+// stretch; a longer gap does, and evidence as sparse as a good estimate meets it never confirms.
+TEST(KidnapDetector, ShortGapsDoNotEndTheEvidence) {
+  const auto run = [](const ha::KidnapParams& p, const std::vector<bool>& pattern) {
+    ha::KidnapDetector d;
+    double match = 1.0;
+    d.step(nominal(match), p);
+    for (std::size_t i = 0; i < pattern.size(); ++i) {
+      match *= 0.75;  // Yang et al.'s P = 0.25: no trigger
+      ha::KidnapInput in = kidnapped(match);
+      if (!pattern[i]) in.preference = 0.5 * p.preference_min;
+      const ha::KidnapVerdict v = d.step(in, p);
+      EXPECT_NE(v, ha::KidnapVerdict::kTriggered) << i;
+      if (v == ha::KidnapVerdict::kKidnapped) return static_cast<int>(i) + 1;
+    }
+    return -1;
+  };
+  const ha::KidnapParams p;
+  ASSERT_EQ(p.divergence_frames, 8);
+  ASSERT_EQ(p.divergence_gap_frames, 2);
+  const std::vector<bool> dips = {1, 1, 1, 1, 1, 0, 0, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1};
+  EXPECT_EQ(run(p, dips), 10);  // the eighth frame of evidence
+  ha::KidnapParams in_a_row = p;
+  in_a_row.divergence_gap_frames = 0;
+  EXPECT_EQ(run(in_a_row, dips), 15);  // eight after the dip
+  const std::vector<bool> long_gap = {1, 1, 1, 1, 1, 0, 0, 0, 1, 1, 1, 1, 1, 1, 1, 1, 1};
+  EXPECT_EQ(run(p, long_gap), 16);  // the stretch starts over after three frames without
+  std::vector<bool> sparse;
+  for (int i = 0; i < 300; ++i) sparse.push_back(i % 10 < 3);  // 3 frames of 10
+  EXPECT_EQ(run(p, sparse), -1);
 }
 
 // Without a fix, disagreement alone is not enough (a person in front of the camera hides boards

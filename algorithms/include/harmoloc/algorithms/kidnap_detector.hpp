@@ -9,7 +9,7 @@
 /// forward map, robust per board), and the fixes agree with each other from frame to frame. The
 /// fix leaves out the boards the filter distrusts, unless it distrusts most of them: that the
 /// boards all disagree at once says the estimate, not the boards, is wrong. The same evidence
-/// held for a few frames in a row without a trigger also counts. Without a fix at a known place
+/// held for a few frames at one place without a trigger also counts. Without a fix at a known place
 /// (the robot put down off the trained route), the boards must show that the estimate is wrong:
 /// most disagree, at least one shows more area than expected there, which no occlusion can do
 /// (a person in front of the camera only hides boards), and they prefer the fix's place, known
@@ -34,8 +34,12 @@ struct KidnapParams {
   /// Evidence farther apart than this from one frame to the next, both the fixes and the boards'
   /// places, is not the same place: the count starts over.
   double consistency_m = 0.15;
-  int divergence_frames = 8;  ///< evidence in this many frames in a row, without a trigger
-  int lost_frames = 90;       ///< the same for the evidence without a fix: lost
+  int divergence_frames = 8;  ///< this many frames of evidence at one place, without a trigger
+  /// Frames without evidence that do not end that stretch. Where the match sinks slowly after a
+  /// carry, the boards' preference can dip under preference_min for a frame or two while the
+  /// fixes hold still (0: the frames must follow each other).
+  int divergence_gap_frames = 2;
+  int lost_frames = 90;  ///< the same for the evidence without a fix: lost
 };
 
 /// What the cycle saw this frame.
@@ -95,7 +99,8 @@ class KidnapDetector {
   int window_left_ = 0;
   int window_evidence_ = 0;
   int window_lost_evidence_ = 0;
-  int evidence_run_ = 0;
+  int evidence_run_ = 0;  // frames of evidence in the current stretch
+  int evidence_gap_ = 0;  // frames without evidence since the stretch's last
   int lost_run_ = 0;
   int lost_hold_ = 0;  // frames after a lost verdict without the short (window) path; not reset()
   // The current stretch of consistent evidence: its fixes' sum and count, the last fix.
