@@ -325,9 +325,10 @@ BoardAssessment BoardReliability::assess(const ForwardMap& map, const BoardFeatu
       double& w = static_probability_[b];
       const double fit = w * std::exp(-0.5 * chi2);
       const double responsibility = fit / (fit + (1.0 - w) * c);
-      w = std::clamp(
-          (1.0 - params.motion_index_rate) * w + params.motion_index_rate * responsibility,
-          params.motion_index_min, params.motion_index_max);
+      const double rate =
+          responsibility > w ? params.motion_index_rise_rate : params.motion_index_rate;
+      w = std::clamp((1.0 - rate) * w + rate * responsibility, params.motion_index_min,
+                     params.motion_index_max);
     }
     a.scaling[b] = static_cast<float>(s);
     const double w = params.robust ? static_probability_[b] : 1.0;

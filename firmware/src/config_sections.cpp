@@ -200,6 +200,7 @@ void read_observation(const Checker& check, const toml::table& root, Observation
               "consensus_chi2",
               "consensus_fraction",
               "motion_index_rate",
+              "motion_index_rise_rate",
               "motion_index_min",
               "motion_index_max",
               "route_free_m",
@@ -238,6 +239,8 @@ void read_observation(const Checker& check, const toml::table& root, Observation
   b.consensus_chi2 = check.number(*t, "consensus_chi2", w, b.consensus_chi2, 0.1, 1e4);
   b.consensus_fraction = check.number(*t, "consensus_fraction", w, b.consensus_fraction, 0.0, 0.99);
   b.motion_index_rate = check.number(*t, "motion_index_rate", w, b.motion_index_rate, 0.0, 1.0);
+  b.motion_index_rise_rate =
+      check.number(*t, "motion_index_rise_rate", w, b.motion_index_rise_rate, 0.0, 1.0);
   b.motion_index_min = check.number(*t, "motion_index_min", w, b.motion_index_min, 0.0, 1.0);
   b.motion_index_max = check.number(*t, "motion_index_max", w, b.motion_index_max, 0.0, 1.0);
   if (b.motion_index_min > b.motion_index_max)

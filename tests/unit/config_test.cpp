@@ -349,6 +349,7 @@ dcs_phi = 2
 consensus_chi2 = 16
 consensus_fraction = 0.6
 motion_index_rate = 0.1
+motion_index_rise_rate = 0.02
 motion_index_min = 0.05
 motion_index_max = 0.9
 route_free_m = 0.05
@@ -383,6 +384,7 @@ floor_search = true
   EXPECT_DOUBLE_EQ(b.consensus_chi2, 16.0);
   EXPECT_DOUBLE_EQ(b.consensus_fraction, 0.6);
   EXPECT_DOUBLE_EQ(b.motion_index_rate, 0.1);
+  EXPECT_DOUBLE_EQ(b.motion_index_rise_rate, 0.02);
   EXPECT_DOUBLE_EQ(b.motion_index_min, 0.05);
   EXPECT_DOUBLE_EQ(b.motion_index_max, 0.9);
   EXPECT_DOUBLE_EQ(b.route_free_m, 0.05);
@@ -430,11 +432,13 @@ TEST(Config, ObservationAndKidnapValuesAreChecked) {
       {"[observation]\nimplausible_ratio = 0.5\n", "observation.implausible_ratio"},
       {"[observation]\nimplausible_ratio = -1\n", "observation.implausible_ratio"},
       {"[observation]\nmotion_index_min = 0.9\nmotion_index_max = 0.5\n", "motion_index_min"},
+      {"[observation]\nmotion_index_rise_rate = 1.5\n", "observation.motion_index_rise_rate"},
       {"[observation]\nsigma = 3\n", "unknown key 'observation.sigma'"},
       {"[kidnap]\nreseed = \"random\"\n", "kidnap.reseed"},
       {"[kidnap]\nwindow_frames = 2\nevidence_frames = 3\n", "evidence_frames"},
       {"[kidnap]\nchange_threshold = 1.5\n", "kidnap.change_threshold"},
       {"[kidnap]\nlost_frames = 0\n", "kidnap.lost_frames"},
+      {"[kidnap]\ndivergence_gap_frames = -1\n", "kidnap.divergence_gap_frames"},
       {"[kidnap]\nfloor_search = \"on\"\n", "kidnap.floor_search must be true or false"},
       {"[filter]\nkld = \"yes\"\n", "filter.kld must be true or false"},
       {"[filter]\nkld_min_particles = 8\n", "filter.kld_min_particles"},

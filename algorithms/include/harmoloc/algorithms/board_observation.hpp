@@ -63,7 +63,12 @@ struct BoardModelParams {
   /// More than this share of the modelled boards must agree: a majority (4 of 6 or 7, 5 of 8).
   double consensus_fraction = 0.5;
   double motion_index_rate = 0.05;  ///< weight of one frame in the motion index (forgetting)
-  double motion_index_min = 0.02;   ///< bounds, so that a board can always come back
+  /// The same while the index rises. Lower, a board written off must fit for longer before it
+  /// is trusted again: 0.0125 keeps a moved board that fits by chance for half a second written
+  /// off, but brings a board hidden for 3 s back a second later (docs/filter.md, the measured
+  /// trade-off); the default is the same rate both ways.
+  double motion_index_rise_rate = 0.05;
+  double motion_index_min = 0.02;  ///< bounds, so that a board can always come back
   double motion_index_max = 0.98;
   double route_free_m = 0.03;   ///< distance from the training run that costs nothing
   double route_sigma_m = 0.03;  ///< beyond it, a Gaussian fall-off of this width
