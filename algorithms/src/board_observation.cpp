@@ -243,6 +243,7 @@ void fit_bearings(const ForwardMap& map, const GridPoint& at, const BoardFeature
 
 void BoardReliability::reset(const BoardModelParams& params) {
   static_probability_.fill(params.motion_index_max);
+  moved_.fill(false);
 }
 
 BoardAssessment BoardReliability::assess(const ForwardMap& map, const BoardFeatures& observed,
@@ -285,6 +286,9 @@ BoardAssessment BoardReliability::assess(const ForwardMap& map, const BoardFeatu
   }
 
   std::array<double, kMaxBoards> inv_var{};
+  // A sign of a move in this frame: the board disagrees by showing more area than the map
+  // expects around the estimate, or a bearing off. An occlusion only hides.
+  std::array<bool, kMaxBoards> sign_of_a_move{};
   update.bearing_mask = 0;
   for (std::size_t b = 0; b < update.boards; ++b) {
     update.observed[b] = observed.value[b];
@@ -304,6 +308,9 @@ BoardAssessment BoardReliability::assess(const ForwardMap& map, const BoardFeatu
       a.bearing_chi2[b] = static_cast<float>(bearing_residual[b] * bearing_residual[b] / variance);
       a.chi2[b] += a.bearing_chi2[b];
     }
+    sign_of_a_move[b] =
+        static_cast<double>(a.chi2[b]) >= params.consensus_chi2 &&
+        (r > 0.0 || static_cast<double>(a.bearing_chi2[b]) >= params.consensus_chi2);
     ++a.modelled;
     if (static_cast<double>(a.chi2[b]) < params.consensus_chi2)
       ++a.agreeing;
@@ -325,10 +332,12 @@ BoardAssessment BoardReliability::assess(const ForwardMap& map, const BoardFeatu
       double& w = static_probability_[b];
       const double fit = w * std::exp(-0.5 * chi2);
       const double responsibility = fit / (fit + (1.0 - w) * c);
-      const double rate =
-          responsibility > w ? params.motion_index_rise_rate : params.motion_index_rate;
+      if (sign_of_a_move[b]) moved_[b] = true;
+      const double rate = responsibility > w && moved_[b] ? params.motion_index_rise_rate
+                                                          : params.motion_index_rate;
       w = std::clamp((1.0 - rate) * w + rate * responsibility, params.motion_index_min,
                      params.motion_index_max);
+      if (w >= 0.5) moved_[b] = false;
     }
     a.scaling[b] = static_cast<float>(s);
     const double w = params.robust ? static_probability_[b] : 1.0;

@@ -63,10 +63,11 @@ struct BoardModelParams {
   /// More than this share of the modelled boards must agree: a majority (4 of 6 or 7, 5 of 8).
   double consensus_fraction = 0.5;
   double motion_index_rate = 0.05;  ///< weight of one frame in the motion index (forgetting)
-  /// The same while the index rises. Lower, a board written off must fit for longer before it
-  /// is trusted again: 0.0125 keeps a moved board that fits by chance for half a second written
-  /// off, but brings a board hidden for 3 s back a second later (docs/filter.md, the measured
-  /// trade-off); the default is the same rate both ways.
+  /// The same while the index rises, for a board that showed a sign of a move since it was last
+  /// trusted (more area than expected, or a bearing off; an occlusion only hides). Lower, such a
+  /// board must fit for longer before it is trusted again: 0.0125 keeps a moved board that fits
+  /// by chance for half a second written off (docs/filter.md); the default is the same rate
+  /// both ways.
   double motion_index_rise_rate = 0.05;
   double motion_index_min = 0.02;  ///< bounds, so that a board can always come back
   double motion_index_max = 0.98;
@@ -201,6 +202,10 @@ class BoardReliability {
 
  private:
   std::array<double, kMaxBoards> static_probability_{};
+  /// Whether the board, since it was last trusted, showed a sign of a move that no occlusion
+  /// gives (more area than the map expects, or a bearing off): only then does its index rise at
+  /// motion_index_rise_rate.
+  std::array<bool, kMaxBoards> moved_{};
 };
 
 }  // namespace harmoloc::algorithms
