@@ -337,7 +337,7 @@ BoardAssessment BoardReliability::assess(const ForwardMap& map, const BoardFeatu
                                                           : params.motion_index_rate;
       w = std::clamp((1.0 - rate) * w + rate * responsibility, params.motion_index_min,
                      params.motion_index_max);
-      if (w >= 0.5) moved_[b] = false;
+      if (!distrusted(b)) moved_[b] = false;
     }
     a.scaling[b] = static_cast<float>(s);
     const double w = params.robust ? static_probability_[b] : 1.0;
