@@ -308,14 +308,14 @@ BoardAssessment BoardReliability::assess(const ForwardMap& map, const BoardFeatu
       a.bearing_chi2[b] = static_cast<float>(bearing_residual[b] * bearing_residual[b] / variance);
       a.chi2[b] += a.bearing_chi2[b];
     }
-    sign_of_a_move[b] =
-        static_cast<double>(a.chi2[b]) >= params.consensus_chi2 &&
-        (r > 0.0 || static_cast<double>(a.bearing_chi2[b]) >= params.consensus_chi2);
     ++a.modelled;
-    if (static_cast<double>(a.chi2[b]) < params.consensus_chi2)
+    if (static_cast<double>(a.chi2[b]) < params.consensus_chi2) {
       ++a.agreeing;
-    else if (r > 0.0)
-      ++a.exceeding;
+    } else {
+      if (r > 0.0) ++a.exceeding;
+      sign_of_a_move[b] =
+          r > 0.0 || static_cast<double>(a.bearing_chi2[b]) >= params.consensus_chi2;
+    }
   }
   a.consensus = a.modelled > 0 && static_cast<double>(a.agreeing) >
                                       params.consensus_fraction * static_cast<double>(a.modelled);

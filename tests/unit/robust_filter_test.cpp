@@ -88,6 +88,19 @@ std::unique_ptr<ha::ForwardMap> make_bearing_map() {
   return map;
 }
 
+// Frames of `seen` until board `b`, written off, is trusted again (at most `limit`).
+int frames_until_trusted(ha::BoardReliability& reliability, const ha::ForwardMap& map,
+                         const ha::BoardFeatures& seen, const ha::Pose2& at,
+                         const ha::BoardModelParams& params, std::size_t b, int limit = 200) {
+  ha::BoardUpdate u;
+  int frames = 0;
+  while (reliability.distrusted(b) && frames < limit) {
+    reliability.assess(map, seen, at, params, u);
+    ++frames;
+  }
+  return frames;
+}
+
 }  // namespace
 
 TEST(ForwardMap, BilinearLookupIsExactOnALinearField) {
@@ -242,11 +255,7 @@ TEST(BoardObservation, AnOccludedBoardIsScaledDownThenDistrustedThenTrustedAgain
   EXPECT_FALSE(reliability.distrusted(0));
   for (int i = 0; i < 100; ++i) reliability.assess(*map, occluded, at, params, u);
   EXPECT_NEAR(reliability.static_probability(1), params.motion_index_min, 1e-9);
-  int back = 0;
-  while (reliability.distrusted(1) && back < 200) {
-    reliability.assess(*map, observe(at.x_m, at.y_m), at, params, u);
-    ++back;
-  }
+  const int back = frames_until_trusted(reliability, *map, observe(at.x_m, at.y_m), at, params, 1);
   EXPECT_FALSE(reliability.distrusted(1));
   EXPECT_LE(back, 60);
 }
@@ -296,12 +305,7 @@ TEST(BoardObservation, AHiddenBoardComesBackAtTheFastRateEvenWithASlowRise) {
     ha::BoardUpdate u;
     for (int i = 0; i < 300; ++i) reliability.assess(*map, hidden, at, params, u);
     EXPECT_TRUE(reliability.distrusted(1));
-    int back = 0;
-    while (reliability.distrusted(1) && back < 200) {
-      reliability.assess(*map, observe(at.x_m, at.y_m), at, params, u);
-      ++back;
-    }
-    return back;
+    return frames_until_trusted(reliability, *map, observe(at.x_m, at.y_m), at, params, 1);
   };
   ha::BoardModelParams params;
   const int fast = frames_back(params);
