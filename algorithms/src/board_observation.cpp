@@ -314,7 +314,7 @@ BoardAssessment BoardReliability::assess(const ForwardMap& map, const BoardFeatu
     } else {
       if (r > 0.0) ++a.exceeding;
       sign_of_a_move[b] =
-          r > 0.0 || static_cast<double>(a.bearing_chi2[b]) >= params.consensus_chi2;
+          r > 0.0 || (r == 0.0 && static_cast<double>(a.bearing_chi2[b]) >= params.consensus_chi2);
     }
   }
   a.consensus = a.modelled > 0 && static_cast<double>(a.agreeing) >

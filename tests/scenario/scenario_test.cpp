@@ -65,6 +65,14 @@ double distrusted_share(const hs::RunRecord& r, std::size_t b, double from_s, do
   return n > 0 ? static_cast<double>(d) / static_cast<double>(n) : 0.0;
 }
 
+// The time of the last frame in which board @p b was distrusted (0 if none).
+double last_distrusted_s(const hs::RunRecord& r, std::size_t b) {
+  double last = 0.0;
+  for (const auto& f : r.frames)
+    if ((f.distrusted >> b & 1U) != 0) last = f.t_s;
+  return last;
+}
+
 }  // namespace
 
 TEST(FilterScenario, NominalBeatsTheLocalizerAlone) {
@@ -94,8 +102,9 @@ TEST(FilterScenario, OccludedBoardIsIgnoredThenTrustedAgain) {
   // Before the person comes in (28.7 s) green is trusted nearly throughout: where the test run's
   // wander makes it show a quarter less than the map expects for a second (about 23 s), the
   // motion index may doubt it for a moment.
-  std::printf("green distrusted in %.1f%% of the frames before the person comes in\n",
-              100.0 * distrusted_share(r, kGreen, 0.0, 28.7));
+  std::printf(
+      "green distrusted in %.1f%% of the frames before the person comes in, last at %.2f s\n",
+      100.0 * distrusted_share(r, kGreen, 0.0, 28.7), last_distrusted_s(r, kGreen));
   EXPECT_LT(distrusted_share(r, kGreen, 0.0, 28.7), 0.05);
   EXPECT_EQ(r.counters.kidnaps, 0U);
 

@@ -64,11 +64,11 @@ struct BoardModelParams {
   double consensus_fraction = 0.5;
   double motion_index_rate = 0.05;  ///< weight of one frame in the motion index (forgetting)
   /// The same while the index rises, for a board that showed a sign of a move since it was last
-  /// trusted (more area than expected, or a bearing off; an occlusion only hides). Lower, such a
-  /// board must fit for longer before it is trusted again: 0.0125 keeps a moved board that fits
-  /// by chance for half a second written off (docs/filter.md); the default is the same rate
-  /// both ways.
-  double motion_index_rise_rate = 0.05;
+  /// trusted (more area than expected, or a bearing off with no area missing; an occlusion only
+  /// hides). A quarter of the fall: such a board must fit for about 1.9 s before it is trusted
+  /// again, so a moved board that fits by chance for half a second stays written off
+  /// (docs/filter.md).
+  double motion_index_rise_rate = 0.0125;
   double motion_index_min = 0.02;  ///< bounds, so that a board can always come back
   double motion_index_max = 0.98;
   double route_free_m = 0.03;   ///< distance from the training run that costs nothing
@@ -203,8 +203,8 @@ class BoardReliability {
  private:
   std::array<double, kMaxBoards> static_probability_{};
   /// Whether the board, since it was last trusted, showed a sign of a move that no occlusion
-  /// gives (more area than the map expects, or a bearing off): only then does its index rise at
-  /// motion_index_rise_rate.
+  /// gives (more area than the map expects, or a bearing off with no area missing): only then
+  /// does its index rise at motion_index_rise_rate.
   std::array<bool, kMaxBoards> moved_{};
 };
 
