@@ -149,12 +149,12 @@ LocalizationCycle::LocalizationCycle(const FirmwareConfig& config, const algorit
   // cloud's far side off and its mean moved 2.6 cm inwards before the robot moved (random seed
   // 15; without the route term it stayed on the fix; docs/sweep.md). A kidnap's re-seed keeps
   // twice it: it is measured on kidnaps.
-  init_sigma_m_ = config.filter.init_position_sigma_m >= 0.0 ? config.filter.init_position_sigma_m
-                  : fix_rmse > 0.0                           ? std::clamp(fix_rmse, 0.02, 1.0)
-                                                             : 0.05;
-  reseed_sigma_m_ = config.kidnap.position_sigma_m >= 0.0 ? config.kidnap.position_sigma_m
-                    : fix_rmse > 0.0                      ? std::clamp(2.0 * fix_rmse, 0.02, 1.0)
-                                                          : 0.04;
+  const auto spread_m = [fix_rmse](double configured_m, double fix_factor, double fallback_m) {
+    if (configured_m >= 0.0) return configured_m;
+    return fix_rmse > 0.0 ? std::clamp(fix_factor * fix_rmse, 0.02, 1.0) : fallback_m;
+  };
+  init_sigma_m_ = spread_m(config.filter.init_position_sigma_m, 1.0, 0.05);
+  reseed_sigma_m_ = spread_m(config.kidnap.position_sigma_m, 2.0, 0.04);
   if (map.calibration.present && board_params_.position_spread_m == 0.0)
     board_params_.position_spread_m = static_cast<double>(map.calibration.pass_spread_m);
   reliability_.reset(board_params_);

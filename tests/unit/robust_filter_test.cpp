@@ -101,6 +101,19 @@ int frames_until_trusted(ha::BoardReliability& reliability, const ha::ForwardMap
   return frames;
 }
 
+// A fresh reliability sees board b as `off` for 10 s (written off by then), then as `seen`:
+// the frames until it is trusted again.
+int frames_back_after_ten_seconds(const ha::ForwardMap& map, const ha::BoardFeatures& off,
+                                  const ha::BoardFeatures& seen, const ha::Pose2& at,
+                                  const ha::BoardModelParams& params, std::size_t b) {
+  ha::BoardReliability reliability;
+  reliability.reset(params);
+  ha::BoardUpdate u;
+  for (int i = 0; i < 300; ++i) reliability.assess(map, off, at, params, u);
+  EXPECT_TRUE(reliability.distrusted(b));
+  return frames_until_trusted(reliability, map, seen, at, params, b);
+}
+
 }  // namespace
 
 TEST(ForwardMap, BilinearLookupIsExactOnALinearField) {
@@ -300,12 +313,7 @@ TEST(BoardObservation, AHiddenBoardComesBackAtTheFastRateEvenWithASlowRise) {
   ha::BoardFeatures hidden = observe(at.x_m, at.y_m);
   hidden.value[1] = 0.0F;
   const auto frames_back = [&](const ha::BoardModelParams& params) {
-    ha::BoardReliability reliability;
-    reliability.reset(params);
-    ha::BoardUpdate u;
-    for (int i = 0; i < 300; ++i) reliability.assess(*map, hidden, at, params, u);
-    EXPECT_TRUE(reliability.distrusted(1));
-    return frames_until_trusted(reliability, *map, observe(at.x_m, at.y_m), at, params, 1);
+    return frames_back_after_ten_seconds(*map, hidden, observe(at.x_m, at.y_m), at, params, 1);
   };
   ha::BoardModelParams params;
   params.motion_index_rise_rate = params.motion_index_rate;
@@ -331,13 +339,7 @@ TEST(BoardObservation, ABearingOffIsASignOfAMoveOnlyWhenNoAreaIsMissing) {
   const auto frames_back = [&](const ha::BoardFeatures& off, double rise_rate) {
     ha::BoardModelParams params;
     params.motion_index_rise_rate = rise_rate;
-    ha::BoardReliability reliability;
-    reliability.reset(params);
-    ha::BoardUpdate u;
-    for (int i = 0; i < 300; ++i) reliability.assess(*map, off, at, params, u);
-    EXPECT_TRUE(reliability.distrusted(0));
-    EXPECT_FALSE(reliability.distrusted(1));
-    return frames_until_trusted(reliability, *map, right, at, params, 0);
+    return frames_back_after_ten_seconds(*map, off, right, at, params, 0);
   };
   const double fall = ha::BoardModelParams{}.motion_index_rate;
   const int fast = frames_back(part_hidden, fall);
