@@ -40,7 +40,17 @@ int main(int argc, char** argv) {
   bool quick = false, no_default = false, quiet = false;
   std::string parts = "nominal,kidnap,dynamic,long";
   sim_host::SweepOptions opt;
-  app.add_option("--first", first, "first scene seed")->capture_default_str();
+  // Seed 0 is the default scene's in sweep.json and the traces.
+  const CLI::Validator scene_seed(
+      [](std::string& value) {
+        return value.find_first_not_of("0") == std::string::npos
+                   ? std::string("random scene seeds are 1 and up (0 is the default scene's)")
+                   : std::string();
+      },
+      "SEED >= 1");
+  app.add_option("--first", first, "first scene seed (random scenes are 1 and up)")
+      ->capture_default_str()
+      ->check(scene_seed);
   app.add_option("--scenes", scenes, "number of scenes (seeds first .. first + N - 1)")
       ->capture_default_str()
       ->check(CLI::Range(1, 100000));
@@ -48,6 +58,7 @@ int main(int argc, char** argv) {
   app.add_option("--seeds", seed_list,
                  "these scene seeds instead of --first/--scenes (e.g. --seeds 5,7,11)")
       ->delimiter(',')
+      ->check(scene_seed)
       ->excludes("--first")
       ->excludes("--scenes");
   app.add_option("--jobs", jobs, "scenes evaluated in parallel")->capture_default_str();

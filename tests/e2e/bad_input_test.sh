@@ -169,6 +169,7 @@ printf '1 2 3\n' > "$out/bad_labels.tum"
 expect_error "train: malformed labels" "bad_labels.tum:1" "$BIN/harmoloc-train" --dataset "$out/good" --labels "$out/bad_labels.tum" --out "$out/x.hmap"
 printf '5.0 1 1 0 0 0 0 1\n' > "$out/far_labels.tum"
 expect_error "train: labels that match no frame" "outside the run" "$BIN/harmoloc-train" --dataset "$out/good" --labels "$out/far_labels.tum" --out "$out/x.hmap"
+expect_error "sweep: seed 0 (the default scene's)" "random scene seeds are 1 and up" "$BIN/harmoloc-sweep" --seeds 3,0 --out "$out/sweep" --quiet
 expect_error "report: missing truth" "harmoloc-report" "$BIN/harmoloc-report" --truth "$out/nope.tum" --estimate "$out/t.tum" --out "$out/r"
 expect_error "report: no estimate" "--estimate is required" "$BIN/harmoloc-report" --truth "$out/t.tum" --out "$out/r"
 expect_error "report: one run to compare" "at least two runs" "$BIN/harmoloc-report" --truth "$out/t.tum" --compare "a=$out/t.tum" --out "$out/r"
