@@ -8,6 +8,8 @@
 #include <fstream>
 #include <mutex>
 #include <sstream>
+#include <stdexcept>
+#include <string>
 #include <thread>
 
 #include <CLI/CLI.hpp>
@@ -43,9 +45,14 @@ int main(int argc, char** argv) {
   // Seed 0 is the default scene's in sweep.json and the traces.
   const CLI::Validator scene_seed(
       [](std::string& value) {
-        return value.find_first_not_of("0") == std::string::npos
-                   ? std::string("random scene seeds are 1 and up (0 is the default scene's)")
-                   : std::string();
+        unsigned long long seed = 1;
+        try {
+          seed = std::stoull(value);
+        } catch (const std::exception&) {
+          return std::string();  // not a number: the option's own conversion says so
+        }
+        return seed == 0 ? std::string("random scene seeds are 1 and up (0 is the default scene's)")
+                         : std::string();
       },
       "SEED >= 1");
   app.add_option("--first", first, "first scene seed (random scenes are 1 and up)")
