@@ -1,7 +1,7 @@
 // The commands through the whole cycle: what each does to the pose, its COMMAND_ACK and what
 // follows it on the link; signed links; garbage on the line leaves the cycle's outputs exactly as
-// they are without it. The cycle runs on fakes (a camera showing one red board or nothing, no
-// encoders, a queue for the link) and a three-sample map.
+// they are without it. The cycle runs on the one-board rig (one_board_cycle_rig.hpp): fakes and a
+// three-sample map.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -16,6 +16,7 @@
 #include "harmoloc/firmware/mavlink_inbound.hpp"
 #include "harmoloc/firmware/signing_startup.hpp"
 #include "mavlink_test_frames.hpp"
+#include "one_board_cycle_rig.hpp"
 #include "test_support.hpp"
 
 namespace ha = harmoloc::algorithms;
@@ -26,77 +27,14 @@ namespace tf = harmoloc::test::mav;
 
 namespace {
 
-constexpr std::uint32_t kWidth = 16, kHeight = 8;
-constexpr std::array<float, 7> kNoParams{};
-// The map's training positions (map frame); sample 0 is what a frame full of red looks like.
-constexpr double kTargets[3][2] = {{1.0, 0.5}, {3.0, 0.5}, {2.0, 2.5}};
-
-class FakeCamera final : public hh::Camera {
- public:
-  FakeCamera() : red_(kWidth * kHeight * 3) {
-    for (std::size_t i = 0; i < red_.size(); i += 3) red_[i] = 255;
-  }
-  hh::CameraStatus acquire(hh::FrameView& f, std::uint64_t) override {
-    t_ += 33'333'333;
-    if (!frames) return hh::CameraStatus::kNoFrame;
-    f.data = red_.data();
-    f.width_px = kWidth;
-    f.height_px = kHeight;
-    f.stride_bytes = kWidth * 3;
-    f.format = hh::PixelFormat::kRgb24;
-    f.timestamp_ns = t_;
-    return hh::CameraStatus::kFrame;
-  }
-  void release() override {}
-  hh::CameraCounters counters() const override { return {}; }
-  bool frames = false;
-
- private:
-  std::vector<std::uint8_t> red_;
-  std::uint64_t t_ = 0;
-};
-
-class NoEncoders final : public hh::WheelEncoders {
- public:
-  hh::EncoderStatus read(std::uint64_t, hh::EncoderCounts&) override {
-    return hh::EncoderStatus::kNoData;
-  }
-  hh::EncoderCounters counters() const override { return {}; }
-};
-
-class StepClock final : public hh::Clock {
- public:
-  std::uint64_t now_ns() const override { return now_ += step; }
-  void sleep_until(std::uint64_t) override {}
-  std::uint64_t step = 1000;  ///< every reading of the clock advances it this much
-
- private:
-  mutable std::uint64_t now_ = 0;
-};
-
-const ha::MapFile& test_map() {
-  static const std::unique_ptr<ha::MapFile> map = [] {
-    auto m = std::make_unique<ha::MapFile>();
-    m->image_width_px = kWidth;
-    m->image_height_px = kHeight;
-    m->thresholds = hf::default_config().thresholds;
-    ha::HarmonicModel& h = m->model;
-    h.sample_count = 3;
-    h.feature_count = 1;
-    h.board_index[0] = 0;  // red
-    h.area_scale = 100.0F / (kWidth * kHeight);
-    h.sigma_x = h.sigma_y = 1.0F;
-    h.max_nearest_distance = 5.0F;
-    const float features[3] = {100.0F, 50.0F, 25.0F};
-    for (std::size_t i = 0; i < 3; ++i) {
-      h.sample(i)[0] = features[i];
-      h.target_x_m[i] = static_cast<float>(kTargets[i][0]);
-      h.target_y_m[i] = static_cast<float>(kTargets[i][1]);
-    }
-    return m;
-  }();
-  return *map;
-}
+using harmoloc::test::one_board::kHeight;
+using harmoloc::test::one_board::kNoParams;
+using harmoloc::test::one_board::kTargets;
+using harmoloc::test::one_board::kWidth;
+using harmoloc::test::one_board::NoEncoders;
+using harmoloc::test::one_board::of_type;
+using harmoloc::test::one_board::Rig;
+using harmoloc::test::one_board::test_map;
 
 struct Odometry {
   float x, y, yaw_frd;
@@ -108,49 +46,6 @@ Odometry odometry_of(const tf::Decoded& d) {
   const float qz = tf::f32(d.payload, 32);
   return Odometry{tf::f32(d.payload, 8), tf::f32(d.payload, 12), 2.0F * std::atan2(qz, qw),
                   d.payload[230], static_cast<std::int8_t>(d.payload[232])};
-}
-
-struct Rig {
-  explicit Rig(const tf::Key* signing_key = nullptr) {
-    config.filter.particles = 512;
-    if (signing_key != nullptr) {
-      config.link.has_signing_key = true;
-      config.link.signing_key = *signing_key;
-      key = *signing_key;
-    }
-  }
-  void start() {
-    cycle =
-        std::make_unique<hf::LocalizationCycle>(config, test_map(), camera, encoders, link, clock);
-  }
-  // Runs one cycle and returns the frames it wrote.
-  std::vector<tf::Decoded> run() {
-    const std::size_t before = link.written.size();
-    cycle->run_once();
-    return tf::decode(
-        tf::Bytes(link.written.begin() + static_cast<std::ptrdiff_t>(before), link.written.end()),
-        config.link.has_signing_key ? &key : nullptr);
-  }
-  // The frames of one cycle after @p bytes arrived, by message id in order.
-  std::vector<tf::Decoded> send_and_run(const tf::Bytes& bytes) {
-    link.send(bytes);
-    return run();
-  }
-
-  hf::FirmwareConfig config = hf::default_config();
-  tf::Key key{};
-  FakeCamera camera;
-  NoEncoders encoders;
-  tf::QueueLink link;
-  StepClock clock;
-  std::unique_ptr<hf::LocalizationCycle> cycle;
-};
-
-std::vector<tf::Decoded> of_type(const std::vector<tf::Decoded>& frames, std::uint32_t id) {
-  std::vector<tf::Decoded> out;
-  for (const auto& f : frames)
-    if (f.msg_id == id) out.push_back(f);
-  return out;
 }
 
 }  // namespace
@@ -264,28 +159,6 @@ TEST(MavlinkCommands, RelocalizeAroundTheLatestFix) {
   const auto later = of_type(r.send_and_run(tf::command(mv::kCmdRelocalize, kNoParams)), 77);
   ASSERT_EQ(later.size(), 1U);
   EXPECT_EQ(tf::ack_of(later[0]).result_param2, 2);
-}
-
-// The first fix spreads the particles as far as the map's own fix error reaches (its
-// calibration), not twice as far: at the end of a route a wider cloud loses its far side to the
-// route term and starts off the fix (docs/sweep.md, seed 15's start-up).
-TEST(StartUp, TheFirstCloudIsAsWideAsTheFixError) {
-  const auto spread_at_first_fix = [](double fix_rmse_m) {
-    auto map = std::make_unique<ha::MapFile>(test_map());
-    map->calibration.present = true;
-    map->calibration.fix_rmse_x_m = map->calibration.fix_rmse_y_m = static_cast<float>(fix_rmse_m);
-    Rig r;
-    r.camera.frames = true;
-    r.cycle = std::make_unique<hf::LocalizationCycle>(r.config, *map, r.camera, r.encoders, r.link,
-                                                      r.clock);
-    for (int i = 0; i < 5 && !r.cycle->pose().valid; ++i) r.run();
-    EXPECT_TRUE(r.cycle->pose().valid);
-    const ha::PoseCovariance& c = r.cycle->pose().covariance;
-    return std::sqrt(0.5 * (c(0, 0) + c(1, 1)));
-  };
-  EXPECT_NEAR(spread_at_first_fix(0.10), 0.10, 0.01);
-  EXPECT_NEAR(spread_at_first_fix(0.30), 0.30, 0.03);
-  EXPECT_NEAR(spread_at_first_fix(0.005), 0.02, 0.002);  // never narrower than 2 cm
 }
 
 TEST(MavlinkCommands, RequestMessage) {

@@ -34,6 +34,7 @@ add_executable(firmware_test
   ${HARMOLOC_UNIT_DIR}/mavlink_test.cpp
   ${HARMOLOC_UNIT_DIR}/mavlink_inbound_test.cpp
   ${HARMOLOC_UNIT_DIR}/mavlink_commands_test.cpp
+  ${HARMOLOC_UNIT_DIR}/cycle_startup_test.cpp
   ${HARMOLOC_UNIT_DIR}/mavlink_config_test.cpp
   ${HARMOLOC_UNIT_DIR}/pose_messages_test.cpp
   ${HARMOLOC_UNIT_DIR}/latency_histogram_test.cpp

@@ -1,0 +1,138 @@
+// A localization cycle on fakes for tests of the whole cycle: a camera that shows one red board
+// filling the frame or nothing, no encoders, a queue for the link, a clock that advances a little
+// at every reading, and a three-sample map whose sample 0 is the full red frame.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "harmoloc/algorithms/map_codec.hpp"
+#include "harmoloc/firmware/config.hpp"
+#include "harmoloc/firmware/localization_cycle.hpp"
+#include "mavlink_test_frames.hpp"
+
+namespace harmoloc::test::one_board {
+
+namespace ha = harmoloc::algorithms;
+namespace hf = harmoloc::firmware;
+namespace hh = harmoloc::hal;
+namespace tf = harmoloc::test::mav;
+
+constexpr std::uint32_t kWidth = 16, kHeight = 8;
+constexpr std::array<float, 7> kNoParams{};
+// The map's training positions (map frame); sample 0 is what a frame full of red looks like.
+constexpr double kTargets[3][2] = {{1.0, 0.5}, {3.0, 0.5}, {2.0, 2.5}};
+
+class FakeCamera final : public hh::Camera {
+ public:
+  FakeCamera() : red_(kWidth * kHeight * 3) {
+    for (std::size_t i = 0; i < red_.size(); i += 3) red_[i] = 255;
+  }
+  hh::CameraStatus acquire(hh::FrameView& f, std::uint64_t) override {
+    t_ += 33'333'333;
+    if (!frames) return hh::CameraStatus::kNoFrame;
+    f.data = red_.data();
+    f.width_px = kWidth;
+    f.height_px = kHeight;
+    f.stride_bytes = kWidth * 3;
+    f.format = hh::PixelFormat::kRgb24;
+    f.timestamp_ns = t_;
+    return hh::CameraStatus::kFrame;
+  }
+  void release() override {}
+  hh::CameraCounters counters() const override { return {}; }
+  bool frames = false;
+
+ private:
+  std::vector<std::uint8_t> red_;
+  std::uint64_t t_ = 0;
+};
+
+class NoEncoders final : public hh::WheelEncoders {
+ public:
+  hh::EncoderStatus read(std::uint64_t, hh::EncoderCounts&) override {
+    return hh::EncoderStatus::kNoData;
+  }
+  hh::EncoderCounters counters() const override { return {}; }
+};
+
+class StepClock final : public hh::Clock {
+ public:
+  std::uint64_t now_ns() const override { return now_ += step; }
+  void sleep_until(std::uint64_t) override {}
+  std::uint64_t step = 1000;  ///< every reading of the clock advances it this much
+
+ private:
+  mutable std::uint64_t now_ = 0;
+};
+
+inline const ha::MapFile& test_map() {
+  static const std::unique_ptr<ha::MapFile> map = [] {
+    auto m = std::make_unique<ha::MapFile>();
+    m->image_width_px = kWidth;
+    m->image_height_px = kHeight;
+    m->thresholds = hf::default_config().thresholds;
+    ha::HarmonicModel& h = m->model;
+    h.sample_count = 3;
+    h.feature_count = 1;
+    h.board_index[0] = 0;  // red
+    h.area_scale = 100.0F / (kWidth * kHeight);
+    h.sigma_x = h.sigma_y = 1.0F;
+    h.max_nearest_distance = 5.0F;
+    const float features[3] = {100.0F, 50.0F, 25.0F};
+    for (std::size_t i = 0; i < 3; ++i) {
+      h.sample(i)[0] = features[i];
+      h.target_x_m[i] = static_cast<float>(kTargets[i][0]);
+      h.target_y_m[i] = static_cast<float>(kTargets[i][1]);
+    }
+    return m;
+  }();
+  return *map;
+}
+
+struct Rig {
+  explicit Rig(const tf::Key* signing_key = nullptr) {
+    config.filter.particles = 512;
+    if (signing_key != nullptr) {
+      config.link.has_signing_key = true;
+      config.link.signing_key = *signing_key;
+      key = *signing_key;
+    }
+  }
+  void start() {
+    cycle =
+        std::make_unique<hf::LocalizationCycle>(config, test_map(), camera, encoders, link, clock);
+  }
+  // Runs one cycle and returns the frames it wrote.
+  std::vector<tf::Decoded> run() {
+    const std::size_t before = link.written.size();
+    cycle->run_once();
+    return tf::decode(
+        tf::Bytes(link.written.begin() + static_cast<std::ptrdiff_t>(before), link.written.end()),
+        config.link.has_signing_key ? &key : nullptr);
+  }
+  // The frames of one cycle after @p bytes arrived, by message id in order.
+  std::vector<tf::Decoded> send_and_run(const tf::Bytes& bytes) {
+    link.send(bytes);
+    return run();
+  }
+
+  hf::FirmwareConfig config = hf::default_config();
+  tf::Key key{};
+  FakeCamera camera;
+  NoEncoders encoders;
+  tf::QueueLink link;
+  StepClock clock;
+  std::unique_ptr<hf::LocalizationCycle> cycle;
+};
+
+inline std::vector<tf::Decoded> of_type(const std::vector<tf::Decoded>& frames, std::uint32_t id) {
+  std::vector<tf::Decoded> out;
+  for (const auto& f : frames)
+    if (f.msg_id == id) out.push_back(f);
+  return out;
+}
+
+}  // namespace harmoloc::test::one_board
