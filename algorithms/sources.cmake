@@ -31,4 +31,5 @@ set(HARMOLOC_TRAINING_SOURCES
   src/route_placement.cpp
   src/odometry_calibration.cpp
   src/kernel_selection.cpp
+  src/local_fix_error.cpp
   src/bearing_calibration.cpp)

@@ -221,6 +221,7 @@ KernelSelection select_kernel_model(const PlacedSamples& samples, const PlacedSa
     const double lo = d2.row(q).minCoeff(&j);
     if (!std::isfinite(lo) || !usable[static_cast<std::size_t>(q)]) continue;
     out.nearest_distance.push_back(std::sqrt(lo));
+    out.query_row.push_back(static_cast<std::size_t>(q));
     const double num = (fq.row(q) - fs.row(j)).cwiseAbs().sum();
     const double den = (fq.row(q) + fs.row(j)).sum();
     out.nearest_dissimilarity.push_back(den > 0.0 ? num / den : 1.0);

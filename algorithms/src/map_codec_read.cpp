@@ -185,8 +185,26 @@ MapError decode_map(const std::uint8_t* data, std::size_t size, MapFile& map) {
     map.calibration.present = measured > 0;
     map.calibration.odometry_present = odometry_entries > 0;
   }
+  m.fix_error_m.fill(0.0F);
+  if (version >= 11) {
+    // Version 11: the per-sample fix errors, all or none (canonical: none when every one is 0).
+    std::uint32_t count = 0;
+    if (!r.u32(count, "truncated: the per-sample fix errors are missing")) return r.error;
+    if (count != 0 && count != m.sample_count)
+      return MapError{"per-sample fix errors: count is neither 0 nor the sample count", r.pos()};
+    bool any = false;
+    for (std::size_t i = 0; i < count; ++i) {
+      if (!r.f32(m.fix_error_m[i], "truncated per-sample fix errors")) return r.error;
+      if (!std::isfinite(m.fix_error_m[i]) || m.fix_error_m[i] < 0.0F || m.fix_error_m[i] > 100.0F)
+        return MapError{"per-sample fix error not finite or out of range (0..100)", r.pos()};
+      any = any || m.fix_error_m[i] > 0.0F;
+    }
+    if (count != 0 && !any)
+      return MapError{"per-sample fix errors all 0 written (absent means none)", r.pos()};
+  }
   if (r.pos() != body) {
-    return MapError{version >= 4   ? "trailing bytes after the calibration"
+    return MapError{version >= 11  ? "trailing bytes after the per-sample fix errors"
+                    : version >= 4 ? "trailing bytes after the calibration"
                     : version >= 3 ? "trailing bytes after the forward map"
                                    : "trailing bytes after the samples",
                     r.pos()};

@@ -114,9 +114,13 @@ bool LocalizationCycle::update_with_boards(
   // forward map is coarse or its boards noisy, the boards' terms are flat along the route, and
   // the fix still knows where the robot is. Its width is the fix's own error on the training run
   // (the map's calibration), widened as the boards' terms are tempered; an outlier floor keeps a
-  // wrong fix from dragging the cloud.
+  // wrong fix from dragging the cloud. Where the training run's fixes that named this place were
+  // wrong by more (the map's per-sample fix errors), it is that much wider: there a fix 10-20 cm
+  // off outweighed the boards and held a re-seeded cloud off the robot (docs/sweep.md).
   if (fix_term_sigma_m_ > 0.0 && robust_fix_.known_place) {
-    filter_.update_position(robust_fix_.x_m, robust_fix_.y_m, fix_term_sigma_m_,
+    const double sigma_m = algorithms::fix_term_sigma_m(
+        map_.model, fix_term_sigma_m_, fix_term_widen_, robust_fix_.x_m, robust_fix_.y_m);
+    filter_.update_position(robust_fix_.x_m, robust_fix_.y_m, sigma_m,
                             config_.filter.outlier_probability);
   }
   if (filter_.resample_if_needed(config_.filter.resample_threshold)) ++counters_.resamples;

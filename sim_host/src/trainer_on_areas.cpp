@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "harmoloc/algorithms/kernel_selection.hpp"
+#include "harmoloc/algorithms/local_fix_error.hpp"
 #include "harmoloc/algorithms/route_placement.hpp"
 #include "harmoloc/sim_host/trainer.hpp"
 #include "trainer_parts.hpp"
@@ -288,6 +289,24 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<dataset::Sta
     model.target_y_m[i] = static_cast<float>(samples.xy(static_cast<Eigen::Index>(i), 1));
   }
 
+  // Where the fixes that named a place were wrong (docs/filter.md, "The fix error here"): within
+  // twice the fix's own RMS error of each sample (never under 5 cm), at least three fixes, else
+  // the global error.
+  {
+    const double fix_rmse_m =
+        std::hypot(pr.cv_rmse_placed_x_m, pr.cv_rmse_placed_y_m) / std::sqrt(2.0);
+    algorithms::LocalFixErrorOptions lo;
+    lo.radius_m = std::max(2.0 * fix_rmse_m, 0.05);
+    lo.fallback_m = fix_rmse_m;
+    const std::vector<double> local =
+        algorithms::local_fix_errors(samples.xy, algorithms::cross_validated_fixes(sel, queries),
+                                     sel.error_x_m, sel.error_y_m, lo);
+    for (std::size_t i = 0; i < local.size(); ++i)
+      model.fix_error_m[i] = static_cast<float>(std::min(local[i], 100.0));
+    report.local_fix_error_median_m = quantile(local, 0.5);
+    report.local_fix_error_max_m =
+        local.empty() ? 0.0 : *std::max_element(local.begin(), local.end());
+  }
   map.calibration.present = true;
   map.calibration.fix_rmse_x_m = static_cast<float>(pr.cv_rmse_placed_x_m);
   map.calibration.fix_rmse_y_m = static_cast<float>(pr.cv_rmse_placed_y_m);

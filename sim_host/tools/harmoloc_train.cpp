@@ -347,6 +347,12 @@ int main(int argc, char** argv) {
           "known place   Bray-Curtis dissimilarity to the nearest sample <= %.3g, distance <= %.3g "
           "(%% of frame)\n",
           r.dissimilarity_bound, r.known_place_bound);
+      if (r.local_fix_error_max_m > 0.0) {
+        std::printf(
+            "fix error     near each sample, from the cross-validated fixes that named its place: "
+            "median %.2f cm, largest %.2f cm\n",
+            100.0 * r.local_fix_error_median_m, 100.0 * r.local_fix_error_max_m);
+      }
       if (r.has_forward_map) {
         const auto& fw = r.forward;
         std::string sig;

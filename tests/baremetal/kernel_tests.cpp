@@ -775,7 +775,8 @@ void write_map(MapBytes& m, const MapSpec& s) {
       for (int i = 0; i < cells; ++i) m.u16(0x0180U);  // heading coverage, version 8
     }
   }
-  if (s.version >= 4) m.u32(0);  // no calibration entries
+  if (s.version >= 4) m.u32(0);   // no calibration entries
+  if (s.version >= 11) m.u32(0);  // no per-sample fix errors
   if (s.trailing) m.u32(0);
   m.seal();
 }
@@ -875,8 +876,9 @@ void test_map_codec() {
       BM_CHECK(again.size() == fw.size() && std::memcmp(again.data(), fw.data(), fw.size()) == 0);
     }
 #endif
-    // Cut inside the forward map and re-sealed: rejected.
-    fw.truncate(fw.size() - 4 - 8);
+    // Cut inside the forward map (before the CRC, the fix errors' count from version 11 and the
+    // calibration's count) and re-sealed: rejected.
+    fw.truncate(fw.size() - 4 - (version >= 11 ? 4U : 0U) - 8);
     fw.seal();
     err = ha::decode_map(fw.data(), fw.size(), g_map);
     BM_CHECK(err && std::strstr(err.what, "truncated") != nullptr);

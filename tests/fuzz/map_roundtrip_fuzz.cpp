@@ -53,6 +53,7 @@ bool same_model(const MapFile& a, const MapFile& b) {
     if (!same_bits(x.sample(i), y.sample(i), x.feature_count * sizeof(float))) return false;
     if (!same_bits(&x.target_x_m[i], &y.target_x_m[i], sizeof(float))) return false;
     if (!same_bits(&x.target_y_m[i], &y.target_y_m[i], sizeof(float))) return false;
+    if (!same_bits(&x.fix_error_m[i], &y.fix_error_m[i], sizeof(float))) return false;
   }
   const ForwardMap& f = a.forward;
   const ForwardMap& g = b.forward;
@@ -182,6 +183,18 @@ void check_added_visibility(const std::vector<std::uint8_t>& input) {
   check_given_round_trip("visibility");
 }
 
+// A decoded map without per-sample fix errors is given some (version 11), drawn from the input's
+// bytes (one value in 256 is 0), and must survive encode and decode.
+void check_added_fix_errors(const std::vector<std::uint8_t>& input) {
+  HarmonicModel& m = g_map.model;
+  for (std::size_t i = 0; i < m.sample_count; ++i)
+    if (m.fix_error_m[i] != 0.0F) return;
+  for (std::size_t i = 0; i < m.sample_count; ++i)
+    m.fix_error_m[i] = 0.001F * static_cast<float>(input[i % input.size()]);
+  m.fix_error_m[0] = 0.05F;  // never all 0 (that is written as none)
+  check_given_round_trip("per-sample fix errors");
+}
+
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
@@ -206,7 +219,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     // before version 3, every feature weight 1 and no calibration before version 4, a forward
     // map of versions 3 and 4 with every tile of its grid stored, no bearings before version 6,
     // no heading terms before version 7, no heading coverage before version 8, no visibility
-    // before version 10.
+    // before version 10, no per-sample fix errors before version 11.
     HARMOLOC_FUZZ_CHECK(input[8] != 1 || g_map.model.max_dissimilarity == 1.0F,
                         "a version 1 map decodes with a dissimilarity bound");
     HARMOLOC_FUZZ_CHECK(input[8] >= 3 || !g_map.forward.present(),
@@ -227,7 +240,12 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
                         "a map before version 7 decodes with heading terms");
     HARMOLOC_FUZZ_CHECK(input[8] >= 8 || !f.has_heading_coverage,
                         "a map before version 8 decodes with coverage");
-    HARMOLOC_FUZZ_CHECK(!f.has_visibility, "a map before version 10 decodes with visibility");
+    HARMOLOC_FUZZ_CHECK(input[8] >= 10 || !f.has_visibility,
+                        "a map before version 10 decodes with visibility");
+    bool no_fix_errors = true;
+    for (std::size_t i = 0; i < g_map.model.sample_count; ++i)
+      no_fix_errors = no_fix_errors && g_map.model.fix_error_m[i] == 0.0F;
+    HARMOLOC_FUZZ_CHECK(no_fix_errors, "a map before version 11 decodes with fix errors");
     HARMOLOC_FUZZ_CHECK(!decode_map(encoded.data(), encoded.size(), g_again),
                         "a re-encoded older map does not decode");
     HARMOLOC_FUZZ_CHECK(same_model(g_map, g_again), "decode(encode(older map)) differs");
@@ -235,6 +253,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     check_added_heading_terms(input);
     check_added_heading_coverage(input);
     check_added_visibility(input);
+    check_added_fix_errors(input);
     return 0;
   }
   HARMOLOC_FUZZ_CHECK(encoded.size() == input.size(),
@@ -248,5 +267,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   check_added_heading_terms(input);
   check_added_heading_coverage(input);
   check_added_visibility(input);
+  check_added_fix_errors(input);
   return 0;
 }

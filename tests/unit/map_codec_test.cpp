@@ -41,8 +41,10 @@ constexpr std::size_t kOffWeights = kOffAreaScale + 7 * 4;  // version 4
 constexpr std::size_t kOffSamples = kOffWeights + kFeatures * 4;
 // Version 3: the forward map's grid size (0 x 0 here: none), then the CRC.
 constexpr std::size_t kOffForward = kOffSamples + kSamples * (kFeatures + 2) * 4;
-// The forward map's grid size (0, 0: none), the calibration's entry count (0), the CRC.
-constexpr std::size_t kExpectedSize = kOffForward + 8 + 4 + 4;
+// The forward map's grid size (0, 0: none), the calibration's entry count (0), the per-sample fix
+// errors' count (0, version 11), the CRC.
+constexpr std::size_t kOffCalibration = kOffForward + 8;
+constexpr std::size_t kExpectedSize = kOffCalibration + 4 + 4 + 4;
 
 std::unique_ptr<ha::MapFile> make_map() {
   auto map = std::make_unique<ha::MapFile>();
@@ -170,9 +172,15 @@ TEST(MapCodec, UnsupportedVersion) {
   EXPECT_NE(decode_error(b).find("version"), std::string::npos) << decode_error(b);
 }
 
-// Removes the version 4 calibration's entry count (a map without calibration) before the CRC.
-static void strip_calibration(std::vector<std::uint8_t>& b) {
+// Removes the version 11 per-sample fix errors' count (a map without them) before the CRC.
+static void strip_fix_errors(std::vector<std::uint8_t>& b) {
   b.erase(b.end() - 8, b.end() - 4);
+}
+
+// Removes the version 4 calibration's entry count and the fix errors' count (a map with neither)
+// before the CRC.
+static void strip_calibration(std::vector<std::uint8_t>& b) {
+  b.erase(b.end() - 12, b.end() - 4);
 }
 
 // Removes the version 4 feature weights (after the calibration: offsets before it stay).
@@ -235,7 +243,7 @@ TEST(MapCodec, CalibrationRoundTripAndChecks) {
   EXPECT_EQ(out->calibration.pass_spread_m, 0.012F);
   EXPECT_EQ(ha::encode_map(*out), bytes);
   // An entry this firmware does not know, a value out of range or not finite: refused.
-  const std::size_t first_id = kExpectedSize - 4;
+  const std::size_t first_id = kOffCalibration + 4;
   std::vector<std::uint8_t> b = bytes;
   put_u32(b, first_id, 77);
   fix_crc(b);
@@ -248,7 +256,7 @@ TEST(MapCodec, CalibrationRoundTripAndChecks) {
     EXPECT_NE(decode_error(b).find("calibration value"), std::string::npos) << decode_error(b);
   }
   b = bytes;
-  put_u32(b, kExpectedSize - 8, 100000);  // the entry count
+  put_u32(b, kOffCalibration, 100000);  // the entry count
   fix_crc(b);
   EXPECT_NE(decode_error(b).find("calibration"), std::string::npos) << decode_error(b);
 }
@@ -275,7 +283,7 @@ TEST(MapCodec, LocalLinearRidgeRoundTrip) {
   EXPECT_TRUE(out->calibration.present);
   EXPECT_EQ(out->calibration.fix_rmse_x_m, 0.02F);
   // Only what encode_map writes is read: entries in order, 1 to 3 together, no ridge of 0.
-  const std::size_t count_at = both.size() - 4 - 4 - 4 * 8;
+  const std::size_t count_at = both.size() - 4 - 4 - 4 - 4 * 8;
   ASSERT_EQ(get_u32(both, count_at), 4U);
   std::vector<std::uint8_t> b = both;
   put_u32(b, count_at + 4, 2);  // ids 2, 2, 3, 4
@@ -315,7 +323,7 @@ TEST(MapCodec, OdometryCalibrationRoundTripAndChecks) {
   EXPECT_EQ(out->calibration.right_wheel_scale, 1.004F);
   EXPECT_EQ(out->calibration.track_scale, 1.03F);
   EXPECT_EQ(ha::encode_map(*out), bytes);
-  const std::size_t count_at = bytes.size() - 4 - 4 - 3 * 8;
+  const std::size_t count_at = bytes.size() - 4 - 4 - 4 - 3 * 8;
   ASSERT_EQ(get_u32(bytes, count_at), 3U);
   for (float v : {0.3F, 2.5F}) {
     std::vector<std::uint8_t> b = bytes;
@@ -351,7 +359,7 @@ TEST(MapCodec, PassHeadingSpreadRoundTripAndChecks) {
   EXPECT_TRUE(out->calibration.odometry_present);
   EXPECT_TRUE(ha::is_floor_map(out->calibration));
   EXPECT_EQ(ha::encode_map(*out), bytes);
-  const std::size_t count_at = bytes.size() - 4 - 4 - 4 * 8;
+  const std::size_t count_at = bytes.size() - 4 - 4 - 4 - 4 * 8;
   ASSERT_EQ(get_u32(bytes, count_at), 4U);
   const std::size_t entry = count_at + 4 + 3 * 8;
   ASSERT_EQ(get_u32(bytes, entry), 8U);
@@ -376,6 +384,65 @@ TEST(MapCodec, PassHeadingSpreadRoundTripAndChecks) {
   ASSERT_FALSE(ha::decode_map(plain.data(), plain.size(), *out));
   EXPECT_EQ(out->calibration.pass_heading_spread_rad, 0.0F);
   EXPECT_FALSE(ha::is_floor_map(out->calibration));
+}
+
+// Version 11's per-sample fix errors follow the calibration, all or none: a map with none
+// writes a count of 0, and every value must be finite and in 0..100 m.
+TEST(MapCodec, FixErrorsRoundTripAndChecks) {
+  auto map = make_map();
+  for (std::size_t i = 0; i < kSamples; ++i)
+    map->model.fix_error_m[i] = 0.01F * static_cast<float>(i % 4);
+  const std::vector<std::uint8_t> bytes = ha::encode_map(*map);
+  ASSERT_EQ(bytes.size(), kExpectedSize + 4 * kSamples);
+  const std::size_t count_at = kExpectedSize - 8;
+  EXPECT_EQ(get_u32(bytes, count_at), kSamples);
+  auto out = std::make_unique<ha::MapFile>();
+  ASSERT_FALSE(ha::decode_map(bytes.data(), bytes.size(), *out));
+  for (std::size_t i = 0; i < kSamples; ++i)
+    EXPECT_EQ(out->model.fix_error_m[i], map->model.fix_error_m[i]) << i;
+  EXPECT_EQ(ha::encode_map(*out), bytes);
+  EXPECT_FLOAT_EQ(
+      ha::fix_error_near(out->model, map->model.target_x_m[3], map->model.target_y_m[3] + 0.001F),
+      0.03F);
+  // A map without them reads with 0 everywhere, whatever the object held before.
+  const std::vector<std::uint8_t> plain = ha::encode_map(*make_map());
+  ASSERT_FALSE(ha::decode_map(plain.data(), plain.size(), *out));
+  for (std::size_t i = 0; i < kSamples; ++i) EXPECT_EQ(out->model.fix_error_m[i], 0.0F) << i;
+  EXPECT_EQ(ha::fix_error_near(out->model, 0.0, 0.0), 0.0F);
+  // Refused: a value out of range or not finite, all 0 written, a count that is neither 0 nor
+  // the sample count, cut short.
+  for (float v : {-0.01F, 101.0F, std::numeric_limits<float>::quiet_NaN(),
+                  std::numeric_limits<float>::infinity()}) {
+    std::vector<std::uint8_t> b = bytes;
+    put_f32(b, count_at + 4 + 4, v);
+    fix_crc(b);
+    EXPECT_NE(decode_error(b).find("per-sample fix error not finite"), std::string::npos)
+        << v << ": " << decode_error(b);
+  }
+  std::vector<std::uint8_t> b = bytes;
+  for (std::size_t i = 0; i < kSamples; ++i) put_f32(b, count_at + 4 + 4 * i, 0.0F);
+  fix_crc(b);
+  EXPECT_NE(decode_error(b).find("all 0"), std::string::npos) << decode_error(b);
+  b = bytes;
+  put_u32(b, count_at, kSamples - 1);
+  fix_crc(b);
+  EXPECT_NE(decode_error(b).find("neither 0 nor the sample count"), std::string::npos)
+      << decode_error(b);
+  b.assign(bytes.begin(), bytes.begin() + static_cast<std::ptrdiff_t>(count_at + 4 + 4));
+  b.resize(b.size() + 4);
+  fix_crc(b);
+  EXPECT_FALSE(decode_error(b).empty());
+  // Before version 11 there are none: the same bytes as version 10 have trailing bytes.
+  b = bytes;
+  put_u32(b, kOffVersion, 10);
+  fix_crc(b);
+  EXPECT_NE(decode_error(b).find("trailing bytes after the calibration"), std::string::npos)
+      << decode_error(b);
+  b = plain;
+  strip_fix_errors(b);
+  put_u32(b, kOffVersion, 10);
+  fix_crc(b);
+  EXPECT_EQ(decode_error(b), "");
 }
 
 // Maps written before the forward map existed (version 2) still load, without it.
@@ -597,6 +664,7 @@ TEST(MapCodec, LargestMapFitsTheSizeCap) {
   for (std::size_t i = 0; i < m.sample_count; ++i) {
     for (std::size_t k = 0; k < m.feature_count; ++k) m.sample(i)[k] = 1.0F;
     m.target_x_m[i] = m.target_y_m[i] = 0.0F;
+    m.fix_error_m[i] = 0.03F;  // version 11
   }
   // The widest tile grid this build holds, as many of its tiles stored as it holds.
   ha::ForwardMap& f = map->forward;
@@ -668,7 +736,7 @@ constexpr std::size_t kOffHeading = kOffRoute + kTileCells * 4;
 TEST(MapCodec, ForwardMapRoundTripAndLayout) {
   const auto map = make_map_with_forward();
   const std::vector<std::uint8_t> bytes = ha::encode_map(*map);
-  ASSERT_EQ(bytes.size(), kOffHeading + kTileCells * 4 + 4 + 4);
+  ASSERT_EQ(bytes.size(), kOffHeading + kTileCells * 4 + 4 + 4 + 4);
   EXPECT_EQ(get_u32(bytes, kOffGridSize), 3U);
   EXPECT_EQ(get_u32(bytes, kOffTileCount), 1U);
   EXPECT_EQ(bytes[kOffTileBitmap], 1U);
@@ -724,9 +792,9 @@ TEST(MapCodec, HeadingTermsRoundTripAndChecks) {
   for (std::size_t i = 0; i < f.stored_cells() * ha::kMaxBoards * 2; ++i)
     ASSERT_EQ(out->forward.heading_terms[i], f.heading_terms[i]) << i;
   EXPECT_EQ(ha::encode_map(*out), bytes);
-  // The first cell's first term sits right after the cells' headings, before the CRC and the
-  // calibration count.
-  const std::size_t first = plain.size() - 4 - 4;
+  // The first cell's first term sits right after the cells' headings, before the calibration
+  // count, the fix errors' count and the CRC.
+  const std::size_t first = plain.size() - 4 - 4 - 4;
   for (float v : {std::numeric_limits<float>::infinity(), 2.0e6F}) {
     std::vector<std::uint8_t> b = bytes;
     put_f32(b, first, v);
@@ -857,7 +925,7 @@ TEST(MapCodec, HeadingCoverageRoundTripAndChecks) {
     ASSERT_EQ(out->forward.heading_cover[c], f.heading_cover[c]) << c;
   EXPECT_EQ(ha::encode_map(*out), bytes);
   // Cut short inside the section.
-  const std::size_t first = plain.size() - 4 - 4;
+  const std::size_t first = plain.size() - 4 - 4 - 4;
   std::vector<std::uint8_t> cut(bytes.begin(),
                                 bytes.begin() + static_cast<std::ptrdiff_t>(first + 3));
   EXPECT_FALSE(decode_error(cut).empty());
@@ -929,7 +997,7 @@ TEST(MapCodec, ReadsVersionFourForwardMapAsTiles) {
     for (std::uint32_t c = 0; c < 3; ++c) f32(f.route_distance_m[f.index(c, r)]);
   for (std::uint32_t r = 0; r < 2; ++r)
     for (std::uint32_t c = 0; c < 3; ++c) f32(f.heading_rad[f.index(c, r)]);
-  v4.insert(v4.end(), v5.end() - 8, v5.end());  // the calibration count (0) and the CRC
+  v4.insert(v4.end(), v5.end() - 8, v5.end());  // a count of 0 (the calibration's) and the CRC
   put_u32(v4, kOffVersion, 4);
   fix_crc(v4);
   auto out = std::make_unique<ha::MapFile>();
@@ -1097,7 +1165,7 @@ bool bearings_cleared(const ha::ForwardMap& f) {
 TEST(MapCodec, ForwardMapBearingsRoundTripAndLayout) {
   const auto map = make_map_with_bearings();
   const std::vector<std::uint8_t> bytes = ha::encode_map(*map);
-  ASSERT_EQ(bytes.size(), kOffBearingsEnd + 4 + 4);
+  ASSERT_EQ(bytes.size(), kOffBearingsEnd + 4 + 4 + 4);
   EXPECT_EQ(get_u32(bytes, kOffVersion), ha::kMapFormatVersion);
   EXPECT_EQ(bytes[kOffFlags], 3U);
   std::uint32_t bits = 0;
@@ -1158,7 +1226,7 @@ TEST(MapCodec, ForwardMapBearingsRoundTripAndLayout) {
 TEST(MapCodec, ForwardMapWithoutBearingsRoundTrip) {
   const auto map = make_map_with_forward();
   const std::vector<std::uint8_t> bytes = ha::encode_map(*map);
-  ASSERT_EQ(bytes.size(), kOffHeading + kTileCells * 4 + 4 + 4);
+  ASSERT_EQ(bytes.size(), kOffHeading + kTileCells * 4 + 4 + 4 + 4);
   EXPECT_EQ(bytes[kOffFlags], 1U);
   const std::vector<std::uint8_t> with = ha::encode_map(*make_map_with_bearings());
   auto out = std::make_unique<ha::MapFile>();
@@ -1173,6 +1241,7 @@ TEST(MapCodec, ForwardMapWithoutBearingsRoundTrip) {
 
   // The same map as version 5 still reads, the same map, and is written back as version 6.
   std::vector<std::uint8_t> v5 = bytes;
+  strip_fix_errors(v5);
   put_u32(v5, kOffVersion, 5);
   fix_crc(v5);
   ASSERT_FALSE(ha::decode_map(with.data(), with.size(), *out));
@@ -1198,6 +1267,7 @@ TEST(MapCodec, ForwardMapBearingsBeforeVersion9ReadFromTheAxle) {
   std::vector<std::uint8_t> v8 = v9;
   v8.erase(v8.begin() + static_cast<std::ptrdiff_t>(kOffBearingCamera),
            v8.begin() + static_cast<std::ptrdiff_t>(kOffBearingCamera + 4));
+  strip_fix_errors(v8);
   put_u32(v8, kOffVersion, 8);
   fix_crc(v8);
   auto out = std::make_unique<ha::MapFile>();
@@ -1356,9 +1426,9 @@ TEST(MapCodec, VisibilityRoundTripAndChecks) {
   for (std::size_t i = 0; i < f.stored_cells() * ha::kMaxBoards * 2; ++i)
     ASSERT_EQ(out->forward.heading_terms[i], f.heading_terms[i]) << i;
   EXPECT_EQ(ha::encode_map(*out), bytes);
-  // The angle gain sits right after the bearings, before the CRC and the calibration count;
+  // The angle gain sits right after the bearings, before the two counts and the CRC;
   // then the first cell's first feature and its half-width.
-  const std::size_t first = plain.size() - 4 - 4 + 4;
+  const std::size_t first = plain.size() - 4 - 4 - 4 + 4;
   const auto refused = [&](std::size_t at, float v, const char* what) {
     std::vector<std::uint8_t> b = bytes;
     put_f32(b, at, v);

@@ -13,6 +13,7 @@ add_executable(algorithms_test
   ${HARMOLOC_UNIT_DIR}/route_placement_test.cpp
   ${HARMOLOC_UNIT_DIR}/odometry_calibration_test.cpp
   ${HARMOLOC_UNIT_DIR}/kernel_selection_test.cpp
+  ${HARMOLOC_UNIT_DIR}/local_fix_error_test.cpp
   ${HARMOLOC_UNIT_DIR}/bearing_calibration_test.cpp
   ${HARMOLOC_UNIT_DIR}/odometry_test.cpp
   ${HARMOLOC_UNIT_DIR}/particle_filter_test.cpp

@@ -49,10 +49,25 @@ struct HarmonicModel {
   std::array<float, kMaxSamples * kMaxFeatures> features{};
   std::array<float, kMaxSamples> target_x_m{};
   std::array<float, kMaxSamples> target_y_m{};
+  /// Per sample (version 11; 0 everywhere in older maps): the RMS error per axis of the training
+  /// run's cross-validated fixes that landed near the sample's place (metres,
+  /// local_fix_error.hpp). Where a place's areas look like another place's, a fix naming it is
+  /// often wrong; the filter's fix term is that much wider there.
+  std::array<float, kMaxSamples> fix_error_m{};
 
   const float* sample(std::size_t i) const { return features.data() + i * kMaxFeatures; }
   float* sample(std::size_t i) { return features.data() + i * kMaxFeatures; }
 };
+
+/// The fix error stored with the sample nearest to (@p x_m, @p y_m) (the place a fix names),
+/// 0 if the model has none.
+float fix_error_near(const HarmonicModel& model, double x_m, double y_m);
+
+/// The width of the filter's fix term for a fix at (@p x_m, @p y_m): @p base_sigma_m (the run's
+/// fix error, tempered), or the fix error stored near that place times @p widen where that is
+/// wider (@p widen 0: @p base_sigma_m everywhere).
+double fix_term_sigma_m(const HarmonicModel& model, double base_sigma_m, double widen, double x_m,
+                        double y_m);
 
 /// Converts a frame's board areas into the model's feature vector.
 void areas_to_features(const HarmonicModel& model, const AreaVector& areas,

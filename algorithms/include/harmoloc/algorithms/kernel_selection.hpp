@@ -60,6 +60,8 @@ struct KernelSelection {
   /// sample of another pass, and the prediction's error (metres; x, y).
   std::vector<double> nearest_distance, nearest_dissimilarity;
   std::vector<double> error_x_m, error_y_m;
+  /// The row in the queries of each entry above (queries without another pass have none).
+  std::vector<std::size_t> query_row;
 };
 
 /// Cross-validated eq. 9 error of predicting @p queries (held out: their own pass's samples are

@@ -17,11 +17,11 @@ namespace harmoloc::algorithms {
 /// the calibration measured on the training run, version 5 stores the forward map's tiles near
 /// the training run instead of its whole grid, version 6 adds the board bearings, version 7 the
 /// heading terms of a floor map, version 8 the headings each place was trained from, version 9
-/// the camera's place the bearings are seen from, version 10 the visibility of a floor map;
-/// versions 1 to 9 are still read (without what they
+/// the camera's place the bearings are seen from, version 10 the visibility of a floor map,
+/// version 11 the fix error per sample; versions 1 to 10 are still read (without what they
 /// lack; a version 3 or 4 forward map as a grid of which every tile is stored, a forward map before
 /// version 6 without bearings).
-constexpr std::uint32_t kMapFormatVersion = 10;
+constexpr std::uint32_t kMapFormatVersion = 11;
 
 /// What the trainer measured on the training run that the firmware derives its scene-dependent
 /// settings from (docs/map-format.md): nothing of it is a constant tuned to one scene.
@@ -74,7 +74,9 @@ constexpr std::size_t kMaxMapFileBytes =
     // its angle gain).
     4U + ForwardMap::kMaxCells * kMaxBoards * 8U +
     // Version 8: every cell's heading coverage.
-    ForwardMap::kMaxCells * 2U + 4U + kMaxCalibrationEntries * 8U + 4U;
+    ForwardMap::kMaxCells * 2U + 4U + kMaxCalibrationEntries * 8U +
+    // Version 11: the per-sample fix errors.
+    4U + HarmonicModel::kMaxSamples * 4U + 4U;
 
 /// How far from the map's origin a position in a map may be (metres): a training target beyond
 /// it is refused (a label in millimetres or at 1e30 must not become a map the firmware trusts).

@@ -125,6 +125,9 @@ struct TrainReport {
   std::vector<BoardStep> board_steps;
   double known_place_bound = 0;    ///< nearest-sample distance bound, feature units
   double dissimilarity_bound = 0;  ///< Bray-Curtis bound to the nearest sample
+  /// The per-sample fix errors stored in the map (HarmonicModel::fix_error_m): median and
+  /// largest over the samples (metres; 0 when the map has none).
+  double local_fix_error_median_m = 0, local_fix_error_max_m = 0;
   double segment_ms = 0, train_ms = 0;
   PlacementReport placement;
   bool noise_weighted = false;  ///< the kernel weighs each board by its noise (CV preferred it)
