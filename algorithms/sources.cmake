@@ -17,6 +17,7 @@ set(HARMOLOC_ALGORITHMS_SOURCES
   src/nearby_pose_test.cpp
   src/forward_map.cpp
   src/fix_board_check.cpp
+  src/fix_error_grid.cpp
   src/kidnap_detector.cpp
   src/particle_filter.cpp
   src/segmentation.cpp

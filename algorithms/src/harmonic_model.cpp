@@ -30,10 +30,10 @@ float fix_error_near(const HarmonicModel& model, double x_m, double y_m) {
   return error_m;
 }
 
-double fix_term_sigma_m(const HarmonicModel& model, double base_sigma_m, double widen, double x_m,
-                        double y_m) {
-  if (!(widen > 0.0)) return base_sigma_m;
-  return std::max(base_sigma_m, widen * static_cast<double>(fix_error_near(model, x_m, y_m)));
+bool has_fix_errors(const HarmonicModel& model) {
+  return std::any_of(model.fix_error_m.begin(),
+                     model.fix_error_m.begin() + static_cast<std::ptrdiff_t>(model.sample_count),
+                     [](float e) { return e > 0.0F; });
 }
 
 }  // namespace harmoloc::algorithms

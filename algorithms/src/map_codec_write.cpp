@@ -172,9 +172,7 @@ std::vector<std::uint8_t> encode_map(const MapFile& map) {
     w.u32(0);
   }
   // Version 11: the per-sample fix errors, all or none.
-  bool fix_errors = false;
-  for (std::size_t i = 0; i < m.sample_count; ++i)
-    fix_errors = fix_errors || m.fix_error_m[i] > 0.0F;
+  const bool fix_errors = has_fix_errors(m);
   w.u32(fix_errors ? m.sample_count : 0U);
   if (fix_errors) {
     for (std::size_t i = 0; i < m.sample_count; ++i) w.f32(m.fix_error_m[i]);

@@ -119,7 +119,8 @@ bool LocalizationCycle::update_with_boards(
   // off outweighed the boards and held a re-seeded cloud off the robot (docs/sweep.md).
   if (fix_term_sigma_m_ > 0.0 && robust_fix_.known_place) {
     const double sigma_m = algorithms::fix_term_sigma_m(
-        map_.model, fix_term_sigma_m_, fix_term_widen_, robust_fix_.x_m, robust_fix_.y_m);
+        fix_term_sigma_m_, board_params_.tempering,
+        fix_errors_.at(map_.forward, robust_fix_.x_m, robust_fix_.y_m));
     filter_.update_position(robust_fix_.x_m, robust_fix_.y_m, sigma_m,
                             config_.filter.outlier_probability);
   }

@@ -16,8 +16,9 @@
 //   seg_rgb_opencv RES, seg_yuyv_opencv RES   the OpenCV reference
 //   harmonic N                 harmonic query over N samples, 6 boards
 //   harmonic_linear N          the same with the local linear correction (ridge 0.01)
-//   fix_error_near N           the fix term's lookup of the fix error stored with the sample
-//                              nearest the fix's place, over N samples (map format 11)
+//   fix_error_grid N           the fix term's lookup of the fix error near the fix's place (map
+//                              format 11): one cell of the grid built at start-up over N samples
+//   fix_error_grid_build N     building that grid at start-up (the benchmark map's 4224 cells)
 //   filter N                   particle filter step with N particles
 //   kidnap_preference R        the kidnap test's board preference over the places within R cm of
 //                              a fix 60 cm along the route from the estimate (areas and bearings;
@@ -43,6 +44,7 @@
 
 #include "bench_fixtures.hpp"
 #include "harmoloc/algorithms/board_observation.hpp"
+#include "harmoloc/algorithms/fix_error_grid.hpp"
 #include "harmoloc/algorithms/harmonic_localizer.hpp"
 #include "harmoloc/algorithms/particle_filter.hpp"
 #include "harmoloc/algorithms/random.hpp"
@@ -209,12 +211,17 @@ int main(int argc, char** argv) {
     const std::array<float, algorithms::HarmonicModel::kMaxFeatures> features{0.5F, 1.0F, 0.2F,
                                                                               1.5F, 0.3F, 0.8F};
     measure([&] { (void)algorithms::harmonic_query(g_map.model, features); });
-  } else if (kernel == "fix_error_near") {
+  } else if (kernel == "fix_error_grid" || kernel == "fix_error_grid_build") {
     bench::synthetic_map(n, 320, 240, g_map);
     for (std::size_t i = 0; i < n; ++i) g_map.model.fix_error_m[i] = 0.01F;
+    static algorithms::FixErrorGrid grid;
+    grid.build(g_map.model, g_map.forward);
     float e = 0.0F;
-    measure([&] { e += algorithms::fix_error_near(g_map.model, 2.1, 1.0); });
-    if (!(e > 0.0F)) return 1;
+    if (kernel == "fix_error_grid")
+      measure([&] { e += grid.at(g_map.forward, 2.1, 1.0); });
+    else
+      measure([&] { grid.build(g_map.model, g_map.forward); });
+    if (!(grid.at(g_map.forward, 2.1, 1.0) > 0.0F)) return 1;
   } else if (kernel == "filter_boards" || kernel == "filter_boards_kld" ||
              kernel == "filter_boards_vis") {
     // The default measurement update: every board against the forward map, robust weights.

@@ -17,7 +17,7 @@ kernels=(
   "filter 256" "filter 1024" "filter 4096"
   "filter_boards 256" "filter_boards 1024" "filter_boards 4096"
   "filter_boards_kld 1024" "filter_boards_kld 4096" "filter_boards_vis 1024"
-  "kidnap_preference 25" "kidnap_preference_areas 25" "fix_error_near 4096"
+  "kidnap_preference 25" "kidnap_preference_areas 25" "fix_error_grid 4096" "fix_error_grid_build 4096"
   "cycle 320x240" "cycle 640x480" "cycle_yuyv 640x480" "cycle_floor 320x240"
 )
 # Kernels whose count depends on the CPU's best segmentation path.

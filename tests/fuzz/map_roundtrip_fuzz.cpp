@@ -187,8 +187,7 @@ void check_added_visibility(const std::vector<std::uint8_t>& input) {
 // bytes (one value in 256 is 0), and must survive encode and decode.
 void check_added_fix_errors(const std::vector<std::uint8_t>& input) {
   HarmonicModel& m = g_map.model;
-  for (std::size_t i = 0; i < m.sample_count; ++i)
-    if (m.fix_error_m[i] != 0.0F) return;
+  if (has_fix_errors(m)) return;
   for (std::size_t i = 0; i < m.sample_count; ++i)
     m.fix_error_m[i] = 0.001F * static_cast<float>(input[i % input.size()]);
   m.fix_error_m[0] = 0.05F;  // never all 0 (that is written as none)
@@ -242,10 +241,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
                         "a map before version 8 decodes with coverage");
     HARMOLOC_FUZZ_CHECK(input[8] >= 10 || !f.has_visibility,
                         "a map before version 10 decodes with visibility");
-    bool no_fix_errors = true;
-    for (std::size_t i = 0; i < g_map.model.sample_count; ++i)
-      no_fix_errors = no_fix_errors && g_map.model.fix_error_m[i] == 0.0F;
-    HARMOLOC_FUZZ_CHECK(no_fix_errors, "a map before version 11 decodes with fix errors");
+    HARMOLOC_FUZZ_CHECK(!has_fix_errors(g_map.model),
+                        "a map before version 11 decodes with fix errors");
     HARMOLOC_FUZZ_CHECK(!decode_map(encoded.data(), encoded.size(), g_again),
                         "a re-encoded older map does not decode");
     HARMOLOC_FUZZ_CHECK(same_model(g_map, g_again), "decode(encode(older map)) differs");

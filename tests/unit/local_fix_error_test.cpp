@@ -2,8 +2,6 @@
 // takes the error of the held-out fixes that landed near its place, not of those taken there.
 #include "harmoloc/algorithms/local_fix_error.hpp"
 
-#include "harmoloc/algorithms/harmonic_model.hpp"
-
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -69,23 +67,4 @@ TEST(LocalFixError, CrossValidatedFixesPairEachErrorWithItsQuery) {
   EXPECT_THROW(ha::cross_validated_fixes(sel, queries), std::invalid_argument);
   sel.query_row = {0};
   EXPECT_THROW(ha::cross_validated_fixes(sel, queries), std::invalid_argument);
-}
-
-// The firmware's fix term: as wide as the run's fix error, wider where the map says the fixes
-// that named the place were wrong by more, looked up at the sample nearest the fix.
-TEST(LocalFixError, TheFixTermWidensWhereTheMapSaysSo) {
-  auto model = std::make_unique<ha::HarmonicModel>();
-  model->sample_count = 3;
-  const float xs[3] = {0.0F, 1.0F, 3.0F};
-  const float errors[3] = {0.01F, 0.15F, 0.02F};
-  for (std::size_t i = 0; i < 3; ++i) {
-    model->target_x_m[i] = xs[i];
-    model->fix_error_m[i] = errors[i];
-  }
-  const double base = 0.03 * std::sqrt(40.0), widen = std::sqrt(40.0);
-  EXPECT_DOUBLE_EQ(ha::fix_term_sigma_m(*model, base, widen, 0.1, 0.0), base);  // 1 cm there
-  EXPECT_NEAR(ha::fix_term_sigma_m(*model, base, widen, 0.9, 0.05), 0.15 * widen, 1e-6);
-  EXPECT_DOUBLE_EQ(ha::fix_term_sigma_m(*model, base, widen, 2.5, 0.0), base);
-  EXPECT_DOUBLE_EQ(ha::fix_term_sigma_m(*model, base, 0.0, 0.9, 0.0), base);  // none in the map
-  EXPECT_FLOAT_EQ(ha::fix_error_near(*model, 1.9, 0.0), 0.15F);  // nearest: 1 m, not 3 m
 }

@@ -14,6 +14,7 @@ add_executable(algorithms_test
   ${HARMOLOC_UNIT_DIR}/odometry_calibration_test.cpp
   ${HARMOLOC_UNIT_DIR}/kernel_selection_test.cpp
   ${HARMOLOC_UNIT_DIR}/local_fix_error_test.cpp
+  ${HARMOLOC_UNIT_DIR}/fix_error_grid_test.cpp
   ${HARMOLOC_UNIT_DIR}/bearing_calibration_test.cpp
   ${HARMOLOC_UNIT_DIR}/odometry_test.cpp
   ${HARMOLOC_UNIT_DIR}/particle_filter_test.cpp
@@ -36,6 +37,7 @@ add_executable(firmware_test
   ${HARMOLOC_UNIT_DIR}/mavlink_inbound_test.cpp
   ${HARMOLOC_UNIT_DIR}/mavlink_commands_test.cpp
   ${HARMOLOC_UNIT_DIR}/cycle_startup_test.cpp
+  ${HARMOLOC_UNIT_DIR}/cycle_fix_term_test.cpp
   ${HARMOLOC_UNIT_DIR}/mavlink_config_test.cpp
   ${HARMOLOC_UNIT_DIR}/pose_messages_test.cpp
   ${HARMOLOC_UNIT_DIR}/latency_histogram_test.cpp

@@ -60,14 +60,12 @@ struct HarmonicModel {
 };
 
 /// The fix error stored with the sample nearest to (@p x_m, @p y_m) (the place a fix names),
-/// 0 if the model has none.
+/// 0 if the model has none. A pass over every sample: the cycle reads FixErrorGrid instead.
 float fix_error_near(const HarmonicModel& model, double x_m, double y_m);
 
-/// The width of the filter's fix term for a fix at (@p x_m, @p y_m): @p base_sigma_m (the run's
-/// fix error, tempered), or the fix error stored near that place times @p widen where that is
-/// wider (@p widen 0: @p base_sigma_m everywhere).
-double fix_term_sigma_m(const HarmonicModel& model, double base_sigma_m, double widen, double x_m,
-                        double y_m);
+/// Whether @p model holds per-sample fix errors (map format 11; they are all or none, never all
+/// 0).
+bool has_fix_errors(const HarmonicModel& model);
 
 /// Converts a frame's board areas into the model's feature vector.
 void areas_to_features(const HarmonicModel& model, const AreaVector& areas,

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "harmoloc/algorithms/fix_board_check.hpp"
+#include "harmoloc/algorithms/fix_error_grid.hpp"
 #include "harmoloc/algorithms/floor_search.hpp"
 #include "harmoloc/algorithms/harmonic_localizer.hpp"
 #include "harmoloc/algorithms/map_codec.hpp"
@@ -343,10 +344,8 @@ class LocalizationCycle {
   algorithms::BoardModelParams board_params_;
   /// Width of the harmonic fix's term in the per-board update (0: none; maps before version 4).
   double fix_term_sigma_m_ = 0.0;
-  /// From the map's fix error near the fix's place to the fix term's width there: sqrt(tempering),
-  /// as for the global width (0: the map has no per-sample fix errors; the width is the same
-  /// everywhere).
-  double fix_term_widen_ = 0.0;
+  /// The map's per-sample fix errors over the forward map's cells (empty without them).
+  algorithms::FixErrorGrid fix_errors_;
   /// Spread of the particles around a fix at start-up and at a kidnap's re-seed (metres).
   double init_sigma_m_ = 0.05;
   double reseed_sigma_m_ = 0.04;
