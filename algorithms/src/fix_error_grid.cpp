@@ -14,7 +14,9 @@ void FixErrorGrid::build(const HarmonicModel& model, const ForwardMap& forward) 
   for (std::size_t i = 0; i < n; ++i) by_x_[i] = static_cast<std::uint16_t>(i);
   const auto x_of = [&model](std::uint16_t i) { return model.target_x_m[i]; };
   std::sort(by_x_.begin(), by_x_.begin() + static_cast<std::ptrdiff_t>(n),
-            [&](std::uint16_t a, std::uint16_t b) { return x_of(a) < x_of(b) || (x_of(a) == x_of(b) && a < b); });
+            [&](std::uint16_t a, std::uint16_t b) {
+              return x_of(a) < x_of(b) || (x_of(a) == x_of(b) && a < b);
+            });
   const auto* first = by_x_.data();
   const auto* last = by_x_.data() + n;
   for (std::uint32_t tr = 0; tr < forward.tile_rows; ++tr) {
@@ -28,9 +30,8 @@ void FixErrorGrid::build(const HarmonicModel& model, const ForwardMap& forward) 
         const float y = forward.origin_y_m + static_cast<float>(r) * forward.cell_m;
         // Outwards from the cell's x in both directions until the x gap alone exceeds the best
         // distance; ties go to the lower sample index, as in fix_error_near().
-        const auto* mid = std::lower_bound(first, last, x, [&](std::uint16_t i, float value) {
-          return x_of(i) < value;
-        });
+        const auto* mid = std::lower_bound(
+            first, last, x, [&](std::uint16_t i, float value) { return x_of(i) < value; });
         float best_d2 = std::numeric_limits<float>::infinity();
         std::uint16_t best = 0;
         const auto consider = [&](std::uint16_t i) {

@@ -45,12 +45,12 @@ std::unique_ptr<ha::MapFile> flat_map(float fix_error_m) {
 // far the estimate moved towards it (metres).
 double pull_of_one_frame(const ha::MapFile& map) {
   Rig r;
-  r.cycle = std::make_unique<hf::LocalizationCycle>(r.config, map, r.camera, r.encoders, r.link,
-                                                    r.clock);
+  r.cycle =
+      std::make_unique<hf::LocalizationCycle>(r.config, map, r.camera, r.encoders, r.link, r.clock);
   const double x = kTargets[0][0], y = kTargets[0][1] + 0.08;
   // LOCAL_FRD: y mirrored.
-  r.send_and_run(tf::command(mv::kCmdSetPose, {static_cast<float>(x), static_cast<float>(-y), 0,
-                                               0.30F, 0.05F, 0, 0}));
+  r.send_and_run(tf::command(
+      mv::kCmdSetPose, {static_cast<float>(x), static_cast<float>(-y), 0, 0.30F, 0.05F, 0, 0}));
   const double before = r.cycle->pose().pose.y_m;
   EXPECT_NEAR(before, y, 0.03);
   r.camera.frames = true;

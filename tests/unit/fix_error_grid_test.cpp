@@ -56,9 +56,10 @@ TEST(FixErrorGrid, EachCellHoldsTheErrorOfTheSampleNearestItsCentre) {
     for (std::uint32_t c = 0; c < f.columns; ++c) {
       const double cx = f.origin_x_m + static_cast<float>(c) * f.cell_m;
       const double cy = f.origin_y_m + static_cast<float>(r) * f.cell_m;
-      // A little off the centre, towards the cell's own side of its neighbours.
       if (!f.stored(c, r)) continue;
-      ASSERT_EQ(grid->at(f, cx + 0.004, cy + 0.003), ha::fix_error_near(m, cx, cy)) << c << " " << r;
+      // A little off the centre, towards the cell's own side of its neighbours.
+      ASSERT_EQ(grid->at(f, cx + 0.004, cy + 0.003), ha::fix_error_near(m, cx, cy))
+          << c << " " << r;
       ++checked;
     }
   }
@@ -103,3 +104,4 @@ TEST(FixErrorGrid, TheFixTermWidensWhereTheMapSaysSo) {
   EXPECT_DOUBLE_EQ(ha::fix_term_sigma_m(base, tempering, 0.0F), base);  // none in the map
   EXPECT_DOUBLE_EQ(ha::fix_term_sigma_m(base, 1.0, 0.05F), base);
 }
+
