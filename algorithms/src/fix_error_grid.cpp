@@ -10,15 +10,18 @@ void FixErrorGrid::build(const HarmonicModel& model, const ForwardMap& forward) 
   filled_ = false;
   if (!forward.present() || !has_fix_errors(model)) return;
   // Every stored cell is written below; the rest of the table is never read (nor touched).
+  // The samples' order by x: 8 KB on the caller's stack, start-up only, rather than a member
+  // that would sit in the cycle object for good.
+  std::array<std::uint16_t, HarmonicModel::kMaxSamples> by_x;
   const std::size_t n = model.sample_count;
-  for (std::size_t i = 0; i < n; ++i) by_x_[i] = static_cast<std::uint16_t>(i);
+  for (std::size_t i = 0; i < n; ++i) by_x[i] = static_cast<std::uint16_t>(i);
   const auto x_of = [&model](std::uint16_t i) { return model.target_x_m[i]; };
-  std::sort(by_x_.begin(), by_x_.begin() + static_cast<std::ptrdiff_t>(n),
+  std::sort(by_x.begin(), by_x.begin() + static_cast<std::ptrdiff_t>(n),
             [&](std::uint16_t a, std::uint16_t b) {
               return x_of(a) < x_of(b) || (x_of(a) == x_of(b) && a < b);
             });
-  const auto* first = by_x_.data();
-  const auto* last = by_x_.data() + n;
+  const auto* first = by_x.data();
+  const auto* last = by_x.data() + n;
   for (std::uint32_t tr = 0; tr < forward.tile_rows; ++tr) {
     for (std::uint32_t tc = 0; tc < forward.tile_columns; ++tc) {
       const std::uint16_t slot = forward.tile_slot[tr * forward.tile_columns + tc];
@@ -63,13 +66,8 @@ void FixErrorGrid::build(const HarmonicModel& model, const ForwardMap& forward) 
 
 float FixErrorGrid::at(const ForwardMap& forward, double x_m, double y_m) const {
   if (!filled_) return 0.0F;
-  const GridPoint point = locate(forward, x_m, y_m);
-  int nearest = -1;
-  for (int k = 0; k < 4; ++k) {
-    if (point.index[k] == ForwardMap::kVoidCell) continue;
-    if (nearest < 0 || point.weight[k] > point.weight[nearest]) nearest = k;
-  }
-  return nearest < 0 ? 0.0F : error_m_[point.index[nearest]];
+  const std::size_t cell = nearest_stored_cell(locate(forward, x_m, y_m));
+  return cell == ForwardMap::kVoidCell ? 0.0F : error_m_[cell];
 }
 
 double fix_term_sigma_m(double base_sigma_m, double tempering, float fix_error_here_m) {

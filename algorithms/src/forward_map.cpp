@@ -122,6 +122,15 @@ GridPoint locate(const ForwardMap& map, double x_m, double y_m) {
   return p;
 }
 
+std::size_t nearest_stored_cell(const GridPoint& point) {
+  int best = -1;
+  for (int k = 0; k < 4; ++k) {
+    if (point.index[k] == ForwardMap::kVoidCell) continue;
+    if (best < 0 || point.weight[k] > point.weight[best]) best = k;
+  }
+  return best < 0 ? ForwardMap::kVoidCell : point.index[best];
+}
+
 void expected_features(const ForwardMap& map, const GridPoint& point, float* out) {
   const std::size_t n = map.board_count;
   const float* corner[4];
@@ -195,14 +204,10 @@ void expected_features(const ForwardMap& map, const GridPoint& point, const Seen
 }
 
 bool heading_covered(const ForwardMap& map, const GridPoint& point, const SeenHeading& heading) {
-  int best = -1;
-  for (int k = 0; k < 4; ++k) {
-    if (point.index[k] == ForwardMap::kVoidCell) continue;
-    if (best < 0 || point.weight[k] > point.weight[best]) best = k;
-  }
-  if (best < 0) return false;
+  const std::size_t cell = nearest_stored_cell(point);
+  if (cell == ForwardMap::kVoidCell) return false;
   if (!ForwardMap::kHeadingTermStorage || !map.has_heading_coverage) return true;
-  const std::uint32_t mask = map.heading_cover[point.index[best]];
+  const std::uint32_t mask = map.heading_cover[cell];
   return mask == 0U || ((mask >> heading.sector) & 1U) != 0U;
 }
 
@@ -307,13 +312,9 @@ float route_heading(const ForwardMap& map, double x_m, double y_m) {
 
 bool route_heading(const ForwardMap& map, const GridPoint& point, float& heading_rad) {
   if (!map.has_heading) return false;
-  int best = -1;
-  for (int k = 0; k < 4; ++k) {
-    if (point.index[k] == ForwardMap::kVoidCell) continue;
-    if (best < 0 || point.weight[k] > point.weight[best]) best = k;
-  }
-  if (best < 0) return false;
-  heading_rad = map.heading_rad[point.index[best]];
+  const std::size_t cell = nearest_stored_cell(point);
+  if (cell == ForwardMap::kVoidCell) return false;
+  heading_rad = map.heading_rad[cell];
   return true;
 }
 

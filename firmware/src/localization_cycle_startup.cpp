@@ -143,10 +143,10 @@ LocalizationCycle::LocalizationCycle(const FirmwareConfig& config, const algorit
                                      static_cast<double>(map.calibration.fix_rmse_y_m));
   if (config.observation.fix_term && fix_rmse > 0.0) {
     fix_term_sigma_m_ = std::max(fix_rmse, 0.005) * std::sqrt(board_params_.tempering);
+    // The per-sample fix errors (map format 11) over the forward map's cells: the fix term reads
+    // the error near a fix's place from one cell. Nothing else reads them.
+    fix_errors_.build(map.model, map.forward);
   }
-  // The per-sample fix errors (map format 11) over the forward map's cells: the fix term reads the
-  // error near a fix's place from one cell.
-  fix_errors_.build(map.model, map.forward);
   // Where a re-seed puts the particles: around a fix, as far as the fix's own error reaches (5 cm
   // and 4 cm for maps without a calibration). Configured values win. At start-up once that error:
   // twice it reached past the end of a route where the robot started, the route term cut the

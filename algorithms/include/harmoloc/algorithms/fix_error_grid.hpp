@@ -18,7 +18,7 @@ class FixErrorGrid {
   /// Takes, for every stored cell of @p forward, the fix error of the sample of @p model nearest
   /// to the cell's centre (the same sample fix_error_near() names for that centre). Without
   /// per-sample errors or a forward map every lookup reads 0. Start-up only: it sorts the
-  /// samples once and visits each cell once.
+  /// samples once (8 KB of indices on the stack) and visits each cell once.
   void build(const HarmonicModel& model, const ForwardMap& forward);
 
   /// The fix error of the cell nearest to (@p x_m, @p y_m) (metres; 0 outside the stored cells,
@@ -29,7 +29,6 @@ class FixErrorGrid {
 
  private:
   std::array<float, ForwardMap::kMaxCells> error_m_{};
-  std::array<std::uint16_t, HarmonicModel::kMaxSamples> by_x_{};  ///< build()'s scratch
   bool filled_ = false;
 };
 

@@ -223,6 +223,11 @@ struct GridPoint {
 /// Locates (@p x_m, @p y_m) on @p map's grid (clamped to the border). @p map must be present().
 GridPoint locate(const ForwardMap& map, double x_m, double y_m);
 
+/// The storage index of @p point's heaviest stored corner (ties: the first), kVoidCell when no
+/// corner is stored: the cell whose per-cell values (route heading, heading coverage, fix error)
+/// stand for the point.
+std::size_t nearest_stored_cell(const GridPoint& point);
+
 /// The expected features of all map.board_count boards at @p point (a map with heading terms:
 /// their value over every heading, the terms left out).
 void expected_features(const ForwardMap& map, const GridPoint& point, float* out);
