@@ -104,17 +104,3 @@ TEST(FixErrorGrid, TheFixTermWidensWhereTheMapSaysSo) {
   EXPECT_DOUBLE_EQ(ha::fix_term_sigma_m(base, tempering, 0.0F), base);  // none in the map
   EXPECT_DOUBLE_EQ(ha::fix_term_sigma_m(base, 1.0, 0.05F), base);
 }
-
-// The corner whose per-cell values stand for a point (the fix error here, the route heading, the
-// heading coverage): the heaviest stored one, the first on a tie, none when no corner is stored.
-TEST(NearestStoredCell, TheHeaviestStoredCornerOrNone) {
-  constexpr std::uint32_t kVoid = static_cast<std::uint32_t>(ha::ForwardMap::kVoidCell);
-  ha::GridPoint point{{10, 11, 12, 13}, {0.1F, 0.2F, 0.6F, 0.1F}, 0.0F};
-  EXPECT_EQ(ha::nearest_stored_cell(point), 12U);
-  point.index[2] = kVoid;  // the heaviest is not stored: the next heaviest stands for it
-  EXPECT_EQ(ha::nearest_stored_cell(point), 11U);
-  point.weight[3] = 0.2F;  // a tie goes to the first corner
-  EXPECT_EQ(ha::nearest_stored_cell(point), 11U);
-  point.index[0] = point.index[1] = point.index[3] = kVoid;
-  EXPECT_EQ(ha::nearest_stored_cell(point), ha::ForwardMap::kVoidCell);
-}
