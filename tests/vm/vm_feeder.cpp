@@ -10,7 +10,8 @@
 // offers a capture node only once a writer has set the format and written), then waits for
 // GO_FILE to exist (the firmware is up). It prints, for the host:
 //   FEEDER start_mono_ns=S origin_ns=O slowdown=K      when the clock starts
-//   FEEDER done frames=N can=M frame_late_p50_ms=.. frame_late_max_ms=.. can_late_max_ms=.. frames_late_over_10ms=..
+//   FEEDER done frames=N can=M frame_late_p50_ms=.. frame_late_max_ms=.. can_late_max_ms=..
+//   frames_late_over_10ms=..
 //          can_late_over_10ms=.. wall_s=..                  at the end
 #include <fcntl.h>
 #include <linux/can.h>
@@ -68,7 +69,8 @@ void sleep_until(std::int64_t t_ns) {
 std::vector<unsigned char> read_file(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) die("cannot open " + path);
-  return std::vector<unsigned char>((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  return std::vector<unsigned char>((std::istreambuf_iterator<char>(in)),
+                                    std::istreambuf_iterator<char>());
 }
 
 // The pixel bytes of a frame file: PPM (P6, maxval 255) without its header, or raw YUYV as is.
@@ -93,7 +95,8 @@ Pixels load_frame(const std::string& path, int meta_w, int meta_h) {
     p.width = fields[0];
     p.height = fields[1];
     p.rgb = true;
-    if (fields[2] != 255 || p.bytes.size() != p.offset + static_cast<std::size_t>(p.width) * p.height * 3)
+    if (fields[2] != 255 ||
+        p.bytes.size() != p.offset + static_cast<std::size_t>(p.width) * p.height * 3)
       die(path + ": not an 8-bit P6 PPM of its stated size");
   } else {
     p.width = meta_w;
@@ -121,13 +124,15 @@ int meta_int(const std::string& metadata, const char* key) {
 bool parse_candump(const std::string& line, CanEntry& out) {
   long long sec = 0, usec = 0;
   char iface[32], frame[64];
-  if (std::sscanf(line.c_str(), " (%lld.%lld) %31s %63s", &sec, &usec, iface, frame) != 4) return false;
+  if (std::sscanf(line.c_str(), " (%lld.%lld) %31s %63s", &sec, &usec, iface, frame) != 4)
+    return false;
   const char* hash = std::strchr(frame, '#');
   if (hash == nullptr) return false;
   const std::size_t id_len = static_cast<std::size_t>(hash - frame);
   out = CanEntry{};
   out.t_ns = sec * 1000000000LL + usec * 1000LL;
-  out.frame.can_id = static_cast<canid_t>(std::strtoul(std::string(frame, id_len).c_str(), nullptr, 16));
+  out.frame.can_id =
+      static_cast<canid_t>(std::strtoul(std::string(frame, id_len).c_str(), nullptr, 16));
   if (id_len == 8) out.frame.can_id |= CAN_EFF_FLAG;
   const char* data = hash + 1;
   const std::size_t n = std::strlen(data) / 2;
@@ -175,7 +180,8 @@ int main(int argc, char** argv) {
     while (std::getline(in, line)) {
       ++n;
       CanEntry e;
-      if (!parse_candump(line, e)) die("encoders.log:" + std::to_string(n) + ": not a candump line");
+      if (!parse_candump(line, e))
+        die("encoders.log:" + std::to_string(n) + ": not a candump line");
       cans.push_back(e);
     }
   }
@@ -194,18 +200,22 @@ int main(int argc, char** argv) {
   fmt.fmt.pix.bytesperline = static_cast<__u32>(first.width * (first.rgb ? 3 : 2));
   fmt.fmt.pix.sizeimage = fmt.fmt.pix.bytesperline * static_cast<__u32>(first.height);
   fmt.fmt.pix.colorspace = V4L2_COLORSPACE_SRGB;
-  if (::ioctl(video, VIDIOC_S_FMT, &fmt) != 0) die(std::string("VIDIOC_S_FMT: ") + std::strerror(errno));
+  if (::ioctl(video, VIDIOC_S_FMT, &fmt) != 0)
+    die(std::string("VIDIOC_S_FMT: ") + std::strerror(errno));
   const std::size_t frame_size = fmt.fmt.pix.sizeimage;
-  if (fmt.fmt.pix.width != static_cast<__u32>(first.width) || fmt.fmt.pix.height != static_cast<__u32>(first.height))
+  if (fmt.fmt.pix.width != static_cast<__u32>(first.width) ||
+      fmt.fmt.pix.height != static_cast<__u32>(first.height))
     die("the loopback did not take the frame size");
   v4l2_streamparm parm{};
   parm.type = V4L2_BUF_TYPE_VIDEO_OUTPUT;
   parm.parm.output.timeperframe.numerator = static_cast<__u32>(slowdown * 1000.0 + 0.5);
-  parm.parm.output.timeperframe.denominator = static_cast<__u32>(meta_int(metadata, "rate_hz") * 1000);
+  parm.parm.output.timeperframe.denominator =
+      static_cast<__u32>(meta_int(metadata, "rate_hz") * 1000);
   if (meta_int(metadata, "rate_hz") > 0) (void)::ioctl(video, VIDIOC_S_PARM, &parm);
   auto write_frame = [&](const Pixels& p) {
     const ssize_t n = ::write(video, p.bytes.data() + p.offset, frame_size);
-    if (n != static_cast<ssize_t>(frame_size)) die(std::string("write to the loopback: ") + std::strerror(errno));
+    if (n != static_cast<ssize_t>(frame_size))
+      die(std::string("write to the loopback: ") + std::strerror(errno));
   };
   write_frame(first);  // the pre-roll: the capture node appears
 
@@ -214,14 +224,16 @@ int main(int argc, char** argv) {
   if (can < 0) die(std::string("CAN socket: ") + std::strerror(errno));
   ifreq ifr{};
   std::strncpy(ifr.ifr_name, argv[3], IFNAMSIZ - 1);
-  if (::ioctl(can, SIOCGIFINDEX, &ifr) != 0) die(std::string("CAN interface ") + argv[3] + ": " + std::strerror(errno));
+  if (::ioctl(can, SIOCGIFINDEX, &ifr) != 0)
+    die(std::string("CAN interface ") + argv[3] + ": " + std::strerror(errno));
   sockaddr_can addr{};
   addr.can_family = AF_CAN;
   addr.can_ifindex = ifr.ifr_ifindex;
-  if (::bind(can, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0) die(std::string("CAN bind: ") + std::strerror(errno));
+  if (::bind(can, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0)
+    die(std::string("CAN bind: ") + std::strerror(errno));
 
-  std::printf("FEEDER ready frames=%zu can=%zu size=%dx%d format=%s\n", frames.size(), cans.size(), first.width,
-              first.height, first.rgb ? "rgb24" : "yuyv");
+  std::printf("FEEDER ready frames=%zu can=%zu size=%dx%d format=%s\n", frames.size(), cans.size(),
+              first.width, first.height, first.rgb ? "rgb24" : "yuyv");
   std::fflush(stdout);
   if (argc == 6) {
     const std::int64_t give_up = mono_ns() + 300LL * 1000000000LL;
@@ -231,10 +243,14 @@ int main(int argc, char** argv) {
     }
   }
 
-  const std::int64_t origin = std::min(frames.front().t_ns, cans.empty() ? frames.front().t_ns : cans.front().t_ns);
+  const std::int64_t origin =
+      std::min(frames.front().t_ns, cans.empty() ? frames.front().t_ns : cans.front().t_ns);
   const std::int64_t start = mono_ns() + 100000000LL;  // 0.1 s to set out
-  auto wall = [&](std::int64_t t) { return start + static_cast<std::int64_t>(slowdown * static_cast<double>(t - origin)); };
-  std::printf("FEEDER start_mono_ns=%" PRId64 " origin_ns=%" PRId64 " slowdown=%g\n", start, origin, slowdown);
+  auto wall = [&](std::int64_t t) {
+    return start + static_cast<std::int64_t>(slowdown * static_cast<double>(t - origin));
+  };
+  std::printf("FEEDER start_mono_ns=%" PRId64 " origin_ns=%" PRId64 " slowdown=%g\n", start, origin,
+              slowdown);
   std::fflush(stdout);
 
   std::size_t fi = 0, ci = 0;
@@ -244,7 +260,8 @@ int main(int argc, char** argv) {
   const std::int64_t late_ns = 10000000LL;
   Pixels next = first;
   while (fi < frames.size() || ci < cans.size()) {
-    const bool frame_next = ci >= cans.size() || (fi < frames.size() && frames[fi].t_ns <= cans[ci].t_ns);
+    const bool frame_next =
+        ci >= cans.size() || (fi < frames.size() && frames[fi].t_ns <= cans[ci].t_ns);
     const std::int64_t due = wall(frame_next ? frames[fi].t_ns : cans[ci].t_ns);
     sleep_until(due);
     const std::int64_t late = mono_ns() - due;  // when it starts to go out
@@ -254,9 +271,11 @@ int main(int argc, char** argv) {
       frame_lates.push_back(late);
       frames_late += late > late_ns ? 1 : 0;
       ++fi;
-      if (fi < frames.size()) next = load_frame(frames[fi].path, meta_w, meta_h);  // before it is due
+      if (fi < frames.size())
+        next = load_frame(frames[fi].path, meta_w, meta_h);  // before it is due
     } else {
-      if (::write(can, &cans[ci].frame, sizeof(can_frame)) != static_cast<ssize_t>(sizeof(can_frame)))
+      if (::write(can, &cans[ci].frame, sizeof(can_frame)) !=
+          static_cast<ssize_t>(sizeof(can_frame)))
         die(std::string("CAN write: ") + std::strerror(errno));
       can_late_max = std::max(can_late_max, late);
       cans_late += late > late_ns ? 1 : 0;
@@ -265,10 +284,13 @@ int main(int argc, char** argv) {
   }
   std::sort(frame_lates.begin(), frame_lates.end());
   const double frame_late_p50_ms = static_cast<double>(frame_lates[frame_lates.size() / 2]) * 1e-6;
-  std::printf("FEEDER done frames=%zu can=%zu frame_late_p50_ms=%.2f frame_late_max_ms=%.1f can_late_max_ms=%.1f frames_late_over_10ms=%d "
-              "can_late_over_10ms=%d wall_s=%.2f\n",
-              fi, ci, frame_late_p50_ms, static_cast<double>(frame_late_max) * 1e-6, static_cast<double>(can_late_max) * 1e-6, frames_late,
-              cans_late, static_cast<double>(mono_ns() - start) * 1e-9);
+  std::printf(
+      "FEEDER done frames=%zu can=%zu frame_late_p50_ms=%.2f frame_late_max_ms=%.1f "
+      "can_late_max_ms=%.1f frames_late_over_10ms=%d "
+      "can_late_over_10ms=%d wall_s=%.2f\n",
+      fi, ci, frame_late_p50_ms, static_cast<double>(frame_late_max) * 1e-6,
+      static_cast<double>(can_late_max) * 1e-6, frames_late, cans_late,
+      static_cast<double>(mono_ns() - start) * 1e-9);
   std::fflush(stdout);
   ::close(can);
   ::close(video);
