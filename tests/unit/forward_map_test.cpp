@@ -35,16 +35,16 @@ TEST(NearestStoredCell, OnAGridWithAnUnstoredTile) {
   map->cell_m = 0.02F;
   const ha::ForwardMap& f = *map;
 
-  const double c = f.cell_m;
+  const double cell_m = f.cell_m;
   const auto cell_at = [&](double x_m, double y_m) {
     return ha::nearest_stored_cell(ha::locate(f, x_m, y_m));
   };
-  EXPECT_EQ(cell_at(1.0 + 3 * c + 0.004, 2.0 + 5 * c - 0.004), f.index(3, 5));
+  EXPECT_EQ(cell_at(1.0 + 3 * cell_m + 0.004, 2.0 + 5 * cell_m - 0.004), f.index(3, 5));
   // Cell 8 (the unstored tile's first column) is nearer, cell 7 is the stored one.
-  EXPECT_EQ(cell_at(1.0 + 7 * c + 0.015, 2.0 + 2 * c), f.index(7, 2));
-  EXPECT_EQ(cell_at(1.0 + 12 * c, 2.0 + 4 * c), ha::ForwardMap::kVoidCell);
+  EXPECT_EQ(cell_at(1.0 + 7 * cell_m + 0.015, 2.0 + 2 * cell_m), f.index(7, 2));
+  EXPECT_EQ(cell_at(1.0 + 12 * cell_m, 2.0 + 4 * cell_m), ha::ForwardMap::kVoidCell);
   // Beyond the border the place is clamped to the border cells.
-  const ha::GridPoint outside = ha::locate(f, 0.5, 2.0 + 1 * c);
+  const ha::GridPoint outside = ha::locate(f, 0.5, 2.0 + 1 * cell_m);
   EXPECT_GT(outside.outside_m, 0.4F);
   EXPECT_EQ(ha::nearest_stored_cell(outside), f.index(0, 1));
 }
