@@ -36,7 +36,7 @@ void FixBoardCheck::reset() {
 HarmonicFix FixBoardCheck::fix(const HarmonicModel& model,
                                const std::array<float, HarmonicModel::kMaxFeatures>& features,
                                const FeatureMask& use, double x_m, double y_m,
-                               const FixCheckParams& params) {
+                               const FixCheckParams& params, const ColumnFeatures* columns) {
   const std::size_t n = model.feature_count;
   for (std::size_t k = 0; k < n; ++k) hold_[k] = hold_[k] > 0 ? hold_[k] - 1 : 0;
   // The features the fix may use: those allowed, less the suspects, as long as two remain.
@@ -47,7 +47,7 @@ HarmonicFix FixBoardCheck::fix(const HarmonicModel& model,
   };
   FeatureMask effective = trusted();
   if (!(params.near_m > 0.0) || weighted(model, use) < 3)
-    return harmonic_query(model, features, effective);
+    return harmonic_query(model, features, effective, columns);
 
   // The next allowed feature the kernel weighs, in turn.
   std::size_t k = n;
@@ -58,14 +58,14 @@ HarmonicFix FixBoardCheck::fix(const HarmonicModel& model,
       break;
     }
   }
-  if (k == n) return harmonic_query(model, features, effective);
+  if (k == n) return harmonic_query(model, features, effective, columns);
   next_ = (k + 1) % n;
   FeatureMask with = effective, without = effective;
   with[k] = true;
   without[k] = false;
-  if (weighted(model, without) < 2) return harmonic_query(model, features, effective);
-  const HarmonicFix a = harmonic_query(model, features, with);
-  const HarmonicFix b = harmonic_query(model, features, without);
+  if (weighted(model, without) < 2) return harmonic_query(model, features, effective, columns);
+  const HarmonicFix a = harmonic_query(model, features, with, columns);
+  const HarmonicFix b = harmonic_query(model, features, without, columns);
   const bool a_known = a.known_place && std::isfinite(a.x_m) && std::isfinite(a.y_m);
   const bool b_known = b.known_place && std::isfinite(b.x_m) && std::isfinite(b.y_m);
   if (a_known && b_known && distance(a, x_m, y_m) >= params.far_m &&
@@ -78,7 +78,7 @@ HarmonicFix FixBoardCheck::fix(const HarmonicModel& model,
   effective = trusted();
   if (effective == with) return a;
   if (effective == without) return b;
-  return harmonic_query(model, features, effective);
+  return harmonic_query(model, features, effective, columns);
 }
 
 }  // namespace harmoloc::algorithms

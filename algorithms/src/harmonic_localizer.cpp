@@ -81,12 +81,13 @@ class LocalPlane {
   std::array<double, kMax> b_{};
 };
 
-// Eq. 9 with the model's feature weights (times @p mask, 0 or 1 per feature, when given). The
-// known-place test compares the features the mask keeps, all of them with equal weight, against
-// the sample nearest in that plain distance.
+// Eq. 9 with the model's feature weights (times @p mask, 0 or 1 per feature, when given), and
+// the centroid columns of the features it weighs when the model and @p columns have them. The
+// known-place test compares the areas of the features the mask keeps, all of them with equal
+// weight, against the sample nearest in that plain distance.
 HarmonicFix query(const HarmonicModel& model,
-                  const std::array<float, HarmonicModel::kMaxFeatures>& features, const float* mask,
-                  float kernel_scale) {
+                  const std::array<float, HarmonicModel::kMaxFeatures>& features,
+                  const ColumnFeatures* columns, const float* mask, float kernel_scale) {
   HarmonicFix fix;
   const std::size_t n = model.sample_count;
   const std::size_t d = model.feature_count;
@@ -103,6 +104,13 @@ HarmonicFix query(const HarmonicModel& model,
   // Every feature the kernel would use is masked: the plain features carry the fix.
   if (!any_kernel) kernel_weight = test_weight;
   const bool separate_test = weighted && test_weight != kernel_weight;
+  // The centroid columns of the boards the kernel uses, in the kernel's distance only.
+  const bool with_columns = columns != nullptr && model.uses_columns();
+  std::array<float, HarmonicModel::kMaxFeatures> column_weight{};
+  if (with_columns) {
+    const float w2 = model.column_weight * model.column_weight;
+    for (std::size_t k = 0; k < d; ++k) column_weight[k] = w2 * std::sqrt(kernel_weight[k]);
+  }
 
   // Each distance is computed once and kept (16 KiB of stack at full capacity).
   std::array<float, HarmonicModel::kMaxSamples> d2;  // only the first n are written and read
@@ -110,12 +118,16 @@ HarmonicFix query(const HarmonicModel& model,
   float test_min = std::numeric_limits<float>::infinity();
   std::size_t nearest = 0;
   for (std::size_t j = 0; j < n; ++j) {
-    d2[j] = weighted ? squared_distance(features.data(), model.sample(j), d, kernel_weight.data())
-                     : squared_distance(features.data(), model.sample(j), d);
+    const float area =
+        weighted ? squared_distance(features.data(), model.sample(j), d, kernel_weight.data())
+                 : squared_distance(features.data(), model.sample(j), d);
+    d2[j] = with_columns ? area + squared_distance(columns->data(), model.sample_columns(j), d,
+                                                   column_weight.data())
+                         : area;
     if (d2[j] < d2_min) d2_min = d2[j];
     const float t = separate_test
                         ? squared_distance(features.data(), model.sample(j), d, test_weight.data())
-                        : d2[j];
+                        : area;
     if (t < test_min) {
       test_min = t;
       nearest = j;
@@ -196,13 +208,14 @@ HarmonicFix query(const HarmonicModel& model,
 }  // namespace
 
 HarmonicFix harmonic_query(const HarmonicModel& model,
-                           const std::array<float, HarmonicModel::kMaxFeatures>& features) {
-  return query(model, features, nullptr, 1.0F);
+                           const std::array<float, HarmonicModel::kMaxFeatures>& features,
+                           const ColumnFeatures* columns) {
+  return query(model, features, columns, nullptr, 1.0F);
 }
 
 HarmonicFix harmonic_query(const HarmonicModel& model,
                            const std::array<float, HarmonicModel::kMaxFeatures>& features,
-                           const FeatureMask& use) {
+                           const FeatureMask& use, const ColumnFeatures* columns) {
   std::array<float, HarmonicModel::kMaxFeatures> weight{};
   std::size_t used = 0;
   float full = 0.0F, kept = 0.0F;
@@ -212,11 +225,11 @@ HarmonicFix harmonic_query(const HarmonicModel& model,
     full += model.feature_weight[k];
     kept += weight[k] * model.feature_weight[k];
   }
-  if (used == model.feature_count) return query(model, features, nullptr, 1.0F);
+  if (used == model.feature_count) return query(model, features, columns, nullptr, 1.0F);
   if (used == 0) return HarmonicFix{};
   // The kernel widths scaled by the weight left over the weight in full, so that the weights
   // keep their spread with fewer features.
-  return query(model, features, weight.data(),
+  return query(model, features, columns, weight.data(),
                kept > 0.0F ? full / kept
                            : static_cast<float>(model.feature_count) / static_cast<float>(used));
 }

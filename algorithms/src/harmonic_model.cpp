@@ -1,6 +1,7 @@
 #include "harmoloc/algorithms/harmonic_model.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
 namespace harmoloc::algorithms {
@@ -13,6 +14,26 @@ void areas_to_features(const HarmonicModel& model, const AreaVector& areas,
     const std::uint32_t px = board < areas.count ? areas.pixels[board] : 0U;
     features[k] = static_cast<float>(px) * model.area_scale;
   }
+}
+
+float column_feature(double centroid_column_px, std::uint32_t width_px, float feature) {
+  if (!(feature > 0.0F) || width_px < 2) return 0.0F;
+  const double u = centroid_column_px / static_cast<double>(width_px - 1U);
+  return static_cast<float>((std::clamp(u, 0.0, 1.0) - 0.5) *
+                            std::sqrt(static_cast<double>(feature)));
+}
+
+bool areas_to_columns(const HarmonicModel& model, const AreaVector& areas,
+                      const std::array<float, HarmonicModel::kMaxFeatures>& features,
+                      std::array<float, HarmonicModel::kMaxFeatures>& columns) {
+  columns.fill(0.0F);
+  if (!areas.columns_measured()) return false;
+  for (std::size_t k = 0; k < model.feature_count; ++k) {
+    const std::size_t board = model.board_index[k];
+    if (board < areas.count && areas.pixels[board] > 0)
+      columns[k] = column_feature(areas.centroid_column_px(board), areas.width_px, features[k]);
+  }
+  return true;
 }
 
 float fix_error_near(const HarmonicModel& model, double x_m, double y_m) {

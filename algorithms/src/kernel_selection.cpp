@@ -22,10 +22,16 @@ Eigen::MatrixXd columns_of(const Eigen::MatrixXd& m, const std::vector<int>& col
 
 // Squared distances from each query to each sample, +inf where the sample is of the query's own
 // pass (within same_pass_m of travel).
+// With @p column_weight above 0 (and columns in both), the centroid columns add theirs.
 Eigen::MatrixXd held_out_distances(const PlacedSamples& samples, const PlacedSamples& queries,
-                                   const std::vector<int>& columns, double same_pass_m) {
+                                   const std::vector<int>& columns, double same_pass_m,
+                                   double column_weight) {
   Eigen::MatrixXd d2 = squared_distances(columns_of(queries.features, columns),
                                          columns_of(samples.features, columns));
+  if (column_weight > 0.0 && samples.columns.size() > 0 && queries.columns.size() > 0) {
+    d2 += (column_weight * column_weight) * squared_distances(columns_of(queries.columns, columns),
+                                                              columns_of(samples.columns, columns));
+  }
   for (Eigen::Index q = 0; q < d2.rows(); ++q) {
     const double tq = queries.travel_m[static_cast<std::size_t>(q)];
     // Samples come in travel order: the excluded ones are one contiguous stretch.
@@ -127,7 +133,8 @@ std::pair<KernelAxis, KernelAxis> cross_validate_kernel(const PlacedSamples& sam
                                                         const std::vector<int>& columns,
                                                         const KernelSelectionOptions& options) {
   if (columns.empty()) throw std::invalid_argument("cross_validate_kernel: no columns");
-  Eigen::MatrixXd d2 = held_out_distances(samples, queries, columns, options.same_pass_m);
+  Eigen::MatrixXd d2 =
+      held_out_distances(samples, queries, columns, options.same_pass_m, options.column_weight);
   const double median = median_finite(d2);
   // Relative to each query's nearest allowed sample (as the firmware computes eq. 9).
   std::vector<char> usable = queries_with_other_pass(samples, queries, options.same_pass_m);
@@ -172,7 +179,7 @@ void other_pass_nearest(const PlacedSamples& samples, const PlacedSamples& queri
                         std::vector<double>& distance, std::vector<double>& dissimilarity) {
   distance.clear();
   dissimilarity.clear();
-  const Eigen::MatrixXd d2 = held_out_distances(samples, queries, columns, same_pass_m);
+  const Eigen::MatrixXd d2 = held_out_distances(samples, queries, columns, same_pass_m, 0.0);
   const Eigen::MatrixXd fq = columns_of(queries.features, columns);
   const Eigen::MatrixXd fs = columns_of(samples.features, columns);
   const std::vector<char> usable = queries_with_other_pass(samples, queries, same_pass_m);
@@ -210,7 +217,8 @@ KernelSelection select_kernel_model(const PlacedSamples& samples, const PlacedSa
   out.y = current.second;
 
   // Diagnostics of the chosen model: nearest other-pass sample and the held-out error.
-  Eigen::MatrixXd d2 = held_out_distances(samples, queries, columns, options.same_pass_m);
+  Eigen::MatrixXd d2 =
+      held_out_distances(samples, queries, columns, options.same_pass_m, options.column_weight);
   const Eigen::MatrixXd fq = columns_of(queries.features, columns);
   const Eigen::MatrixXd fs = columns_of(samples.features, columns);
   const std::vector<char> usable = queries_with_other_pass(samples, queries, options.same_pass_m);

@@ -26,7 +26,7 @@ MapError decode_map(const std::uint8_t* data, std::size_t size, MapFile& map) {
   std::uint32_t version = 0;
   if (!r.u32(version, "version")) return r.error;
   if (version < 1 || version > kMapFormatVersion)
-    return MapError{"unsupported map format version (this firmware reads versions 1 to 6)", 8};
+    return MapError{"unsupported map format version (this firmware reads versions 1 to 12)", 8};
   if (crc32(data, body) != stored) return MapError{"checksum mismatch: the map is corrupt", body};
 
   std::uint32_t boards = 0;
@@ -202,11 +202,39 @@ MapError decode_map(const std::uint8_t* data, std::size_t size, MapFile& map) {
     if (count != 0 && !any)
       return MapError{"per-sample fix errors all 0 written (absent means none)", r.pos()};
   }
+  m.column_weight = 0.0F;
+  if (version >= 12) {
+    // Version 12: the centroid columns' weight (0: none follow), then n x d column features.
+    if (!r.f32(m.column_weight, "truncated: the column weight is missing")) return r.error;
+    if (!std::isfinite(m.column_weight) || m.column_weight < 0.0F || m.column_weight > 100.0F)
+      return MapError{"column weight not finite or out of range (0..100)", r.pos()};
+    if (m.column_weight > 0.0F && !HarmonicModel::kHoldsColumns) {
+      m.column_weight = 0.0F;
+      return MapError{
+          "the map holds the boards' centroid columns, which this build leaves out "
+          "(HARMOLOC_HARMONIC_COLUMNS=0): train it with --no-columns",
+          r.pos()};
+    }
+    if (m.column_weight > 0.0F) {
+      for (std::size_t i = 0; i < m.sample_count; ++i) {
+        float* c = m.sample_columns(i);
+        for (std::size_t k = 0; k < m.feature_count; ++k) {
+          if (!r.f32(c[k], "truncated column features")) return r.error;
+          // (u - 0.5) sqrt(feature) with u in [0, 1]: within half the root of the feature.
+          const double bound = 0.5 * std::sqrt(static_cast<double>(m.sample(i)[k])) * (1.0 + 1e-5);
+          if (!std::isfinite(c[k]) || std::fabs(static_cast<double>(c[k])) > bound)
+            return MapError{"column feature not finite or beyond half the root of its area feature",
+                            r.pos()};
+        }
+      }
+    }
+  }
   if (r.pos() != body) {
-    return MapError{version >= 11  ? "trailing bytes after the per-sample fix errors"
-                    : version >= 4 ? "trailing bytes after the calibration"
-                    : version >= 3 ? "trailing bytes after the forward map"
-                                   : "trailing bytes after the samples",
+    return MapError{version >= 12   ? "trailing bytes after the column features"
+                    : version >= 11 ? "trailing bytes after the per-sample fix errors"
+                    : version >= 4  ? "trailing bytes after the calibration"
+                    : version >= 3  ? "trailing bytes after the forward map"
+                                    : "trailing bytes after the samples",
                     r.pos()};
   }
   return MapError{};

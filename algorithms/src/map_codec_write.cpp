@@ -177,6 +177,14 @@ std::vector<std::uint8_t> encode_map(const MapFile& map) {
   if (fix_errors) {
     for (std::size_t i = 0; i < m.sample_count; ++i) w.f32(m.fix_error_m[i]);
   }
+  // Version 12: the centroid columns' weight, then (above 0) every sample's column features.
+  const bool columns = m.uses_columns();
+  w.f32(columns ? m.column_weight : 0.0F);
+  if (columns) {
+    for (std::size_t i = 0; i < m.sample_count; ++i) {
+      for (std::size_t k = 0; k < m.feature_count; ++k) w.f32(m.sample_columns(i)[k]);
+    }
+  }
   w.u32(crc32(w.out.data(), w.out.size()));
   return std::move(w.out);
 }

@@ -193,9 +193,11 @@ void LocalizationCycle::localize(bool usable, const algorithms::AreaVector& area
                                  Features& features) {
   fix_.present = false;
   fix_.distrusted_mask = 0;
+  columns_valid_ = false;
   if (usable) {
     algorithms::areas_to_features(map_.model, areas, features);
-    fix_.fix = algorithms::harmonic_query(map_.model, features);
+    columns_valid_ = algorithms::areas_to_columns(map_.model, areas, features, columns_);
+    fix_.fix = algorithms::harmonic_query(map_.model, features, frame_columns());
     fix_.areas = areas;
     fix_.present = true;
   }

@@ -105,8 +105,8 @@ bool LocalizationCycle::update_with_boards(
   }
   counters_.distrusted_boards += distrusted;
   fix_.distrusted_mask = distrusted_mask;
-  robust_fix_ =
-      fix_check_.fix(map_.model, features, use, estimate.x_m, estimate.y_m, fix_check_params_);
+  robust_fix_ = fix_check_.fix(map_.model, features, use, estimate.x_m, estimate.y_m,
+                               fix_check_params_, frame_columns());
   counters_.fix_board_suspicions = fix_check_.suspicions();
 
   const double match = filter_.update_boards(board_update_);

@@ -58,6 +58,19 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<dataset::Sta
     for (std::size_t b = 0; b < boards; ++b)
       all[i][b] = static_cast<float>(run.areas[i].pixels[b]) * area_scale;
   }
+  // Each board's centroid-column feature (HarmonicModel::columns), where the run measured them.
+  bool columns_measured = true;
+  std::vector<std::vector<float>> all_columns(run.areas.size(), std::vector<float>(boards, 0.0F));
+  for (std::size_t i = 0; i < run.areas.size(); ++i) {
+    const algorithms::AreaVector& a = run.areas[i];
+    columns_measured = columns_measured && a.columns_measured();
+    if (!a.columns_measured()) continue;
+    for (std::size_t b = 0; b < boards; ++b) {
+      if (a.pixels[b] > 0)
+        all_columns[i][b] =
+            algorithms::column_feature(a.centroid_column_px(b), a.width_px, all[i][b]);
+    }
+  }
   const bool with_odometry =
       opt.use_odometry && !run.odometry.empty() && opt.method == TrainMethod::kNeighbourGraph;
   if (!with_odometry) {
@@ -116,11 +129,15 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<dataset::Sta
     s.features.resize(static_cast<Eigen::Index>(which.size()),
                       static_cast<Eigen::Index>(candidates.size()));
     s.xy.resize(static_cast<Eigen::Index>(which.size()), 2);
+    s.columns.resize(s.features.rows(), s.features.cols());
     for (std::size_t r = 0; r < which.size(); ++r) {
       const PlacedFrame& f = frames[which[r]];
       for (std::size_t c = 0; c < candidates.size(); ++c) {
+        const auto board = static_cast<std::size_t>(candidates[c]);
         s.features(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) =
-            static_cast<double>(all[f.index][static_cast<std::size_t>(candidates[c])]);
+            static_cast<double>(all[f.index][board]);
+        s.columns(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) =
+            static_cast<double>(all_columns[f.index][board]);
       }
       s.xy(static_cast<Eigen::Index>(r), 0) = f.pose.x_m;
       s.xy(static_cast<Eigen::Index>(r), 1) = f.pose.y_m;
@@ -221,6 +238,49 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<dataset::Sta
   }
   if (!report.noise_weighted) std::fill(scale.begin(), scale.end(), 1.0);
 
+  // The boards' centroid columns in the kernel, over the chosen boards: at a turn, two places
+  // can show the same amounts of each board with the boards at other columns. Each column is
+  // weighed by the square root of its board's kernel weight (HarmonicModel::column_weight); the
+  // weight CV prefers is kept where it improves x + y by options.min_improvement.
+  if (opt.column_features && columns_measured && algorithms::HarmonicModel::kHoldsColumns) {
+    report.areas_only_cv_rmse_x_m = std::sqrt(sel.x.cv_mse);
+    report.areas_only_cv_rmse_y_m = std::sqrt(sel.y.cv_mse);
+    const auto restricted = [&](const algorithms::PlacedSamples& s) {
+      algorithms::PlacedSamples r;
+      r.features.resize(s.features.rows(), static_cast<Eigen::Index>(sel.columns.size()));
+      r.columns.resizeLike(r.features);
+      for (std::size_t i = 0; i < sel.columns.size(); ++i) {
+        const auto c = static_cast<std::size_t>(sel.columns[i]);
+        r.features.col(static_cast<Eigen::Index>(i)) =
+            s.features.col(static_cast<Eigen::Index>(c)) * scale[c];
+        r.columns.col(static_cast<Eigen::Index>(i)) =
+            s.columns.col(static_cast<Eigen::Index>(c)) * std::sqrt(scale[c]);
+      }
+      r.xy = s.xy;
+      r.travel_m = s.travel_m;
+      return r;
+    };
+    const algorithms::PlacedSamples rs = restricted(samples), rq = restricted(queries);
+    algorithms::KernelSelectionOptions co = ko;
+    co.select_features = false;
+    double best = (sel.x.cv_mse + sel.y.cv_mse) * (1.0 - co.min_improvement);
+    double previous = std::numeric_limits<double>::infinity();
+    for (const double w : {0.5, 1.0, 2.0, 4.0}) {
+      co.column_weight = w;
+      algorithms::KernelSelection with = algorithms::select_kernel_model(rs, rq, co);
+      if (with.columns.size() != sel.columns.size()) break;  // a chosen board never changed
+      const double score = with.x.cv_mse + with.y.cv_mse;
+      if (!(score < previous)) break;  // past the best weight (CV over w has one dip)
+      previous = score;
+      if (!(score < best)) continue;
+      best = score;
+      with.columns = sel.columns;
+      with.steps = sel.steps;
+      sel = std::move(with);
+      report.column_weight = w;
+    }
+  }
+
   // Every board whose area changes is a feature; the ones the selection dropped stay in the
   // map with weight 0 in the kernel, so that the known-place test still compares them.
   std::vector<int> features_in_map;
@@ -278,12 +338,16 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<dataset::Sta
   model.gamma_x = 0.0F;
   model.gamma_y = 0.0F;
   model.local_linear_ridge = static_cast<float>(sel.local_linear_ridge);
+  model.column_weight = static_cast<float>(report.column_weight);
   model.max_nearest_distance = static_cast<float>(report.known_place_bound);
   model.max_dissimilarity = static_cast<float>(report.dissimilarity_bound);
   for (std::size_t i = 0; i < sample_rows.size(); ++i) {
     for (std::size_t k = 0; k < features_in_map.size(); ++k) {
       model.sample(i)[k] =
           static_cast<float>(samples.features(static_cast<Eigen::Index>(i), features_in_map[k]));
+      if (model.uses_columns())
+        model.sample_columns(i)[k] =
+            static_cast<float>(samples.columns(static_cast<Eigen::Index>(i), features_in_map[k]));
     }
     model.target_x_m[i] = static_cast<float>(samples.xy(static_cast<Eigen::Index>(i), 0));
     model.target_y_m[i] = static_cast<float>(samples.xy(static_cast<Eigen::Index>(i), 1));

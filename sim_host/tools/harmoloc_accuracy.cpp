@@ -74,7 +74,9 @@ std::vector<algorithms::HarmonicFix> localise(const algorithms::MapFile& map, co
   for (const auto& a : run.areas.areas) {
     std::array<float, algorithms::HarmonicModel::kMaxFeatures> f{};
     algorithms::areas_to_features(map.model, a, f);
-    fixes.push_back(algorithms::harmonic_query(map.model, f));
+    algorithms::ColumnFeatures c{};
+    const bool columns = algorithms::areas_to_columns(map.model, a, f, c);
+    fixes.push_back(algorithms::harmonic_query(map.model, f, columns ? &c : nullptr));
   }
   return fixes;
 }

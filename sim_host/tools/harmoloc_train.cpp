@@ -77,6 +77,11 @@ int main(int argc, char** argv) {
   app.add_flag("--no-bearings", no_bearings,
                "do not store the boards' bearings (where each board is seen across the frame) in\n"
                "the map: the filter then weighs by areas alone, as maps before version 6");
+  bool no_columns = false;
+  app.add_flag("--no-columns", no_columns,
+               "do not try the boards' centroid columns in the harmonic localizer's kernel (map\n"
+               "format 12): areas only, as maps before it; for a co-processor build, which has\n"
+               "no room for them");
   bool heading_terms = false;
   CLI::Option* terms_flag = app.add_flag(
       "--heading-terms", heading_terms,
@@ -162,6 +167,7 @@ int main(int argc, char** argv) {
     opt.geometry = config.geometry;
     opt.use_odometry = !no_odometry;
     opt.bearings = !no_bearings;
+    opt.column_features = !no_columns;
     if (heading_terms) opt.forward.heading_ridges = sim_host::kHeadingRidges;
     opt.forward.visibility = visibility;
     opt.forward.visibility_on_floors = !no_visibility;
@@ -307,6 +313,13 @@ int main(int argc, char** argv) {
         std::printf("kernel        %s\n",
                     r.noise_weighted ? "each board in units of its noise (CV prefers it)"
                                      : "board areas as they are (CV prefers it to noise units)");
+        if (r.column_weight > 0.0)
+          std::printf(
+              "columns       the boards' centroid columns weigh in, weight %.2f (CV: x %.2f cm, "
+              "y %.2f cm with areas only)\n",
+              r.column_weight, 100.0 * r.areas_only_cv_rmse_x_m, 100.0 * r.areas_only_cv_rmse_y_m);
+        else if (r.areas_only_cv_rmse_x_m > 0.0)
+          std::printf("columns       areas only (the centroid columns do not improve CV enough)\n");
         if (r.local_linear_ridge > 0.0)
           std::printf(
               "fix           local linear, ridge %.2f (CV: x %.2f cm, y %.2f cm with the "

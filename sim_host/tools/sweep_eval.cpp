@@ -281,6 +281,7 @@ void route_runs(const Scenario& scene, const algorithms::ThresholdSet& threshold
     r.cv_rmse_x_m = tr.x.cv_rmse_m;
     r.pass_heading_spread_rad = tr.forward.pass_heading_spread_rad;
     r.cv_rmse_y_m = tr.y.cv_rmse_m;
+    r.column_weight = tr.column_weight;
     r.boards_used = board_names(tr, scene);
     bearing_figures(tr, scene, r);
     const algorithms::MapFile& map = *trained.map;

@@ -57,6 +57,8 @@ struct SceneResult {
   double placement_rmse_m = -1.0;
   double placement_heading_rmse_deg = -1.0;
   double cv_rmse_x_m = -1.0, cv_rmse_y_m = -1.0;
+  /// The map's centroid-column weight (0: areas only, docs/training.md).
+  double column_weight = 0.0;
   /// The training run's ForwardMapReport::pass_heading_spread_rad.
   double pass_heading_spread_rad = -1.0;
   std::string boards_used;

@@ -25,6 +25,7 @@ nlohmann::json to_json(const SceneResult& r) {
   j["cv_rmse_x_m"] = r.cv_rmse_x_m;
   j["pass_heading_spread_rad"] = r.pass_heading_spread_rad;
   j["cv_rmse_y_m"] = r.cv_rmse_y_m;
+  j["column_weight"] = r.column_weight;
   j["boards_used"] = r.boards_used;
   j["bearing_boards_placed"] = r.bearing_boards_placed;
   j["board_place_median_m"] = r.board_place_median_m;

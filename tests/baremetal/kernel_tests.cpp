@@ -687,6 +687,8 @@ struct MapSpec {
   /// Forward map flag bits beyond the heading (bit 0): 4 heading terms, 8 heading coverage (2
   /// bearings and 16 visibility only for maps this build refuses: no sections are written).
   std::uint8_t forward_flags = 0;
+  /// The centroid columns' weight (version 12; above 0: every sample's columns follow, 0 each).
+  float column_weight = 0.0F;
 };
 
 constexpr std::uint8_t kMagic[8] = {'H', 'A', 'R', 'M', 'O', 'M', 'A', 'P'};
@@ -777,6 +779,12 @@ void write_map(MapBytes& m, const MapSpec& s) {
   }
   if (s.version >= 4) m.u32(0);   // no calibration entries
   if (s.version >= 11) m.u32(0);  // no per-sample fix errors
+  if (s.version >= 12) {
+    m.f32(s.column_weight);
+    if (s.column_weight > 0.0F) {
+      for (std::uint32_t i = 0; i < s.samples * 3; ++i) m.f32(0.0F);
+    }
+  }
   if (s.trailing) m.u32(0);
   m.seal();
 }
@@ -876,14 +884,19 @@ void test_map_codec() {
       BM_CHECK(again.size() == fw.size() && std::memcmp(again.data(), fw.data(), fw.size()) == 0);
     }
 #endif
-    // Cut inside the forward map (before the CRC, the fix errors' count from version 11 and the
-    // calibration's count) and re-sealed: rejected.
-    fw.truncate(fw.size() - 4 - (version >= 11 ? 4U : 0U) - 8);
+    // Cut inside the forward map (before the CRC, the column weight from version 12, the fix
+    // errors' count from version 11 and the calibration's count) and re-sealed: rejected.
+    fw.truncate(fw.size() - 4 - (version >= 12 ? 4U : 0U) - (version >= 11 ? 4U : 0U) - 8);
     fw.seal();
     err = ha::decode_map(fw.data(), fw.size(), g_map);
     BM_CHECK(err && std::strstr(err.what, "truncated") != nullptr);
     BM_CHECK(!g_map.forward.present());
   }
+  // The harmonic samples' centroid columns (version 12) do not fit this build either: refused
+  // with the way out.
+  s = MapSpec{};
+  s.column_weight = 0.5F;
+  BM_CHECK(ha::HarmonicModel::kHoldsColumns || rejected(s, "--no-columns"));
   // A floor map's heading terms do not fit this build: refused with the way out; its heading
   // coverage is read and left (nothing here uses it without the terms).
   s = MapSpec{};

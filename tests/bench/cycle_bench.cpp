@@ -187,15 +187,24 @@ void BM_SegmentYuyvOpenCV(benchmark::State& state) {
 // Eq. 9 over a synthetic map of state.range(0) samples; @p ridge > 0: with the local linear
 // correction (a map whose training chose it), the extra normal equations over the neighbours
 // the kernel reaches.
-void harmonic_query_bench(benchmark::State& state, float ridge) {
+// @p columns: with the boards' centroid columns (map format 12) in the kernel's distance.
+void harmonic_query_bench(benchmark::State& state, float ridge, bool columns = false) {
   static algorithms::MapFile map;
   bench::synthetic_map(static_cast<std::size_t>(state.range(0)), 320, 240, map);
   map.model.local_linear_ridge = ridge;
+  map.model.column_weight = columns ? 1.0F : 0.0F;
+  for (std::size_t i = 0; columns && i < map.model.sample_count; ++i) {
+    for (std::size_t k = 0; k < map.model.feature_count; ++k)
+      map.model.sample_columns(i)[k] =
+          0.01F * (static_cast<float>((i * 7 + k * 13) % 41) - 20.0F) * map.model.sample(i)[k];
+  }
   std::array<float, algorithms::HarmonicModel::kMaxFeatures> features{0.5F, 1.0F, 0.2F,
                                                                       1.5F, 0.3F, 0.8F};
+  const algorithms::ColumnFeatures frame_columns{0.1F, -0.2F, 0.05F, 0.3F, -0.1F, 0.0F};
   for (auto _ : state) {
     features[0] += 1e-6F;
-    benchmark::DoNotOptimize(algorithms::harmonic_query(map.model, features));
+    benchmark::DoNotOptimize(
+        algorithms::harmonic_query(map.model, features, columns ? &frame_columns : nullptr));
   }
   state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()) * state.range(0));
 }
@@ -206,6 +215,10 @@ void BM_HarmonicQuery(benchmark::State& state) {
 
 void BM_HarmonicQueryLocalLinear(benchmark::State& state) {
   harmonic_query_bench(state, 0.01F);
+}
+
+void BM_HarmonicQueryColumns(benchmark::State& state) {
+  harmonic_query_bench(state, 0.0F, true);
 }
 
 void BM_FilterStep(benchmark::State& state) {
@@ -308,6 +321,7 @@ BENCHMARK(BM_HarmonicQueryLocalLinear)
     ->Arg(1024)
     ->Arg(4096)
     ->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_HarmonicQueryColumns)->Arg(204)->Arg(1024)->Arg(4096)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_FilterStep)->Arg(256)->Arg(1024)->Arg(4096)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_FilterStepBoards)->Arg(256)->Arg(1024)->Arg(4096)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_WholeCycle)->Apply(cycle_args)->Unit(benchmark::kMicrosecond);

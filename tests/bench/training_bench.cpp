@@ -130,12 +130,13 @@ void train(benchmark::State& state, std::size_t frames, std::size_t labelled, in
 
 // The figure: an area log of a 4000-frame run with 64 labels and its wheel odometry,
 // every frame placed, board selection, the forward map and the calibration (<= 2 s).
-void train_placed(benchmark::State& state, bool bearings) {
+void train_placed(benchmark::State& state, bool bearings, bool columns = true) {
   Run run = make_run(4000, 64);
   add_odometry(run);
   hs::TrainOptions opt;
   opt.thresholds.count = 6;
   opt.bearings = bearings;
+  opt.column_features = columns;
   auto map = std::make_unique<ha::MapFile>();
   for (auto _ : state) {
     const hs::TrainReport report = hs::train_on_areas(run.areas, run.labels, opt, *map);
@@ -144,6 +145,7 @@ void train_placed(benchmark::State& state, bool bearings) {
     state.counters["bearing_ms"] = report.bearings_ms;
     state.counters["forward_ms"] = report.forward_ms;
     state.counters["bearing_cells"] = static_cast<double>(report.forward.bearing_cells);
+    state.counters["column_weight"] = report.column_weight;
   }
   state.counters["samples"] = static_cast<double>(map->model.sample_count);
 }
@@ -154,6 +156,11 @@ void BM_TrainPlaced4000(benchmark::State& state) {
 // still learnt and reported): what the bearings cost.
 void BM_TrainPlaced4000NoBearings(benchmark::State& state) {
   train_placed(state, false);
+}
+// The same without trying the boards' centroid columns (harmoloc-train --no-columns): what
+// their cross-validation costs.
+void BM_TrainPlaced4000NoColumns(benchmark::State& state) {
+  train_placed(state, true, false);
 }
 
 void BM_TrainMap204(benchmark::State& state) {
@@ -170,6 +177,7 @@ void BM_TrainMap1024(benchmark::State& state) {
 
 BENCHMARK(BM_TrainPlaced4000)->Unit(benchmark::kMillisecond)->Iterations(3);
 BENCHMARK(BM_TrainPlaced4000NoBearings)->Unit(benchmark::kMillisecond)->Iterations(3);
+BENCHMARK(BM_TrainPlaced4000NoColumns)->Unit(benchmark::kMillisecond)->Iterations(3);
 BENCHMARK(BM_TrainMap204)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_TrainMap204AllBoards)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_TrainMap1024)->Unit(benchmark::kMillisecond)->Iterations(3);

@@ -6,6 +6,7 @@
 // heading terms some (version 7), one with headings and without coverage some (version 8), and
 // must round trip with them too.
 
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <string>
@@ -37,12 +38,16 @@ bool same_model(const MapFile& a, const MapFile& b) {
                  x.feature_count * sizeof(float))) {
     return false;
   }
-  const float xs[] = {x.area_scale,        x.sigma_x,           x.sigma_y,
-                      x.gamma_x,           x.gamma_y,           x.max_nearest_distance,
-                      x.max_dissimilarity, x.local_linear_ridge};
-  const float ys[] = {y.area_scale,        y.sigma_x,           y.sigma_y,
-                      y.gamma_x,           y.gamma_y,           y.max_nearest_distance,
-                      y.max_dissimilarity, y.local_linear_ridge};
+  const float xs[] = {x.area_scale,        x.sigma_x,
+                      x.sigma_y,           x.gamma_x,
+                      x.gamma_y,           x.max_nearest_distance,
+                      x.max_dissimilarity, x.local_linear_ridge,
+                      x.column_weight};
+  const float ys[] = {y.area_scale,        y.sigma_x,
+                      y.sigma_y,           y.gamma_x,
+                      y.gamma_y,           y.max_nearest_distance,
+                      y.max_dissimilarity, y.local_linear_ridge,
+                      y.column_weight};
   const MapCalibration& ca = a.calibration;
   const MapCalibration& cb = b.calibration;
   const float cas[] = {ca.fix_rmse_x_m, ca.fix_rmse_y_m, ca.pass_spread_m};
@@ -54,6 +59,9 @@ bool same_model(const MapFile& a, const MapFile& b) {
     if (!same_bits(&x.target_x_m[i], &y.target_x_m[i], sizeof(float))) return false;
     if (!same_bits(&x.target_y_m[i], &y.target_y_m[i], sizeof(float))) return false;
     if (!same_bits(&x.fix_error_m[i], &y.fix_error_m[i], sizeof(float))) return false;
+    if (x.uses_columns() &&
+        !same_bits(x.sample_columns(i), y.sample_columns(i), x.feature_count * sizeof(float)))
+      return false;
   }
   const ForwardMap& f = a.forward;
   const ForwardMap& g = b.forward;
@@ -185,6 +193,21 @@ void check_added_visibility(const std::vector<std::uint8_t>& input) {
 
 // A decoded map without per-sample fix errors is given some (version 11), drawn from the input's
 // bytes (one value in 256 is 0), and must survive encode and decode.
+// Any map given centroid columns (version 12): within half the root of each area feature.
+void check_added_columns(const std::vector<std::uint8_t>& input) {
+  HarmonicModel& m = g_map.model;
+  if (m.uses_columns()) return;
+  for (std::size_t i = 0; i < m.sample_count; ++i) {
+    for (std::size_t k = 0; k < m.feature_count; ++k) {
+      const double u = static_cast<double>(input[(i + k) % input.size()]) / 255.0;
+      m.sample_columns(i)[k] =
+          static_cast<float>((u - 0.5) * std::sqrt(static_cast<double>(m.sample(i)[k])));
+    }
+  }
+  m.column_weight = 0.5F;
+  check_given_round_trip("centroid columns");
+}
+
 void check_added_fix_errors(const std::vector<std::uint8_t>& input) {
   HarmonicModel& m = g_map.model;
   if (has_fix_errors(m)) return;
@@ -218,7 +241,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     // before version 3, every feature weight 1 and no calibration before version 4, a forward
     // map of versions 3 and 4 with every tile of its grid stored, no bearings before version 6,
     // no heading terms before version 7, no heading coverage before version 8, no visibility
-    // before version 10, no per-sample fix errors before version 11.
+    // before version 10, no per-sample fix errors before version 11, no centroid columns before
+    // version 12.
     HARMOLOC_FUZZ_CHECK(input[8] != 1 || g_map.model.max_dissimilarity == 1.0F,
                         "a version 1 map decodes with a dissimilarity bound");
     HARMOLOC_FUZZ_CHECK(input[8] >= 3 || !g_map.forward.present(),
@@ -241,8 +265,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
                         "a map before version 8 decodes with coverage");
     HARMOLOC_FUZZ_CHECK(input[8] >= 10 || !f.has_visibility,
                         "a map before version 10 decodes with visibility");
-    HARMOLOC_FUZZ_CHECK(!has_fix_errors(g_map.model),
+    HARMOLOC_FUZZ_CHECK(input[8] >= 11 || !has_fix_errors(g_map.model),
                         "a map before version 11 decodes with fix errors");
+    HARMOLOC_FUZZ_CHECK(!g_map.model.uses_columns(),
+                        "a map before version 12 decodes with centroid columns");
     HARMOLOC_FUZZ_CHECK(!decode_map(encoded.data(), encoded.size(), g_again),
                         "a re-encoded older map does not decode");
     HARMOLOC_FUZZ_CHECK(same_model(g_map, g_again), "decode(encode(older map)) differs");
@@ -251,6 +277,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     check_added_heading_coverage(input);
     check_added_visibility(input);
     check_added_fix_errors(input);
+    check_added_columns(input);
     return 0;
   }
   HARMOLOC_FUZZ_CHECK(encoded.size() == input.size(),
@@ -265,5 +292,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   check_added_heading_coverage(input);
   check_added_visibility(input);
   check_added_fix_errors(input);
+  check_added_columns(input);
   return 0;
 }

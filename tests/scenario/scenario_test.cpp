@@ -108,12 +108,14 @@ TEST(FilterScenario, OccludedBoardIsIgnoredThenTrustedAgain) {
   EXPECT_LT(distrusted_share(r, kGreen, 0.0, 28.7), 0.05);
   EXPECT_EQ(r.counters.kidnaps, 0U);
 
-  // Without the robust parts the same run drags the estimate further.
+  // Without the robust parts the same run drags the estimate further. With the boards' centroid
+  // columns in the map (format 12) the fix itself is dragged less, and the margin shrank from
+  // over 20% to 8% (2.07 against 1.91 cm, 2026-12-01).
   hf::FirmwareConfig plain = robust();
   plain.observation.boards.robust = false;
   const hs::ErrorStats p = hs::error_stats(replay("desk-occlusion", plain), 30.1, 36.0);
   std::printf("occlusion, not robust: max %.2f cm while the person stands there\n", 100 * p.max_m);
-  EXPECT_GT(p.max_m, 1.2 * during.max_m);
+  EXPECT_GT(p.max_m, 1.05 * during.max_m);
 }
 
 // The yellow board is moved 30 cm at 29.7 s (and then hides part of green).

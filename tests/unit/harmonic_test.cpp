@@ -322,6 +322,96 @@ TEST(HarmonicQuery, LocalLinearRemovesTheKernelAverageBiasAtARouteEnd) {
   EXPECT_NEAR(flat.x_m, 0.5, 1e-3);
 }
 
+// Two stretches of a route that show the same amounts of two boards, with the boards at other
+// columns (a turn, or a board passed twice): areas alone cannot tell them apart, the centroid
+// columns (map format 12) can. The known-place test still compares areas only, and a board
+// left out takes its column with it.
+TEST(HarmonicQuery, CentroidColumnsTellApartPlacesWithTheSameAreas) {
+  auto model = std::make_unique<ha::HarmonicModel>();
+  model->sample_count = 40;
+  model->feature_count = 2;
+  model->sigma_x = model->sigma_y = 50.0F;
+  model->max_nearest_distance = 0.5F;
+  model->max_dissimilarity = 1.0F;
+  const auto areas_at = [](std::size_t i) {
+    std::array<float, ha::HarmonicModel::kMaxFeatures> f{};
+    const double s = static_cast<double>(i % 20) / 19.0;
+    f[0] = static_cast<float>(2.0 + 3.0 * s);
+    f[1] = static_cast<float>(4.0 - 2.0 * s);
+    return f;
+  };
+  // Stretch A (samples 0..19, x = 0..1.9 m) sees both boards left of centre, stretch B (20..39,
+  // x = 5..6.9 m) right of it.
+  const auto columns_at = [&](std::size_t i) {
+    const auto f = areas_at(i);
+    ha::ColumnFeatures c{};
+    const double u = i < 20 ? 0.2 : 0.8;
+    for (std::size_t k = 0; k < 2; ++k) c[k] = ha::column_feature(u * 319.0, 320, f[k]);
+    return c;
+  };
+  for (std::size_t i = 0; i < 40; ++i) {
+    const auto f = areas_at(i);
+    const auto c = columns_at(i);
+    for (std::size_t k = 0; k < 2; ++k) {
+      model->sample(i)[k] = f[k];
+      model->sample_columns(i)[k] = c[k];
+    }
+    model->target_x_m[i] = static_cast<float>(i < 20 ? 0.1 * static_cast<double>(i)
+                                                     : 5.0 + 0.1 * static_cast<double>(i - 20));
+  }
+  const auto q = areas_at(27);
+  const auto qc = columns_at(27);
+  // Without columns in the map (weight 0), or without the frame's: half way between the two.
+  const ha::HarmonicFix areas_only = ha::harmonic_query(*model, q, &qc);
+  EXPECT_NEAR(areas_only.x_m, 0.5 * (0.7 + 5.7), 0.01);
+  model->column_weight = 1.0F;
+  const ha::HarmonicFix blind = ha::harmonic_query(*model, q);
+  EXPECT_NEAR(blind.x_m, areas_only.x_m, 1e-9);
+  const ha::HarmonicFix fix = ha::harmonic_query(*model, q, &qc);
+  EXPECT_NEAR(fix.x_m, 5.7, 0.01);
+  EXPECT_TRUE(fix.known_place);
+  // The known-place distance is over the areas: 0 here although the other stretch's columns
+  // differ, and unchanged by the columns.
+  EXPECT_NEAR(fix.nearest_distance, 0.0, 1e-6);
+  EXPECT_EQ(fix.nearest_distance, areas_only.nearest_distance);
+  // One board left out: its column goes with it, the other still tells B from A.
+  ha::FeatureMask use{};
+  use[0] = true;
+  EXPECT_NEAR(ha::harmonic_query(*model, q, use, &qc).x_m, 5.7, 0.01);
+  // A frame whose board 0 sits where stretch A saw it, board 1 where B did: with board 1 left
+  // out, stretch A.
+  ha::ColumnFeatures mixed = qc;
+  mixed[0] = columns_at(7)[0];
+  EXPECT_NEAR(ha::harmonic_query(*model, q, use, &mixed).x_m, 0.7, 0.01);
+}
+
+TEST(HarmonicModel, ColumnFeatures) {
+  // (u - 0.5) sqrt(feature), u = centroid / (width - 1); 0 for a board not in view.
+  EXPECT_FLOAT_EQ(ha::column_feature(0.0, 320, 4.0F), -1.0F);
+  EXPECT_FLOAT_EQ(ha::column_feature(319.0, 320, 4.0F), 1.0F);
+  EXPECT_FLOAT_EQ(ha::column_feature(159.5, 320, 9.0F), 0.0F);
+  EXPECT_EQ(ha::column_feature(10.0, 320, 0.0F), 0.0F);
+  EXPECT_EQ(ha::column_feature(10.0, 1, 4.0F), 0.0F);  // no width to place it in
+  auto model = std::make_unique<ha::HarmonicModel>();
+  model->feature_count = 2;
+  model->board_index = {2, 0};
+  model->area_scale = 100.0F / (320.0F * 240.0F);
+  ha::AreaVector areas;
+  areas.count = 3;
+  areas.pixels = {768, 0, 3072, 0, 0, 0, 0, 0};
+  areas.column_sum = {768ULL * 319ULL, 0, 0, 0, 0, 0, 0, 0};  // board 0 at the right edge
+  std::array<float, ha::HarmonicModel::kMaxFeatures> f{};
+  ha::areas_to_features(*model, areas, f);
+  ha::ColumnFeatures c{};
+  c.fill(7.0F);
+  EXPECT_FALSE(ha::areas_to_columns(*model, areas, f, c)) << "columns not measured";
+  for (float v : c) EXPECT_EQ(v, 0.0F);
+  areas.width_px = 320;
+  EXPECT_TRUE(ha::areas_to_columns(*model, areas, f, c));
+  EXPECT_FLOAT_EQ(c[0], -1.0F);  // board 2: 4 %, at the left edge
+  EXPECT_FLOAT_EQ(c[1], 0.5F);   // board 0: 1 %, at the right edge
+}
+
 TEST(HarmonicQuery, KnownPlaceFlag) {
   const Problem p = make_problem();
   auto model = std::make_unique<ha::HarmonicModel>();

@@ -65,5 +65,34 @@ TEST(KernelSelection, LocalLinearIsLeftOutWhereItDoesNotHelp) {
   EXPECT_EQ(sel.local_linear_ridge, 0.0);
 }
 
+// Boards whose areas depend only on the distance from the route's middle: x and 2 - x look the
+// same by their areas, the boards stand left of the camera on one half and right on the other.
+// With the centroid columns in the kernel (KernelSelectionOptions::column_weight), CV tells the
+// halves apart; the known-place calibration (other_pass_nearest) compares areas only.
+TEST(KernelSelection, CentroidColumnsTellApartMirroredHalves) {
+  PlacedSamples samples = straight_route(3, 0.005, 40);
+  samples.columns.resize(samples.features.rows(), samples.features.cols());
+  for (Eigen::Index i = 0; i < samples.features.rows(); ++i) {
+    const double x = samples.xy(i, 0), d = std::fabs(x - 1.0);
+    samples.features(i, 0) = 1.0 + 2.0 * d;
+    samples.features(i, 1) = 5.0 - 1.5 * d;
+    samples.features(i, 2) = 0.5 + 0.5 * d * d;
+    for (Eigen::Index k = 0; k < 3; ++k)
+      samples.columns(i, k) = (x < 1.0 ? -0.3 : 0.3) * std::sqrt(samples.features(i, k));
+  }
+  KernelSelectionOptions options;
+  options.select_features = false;
+  const KernelSelection areas = select_kernel_model(samples, samples, options);
+  options.column_weight = 1.0;
+  const KernelSelection columns = select_kernel_model(samples, samples, options);
+  EXPECT_GT(std::sqrt(areas.x.cv_mse), 0.2) << "mirrored halves: half the fixes on the wrong one";
+  EXPECT_LT(std::sqrt(columns.x.cv_mse), 0.05);
+  std::vector<double> d_areas, s_areas, d_columns, s_columns;
+  other_pass_nearest(samples, samples, areas.columns, options.same_pass_m, d_areas, s_areas);
+  samples.columns *= 100.0;  // columns far apart change nothing there
+  other_pass_nearest(samples, samples, areas.columns, options.same_pass_m, d_columns, s_columns);
+  EXPECT_EQ(d_areas, d_columns);
+}
+
 }  // namespace
 }  // namespace harmoloc::algorithms

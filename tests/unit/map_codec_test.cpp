@@ -42,9 +42,11 @@ constexpr std::size_t kOffSamples = kOffWeights + kFeatures * 4;
 // Version 3: the forward map's grid size (0 x 0 here: none), then the CRC.
 constexpr std::size_t kOffForward = kOffSamples + kSamples * (kFeatures + 2) * 4;
 // The forward map's grid size (0, 0: none), the calibration's entry count (0), the per-sample fix
-// errors' count (0, version 11), the CRC.
+// errors' count (0, version 11), the column weight (0, version 12), the CRC.
 constexpr std::size_t kOffCalibration = kOffForward + 8;
-constexpr std::size_t kExpectedSize = kOffCalibration + 4 + 4 + 4;
+constexpr std::size_t kExpectedSize = kOffCalibration + 4 + 4 + 4 + 4;
+// What follows the calibration entries: the fix errors' count, the column weight, the CRC.
+constexpr std::size_t kAfterCalibration = 4 + 4 + 4;
 
 std::unique_ptr<ha::MapFile> make_map() {
   auto map = std::make_unique<ha::MapFile>();
@@ -85,6 +87,12 @@ std::uint32_t get_u32(const std::vector<std::uint8_t>& b, std::size_t at) {
   for (int i = 0; i < 4; ++i)
     v |= static_cast<std::uint32_t>(b[at + static_cast<std::size_t>(i)]) << (8 * i);
   return v;
+}
+float get_f32(const std::vector<std::uint8_t>& b, std::size_t at) {
+  const std::uint32_t u = get_u32(b, at);
+  float f = 0.0F;
+  std::memcpy(&f, &u, 4);
+  return f;
 }
 void put_f32(std::vector<std::uint8_t>& b, std::size_t at, float f) {
   std::uint32_t u = 0;
@@ -172,15 +180,21 @@ TEST(MapCodec, UnsupportedVersion) {
   EXPECT_NE(decode_error(b).find("version"), std::string::npos) << decode_error(b);
 }
 
-// Removes the version 11 per-sample fix errors' count (a map without them) before the CRC.
-static void strip_fix_errors(std::vector<std::uint8_t>& b) {
+// Removes the version 12 column weight (a map without columns) before the CRC.
+static void strip_columns(std::vector<std::uint8_t>& b) {
   b.erase(b.end() - 8, b.end() - 4);
 }
 
-// Removes the version 4 calibration's entry count and the fix errors' count (a map with neither)
+// Removes the version 11 per-sample fix errors' count and the column weight (a map without them)
 // before the CRC.
-static void strip_calibration(std::vector<std::uint8_t>& b) {
+static void strip_fix_errors(std::vector<std::uint8_t>& b) {
   b.erase(b.end() - 12, b.end() - 4);
+}
+
+// Removes the version 4 calibration's entry count, the fix errors' count and the column weight
+// (a map with none of them) before the CRC.
+static void strip_calibration(std::vector<std::uint8_t>& b) {
+  b.erase(b.end() - 16, b.end() - 4);
 }
 
 // Removes the version 4 feature weights (after the calibration: offsets before it stay).
@@ -283,7 +297,7 @@ TEST(MapCodec, LocalLinearRidgeRoundTrip) {
   EXPECT_TRUE(out->calibration.present);
   EXPECT_EQ(out->calibration.fix_rmse_x_m, 0.02F);
   // Only what encode_map writes is read: entries in order, 1 to 3 together, no ridge of 0.
-  const std::size_t count_at = both.size() - 4 - 4 - 4 - 4 * 8;
+  const std::size_t count_at = both.size() - kAfterCalibration - 4 - 4 * 8;
   ASSERT_EQ(get_u32(both, count_at), 4U);
   std::vector<std::uint8_t> b = both;
   put_u32(b, count_at + 4, 2);  // ids 2, 2, 3, 4
@@ -323,7 +337,7 @@ TEST(MapCodec, OdometryCalibrationRoundTripAndChecks) {
   EXPECT_EQ(out->calibration.right_wheel_scale, 1.004F);
   EXPECT_EQ(out->calibration.track_scale, 1.03F);
   EXPECT_EQ(ha::encode_map(*out), bytes);
-  const std::size_t count_at = bytes.size() - 4 - 4 - 4 - 3 * 8;
+  const std::size_t count_at = bytes.size() - kAfterCalibration - 4 - 3 * 8;
   ASSERT_EQ(get_u32(bytes, count_at), 3U);
   for (float v : {0.3F, 2.5F}) {
     std::vector<std::uint8_t> b = bytes;
@@ -359,7 +373,7 @@ TEST(MapCodec, PassHeadingSpreadRoundTripAndChecks) {
   EXPECT_TRUE(out->calibration.odometry_present);
   EXPECT_TRUE(ha::is_floor_map(out->calibration));
   EXPECT_EQ(ha::encode_map(*out), bytes);
-  const std::size_t count_at = bytes.size() - 4 - 4 - 4 - 4 * 8;
+  const std::size_t count_at = bytes.size() - kAfterCalibration - 4 - 4 * 8;
   ASSERT_EQ(get_u32(bytes, count_at), 4U);
   const std::size_t entry = count_at + 4 + 3 * 8;
   ASSERT_EQ(get_u32(bytes, entry), 8U);
@@ -394,7 +408,7 @@ TEST(MapCodec, FixErrorsRoundTripAndChecks) {
     map->model.fix_error_m[i] = 0.01F * static_cast<float>(i % 4);
   const std::vector<std::uint8_t> bytes = ha::encode_map(*map);
   ASSERT_EQ(bytes.size(), kExpectedSize + 4 * kSamples);
-  const std::size_t count_at = kExpectedSize - 8;
+  const std::size_t count_at = kExpectedSize - 12;
   EXPECT_EQ(get_u32(bytes, count_at), kSamples);
   auto out = std::make_unique<ha::MapFile>();
   ASSERT_FALSE(ha::decode_map(bytes.data(), bytes.size(), *out));
@@ -441,6 +455,69 @@ TEST(MapCodec, FixErrorsRoundTripAndChecks) {
   b = plain;
   strip_fix_errors(b);
   put_u32(b, kOffVersion, 10);
+  fix_crc(b);
+  EXPECT_EQ(decode_error(b), "");
+}
+
+// Version 12's centroid columns follow the fix errors: the weight (0: none follow), then every
+// sample's column features, each within half the root of its area feature.
+TEST(MapCodec, ColumnsRoundTripAndChecks) {
+  auto map = make_map();
+  map->model.column_weight = 0.5F;
+  for (std::size_t i = 0; i < kSamples; ++i) {
+    for (std::size_t k = 0; k < kFeatures; ++k)
+      map->model.sample_columns(i)[k] =
+          (i % 2 == 0 ? 0.3F : -0.4F) * std::sqrt(map->model.sample(i)[k]);
+  }
+  const std::vector<std::uint8_t> bytes = ha::encode_map(*map);
+  ASSERT_EQ(bytes.size(), kExpectedSize + 4 * kSamples * kFeatures);
+  const std::size_t weight_at = kExpectedSize - 8;
+  EXPECT_EQ(get_f32(bytes, weight_at), 0.5F);
+  auto out = std::make_unique<ha::MapFile>();
+  ASSERT_FALSE(ha::decode_map(bytes.data(), bytes.size(), *out));
+  EXPECT_EQ(out->model.column_weight, 0.5F);
+  EXPECT_TRUE(out->model.uses_columns());
+  for (std::size_t i = 0; i < kSamples; ++i) {
+    for (std::size_t k = 0; k < kFeatures; ++k)
+      EXPECT_EQ(out->model.sample_columns(i)[k], map->model.sample_columns(i)[k]) << i << " " << k;
+  }
+  EXPECT_EQ(ha::encode_map(*out), bytes);
+  // A map without them reads with weight 0, whatever the object held before.
+  const std::vector<std::uint8_t> plain = ha::encode_map(*make_map());
+  ASSERT_FALSE(ha::decode_map(plain.data(), plain.size(), *out));
+  EXPECT_EQ(out->model.column_weight, 0.0F);
+  EXPECT_FALSE(out->model.uses_columns());
+  // Refused: a weight out of range or not finite; a column feature beyond half the root of its
+  // area feature (or not finite); cut short.
+  for (float v : {-0.5F, 101.0F, std::numeric_limits<float>::quiet_NaN()}) {
+    std::vector<std::uint8_t> b = bytes;
+    put_f32(b, weight_at, v);
+    fix_crc(b);
+    EXPECT_NE(decode_error(b).find("column weight"), std::string::npos) << v << decode_error(b);
+  }
+  const float area = map->model.sample(0)[1];
+  for (float v : {0.51F * std::sqrt(area), -0.51F * std::sqrt(area),
+                  std::numeric_limits<float>::infinity()}) {
+    std::vector<std::uint8_t> b = bytes;
+    put_f32(b, weight_at + 4 + 4, v);
+    fix_crc(b);
+    EXPECT_NE(decode_error(b).find("column feature"), std::string::npos) << v << decode_error(b);
+  }
+  std::vector<std::uint8_t> b(bytes.begin(), bytes.end() - 8);
+  b.resize(b.size() + 4);
+  fix_crc(b);
+  EXPECT_NE(decode_error(b).find("truncated column features"), std::string::npos)
+      << decode_error(b);
+  // Before version 12 there are none: the column weight is a trailing byte.
+  b = plain;
+  put_u32(b, kOffVersion, 11);
+  fix_crc(b);
+  EXPECT_NE(decode_error(b).find("trailing bytes after the per-sample fix errors"),
+            std::string::npos)
+      << decode_error(b);
+  b = plain;
+  strip_columns(b);
+  put_u32(b, kOffVersion, 11);
   fix_crc(b);
   EXPECT_EQ(decode_error(b), "");
 }
@@ -665,7 +742,9 @@ TEST(MapCodec, LargestMapFitsTheSizeCap) {
     for (std::size_t k = 0; k < m.feature_count; ++k) m.sample(i)[k] = 1.0F;
     m.target_x_m[i] = m.target_y_m[i] = 0.0F;
     m.fix_error_m[i] = 0.03F;  // version 11
+    for (std::size_t k = 0; k < m.feature_count; ++k) m.sample_columns(i)[k] = -0.25F;
   }
+  m.column_weight = 1.0F;  // version 12
   // The widest tile grid this build holds, as many of its tiles stored as it holds.
   ha::ForwardMap& f = map->forward;
   std::vector<std::uint8_t> stored(ha::ForwardMap::kMaxTileGrid, 0);
@@ -736,7 +815,7 @@ constexpr std::size_t kOffHeading = kOffRoute + kTileCells * 4;
 TEST(MapCodec, ForwardMapRoundTripAndLayout) {
   const auto map = make_map_with_forward();
   const std::vector<std::uint8_t> bytes = ha::encode_map(*map);
-  ASSERT_EQ(bytes.size(), kOffHeading + kTileCells * 4 + 4 + 4 + 4);
+  ASSERT_EQ(bytes.size(), kOffHeading + kTileCells * 4 + kAfterCalibration + 4);
   EXPECT_EQ(get_u32(bytes, kOffGridSize), 3U);
   EXPECT_EQ(get_u32(bytes, kOffTileCount), 1U);
   EXPECT_EQ(bytes[kOffTileBitmap], 1U);
@@ -793,8 +872,8 @@ TEST(MapCodec, HeadingTermsRoundTripAndChecks) {
     ASSERT_EQ(out->forward.heading_terms[i], f.heading_terms[i]) << i;
   EXPECT_EQ(ha::encode_map(*out), bytes);
   // The first cell's first term sits right after the cells' headings, before the calibration
-  // count, the fix errors' count and the CRC.
-  const std::size_t first = plain.size() - 4 - 4 - 4;
+  // count, the fix errors' count, the column weight and the CRC.
+  const std::size_t first = plain.size() - 4 - kAfterCalibration;
   for (float v : {std::numeric_limits<float>::infinity(), 2.0e6F}) {
     std::vector<std::uint8_t> b = bytes;
     put_f32(b, first, v);
@@ -925,7 +1004,7 @@ TEST(MapCodec, HeadingCoverageRoundTripAndChecks) {
     ASSERT_EQ(out->forward.heading_cover[c], f.heading_cover[c]) << c;
   EXPECT_EQ(ha::encode_map(*out), bytes);
   // Cut short inside the section.
-  const std::size_t first = plain.size() - 4 - 4 - 4;
+  const std::size_t first = plain.size() - 4 - kAfterCalibration;
   std::vector<std::uint8_t> cut(bytes.begin(),
                                 bytes.begin() + static_cast<std::ptrdiff_t>(first + 3));
   EXPECT_FALSE(decode_error(cut).empty());
@@ -1165,7 +1244,7 @@ bool bearings_cleared(const ha::ForwardMap& f) {
 TEST(MapCodec, ForwardMapBearingsRoundTripAndLayout) {
   const auto map = make_map_with_bearings();
   const std::vector<std::uint8_t> bytes = ha::encode_map(*map);
-  ASSERT_EQ(bytes.size(), kOffBearingsEnd + 4 + 4 + 4);
+  ASSERT_EQ(bytes.size(), kOffBearingsEnd + kAfterCalibration + 4);
   EXPECT_EQ(get_u32(bytes, kOffVersion), ha::kMapFormatVersion);
   EXPECT_EQ(bytes[kOffFlags], 3U);
   std::uint32_t bits = 0;
@@ -1226,7 +1305,7 @@ TEST(MapCodec, ForwardMapBearingsRoundTripAndLayout) {
 TEST(MapCodec, ForwardMapWithoutBearingsRoundTrip) {
   const auto map = make_map_with_forward();
   const std::vector<std::uint8_t> bytes = ha::encode_map(*map);
-  ASSERT_EQ(bytes.size(), kOffHeading + kTileCells * 4 + 4 + 4 + 4);
+  ASSERT_EQ(bytes.size(), kOffHeading + kTileCells * 4 + kAfterCalibration + 4);
   EXPECT_EQ(bytes[kOffFlags], 1U);
   const std::vector<std::uint8_t> with = ha::encode_map(*make_map_with_bearings());
   auto out = std::make_unique<ha::MapFile>();
@@ -1350,7 +1429,7 @@ TEST(MapCodec, ForwardMapBearingsCorruptionWithValidChecksum) {
   reject(
       "truncated inside the bearing cells",
       [](auto& b) {
-        b.erase(b.begin() + static_cast<std::ptrdiff_t>(kOffBearingsEnd - 12),
+        b.erase(b.begin() + static_cast<std::ptrdiff_t>(kOffBearingsEnd - 16),
                 b.begin() + static_cast<std::ptrdiff_t>(kOffBearingsEnd));
       },
       "truncated: the forward map's bearings");
@@ -1426,9 +1505,9 @@ TEST(MapCodec, VisibilityRoundTripAndChecks) {
   for (std::size_t i = 0; i < f.stored_cells() * ha::kMaxBoards * 2; ++i)
     ASSERT_EQ(out->forward.heading_terms[i], f.heading_terms[i]) << i;
   EXPECT_EQ(ha::encode_map(*out), bytes);
-  // The angle gain sits right after the bearings, before the two counts and the CRC;
-  // then the first cell's first feature and its half-width.
-  const std::size_t first = plain.size() - 4 - 4 - 4 + 4;
+  // The angle gain sits right after the bearings, before the two counts, the column weight and
+  // the CRC; then the first cell's first feature and its half-width.
+  const std::size_t first = plain.size() - 4 - kAfterCalibration + 4;
   const auto refused = [&](std::size_t at, float v, const char* what) {
     std::vector<std::uint8_t> b = bytes;
     put_f32(b, at, v);

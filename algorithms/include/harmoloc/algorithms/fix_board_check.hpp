@@ -42,9 +42,11 @@ class FixBoardCheck {
 
   /// The harmonic fix from @p features with the features @p use allows, less those held
   /// suspect; checks one feature first. (@p x_m, @p y_m): the filter's predicted position.
+  /// @p columns: the frame's column features (harmonic_query()), or null.
   HarmonicFix fix(const HarmonicModel& model,
                   const std::array<float, HarmonicModel::kMaxFeatures>& features,
-                  const FeatureMask& use, double x_m, double y_m, const FixCheckParams& params);
+                  const FeatureMask& use, double x_m, double y_m, const FixCheckParams& params,
+                  const ColumnFeatures* columns = nullptr);
 
   /// Whether feature @p k is held suspect.
   bool suspect(std::size_t k) const { return hold_[k] > 0; }

@@ -29,10 +29,17 @@ struct HarmonicFix {
 /// firmware computes.
 constexpr float kLocalLinearCutoff = 16.0F;
 
+/// A frame's centroid-column features (areas_to_columns()), in the model's feature order.
+using ColumnFeatures = std::array<float, HarmonicModel::kMaxFeatures>;
+
 /// Evaluates eq. 9 for one feature vector. The weights are computed relative to the nearest
 /// sample (exp(-sigma (d^2 - d_min^2))), which leaves eq. 9 unchanged but cannot underflow.
+/// @p columns: the frame's column features, used when the model has them
+/// (HarmonicModel::column_weight); null for a frame whose columns were not measured (the kernel
+/// then compares areas only, which a map trained with columns does less well).
 HarmonicFix harmonic_query(const HarmonicModel& model,
-                           const std::array<float, HarmonicModel::kMaxFeatures>& features);
+                           const std::array<float, HarmonicModel::kMaxFeatures>& features,
+                           const ColumnFeatures* columns = nullptr);
 
 /// Which of the model's features a query may use (true) or must leave out (false).
 using FeatureMask = std::array<bool, HarmonicModel::kMaxFeatures>;
@@ -40,9 +47,10 @@ using FeatureMask = std::array<bool, HarmonicModel::kMaxFeatures>;
 /// Eq. 9 over the features @p use allows only: distances, the known-place test and the kernel
 /// leave the others out (the kernel widths scaled by d / d_used, so that the weights keep their
 /// spread). For a fix that an occluded or moved board must not drag. With every feature allowed
-/// it equals the plain query; with none, it is not a known place.
+/// it equals the plain query; with none, it is not a known place. A board left out takes its
+/// column with it.
 HarmonicFix harmonic_query(const HarmonicModel& model,
                            const std::array<float, HarmonicModel::kMaxFeatures>& features,
-                           const FeatureMask& use);
+                           const FeatureMask& use, const ColumnFeatures* columns = nullptr);
 
 }  // namespace harmoloc::algorithms

@@ -9,11 +9,18 @@
 
 #include "harmoloc/algorithms/segmentation.hpp"
 
+/// Whether the model has room for the boards' centroid columns (map format 12). A co-processor
+/// build leaves it out (128 KiB at full capacity) and refuses a map that holds them.
+#ifndef HARMOLOC_HARMONIC_COLUMNS
+#define HARMOLOC_HARMONIC_COLUMNS 1
+#endif
+
 namespace harmoloc::algorithms {
 
 struct HarmonicModel {
   static constexpr std::size_t kMaxSamples = 4096;
   static constexpr std::size_t kMaxFeatures = kMaxBoards;
+  static constexpr bool kHoldsColumns = HARMOLOC_HARMONIC_COLUMNS != 0;
 
   std::uint32_t sample_count = 0;
   std::uint32_t feature_count = 0;
@@ -55,8 +62,21 @@ struct HarmonicModel {
   /// often wrong; the filter's fix term is that much wider there.
   std::array<float, kMaxSamples> fix_error_m{};
 
+  /// The boards' centroid columns in eq. 9's distance (version 12; 0: areas only, as before).
+  /// Two places on a route can show the same amounts of each board with the boards at other
+  /// columns (at a turn, or where the route passes a board twice); the areas alone cannot tell
+  /// them apart. Each sample then also holds, per feature, column_feature() of its frame, and the
+  /// query's squared distance adds column_weight^2 * sqrt(feature_weight) * (c - c_j)^2 over the
+  /// features the kernel uses. The known-place test compares areas only.
+  float column_weight = 0.0F;
+  /// Row-major sample_count x feature_count, like features (only when column_weight > 0).
+  std::array<float, kHoldsColumns ? kMaxSamples * kMaxFeatures : 1> columns{};
+
   const float* sample(std::size_t i) const { return features.data() + i * kMaxFeatures; }
   float* sample(std::size_t i) { return features.data() + i * kMaxFeatures; }
+  const float* sample_columns(std::size_t i) const { return columns.data() + i * kMaxFeatures; }
+  float* sample_columns(std::size_t i) { return columns.data() + i * kMaxFeatures; }
+  bool uses_columns() const { return kHoldsColumns && column_weight > 0.0F; }
 };
 
 /// The fix error stored with the sample nearest to (@p x_m, @p y_m) (the place a fix names),
@@ -70,5 +90,17 @@ bool has_fix_errors(const HarmonicModel& model);
 /// Converts a frame's board areas into the model's feature vector.
 void areas_to_features(const HarmonicModel& model, const AreaVector& areas,
                        std::array<float, HarmonicModel::kMaxFeatures>& features);
+
+/// One board's centroid-column feature: (u - 0.5) * sqrt(@p feature), u its centroid column as a
+/// fraction of the frame's width (0 left .. 1 right), @p feature its area feature; 0 when the
+/// board is not in view. Signed, and it grows with the board, so that a board a few pixels wide
+/// whose centroid jumps weighs little.
+float column_feature(double centroid_column_px, std::uint32_t width_px, float feature);
+
+/// The frame's column features in the model's feature order (@p features from
+/// areas_to_features()). False (and all 0) when the frame's columns were not measured.
+bool areas_to_columns(const HarmonicModel& model, const AreaVector& areas,
+                      const std::array<float, HarmonicModel::kMaxFeatures>& features,
+                      std::array<float, HarmonicModel::kMaxFeatures>& columns);
 
 }  // namespace harmoloc::algorithms

@@ -22,6 +22,9 @@ struct PlacedSamples {
   Eigen::MatrixXd features;  ///< m x d, the map's feature units
   Eigen::MatrixXd xy;        ///< m x 2, metres
   std::vector<double> travel_m;
+  /// m x d, each feature's centroid-column feature (HarmonicModel::columns), scaled as the
+  /// kernel weighs it; empty: none.
+  Eigen::MatrixXd columns;
 };
 
 struct KernelSelectionOptions {
@@ -35,6 +38,10 @@ struct KernelSelectionOptions {
   /// one with the lowest x + y CV error is kept where it beats the plain kernel average by more
   /// than min_improvement. Empty: the plain average.
   std::vector<double> local_linear_ridges{0.003, 0.01, 0.03, 0.1, 0.3};
+  /// The centroid columns' weight in eq. 9's distance (HarmonicModel::column_weight): the
+  /// kernel's squared distance adds column_weight^2 |C_q - C_j|^2 over the chosen columns (when
+  /// samples and queries hold columns). The known-place calibration compares areas only.
+  double column_weight = 0.0;
 };
 
 struct KernelAxis {
@@ -56,8 +63,9 @@ struct KernelSelection {
   /// x and y's cv_mse and the per-query errors below are those of the fix with it.
   double local_linear_ridge = 0.0;
   double kernel_average_cv_mse_x = 0.0, kernel_average_cv_mse_y = 0.0;
-  /// Per query (with the chosen columns): distance and Bray-Curtis dissimilarity to the nearest
-  /// sample of another pass, and the prediction's error (metres; x, y).
+  /// Per query (with the chosen columns): distance (the kernel's, centroid columns included)
+  /// and Bray-Curtis dissimilarity to the nearest sample of another pass, and the prediction's
+  /// error (metres; x, y).
   std::vector<double> nearest_distance, nearest_dissimilarity;
   std::vector<double> error_x_m, error_y_m;
   /// The row in the queries of each entry above (queries without another pass have none).

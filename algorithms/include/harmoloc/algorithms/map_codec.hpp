@@ -21,7 +21,7 @@ namespace harmoloc::algorithms {
 /// version 11 the fix error per sample; versions 1 to 10 are still read (without what they
 /// lack; a version 3 or 4 forward map as a grid of which every tile is stored, a forward map before
 /// version 6 without bearings).
-constexpr std::uint32_t kMapFormatVersion = 11;
+constexpr std::uint32_t kMapFormatVersion = 12;
 
 /// What the trainer measured on the training run that the firmware derives its scene-dependent
 /// settings from (docs/map-format.md): nothing of it is a constant tuned to one scene.
@@ -59,7 +59,7 @@ inline bool is_floor_map(const MapCalibration& calibration) {
 /// Most calibration entries a map may hold (version 4).
 constexpr std::uint32_t kMaxCalibrationEntries = 64;
 
-/// The largest map file this build reads (every count at its capacity, version 9): the loader
+/// The largest map file this build reads (every count at its capacity): the loader
 /// refuses a larger file before reading it.
 constexpr std::size_t kMaxMapFileBytes =
     8U + 4U * 4U + kMaxBoards * 12U + 8U + HarmonicModel::kMaxFeatures + 7U * 4U +
@@ -76,7 +76,13 @@ constexpr std::size_t kMaxMapFileBytes =
     // Version 8: every cell's heading coverage.
     ForwardMap::kMaxCells * 2U + 4U + kMaxCalibrationEntries * 8U +
     // Version 11: the per-sample fix errors.
-    4U + HarmonicModel::kMaxSamples * 4U + 4U;
+    4U + HarmonicModel::kMaxSamples * 4U +
+    // Version 12: the column weight and every sample's column features (when this build holds
+    // them); the CRC.
+    4U +
+    (HarmonicModel::kHoldsColumns ? HarmonicModel::kMaxSamples * HarmonicModel::kMaxFeatures * 4U
+                                  : 0U) +
+    4U;
 
 /// How far from the map's origin a position in a map may be (metres): a training target beyond
 /// it is refused (a label in millimetres or at 1e30 must not become a map the firmware trusts).

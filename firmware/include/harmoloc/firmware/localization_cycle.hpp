@@ -335,6 +335,13 @@ class LocalizationCycle {
   algorithms::BoardAssessment assessment_{};
   algorithms::HarmonicFix robust_fix_{};
   algorithms::FixBoardCheck fix_check_;
+  /// This frame's centroid-column features (the map's feature order), when the frame's columns
+  /// were measured.
+  algorithms::ColumnFeatures columns_{};
+  bool columns_valid_ = false;
+  const algorithms::ColumnFeatures* frame_columns() const {
+    return columns_valid_ ? &columns_ : nullptr;
+  }
   algorithms::FixCheckParams fix_check_params_;  ///< from the map's calibration (or none)
   algorithms::KidnapDetector kidnap_;
   /// The kidnap test's parameters with the scene-dependent ones derived from the map.

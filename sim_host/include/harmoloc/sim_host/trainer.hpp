@@ -60,6 +60,9 @@ struct TrainOptions {
   /// Also try eq. 9's local linear correction (kept, with the ridge CV prefers, where it beats
   /// the plain kernel average by 5% or more).
   bool local_linear = true;
+  /// Also try the boards' centroid columns in the kernel (HarmonicModel::column_weight; kept,
+  /// with the weight CV prefers, where CV improves by 5% or more). Off for a co-processor's map.
+  bool column_features = true;
   /// Frames held out in cross-validation (evenly spread).
   int max_cv_queries = 400;
   /// Cross-validation leaves out a held-out frame's own pass: the frames within this much
@@ -135,6 +138,10 @@ struct TrainReport {
   /// error per axis the plain average had (metres), for the report.
   double local_linear_ridge = 0.0;
   double kernel_average_cv_rmse_x_m = 0.0, kernel_average_cv_rmse_y_m = 0.0;
+  /// The centroid columns' weight CV chose (0: areas only), and the CV RMS error per axis
+  /// without them (metres; 0 when columns were not tried).
+  double column_weight = 0.0;
+  double areas_only_cv_rmse_x_m = 0.0, areas_only_cv_rmse_y_m = 0.0;
   bool has_forward_map = false;
   ForwardMapReport forward;
   /// The offset added to the labels' times, and the estimate when it was estimated.
