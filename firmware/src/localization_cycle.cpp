@@ -196,7 +196,9 @@ void LocalizationCycle::localize(bool usable, const algorithms::AreaVector& area
   columns_valid_ = false;
   if (usable) {
     algorithms::areas_to_features(map_.model, areas, features);
-    columns_valid_ = algorithms::areas_to_columns(map_.model, areas, features, columns_);
+    // The columns cost a square root a board; a map without them never reads them.
+    if (map_.model.uses_columns())
+      columns_valid_ = algorithms::areas_to_columns(map_.model, areas, features, columns_);
     fix_.fix = algorithms::harmonic_query(map_.model, features, frame_columns());
     fix_.areas = areas;
     fix_.present = true;

@@ -58,21 +58,25 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<dataset::Sta
     for (std::size_t b = 0; b < boards; ++b)
       all[i][b] = static_cast<float>(run.areas[i].pixels[b]) * area_scale;
   }
-  // Each board's centroid-column feature (HarmonicModel::columns), where the run measured them.
+  const bool with_odometry =
+      opt.use_odometry && !run.odometry.empty() && opt.method == TrainMethod::kNeighbourGraph;
+  // Each board's centroid-column feature (HarmonicModel::columns), where the run measured them;
+  // only the placed path with column features asked for uses them.
   bool columns_measured = true;
-  std::vector<std::vector<float>> all_columns(run.areas.size(), std::vector<float>(boards, 0.0F));
-  for (std::size_t i = 0; i < run.areas.size(); ++i) {
-    const algorithms::AreaVector& a = run.areas[i];
+  for (const algorithms::AreaVector& a : run.areas)
     columns_measured = columns_measured && a.columns_measured();
-    if (!a.columns_measured()) continue;
+  const bool want_columns = with_odometry && opt.column_features && columns_measured &&
+                            algorithms::HarmonicModel::kHoldsColumns;
+  std::vector<std::vector<float>> all_columns(run.areas.size(),
+                                              std::vector<float>(want_columns ? boards : 0, 0.0F));
+  for (std::size_t i = 0; want_columns && i < run.areas.size(); ++i) {
+    const algorithms::AreaVector& a = run.areas[i];
     for (std::size_t b = 0; b < boards; ++b) {
       if (a.pixels[b] > 0)
         all_columns[i][b] =
             algorithms::column_feature(a.centroid_column_px(b), a.width_px, all[i][b]);
     }
   }
-  const bool with_odometry =
-      opt.use_odometry && !run.odometry.empty() && opt.method == TrainMethod::kNeighbourGraph;
   if (!with_odometry) {
     train_from_labels(run, labels, opt, map, report);
     if (opt.forward_map) {
@@ -137,7 +141,7 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<dataset::Sta
         s.features(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) =
             static_cast<double>(all[f.index][board]);
         s.columns(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) =
-            static_cast<double>(all_columns[f.index][board]);
+            want_columns ? static_cast<double>(all_columns[f.index][board]) : 0.0;
       }
       s.xy(static_cast<Eigen::Index>(r), 0) = f.pose.x_m;
       s.xy(static_cast<Eigen::Index>(r), 1) = f.pose.y_m;
@@ -242,7 +246,7 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<dataset::Sta
   // can show the same amounts of each board with the boards at other columns. Each column is
   // weighed by the square root of its board's kernel weight (HarmonicModel::column_weight); the
   // weight CV prefers is kept where it improves x + y by options.min_improvement.
-  if (opt.column_features && columns_measured && algorithms::HarmonicModel::kHoldsColumns) {
+  if (want_columns) {
     report.areas_only_cv_rmse_x_m = std::sqrt(sel.x.cv_mse);
     report.areas_only_cv_rmse_y_m = std::sqrt(sel.y.cv_mse);
     const auto restricted = [&](const algorithms::PlacedSamples& s) {
