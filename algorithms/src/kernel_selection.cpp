@@ -126,6 +126,12 @@ void local_linear_predictions(const Eigen::MatrixXd& fs, const Eigen::RowVectorX
   }
 }
 
+// exp(-t), skipping the call (and its slow underflow path) where it is 0 in double anyway:
+// exp(-t) rounds to 0 from t = 745.2 on (below half the smallest subnormal).
+double weight(double t) {
+  return t > 746.0 ? 0.0 : std::exp(-t);
+}
+
 }  // namespace
 
 std::pair<KernelAxis, KernelAxis> cross_validate_kernel(const PlacedSamples& samples,
@@ -145,23 +151,36 @@ std::pair<KernelAxis, KernelAxis> cross_validate_kernel(const PlacedSamples& sam
     d2.row(q).array() -= lo;
   }
   const double s0 = std::ldexp(1.0, options.sigma_exponent_min) / median;
-  Eigen::MatrixXd w = (-s0 * d2.array()).exp().matrix();  // inf -> weight 0
   std::pair<KernelAxis, KernelAxis> best;
   best.first.cv_mse = best.second.cv_mse = std::numeric_limits<double>::infinity();
   std::size_t count = 0;
   for (char u : usable) count += u ? 1U : 0U;
   if (count == 0)
     throw std::runtime_error("cross-validation: no frame has another pass to compare with");
+  // The weights (queries x samples) outgrow the caches: one pass over the matrix a sigma sums
+  // the weighted positions and the weights and squares them for the next sigma, a column at a
+  // time while it is in the cache, where a matrix product, a row sum and a square would read the
+  // whole matrix three times.
+  Eigen::MatrixXd w = (-s0 * d2.array()).exp().matrix();  // inf -> weight 0
+  Eigen::VectorXd px(w.rows()), py(w.rows()), sum(w.rows());
   for (int e = options.sigma_exponent_min; e <= options.sigma_exponent_max; ++e) {
-    const Eigen::MatrixXd p = w * samples.xy;
-    const Eigen::VectorXd sum = w.rowwise().sum();
+    px.setZero();
+    py.setZero();
+    sum.setZero();
+    const bool square = e < options.sigma_exponent_max;
+    for (Eigen::Index s = 0; s < w.cols(); ++s) {
+      auto ws = w.col(s);
+      px.noalias() += samples.xy(s, 0) * ws;
+      py.noalias() += samples.xy(s, 1) * ws;
+      sum += ws;
+      if (square) ws = ws.cwiseProduct(ws);  // sigma doubles: each weight squares
+    }
     double se[2] = {0.0, 0.0};
     for (Eigen::Index q = 0; q < w.rows(); ++q) {
       if (!usable[static_cast<std::size_t>(q)]) continue;
-      for (int a = 0; a < 2; ++a) {
-        const double err = p(q, a) / sum(q) - queries.xy(q, a);
-        se[a] += err * err;
-      }
+      const double ex = px(q) / sum(q) - queries.xy(q, 0), ey = py(q) / sum(q) - queries.xy(q, 1);
+      se[0] += ex * ex;
+      se[1] += ey * ey;
     }
     const double sigma = std::ldexp(1.0, e) / median;
     for (int a = 0; a < 2; ++a) {
@@ -169,7 +188,6 @@ std::pair<KernelAxis, KernelAxis> cross_validate_kernel(const PlacedSamples& sam
       KernelAxis& b = a == 0 ? best.first : best.second;
       if (std::isfinite(mse) && mse < b.cv_mse) b = KernelAxis{sigma, mse};
     }
-    w = w.cwiseProduct(w);  // sigma doubles: each weight squares
   }
   return best;
 }
@@ -237,7 +255,8 @@ KernelSelection select_kernel_model(const PlacedSamples& samples, const PlacedSa
     for (Eigen::Index s = 0; s < d2.cols(); ++s) {
       const double ex = d2(q, s) - lo;
       if (!std::isfinite(ex)) continue;
-      const double wx = std::exp(-out.x.sigma * ex), wy = std::exp(-out.y.sigma * ex);
+      const double wx = weight(out.x.sigma * ex);
+      const double wy = out.y.sigma == out.x.sigma ? wx : weight(out.y.sigma * ex);
       px += wx * samples.xy(s, 0);
       py += wy * samples.xy(s, 1);
       sx += wx;

@@ -94,5 +94,30 @@ TEST(KernelSelection, CentroidColumnsTellApartMirroredHalves) {
   EXPECT_EQ(d_areas, d_columns);
 }
 
+// cross_validate_kernel sums every sigma's weights from the first one's by squaring; the chosen
+// model's diagnostics weigh each sample with exp() directly. Both must give the same held-out
+// error at the chosen widths, with and without the centroid columns.
+TEST(KernelSelection, CrossValidationMatchesTheDirectKernelAverage) {
+  PlacedSamples samples = straight_route(4, 0.02, 60);
+  samples.columns.resize(samples.features.rows(), samples.features.cols());
+  Pcg32 rng(5);
+  for (Eigen::Index i = 0; i < samples.columns.rows(); ++i)
+    for (Eigen::Index k = 0; k < samples.columns.cols(); ++k)
+      samples.columns(i, k) = rng.uniform(-0.5, 0.5);
+  KernelSelectionOptions options;
+  options.select_features = false;
+  options.local_linear_ridges.clear();
+  for (const double column_weight : {0.0, 1.0}) {
+    options.column_weight = column_weight;
+    const auto cv = cross_validate_kernel(samples, samples, {0, 1, 2}, options);
+    const KernelSelection sel = select_kernel_model(samples, samples, options);
+    ASSERT_GT(cv.first.cv_mse, 0.0);
+    EXPECT_EQ(sel.x.sigma, cv.first.sigma);
+    EXPECT_EQ(sel.y.sigma, cv.second.sigma);
+    EXPECT_NEAR(sel.kernel_average_cv_mse_x, cv.first.cv_mse, 1e-6 * cv.first.cv_mse);
+    EXPECT_NEAR(sel.kernel_average_cv_mse_y, cv.second.cv_mse, 1e-6 * cv.second.cv_mse);
+  }
+}
+
 }  // namespace
 }  // namespace harmoloc::algorithms
