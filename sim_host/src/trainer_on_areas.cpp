@@ -67,9 +67,9 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<dataset::Sta
     columns_measured = columns_measured && a.columns_measured();
   const bool want_columns = with_odometry && opt.column_features && columns_measured &&
                             algorithms::HarmonicModel::kHoldsColumns;
-  std::vector<std::vector<float>> all_columns(run.areas.size(),
-                                              std::vector<float>(want_columns ? boards : 0, 0.0F));
-  for (std::size_t i = 0; want_columns && i < run.areas.size(); ++i) {
+  std::vector<std::vector<float>> all_columns(want_columns ? run.areas.size() : 0,
+                                              std::vector<float>(boards, 0.0F));
+  for (std::size_t i = 0; i < all_columns.size(); ++i) {
     const algorithms::AreaVector& a = run.areas[i];
     for (std::size_t b = 0; b < boards; ++b) {
       if (a.pixels[b] > 0)
@@ -133,15 +133,17 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<dataset::Sta
     s.features.resize(static_cast<Eigen::Index>(which.size()),
                       static_cast<Eigen::Index>(candidates.size()));
     s.xy.resize(static_cast<Eigen::Index>(which.size()), 2);
-    s.columns.resize(s.features.rows(), s.features.cols());
+    // Without columns the matrix stays empty: the kernel then compares areas only.
+    if (want_columns) s.columns.resize(s.features.rows(), s.features.cols());
     for (std::size_t r = 0; r < which.size(); ++r) {
       const PlacedFrame& f = frames[which[r]];
       for (std::size_t c = 0; c < candidates.size(); ++c) {
         const auto board = static_cast<std::size_t>(candidates[c]);
         s.features(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) =
             static_cast<double>(all[f.index][board]);
-        s.columns(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) =
-            want_columns ? static_cast<double>(all_columns[f.index][board]) : 0.0;
+        if (want_columns)
+          s.columns(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) =
+              static_cast<double>(all_columns[f.index][board]);
       }
       s.xy(static_cast<Eigen::Index>(r), 0) = f.pose.x_m;
       s.xy(static_cast<Eigen::Index>(r), 1) = f.pose.y_m;
