@@ -97,6 +97,7 @@ HarmonicFix query(const HarmonicModel& model,
   bool weighted = false, any_kernel = false;
   for (std::size_t k = 0; k < d; ++k) {
     test_weight[k] = mask == nullptr ? 1.0F : mask[k];
+    fix.board_seen = fix.board_seen || (test_weight[k] > 0.0F && features[k] > 0.0F);
     kernel_weight[k] = test_weight[k] * model.feature_weight[k];
     weighted = weighted || kernel_weight[k] != 1.0F;
     any_kernel = any_kernel || kernel_weight[k] > 0.0F;
@@ -189,17 +190,15 @@ HarmonicFix query(const HarmonicModel& model,
     fix.y_m = plane_y.solve(ridge * sum_wy / (2.0 * static_cast<double>(sy)), sum_wy, fix.y_m);
   }
 
-  bool any_board = false;
   double diff_sum = 0.0, sum = 0.0;
   const float* near = model.sample(nearest);
   for (std::size_t k = 0; k < d; ++k) {
     if (test_weight[k] == 0.0F) continue;
-    any_board = any_board || features[k] > 0.0F;
     diff_sum += std::fabs(static_cast<double>(features[k]) - static_cast<double>(near[k]));
     sum += static_cast<double>(features[k]) + static_cast<double>(near[k]);
   }
   fix.dissimilarity = sum > 0.0 ? diff_sum / sum : 1.0;
-  fix.known_place = any_board && std::isfinite(fix.x_m) && std::isfinite(fix.y_m) &&
+  fix.known_place = fix.board_seen && std::isfinite(fix.x_m) && std::isfinite(fix.y_m) &&
                     fix.nearest_distance <= static_cast<double>(model.max_nearest_distance) &&
                     fix.dissimilarity <= static_cast<double>(model.max_dissimilarity);
   return fix;

@@ -65,8 +65,9 @@ Run load_run(const sim_host::Scenario& scenario, std::uint64_t seed, const fs::p
 
 struct Score {
   double mse_x_cm2 = 0, mse_y_cm2 = 0;
-  double flagged_pct = 0;  // frames the known-place test flags
-  std::size_t frames = 0;
+  double flagged_pct = 0;    // frames the known-place test flags
+  std::size_t frames = 0;    // with a fix
+  std::size_t no_board = 0;  // none of the localizer's boards in view: no fix
 };
 
 std::vector<algorithms::HarmonicFix> localise(const algorithms::MapFile& map, const Run& run) {
@@ -86,13 +87,18 @@ Score score(const algorithms::MapFile& map, const Run& run) {
   Score s;
   std::size_t flagged = 0;
   for (std::size_t i = 0; i < fixes.size(); ++i) {
+    if (!fixes[i].board_seen) {
+      ++s.no_board;
+      continue;
+    }
+    ++s.frames;
     const double dx = fixes[i].x_m - run.truth[i].pose.x_m;
     const double dy = fixes[i].y_m - run.truth[i].pose.y_m;
     s.mse_x_cm2 += dx * dx * 1e4;
     s.mse_y_cm2 += dy * dy * 1e4;
     flagged += fixes[i].known_place ? 0 : 1;
   }
-  s.frames = fixes.size();
+  if (s.frames == 0) return s;
   s.mse_x_cm2 /= static_cast<double>(s.frames);
   s.mse_y_cm2 /= static_cast<double>(s.frames);
   s.flagged_pct = 100.0 * static_cast<double>(flagged) / static_cast<double>(s.frames);
@@ -354,6 +360,7 @@ int main(int argc, char** argv) {
       for (std::size_t r = 0; r < data.size(); ++r) {
         const auto& d = data[r];
         j << "    {\"name\": \"" << d.name << "\", \"test_frames\": " << d.nominal.frames
+          << ", \"no_board_frames\": " << d.nominal.no_board
           << ", \"mse_x_cm2\": " << d.nominal.mse_x_cm2
           << ", \"mse_y_cm2\": " << d.nominal.mse_y_cm2
           << ", \"own_flagged_pct\": " << d.nominal.flagged_pct

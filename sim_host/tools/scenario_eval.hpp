@@ -51,6 +51,8 @@ struct FrameRecord {
   firmware::Health health = firmware::Health::kNotInitialized;
   bool fix_present = false;  ///< the harmonic localizer computed a fix (a usable frame)
   bool fix_known = false;    ///< the harmonic localizer's own fix is a known place
+  /// A board the localizer compares showed (HarmonicFix::board_seen): without, the fix is none.
+  bool board_seen = false;
   algorithms::Pose2 fix;
   algorithms::KidnapVerdict verdict = algorithms::KidnapVerdict::kNone;
   std::uint8_t distrusted = 0;  ///< bit b: board b's motion index is below one half

@@ -107,13 +107,18 @@ void bearing_figures(const TrainReport& tr, const Scenario& scene, SceneResult& 
 }
 
 // The harmonic fixes' squared errors per axis, all of them and the known places', over one or
-// more runs.
+// more runs. A frame in which none of the localizer's boards showed has no fix: it is counted
+// apart (HarmonicFix::board_seen).
 struct FixErrors {
   double x_m2 = 0.0, y_m2 = 0.0, known_x_m2 = 0.0, known_y_m2 = 0.0;
-  std::size_t all = 0, known = 0;
+  std::size_t all = 0, known = 0, no_board = 0;
   void add(const RunRecord& run) {
     for (const FrameRecord& f : run.frames) {
       if (!f.fix_present) continue;
+      if (!f.board_seen) {
+        ++no_board;
+        continue;
+      }
       const double ex = f.fix.x_m - f.truth.x_m, ey = f.fix.y_m - f.truth.y_m;
       x_m2 += ex * ex;
       y_m2 += ey * ey;
@@ -299,6 +304,9 @@ void route_runs(const Scenario& scene, const algorithms::ThresholdSet& threshold
         r.fix_mse_y_m2 = fixes.mse_y_m2();
         r.fix_known_fraction = static_cast<double>(fixes.known) / static_cast<double>(fixes.all);
       }
+      if (fixes.all + fixes.no_board > 0)
+        r.no_board_fraction =
+            static_cast<double>(fixes.no_board) / static_cast<double>(fixes.all + fixes.no_board);
       if (fixes.known > 0) {
         r.fix_known_mse_x_m2 = fixes.known_mse_x_m2();
         r.fix_known_mse_y_m2 = fixes.known_mse_y_m2();

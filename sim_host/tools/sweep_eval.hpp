@@ -72,6 +72,7 @@ struct SceneResult {
   // Nominal test run.
   double fix_mse_x_m2 = -1.0, fix_mse_y_m2 = -1.0;  ///< every frame with a fix
   double fix_known_fraction = -1.0;                 ///< of those, flagged a known place
+  double no_board_fraction = -1.0;  ///< of the usable frames, those without a board: no fix
   double fix_known_mse_x_m2 = -1.0, fix_known_mse_y_m2 = -1.0;
   double first_fix_s = -1.0;   ///< run time of the first known-place fix
   double startup_s = -1.0;     ///< from the first fix until under 5 cm (for at least 1 s)

@@ -17,6 +17,10 @@ std::vector<Figure> figures() {
          return r.fix_known_fraction < 0.0 ? -1.0 : 100.0 * r.fix_known_fraction;
        },
        -1.0, -1.0, true},
+      {"no_board", "frames without a board of the localizer's in view (no fix)", "%",
+       [](const SceneResult& r) {
+         return r.no_board_fraction < 0.0 ? -1.0 : 100.0 * r.no_board_fraction;
+       }},
       {"fused_rmse", "fused position RMSE (after first fix + 2 s)", "cm",
        [](const SceneResult& r) { return cm(r.fused_rmse_m); }, 2.0, 4.0},
       {"fused_heading", "fused heading RMSE", "deg",

@@ -36,6 +36,7 @@ nlohmann::json to_json(const SceneResult& r) {
   j["fix_mse_x_m2"] = r.fix_mse_x_m2;
   j["fix_mse_y_m2"] = r.fix_mse_y_m2;
   j["fix_known_fraction"] = r.fix_known_fraction;
+  j["no_board_fraction"] = r.no_board_fraction;
   j["fix_known_mse_x_m2"] = r.fix_known_mse_x_m2;
   j["fix_known_mse_y_m2"] = r.fix_known_mse_y_m2;
   j["first_fix_s"] = r.first_fix_s;

@@ -459,9 +459,36 @@ TEST(HarmonicQuery, NoBoardSeenIsNotAKnownPlace) {
   std::array<float, ha::HarmonicModel::kMaxFeatures> q{};
   const ha::HarmonicFix fix = ha::harmonic_query(*model, q);
   EXPECT_FALSE(fix.known_place);
+  EXPECT_FALSE(fix.board_seen);
   EXPECT_NEAR(fix.nearest_distance, 0.0, 1e-9);
   // Eq. 9 by hand: weights 1 and e^-1.
   EXPECT_NEAR(fix.x_m, 2.0 * std::exp(-1.0) / (1.0 + std::exp(-1.0)), 1e-6);
+  q[0] = 1.0F;
+  const ha::HarmonicFix seen = ha::harmonic_query(*model, q);
+  EXPECT_TRUE(seen.board_seen);
+  EXPECT_TRUE(seen.known_place);
+}
+
+TEST(HarmonicQuery, BoardSeenCountsTheBoardsTheQueryCompares) {
+  // A frame showing only a board the query leaves out (masked) shows it none of its boards.
+  auto model = std::make_unique<ha::HarmonicModel>();
+  model->sample_count = 2;
+  model->feature_count = 2;
+  model->sigma_x = model->sigma_y = 1.0F;
+  model->max_nearest_distance = 1.0F;
+  model->area_scale = 1.0F;
+  model->feature_weight[0] = model->feature_weight[1] = 1.0F;
+  model->sample(1)[0] = 1.0F;
+  model->sample(1)[1] = 1.0F;
+  model->target_x_m[1] = 2.0F;
+  std::array<float, ha::HarmonicModel::kMaxFeatures> q{};
+  q[1] = 1.0F;
+  EXPECT_TRUE(ha::harmonic_query(*model, q).board_seen);
+  ha::FeatureMask use{};
+  use[0] = true;
+  EXPECT_FALSE(ha::harmonic_query(*model, q, use).board_seen);
+  q[0] = 0.5F;
+  EXPECT_TRUE(ha::harmonic_query(*model, q, use).board_seen);
 }
 
 TEST(HarmonicQuery, EmptyModelGivesNoFix) {

@@ -20,6 +20,10 @@ struct HarmonicFix {
   /// True when the frame looks like a place the map was trained on (nearest_distance within the
   /// model's bound, dissimilarity within the model's bound) and some board was seen at all.
   bool known_place = false;
+  /// False when none of the boards the query compares showed a pixel: eq. 9 still returns a
+  /// place (the samples' with the least area), but the frame says nothing about where the robot
+  /// is, so that place is no fix (a turn facing a bare wall; docs/sweep.md, 2026-12-01).
+  bool board_seen = false;
 };
 
 /// Neighbours whose weight is below exp(-kLocalLinearCutoff) (1e-7) of the nearest sample's are
