@@ -445,9 +445,11 @@ TEST(HarmonicQuery, KnownPlaceFlag) {
   EXPECT_FALSE(ha::harmonic_query(*model, q).known_place);
 }
 
-TEST(HarmonicQuery, NoBoardSeenIsNotAKnownPlace) {
-  // A training sample at the origin (no board visible): a black frame matches it exactly but
-  // must not count as a known place.
+namespace {
+
+// Two samples of two boards: one at the origin (no board visible, target 0), one showing the
+// first board (target x 2 m).
+std::unique_ptr<ha::HarmonicModel> two_sample_model() {
   auto model = std::make_unique<ha::HarmonicModel>();
   model->sample_count = 2;
   model->feature_count = 2;
@@ -456,6 +458,14 @@ TEST(HarmonicQuery, NoBoardSeenIsNotAKnownPlace) {
   model->area_scale = 1.0F;
   model->sample(1)[0] = 1.0F;
   model->target_x_m[1] = 2.0F;
+  return model;
+}
+
+}  // namespace
+
+TEST(HarmonicQuery, NoBoardSeenIsNotAKnownPlace) {
+  // A black frame matches the sample at the origin exactly but must not count as a known place.
+  const auto model = two_sample_model();
   std::array<float, ha::HarmonicModel::kMaxFeatures> q{};
   const ha::HarmonicFix fix = ha::harmonic_query(*model, q);
   EXPECT_FALSE(fix.known_place);
@@ -471,16 +481,8 @@ TEST(HarmonicQuery, NoBoardSeenIsNotAKnownPlace) {
 
 TEST(HarmonicQuery, BoardSeenCountsTheBoardsTheQueryCompares) {
   // A frame showing only a board the query leaves out (masked) shows it none of its boards.
-  auto model = std::make_unique<ha::HarmonicModel>();
-  model->sample_count = 2;
-  model->feature_count = 2;
-  model->sigma_x = model->sigma_y = 1.0F;
-  model->max_nearest_distance = 1.0F;
-  model->area_scale = 1.0F;
-  model->feature_weight[0] = model->feature_weight[1] = 1.0F;
-  model->sample(1)[0] = 1.0F;
+  const auto model = two_sample_model();
   model->sample(1)[1] = 1.0F;
-  model->target_x_m[1] = 2.0F;
   std::array<float, ha::HarmonicModel::kMaxFeatures> q{};
   q[1] = 1.0F;
   EXPECT_TRUE(ha::harmonic_query(*model, q).board_seen);

@@ -22,7 +22,8 @@ struct HarmonicFix {
   bool known_place = false;
   /// False when none of the boards the query compares showed a pixel: eq. 9 still returns a
   /// place (the samples' with the least area), but the frame says nothing about where the robot
-  /// is, so that place is no fix (a turn facing a bare wall; docs/sweep.md, 2026-12-01).
+  /// is, so that place is no fix (a turn facing a bare wall;
+  /// docs/sweep.md, 2026-12-01 (afternoon)).
   bool board_seen = false;
 };
 
