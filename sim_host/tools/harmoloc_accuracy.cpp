@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <memory>
 #include <sstream>
@@ -98,11 +99,23 @@ Score score(const algorithms::MapFile& map, const Run& run) {
     s.mse_y_cm2 += dy * dy * 1e4;
     flagged += fixes[i].known_place ? 0 : 1;
   }
-  if (s.frames == 0) return s;
+  if (s.frames == 0) {
+    // No frame showed a board: there is no error to report, and 0 would read as a perfect one.
+    s.mse_x_cm2 = s.mse_y_cm2 = s.flagged_pct = std::numeric_limits<double>::quiet_NaN();
+    return s;
+  }
   s.mse_x_cm2 /= static_cast<double>(s.frames);
   s.mse_y_cm2 /= static_cast<double>(s.frames);
   s.flagged_pct = 100.0 * static_cast<double>(flagged) / static_cast<double>(s.frames);
   return s;
+}
+
+// A JSON number, or null for a figure without frames to measure it on.
+std::string json(double v) {
+  if (!std::isfinite(v)) return "null";
+  std::ostringstream o;
+  o << v;
+  return o.str();
 }
 
 struct Trained {
@@ -116,7 +129,9 @@ Trained train(const Run& run, sim_host::TrainOptions opt) {
   return t;
 }
 
+// A figure without frames to measure it on (NaN) reads "none".
 std::string fmt(const char* f, double v) {
+  if (!std::isfinite(v)) return "none";
   char b[64];
   std::snprintf(b, sizeof b, f, v);
   return b;
@@ -252,7 +267,8 @@ int main(int argc, char** argv) {
       }
       data[r].off_frames = off;
       data[r].off_flagged_pct =
-          off > 0 ? 100.0 * static_cast<double>(flagged) / static_cast<double>(off) : 0.0;
+          off > 0 ? 100.0 * static_cast<double>(flagged) / static_cast<double>(off)
+                  : std::numeric_limits<double>::quiet_NaN();
     }
 
     std::ostringstream md;
@@ -286,10 +302,13 @@ int main(int argc, char** argv) {
             "nominal | x 0.7 | x 1.3 | worst ratio to nominal | flagged at 0.7 / 1.3 "
             "|\n|---|---|---|---|---|---|\n";
       for (const auto& d : data) {
-        const double worst = std::max({d.dark_score.mse_x_cm2 / d.nominal.mse_x_cm2,
-                                       d.dark_score.mse_y_cm2 / d.nominal.mse_y_cm2,
-                                       d.bright_score.mse_x_cm2 / d.nominal.mse_x_cm2,
-                                       d.bright_score.mse_y_cm2 / d.nominal.mse_y_cm2});
+        // A ratio without frames (NaN) makes the worst one none, not the largest of the rest.
+        double worst = 0.0;
+        for (const double r : {d.dark_score.mse_x_cm2 / d.nominal.mse_x_cm2,
+                               d.dark_score.mse_y_cm2 / d.nominal.mse_y_cm2,
+                               d.bright_score.mse_x_cm2 / d.nominal.mse_x_cm2,
+                               d.bright_score.mse_y_cm2 / d.nominal.mse_y_cm2})
+          if (!(r <= worst)) worst = r;
         md << "| " << d.name << " | " << fmt("%.2f", d.nominal.mse_x_cm2) << " / "
            << fmt("%.2f", d.nominal.mse_y_cm2) << " | " << fmt("%.2f", d.dark_score.mse_x_cm2)
            << " / " << fmt("%.2f", d.dark_score.mse_y_cm2) << " | "
@@ -361,21 +380,21 @@ int main(int argc, char** argv) {
         const auto& d = data[r];
         j << "    {\"name\": \"" << d.name << "\", \"test_frames\": " << d.nominal.frames
           << ", \"no_board_frames\": " << d.nominal.no_board
-          << ", \"mse_x_cm2\": " << d.nominal.mse_x_cm2
-          << ", \"mse_y_cm2\": " << d.nominal.mse_y_cm2
-          << ", \"own_flagged_pct\": " << d.nominal.flagged_pct
+          << ", \"mse_x_cm2\": " << json(d.nominal.mse_x_cm2)
+          << ", \"mse_y_cm2\": " << json(d.nominal.mse_y_cm2)
+          << ", \"own_flagged_pct\": " << json(d.nominal.flagged_pct)
           << ", \"off_route_frames\": " << d.off_frames
-          << ", \"off_route_flagged_pct\": " << d.off_flagged_pct
+          << ", \"off_route_flagged_pct\": " << json(d.off_flagged_pct)
           << ", \"train_ms\": " << d.ours.report.train_ms;
         if (!no_paper) {
-          j << ", \"paper_mse_x_cm2\": " << d.paper_score.mse_x_cm2
-            << ", \"paper_mse_y_cm2\": " << d.paper_score.mse_y_cm2;
+          j << ", \"paper_mse_x_cm2\": " << json(d.paper_score.mse_x_cm2)
+            << ", \"paper_mse_y_cm2\": " << json(d.paper_score.mse_y_cm2);
         }
         if (!no_lighting) {
-          j << ", \"light0.7_mse_x_cm2\": " << d.dark_score.mse_x_cm2
-            << ", \"light0.7_mse_y_cm2\": " << d.dark_score.mse_y_cm2
-            << ", \"light1.3_mse_x_cm2\": " << d.bright_score.mse_x_cm2
-            << ", \"light1.3_mse_y_cm2\": " << d.bright_score.mse_y_cm2;
+          j << ", \"light0.7_mse_x_cm2\": " << json(d.dark_score.mse_x_cm2)
+            << ", \"light0.7_mse_y_cm2\": " << json(d.dark_score.mse_y_cm2)
+            << ", \"light1.3_mse_x_cm2\": " << json(d.bright_score.mse_x_cm2)
+            << ", \"light1.3_mse_y_cm2\": " << json(d.bright_score.mse_y_cm2);
         }
         j << "}" << (r + 1 < data.size() ? "," : "") << "\n";
       }
@@ -385,6 +404,11 @@ int main(int argc, char** argv) {
                 no_curves ? "" : ", labelled.svg, unlabelled.svg");
     if (max_mse > 0.0) {
       for (const auto& d : data) {
+        if (d.nominal.frames == 0) {
+          std::fprintf(stderr, "harmoloc-accuracy: %s: no test frame shows a board of its map\n",
+                       d.name.c_str());
+          return 1;
+        }
         if (d.nominal.mse_x_cm2 > max_mse || d.nominal.mse_y_cm2 > max_mse) {
           std::fprintf(stderr, "harmoloc-accuracy: %s: MSE %.2f / %.2f cm^2 above %.2f\n",
                        d.name.c_str(), d.nominal.mse_x_cm2, d.nominal.mse_y_cm2, max_mse);
