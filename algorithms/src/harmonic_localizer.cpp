@@ -233,4 +233,33 @@ HarmonicFix harmonic_query(const HarmonicModel& model,
                            : static_cast<float>(model.feature_count) / static_cast<float>(used));
 }
 
+bool uncut_features(const HarmonicModel& model, const AreaVector& areas,
+                    const std::array<float, HarmonicModel::kMaxFeatures>& features,
+                    FeatureMask& use) {
+  use.fill(true);
+  std::size_t uncut_seen = 0;
+  bool any_cut = false;
+  for (std::size_t k = 0; k < model.feature_count; ++k) {
+    const std::size_t b = model.board_index[k];
+    if (!(features[k] > 0.0F)) continue;  // not in view: nothing to cut
+    if (b < areas.count && areas.side_pixels[b] > 0) {
+      use[k] = false;
+      any_cut = true;
+    } else if (model.feature_weight[k] > 0.0F) {
+      ++uncut_seen;
+    }
+  }
+  if (!any_cut || uncut_seen >= 2) return any_cut;
+  use.fill(true);
+  return false;
+}
+
+HarmonicFix harmonic_fix(const HarmonicModel& model, const AreaVector& areas,
+                         const std::array<float, HarmonicModel::kMaxFeatures>& features,
+                         const ColumnFeatures* columns, FeatureMask& use) {
+  // Without a cut board the plain query: the same arithmetic, and no kernel widths rescaled.
+  return uncut_features(model, areas, features, use) ? harmonic_query(model, features, use, columns)
+                                                     : harmonic_query(model, features, columns);
+}
+
 }  // namespace harmoloc::algorithms

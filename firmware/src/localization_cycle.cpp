@@ -193,13 +193,18 @@ void LocalizationCycle::localize(bool usable, const algorithms::AreaVector& area
                                  Features& features) {
   fix_.present = false;
   fix_.distrusted_mask = 0;
+  uncut_.fill(true);
   columns_valid_ = false;
   if (usable) {
     algorithms::areas_to_features(map_.model, areas, features);
     // The columns cost a square root a board; a map without them never reads them.
     if (map_.model.uses_columns())
       columns_valid_ = algorithms::areas_to_columns(map_.model, areas, features, columns_);
-    fix_.fix = algorithms::harmonic_query(map_.model, features, frame_columns());
+    // Without the boards the frame's side cuts, while two others are in view: the update's
+    // fixes leave them out too (uncut_).
+    fix_.fix = algorithms::harmonic_fix(map_.model, areas, features, frame_columns(), uncut_);
+    if (!std::all_of(uncut_.begin(), uncut_.end(), [](bool u) { return u; }))
+      ++counters_.cut_board_frames;
     fix_.areas = areas;
     fix_.present = true;
   }

@@ -86,13 +86,14 @@ bool LocalizationCycle::update_with_boards(
   if (!assessment_.consensus) ++counters_.no_consensus;
 
   // The global fix without the boards that are not to be trusted now: those the motion index
-  // has written off, and, while the others agree with the estimate, those that do not.
+  // has written off, and, while the others agree with the estimate, those that do not; nor
+  // those the frame's side cuts (localize()).
   algorithms::FeatureMask use{};
   for (std::size_t k = 0; k < map_.model.feature_count; ++k) {
     const std::size_t b = map_.model.board_index[k];
     const bool outlier =
         assessment_.consensus && static_cast<double>(assessment_.chi2[b]) >= params.consensus_chi2;
-    use[k] = !reliability_.distrusted(b) && !outlier;
+    use[k] = !reliability_.distrusted(b) && !outlier && uncut_[k];
   }
   std::size_t modelled = 0, distrusted = 0;
   std::uint32_t distrusted_mask = 0;  // bit b: board b written off

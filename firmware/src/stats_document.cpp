@@ -208,7 +208,8 @@ void to_json(Json& j, const Document& d) {
                           {"unknown_place", l.unknown_place.value_or(0)},
                           {"implausible_frames", l.implausible_frames},
                           {"off_map_cycles", l.off_map_cycles},
-                          {"uncovered_cycles", l.uncovered_cycles}};
+                          {"uncovered_cycles", l.uncovered_cycles},
+                          {"cut_board_frames", l.cut_board_frames}};
   }
   const Filter& f = d.filter;
   j["filter"] = Json{{"observation", f.observation},
@@ -316,6 +317,7 @@ void from_json(const Json& j, Document& d) {
     read_count(*l, "implausible_frames", "localizer.", localizer.implausible_frames);
     read_count(*l, "off_map_cycles", "localizer.", localizer.off_map_cycles);
     read_count(*l, "uncovered_cycles", "localizer.", localizer.uncovered_cycles);
+    read_count(*l, "cut_board_frames", "localizer.", localizer.cut_board_frames);
     d.localizer = localizer;
   }
   if (const Json* w = section(j, "wakeup_latency"))

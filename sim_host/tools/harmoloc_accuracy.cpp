@@ -78,7 +78,8 @@ std::vector<algorithms::HarmonicFix> localise(const algorithms::MapFile& map, co
     algorithms::areas_to_features(map.model, a, f);
     algorithms::ColumnFeatures c{};
     const bool columns = algorithms::areas_to_columns(map.model, a, f, c);
-    fixes.push_back(algorithms::harmonic_query(map.model, f, columns ? &c : nullptr));
+    algorithms::FeatureMask use{};
+    fixes.push_back(algorithms::harmonic_fix(map.model, a, f, columns ? &c : nullptr, use));
   }
   return fixes;
 }

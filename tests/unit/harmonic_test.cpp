@@ -493,6 +493,94 @@ TEST(HarmonicQuery, BoardSeenCountsTheBoardsTheQueryCompares) {
   EXPECT_TRUE(ha::harmonic_query(*model, q, use).board_seen);
 }
 
+namespace {
+
+// Three boards along a 2 m stretch (samples at x 0, 1, 2 m): boards 0 and 1 tell the places
+// apart, board 2 grows fast along it (it enters the frame from the side).
+std::unique_ptr<ha::HarmonicModel> cut_board_model() {
+  auto model = std::make_unique<ha::HarmonicModel>();
+  model->sample_count = 3;
+  model->feature_count = 3;
+  model->board_index = {0, 1, 2};
+  model->sigma_x = model->sigma_y = 1.0F;
+  model->max_nearest_distance = 100.0F;
+  model->area_scale = 1.0F;
+  const float board0[] = {1.0F, 2.0F, 3.0F}, board1[] = {3.0F, 2.0F, 1.0F};
+  const float board2[] = {0.0F, 5.0F, 10.0F};
+  for (std::size_t i = 0; i < 3; ++i) {
+    model->sample(i)[0] = board0[i];
+    model->sample(i)[1] = board1[i];
+    model->sample(i)[2] = board2[i];
+    model->target_x_m[i] = static_cast<float>(i);
+  }
+  return model;
+}
+
+// The three boards' features, and a frame's areas with them as pixel counts (nothing cut).
+std::array<float, ha::HarmonicModel::kMaxFeatures> three_boards(float b0, float b1, float b2) {
+  std::array<float, ha::HarmonicModel::kMaxFeatures> q{};
+  q[0] = b0;
+  q[1] = b1;
+  q[2] = b2;
+  return q;
+}
+
+ha::AreaVector areas_of(const std::array<float, ha::HarmonicModel::kMaxFeatures>& features) {
+  ha::AreaVector a;
+  a.count = 3;
+  for (std::size_t b = 0; b < 3; ++b) a.pixels[b] = static_cast<std::uint32_t>(features[b]);
+  return a;
+}
+
+}  // namespace
+
+TEST(HarmonicQuery, UncutFeaturesLeaveOutCutBoardsWhileTwoOthersAreInView) {
+  const auto model = cut_board_model();
+  std::array<float, ha::HarmonicModel::kMaxFeatures> q = three_boards(1.0F, 3.0F, 4.0F);
+  ha::AreaVector a = areas_of(q);
+  ha::FeatureMask use{};
+  EXPECT_FALSE(ha::uncut_features(*model, a, q, use)) << "no side pixels: nothing cut";
+  EXPECT_TRUE(use[0] && use[1] && use[2]);
+
+  a.side_pixels[2] = 7;
+  EXPECT_TRUE(ha::uncut_features(*model, a, q, use));
+  EXPECT_TRUE(use[0] && use[1]);
+  EXPECT_FALSE(use[2]);
+
+  // Two cut: one uncut board alone names every place at its distance; nothing is left out.
+  a.side_pixels[1] = 3;
+  EXPECT_FALSE(ha::uncut_features(*model, a, q, use));
+  EXPECT_TRUE(use[0] && use[1] && use[2]);
+
+  // A board the kernel does without (weight 0) is no second board in view.
+  a.side_pixels[1] = 0;
+  model->feature_weight[1] = 0.0F;
+  EXPECT_FALSE(ha::uncut_features(*model, a, q, use));
+  EXPECT_TRUE(use[2]);
+  model->feature_weight[1] = 1.0F;
+
+  // A board out of view is not cut, whatever its side count says.
+  q[2] = 0.0F;
+  EXPECT_FALSE(ha::uncut_features(*model, a, q, use));
+  EXPECT_TRUE(use[2]);
+}
+
+TEST(HarmonicQuery, CutBoardDoesNotDragTheFix) {
+  // At x = 0, board 2 half in view: a few degrees of heading more show as much of it as the
+  // training run saw at x = 2 m. With it the fix goes there; without it, it stays at x = 0.
+  const auto model = cut_board_model();
+  std::array<float, ha::HarmonicModel::kMaxFeatures> q = three_boards(1.0F, 3.0F, 10.0F);
+  ha::AreaVector a = areas_of(q);
+  ha::FeatureMask use{};
+  const ha::HarmonicFix uncut_frame = ha::harmonic_fix(*model, a, q, nullptr, use);
+  EXPECT_GT(uncut_frame.x_m, 1.5) << "the board is not cut: the fix compares it";
+  a.side_pixels[2] = 10;
+  const ha::HarmonicFix fix = ha::harmonic_fix(*model, a, q, nullptr, use);
+  EXPECT_FALSE(use[2]);
+  EXPECT_LT(std::fabs(fix.x_m), 0.2);
+  EXPECT_TRUE(fix.board_seen);
+}
+
 TEST(HarmonicQuery, EmptyModelGivesNoFix) {
   auto model = std::make_unique<ha::HarmonicModel>();
   std::array<float, ha::HarmonicModel::kMaxFeatures> q{};

@@ -6,6 +6,7 @@
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <utility>
 #include <vector>
 
 #include "harmoloc/algorithms/map_codec.hpp"
@@ -25,11 +26,13 @@ constexpr std::array<float, 7> kNoParams{};
 // The map's training positions (map frame); sample 0 is what a frame full of red looks like.
 constexpr double kTargets[3][2] = {{1.0, 0.5}, {3.0, 0.5}, {2.0, 2.5}};
 
+// Shows @p rgb (kWidth x kHeight RGB24; by default all red) while frames is true.
 class FakeCamera final : public hh::Camera {
  public:
   FakeCamera() : red_(kWidth * kHeight * 3) {
     for (std::size_t i = 0; i < red_.size(); i += 3) red_[i] = 255;
   }
+  explicit FakeCamera(std::vector<std::uint8_t> rgb) : red_(std::move(rgb)) {}
   hh::CameraStatus acquire(hh::FrameView& f, std::uint64_t) override {
     t_ += 33'333'333;
     if (!frames) return hh::CameraStatus::kNoFrame;
@@ -68,18 +71,25 @@ class StepClock final : public hh::Clock {
   mutable std::uint64_t now_ = 0;
 };
 
+// A map for the rig's frames without samples: the default boards, features in percent of the
+// frame, kernel widths 1.
+inline std::unique_ptr<ha::MapFile> empty_rig_map() {
+  auto m = std::make_unique<ha::MapFile>();
+  m->image_width_px = kWidth;
+  m->image_height_px = kHeight;
+  m->thresholds = hf::default_config().thresholds;
+  m->model.area_scale = 100.0F / (kWidth * kHeight);
+  m->model.sigma_x = m->model.sigma_y = 1.0F;
+  return m;
+}
+
 inline const ha::MapFile& test_map() {
   static const std::unique_ptr<ha::MapFile> map = [] {
-    auto m = std::make_unique<ha::MapFile>();
-    m->image_width_px = kWidth;
-    m->image_height_px = kHeight;
-    m->thresholds = hf::default_config().thresholds;
+    auto m = empty_rig_map();
     ha::HarmonicModel& h = m->model;
     h.sample_count = 3;
     h.feature_count = 1;
     h.board_index[0] = 0;  // red
-    h.area_scale = 100.0F / (kWidth * kHeight);
-    h.sigma_x = h.sigma_y = 1.0F;
     h.max_nearest_distance = 5.0F;
     const float features[3] = {100.0F, 50.0F, 25.0F};
     for (std::size_t i = 0; i < 3; ++i) {

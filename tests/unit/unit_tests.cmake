@@ -39,6 +39,7 @@ add_executable(firmware_test
   ${HARMOLOC_UNIT_DIR}/mavlink_commands_test.cpp
   ${HARMOLOC_UNIT_DIR}/cycle_startup_test.cpp
   ${HARMOLOC_UNIT_DIR}/cycle_fix_term_test.cpp
+  ${HARMOLOC_UNIT_DIR}/cycle_cut_board_test.cpp
   ${HARMOLOC_UNIT_DIR}/mavlink_config_test.cpp
   ${HARMOLOC_UNIT_DIR}/pose_messages_test.cpp
   ${HARMOLOC_UNIT_DIR}/latency_histogram_test.cpp

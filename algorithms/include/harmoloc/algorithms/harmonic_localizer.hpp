@@ -58,4 +58,21 @@ HarmonicFix harmonic_query(const HarmonicModel& model,
                            const std::array<float, HarmonicModel::kMaxFeatures>& features,
                            const FeatureMask& use, const ColumnFeatures* columns = nullptr);
 
+/// The features a frame's fix compares: every one, less those of the boards the frame's side cuts
+/// (AreaVector::side_pixels), as long as two boards the kernel weighs stay in view uncut. A cut
+/// board's area (and column) follows the heading more than the place: its cut edge moves across
+/// the frame by a focal length per radian of heading, and a route map holds one heading per
+/// place, so a pass a few degrees off the training pass's heading reads as another place. One
+/// board alone names every place at its distance; then the cut board stays (as the fix's board
+/// check keeps two). Frames without side counts (area logs written before them) cut nothing.
+/// @p features from areas_to_features(). Returns true when it left a board out.
+bool uncut_features(const HarmonicModel& model, const AreaVector& areas,
+                    const std::array<float, HarmonicModel::kMaxFeatures>& features,
+                    FeatureMask& use);
+
+/// Eq. 9 for a frame as the firmware computes it: over uncut_features(), @p use set to them.
+HarmonicFix harmonic_fix(const HarmonicModel& model, const AreaVector& areas,
+                         const std::array<float, HarmonicModel::kMaxFeatures>& features,
+                         const ColumnFeatures* columns, FeatureMask& use);
+
 }  // namespace harmoloc::algorithms

@@ -72,6 +72,8 @@ struct CycleCounters {
   /// Cycles published odometry only (invalid without encoder data) because the map's heading
   /// coverage did not hold the estimate's heading at its place while frames were usable.
   std::uint64_t uncovered_cycles = 0;
+  /// Frames whose fix left out a board the frame's side cut (algorithms::uncut_features()).
+  std::uint64_t cut_board_frames = 0;
   std::uint64_t encoder_samples = 0;
   /// Encoder gaps the cloud spent diffusing (vision only), closed by their first sample: the
   /// cloud is moved to where the gap's travel takes the pose of the last sample before it.
@@ -339,6 +341,8 @@ class LocalizationCycle {
   /// were measured.
   algorithms::ColumnFeatures columns_{};
   bool columns_valid_ = false;
+  // The features this frame's fixes compare: not the boards its side cuts (uncut_features()).
+  algorithms::FeatureMask uncut_{};
   const algorithms::ColumnFeatures* frame_columns() const {
     return columns_valid_ ? &columns_ : nullptr;
   }
