@@ -46,8 +46,8 @@ std::unique_ptr<ha::MapFile> stripe_map() {
   h.feature_count = 3;
   h.board_index = {0, 1, 2};  // red, green, blue
   h.max_nearest_distance = 50.0F;
-  const std::array<std::array<float, 3>, 2> features = {{{5.0F, 25.0F, 18.75F},
-                                                         {25.0F, 10.0F, 10.0F}}};
+  const std::array<std::array<float, 3>, 2> features = {
+      {{5.0F, 25.0F, 18.75F}, {25.0F, 10.0F, 10.0F}}};
   for (std::size_t i = 0; i < 2; ++i) {
     for (std::size_t k = 0; k < 3; ++k) h.sample(i)[k] = features[i][k];
     h.target_x_m[i] = i == 0 ? 1.0F : 3.0F;
