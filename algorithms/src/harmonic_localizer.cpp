@@ -258,8 +258,10 @@ HarmonicFix harmonic_fix(const HarmonicModel& model, const AreaVector& areas,
                          const std::array<float, HarmonicModel::kMaxFeatures>& features,
                          const ColumnFeatures* columns, FeatureMask& use) {
   // Without a cut board the plain query: the same arithmetic, and no kernel widths rescaled.
-  return uncut_features(model, areas, features, use) ? harmonic_query(model, features, use, columns)
-                                                     : harmonic_query(model, features, columns);
+  if (!uncut_features(model, areas, features, use)) return harmonic_query(model, features, columns);
+  HarmonicFix fix = harmonic_query(model, features, use, columns);
+  fix.cut_board_left_out = true;
+  return fix;
 }
 
 }  // namespace harmoloc::algorithms

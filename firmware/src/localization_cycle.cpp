@@ -203,8 +203,7 @@ void LocalizationCycle::localize(bool usable, const algorithms::AreaVector& area
     // Without the boards the frame's side cuts, while two others are in view: the update's
     // fixes leave them out too (uncut_).
     fix_.fix = algorithms::harmonic_fix(map_.model, areas, features, frame_columns(), uncut_);
-    if (!std::all_of(uncut_.begin(), uncut_.end(), [](bool u) { return u; }))
-      ++counters_.cut_board_frames;
+    if (fix_.fix.cut_board_left_out) ++counters_.cut_board_frames;
     fix_.areas = areas;
     fix_.present = true;
   }

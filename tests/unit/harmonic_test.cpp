@@ -574,9 +574,11 @@ TEST(HarmonicQuery, CutBoardDoesNotDragTheFix) {
   ha::FeatureMask use{};
   const ha::HarmonicFix uncut_frame = ha::harmonic_fix(*model, a, q, nullptr, use);
   EXPECT_GT(uncut_frame.x_m, 1.5) << "the board is not cut: the fix compares it";
+  EXPECT_FALSE(uncut_frame.cut_board_left_out);
   a.side_pixels[2] = 10;
   const ha::HarmonicFix fix = ha::harmonic_fix(*model, a, q, nullptr, use);
   EXPECT_FALSE(use[2]);
+  EXPECT_TRUE(fix.cut_board_left_out);
   EXPECT_LT(std::fabs(fix.x_m), 0.2);
   EXPECT_TRUE(fix.board_seen);
 }

@@ -29,14 +29,14 @@ constexpr double kTargets[3][2] = {{1.0, 0.5}, {3.0, 0.5}, {2.0, 2.5}};
 // Shows @p rgb (kWidth x kHeight RGB24; by default all red) while frames is true.
 class FakeCamera final : public hh::Camera {
  public:
-  FakeCamera() : red_(kWidth * kHeight * 3) {
-    for (std::size_t i = 0; i < red_.size(); i += 3) red_[i] = 255;
+  FakeCamera() : rgb_(kWidth * kHeight * 3) {
+    for (std::size_t i = 0; i < rgb_.size(); i += 3) rgb_[i] = 255;
   }
-  explicit FakeCamera(std::vector<std::uint8_t> rgb) : red_(std::move(rgb)) {}
+  explicit FakeCamera(std::vector<std::uint8_t> rgb) : rgb_(std::move(rgb)) {}
   hh::CameraStatus acquire(hh::FrameView& f, std::uint64_t) override {
     t_ += 33'333'333;
     if (!frames) return hh::CameraStatus::kNoFrame;
-    f.data = red_.data();
+    f.data = rgb_.data();
     f.width_px = kWidth;
     f.height_px = kHeight;
     f.stride_bytes = kWidth * 3;
@@ -49,7 +49,7 @@ class FakeCamera final : public hh::Camera {
   bool frames = false;
 
  private:
-  std::vector<std::uint8_t> red_;
+  std::vector<std::uint8_t> rgb_;
   std::uint64_t t_ = 0;
 };
 

@@ -25,6 +25,8 @@ struct HarmonicFix {
   /// is, so that place is no fix (a turn facing a bare wall;
   /// docs/sweep.md, 2026-12-01 (afternoon)).
   bool board_seen = false;
+  /// True when the fix left out a board the frame's side cuts (harmonic_fix()).
+  bool cut_board_left_out = false;
 };
 
 /// Neighbours whose weight is below exp(-kLocalLinearCutoff) (1e-7) of the nearest sample's are
