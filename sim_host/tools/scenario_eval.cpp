@@ -133,6 +133,7 @@ RunRecord replay_scenario(const Scenario& scenario, std::uint64_t seed,
     f.fix_present = fix.present;
     f.fix_known = fix.present && fix.fix.known_place;
     f.board_seen = fix.present && fix.fix.board_seen;
+    f.cut_board = fix.present && fix.fix.cut_board_left_out;
     f.fix = algorithms::Pose2{fix.fix.x_m, fix.fix.y_m, 0.0};
     f.verdict = cycle->kidnap_verdict();
     f.consensus = cycle->board_assessment().consensus;
@@ -195,7 +196,8 @@ void write_trace(const RunRecord& run, const std::string& path) {
                "t_s,truth_x_m,truth_y_m,truth_yaw_rad,x_m,y_m,yaw_rad,error_m,valid,health,"
                "fix_present,fix_known,fix_x_m,fix_y_m,verdict,distrusted,consensus,robust_fix_x_m,"
                "robust_fix_y_m,preference,sigma_m,sigma_yaw_rad,match,covered,evidence_known,"
-               "evidence_x_m,evidence_y_m,evidence_distance_m,truth_nats,estimate_nats,board_seen");
+               "evidence_x_m,evidence_y_m,evidence_distance_m,truth_nats,estimate_nats,board_seen,"
+               "cut_board");
   const std::size_t boards = run.frames.empty() ? 0 : run.frames.front().boards;
   for (std::size_t b = 0; b < boards; ++b) std::fprintf(f, ",chi2_%zu", b + 1);
   for (std::size_t b = 0; b < boards; ++b) std::fprintf(f, ",static_%zu", b + 1);
@@ -204,7 +206,7 @@ void write_trace(const RunRecord& run, const std::string& path) {
     std::fprintf(f,
                  "%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%d,%s,%d,%d,%.4f,%.4f,%d,%u,%d,%.4f,%.4f,"
                  "%.3f,%.4f,"
-                 "%.4f,%.4g,%d,%d,%.4f,%.4f,%.4f,%.3f,%.3f,%d",
+                 "%.4f,%.4g,%d,%d,%.4f,%.4f,%.4f,%.3f,%.3f,%d,%d",
                  r.t_s, r.truth.x_m, r.truth.y_m, r.truth.yaw_rad, r.estimate.x_m, r.estimate.y_m,
                  r.estimate.yaw_rad, r.position_error_m(), r.valid ? 1 : 0,
                  firmware::health_name(r.health), r.fix_present ? 1 : 0, r.fix_known ? 1 : 0,
@@ -212,7 +214,7 @@ void write_trace(const RunRecord& run, const std::string& path) {
                  static_cast<unsigned>(r.distrusted), r.consensus ? 1 : 0, r.robust_fix.x_m,
                  r.robust_fix.y_m, r.preference, r.sigma_m, r.sigma_yaw_rad, r.match, r.covered,
                  r.evidence_known ? 1 : 0, r.evidence.x_m, r.evidence.y_m, r.evidence_distance_m,
-                 r.truth_nats, r.estimate_nats, r.board_seen ? 1 : 0);
+                 r.truth_nats, r.estimate_nats, r.board_seen ? 1 : 0, r.cut_board ? 1 : 0);
     for (std::size_t b = 0; b < boards; ++b)
       std::fprintf(f, ",%.3g", static_cast<double>(r.chi2[b]));
     for (std::size_t b = 0; b < boards; ++b)

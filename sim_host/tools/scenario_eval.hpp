@@ -53,6 +53,8 @@ struct FrameRecord {
   bool fix_known = false;    ///< the harmonic localizer's own fix is a known place
   /// A board the localizer compares showed (HarmonicFix::board_seen): without, the fix is none.
   bool board_seen = false;
+  /// The fix left out a board the frame's side cuts (HarmonicFix::cut_board_left_out).
+  bool cut_board = false;
   algorithms::Pose2 fix;
   algorithms::KidnapVerdict verdict = algorithms::KidnapVerdict::kNone;
   std::uint8_t distrusted = 0;  ///< bit b: board b's motion index is below one half

@@ -61,6 +61,12 @@ def main():
     if not away or 2 * truth_better <= len(away):
         problems.append(f"the truth fitted better than an estimate 0.5 m off in {truth_better} "
                         f"of {len(away)} frames just after a kidnap")
+    # A fix leaves a cut board out only when it is a fix: a board of the localizer's was seen.
+    if rows and "cut_board" not in rows[0]:
+        problems.append("no cut_board column")
+    elif any(r["cut_board"] not in ("0", "1") or (r["cut_board"] == "1" and r["board_seen"] != "1")
+             for r in rows):
+        problems.append("a cut_board entry that is not 0 or 1, or 1 on a frame without a fix")
     confirmed = sum(1 for r in rows if r["verdict"] == "2")
     if confirmed == 0:
         problems.append("no kidnap confirmed")
