@@ -5,6 +5,7 @@
 # The online half: what the cycle runs. No I/O, no OS calls, no heap.
 set(HARMOLOC_ALGORITHMS_SOURCES
   src/can_encoder_layout.cpp
+  src/column_gain.cpp
   src/crc32.cpp
   src/harmonic_localizer.cpp
   src/harmonic_model.cpp

@@ -12,7 +12,8 @@ void areas_to_features(const HarmonicModel& model, const AreaVector& areas,
   for (std::size_t k = 0; k < model.feature_count; ++k) {
     const std::size_t board = model.board_index[k];
     const std::uint32_t px = board < areas.count ? areas.pixels[board] : 0U;
-    features[k] = static_cast<float>(px) * model.area_scale;
+    features[k] = remove_column_gain(model.column_gain, areas, board,
+                                     static_cast<float>(px) * model.area_scale);
   }
 }
 
@@ -24,14 +25,14 @@ float column_feature(double centroid_column_px, std::uint32_t width_px, float fe
 }
 
 bool areas_to_columns(const HarmonicModel& model, const AreaVector& areas,
-                      const std::array<float, HarmonicModel::kMaxFeatures>& features,
                       std::array<float, HarmonicModel::kMaxFeatures>& columns) {
   columns.fill(0.0F);
   if (!areas.columns_measured()) return false;
   for (std::size_t k = 0; k < model.feature_count; ++k) {
     const std::size_t board = model.board_index[k];
     if (board < areas.count && areas.pixels[board] > 0)
-      columns[k] = column_feature(areas.centroid_column_px(board), areas.width_px, features[k]);
+      columns[k] = column_feature(areas.centroid_column_px(board), areas.width_px,
+                                  static_cast<float>(areas.pixels[board]) * model.area_scale);
   }
   return true;
 }

@@ -26,7 +26,7 @@ MapError decode_map(const std::uint8_t* data, std::size_t size, MapFile& map) {
   std::uint32_t version = 0;
   if (!r.u32(version, "version")) return r.error;
   if (version < 1 || version > kMapFormatVersion)
-    return MapError{"unsupported map format version (this firmware reads versions 1 to 12)", 8};
+    return MapError{"unsupported map format version (this firmware reads versions 1 to 13)", 8};
   if (crc32(data, body) != stored) return MapError{"checksum mismatch: the map is corrupt", body};
 
   std::uint32_t boards = 0;
@@ -202,6 +202,21 @@ MapError decode_map(const std::uint8_t* data, std::size_t size, MapFile& map) {
     if (count != 0 && !any)
       return MapError{"per-sample fix errors all 0 written (absent means none)", r.pos()};
   }
+  m.column_gain = ColumnGain{};
+  if (version >= 13) {
+    // Version 13: the area's gain by column, G(t) = exp(c2 t^2 + c4 t^4) (column_gain.hpp).
+    float c2 = 0.0F, c4 = 0.0F;
+    if (!r.f32(c2, "truncated: the column gain is missing") ||
+        !r.f32(c4, "truncated: the column gain is missing"))
+      return r.error;
+    if (!column_gain_in_range(c2, c4))
+      return MapError{"column gain not finite or beyond a factor of 4 in the frame", r.pos()};
+    m.column_gain.c2 = c2;
+    m.column_gain.c4 = c4;
+  }
+  // A column feature comes from the plain area: at most the gain's largest value times the
+  // sample's feature, which has the gain removed.
+  const double most_gain = std::exp(column_gain_log_extent(m.column_gain.c2, m.column_gain.c4));
   m.column_weight = 0.0F;
   if (version >= 12) {
     // Version 12: the centroid columns' weight (0: none follow), then n x d column features.
@@ -221,9 +236,10 @@ MapError decode_map(const std::uint8_t* data, std::size_t size, MapFile& map) {
         for (std::size_t k = 0; k < m.feature_count; ++k) {
           if (!r.f32(c[k], "truncated column features")) return r.error;
           // (u - 0.5) sqrt(feature) with u in [0, 1]: within half the root of the feature.
-          const double bound = 0.5 * std::sqrt(static_cast<double>(m.sample(i)[k])) * (1.0 + 1e-5);
+          const double bound =
+              0.5 * std::sqrt(static_cast<double>(m.sample(i)[k]) * most_gain) * (1.0 + 1e-5);
           if (!std::isfinite(c[k]) || std::fabs(static_cast<double>(c[k])) > bound)
-            return MapError{"column feature not finite or beyond half the root of its area feature",
+            return MapError{"column feature not finite or beyond half the root of its plain area",
                             r.pos()};
         }
       }

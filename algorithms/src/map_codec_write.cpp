@@ -177,6 +177,9 @@ std::vector<std::uint8_t> encode_map(const MapFile& map) {
   if (fix_errors) {
     for (std::size_t i = 0; i < m.sample_count; ++i) w.f32(m.fix_error_m[i]);
   }
+  // Version 13: the area's gain by column (both 0: none), before the columns, whose check needs it.
+  w.f32(m.column_gain.c2);
+  w.f32(m.column_gain.c4);
   // Version 12: the centroid columns' weight, then (above 0) every sample's column features.
   const bool columns = m.uses_columns();
   w.f32(columns ? m.column_weight : 0.0F);

@@ -199,7 +199,7 @@ void LocalizationCycle::localize(bool usable, const algorithms::AreaVector& area
     algorithms::areas_to_features(map_.model, areas, features);
     // The columns cost a square root a board; a map without them never reads them.
     if (map_.model.uses_columns())
-      columns_valid_ = algorithms::areas_to_columns(map_.model, areas, features, columns_);
+      columns_valid_ = algorithms::areas_to_columns(map_.model, areas, columns_);
     // Without the boards the frame's side cuts, while two others are in view: the update's
     // fixes leave them out too (uncut_).
     fix_.fix = algorithms::harmonic_fix(map_.model, areas, features, frame_columns(), uncut_);

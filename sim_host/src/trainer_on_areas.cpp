@@ -120,6 +120,23 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<dataset::Sta
     throw std::runtime_error("only " + std::to_string(frames.size()) +
                              " frames with a board in view lie within the labelled stretch");
 
+  // The area's gain by column, from the run's own passes: the harmonic samples have it removed,
+  // as every query will (areas_to_features()). The forward map and the column features keep
+  // the plain areas.
+  algorithms::ColumnGain column_gain;
+  if (opt.column_gain && columns_measured)
+    column_gain = trainer_detail::fit_column_gain(run, frames, boards, report.column_gain);
+  std::vector<std::vector<float>> gain_removed;
+  if (column_gain.present()) {
+    gain_removed = all;
+    for (std::size_t i = 0; i < all.size(); ++i) {
+      for (std::size_t b = 0; b < boards; ++b)
+        gain_removed[i][b] =
+            algorithms::remove_column_gain(column_gain, run.areas[i], b, all[i][b]);
+    }
+  }
+  const std::vector<std::vector<float>>& harmonic = column_gain.present() ? gain_removed : all;
+
   // The harmonic map over every placed frame: samples and held-out queries evenly spread.
   const std::vector<int> candidates = trainer_detail::candidate_boards(opt.boards, boards);
   const auto pick = [](std::size_t total, std::size_t want) {
@@ -140,7 +157,7 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<dataset::Sta
       for (std::size_t c = 0; c < candidates.size(); ++c) {
         const auto board = static_cast<std::size_t>(candidates[c]);
         s.features(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) =
-            static_cast<double>(all[f.index][board]);
+            static_cast<double>(harmonic[f.index][board]);
         if (want_columns)
           s.columns(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) =
               static_cast<double>(all_columns[f.index][board]);
@@ -339,6 +356,7 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<dataset::Sta
                                      : 0.0F;
   }
   model.area_scale = area_scale;
+  model.column_gain = column_gain;
   model.sigma_x = static_cast<float>(report.x.sigma);
   model.sigma_y = static_cast<float>(report.y.sigma);
   model.gamma_x = 0.0F;

@@ -12,6 +12,7 @@
 #include "harmoloc/algorithms/map_codec.hpp"
 #include "harmoloc/algorithms/route_placement.hpp"
 #include "harmoloc/dataset/tum.hpp"
+#include "harmoloc/sim_host/forward_map_training.hpp"
 #include "harmoloc/sim_host/trainer.hpp"
 
 namespace harmoloc::sim_host::trainer_detail {
@@ -28,6 +29,12 @@ void train_from_labels(const AreaSeries& run, const std::vector<dataset::Stamped
 algorithms::PlacementResult place_frames(const AreaSeries& run,
                                          const std::vector<dataset::StampedPose>& labels,
                                          const TrainOptions& opt, PlacementReport& report);
+
+// trainer_column_gain.cpp: the gain fitted on pairs of @p frames over one place at one heading
+// (boards [0, @p boards)); plain areas (both coefficients 0) when it cannot be.
+algorithms::ColumnGain fit_column_gain(const AreaSeries& run,
+                                       const std::vector<PlacedFrame>& frames, std::size_t boards,
+                                       ColumnGainReport& report);
 
 // trainer_checks.cpp
 void check_labels(const std::vector<dataset::StampedPose>& labels);

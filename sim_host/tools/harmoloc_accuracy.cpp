@@ -77,7 +77,7 @@ std::vector<algorithms::HarmonicFix> localise(const algorithms::MapFile& map, co
     std::array<float, algorithms::HarmonicModel::kMaxFeatures> f{};
     algorithms::areas_to_features(map.model, a, f);
     algorithms::ColumnFeatures c{};
-    const bool columns = algorithms::areas_to_columns(map.model, a, f, c);
+    const bool columns = algorithms::areas_to_columns(map.model, a, c);
     algorithms::FeatureMask use{};
     fixes.push_back(algorithms::harmonic_fix(map.model, a, f, columns ? &c : nullptr, use));
   }

@@ -105,6 +105,8 @@ int main(int argc, char** argv) {
   app.add_flag("--axle-bearings", opt.axle_bearings,
                "keep the maps' bearings over the axle's place, as when the camera's offset is\n"
                "not given (harmoloc-train --camera-forward-m 0), for comparison");
+  app.add_flag("--column-gain", opt.column_gain,
+               "train the maps with the area's gain by column (harmoloc-train --column-gain)");
   app.add_flag("--quick", quick, "a short sweep: 5 kidnaps, a 1-minute long run");
   app.add_flag("--no-default-scene", no_default, "leave out the project's own default scene");
   app.add_flag("--quiet", quiet, "no progress on stderr");
@@ -177,6 +179,7 @@ int main(int argc, char** argv) {
                     {"parts", parts},
                     {"heading_terms", opt.heading_terms},
                     {"axle_bearings", opt.axle_bearings},
+                    {"column_gain", opt.column_gain},
                     {"visibility", opt.visibility},
                     {"no_visibility", opt.no_visibility},
                     {"roams", opt.roams}};

@@ -161,6 +161,7 @@ void floor_part(const Scenario& scene, const algorithms::ThresholdSet& threshold
     train.forward.visibility = opt.visibility;
     train.forward.visibility_on_floors = !opt.no_visibility;
     if (opt.axle_bearings) train.forward.camera_forward_m = 0.0;
+    train.column_gain = opt.column_gain;
     const TrainedMap trained =
         train_on_scenario(coverage, kCoverageSeed, nullptr, &thresholds, &train);
     r.floor_train_frames = trained.frames;
@@ -275,6 +276,7 @@ void route_runs(const Scenario& scene, const algorithms::ThresholdSet& threshold
     step("training");
     TrainOptions train;
     if (opt.axle_bearings) train.forward.camera_forward_m = 0.0;
+    train.column_gain = opt.column_gain;
     const TrainedMap trained = train_on_scenario(scene, kTrainSeed, nullptr, &thresholds, &train);
     const TrainReport& tr = trained.report;
     r.train_ms = tr.train_ms + tr.forward_ms;
@@ -287,6 +289,9 @@ void route_runs(const Scenario& scene, const algorithms::ThresholdSet& threshold
     r.pass_heading_spread_rad = tr.forward.pass_heading_spread_rad;
     r.cv_rmse_y_m = tr.y.cv_rmse_m;
     r.column_weight = tr.column_weight;
+    r.column_gain_c2 = tr.column_gain.gain.c2;
+    r.column_gain_c4 = tr.column_gain.gain.c4;
+    r.column_gain_observations = tr.column_gain.observations;
     r.boards_used = board_names(tr, scene);
     bearing_figures(tr, scene, r);
     const algorithms::MapFile& map = *trained.map;

@@ -32,6 +32,9 @@ struct SweepOptions {
   /// The maps keep the bearings over the axle's place, as without the camera's offset
   /// (harmoloc-train --camera-forward-m 0), for comparison.
   bool axle_bearings = false;
+  /// The maps take the area's gain by column out of the harmonic features (harmoloc-train
+  /// --column-gain).
+  bool column_gain = false;
   bool visibility = false;     ///< floor: visibility asked for (harmoloc-train --visibility)
   bool no_visibility = false;  ///< floor: no visibility (harmoloc-train --no-visibility)
   int kidnaps = 20;            ///< kidnaps in the kidnap run (each >= 1 m)
@@ -59,6 +62,9 @@ struct SceneResult {
   double cv_rmse_x_m = -1.0, cv_rmse_y_m = -1.0;
   /// The map's centroid-column weight (0: areas only, docs/training.md).
   double column_weight = 0.0;
+  /// The area's gain by column the trainer measured (0 and 0: none) and its observations.
+  double column_gain_c2 = 0.0, column_gain_c4 = 0.0;
+  std::size_t column_gain_observations = 0;
   /// The training run's ForwardMapReport::pass_heading_spread_rad.
   double pass_heading_spread_rad = -1.0;
   std::string boards_used;

@@ -26,6 +26,9 @@ nlohmann::json to_json(const SceneResult& r) {
   j["pass_heading_spread_rad"] = r.pass_heading_spread_rad;
   j["cv_rmse_y_m"] = r.cv_rmse_y_m;
   j["column_weight"] = r.column_weight;
+  j["column_gain_c2"] = r.column_gain_c2;
+  j["column_gain_c4"] = r.column_gain_c4;
+  j["column_gain_observations"] = r.column_gain_observations;
   j["boards_used"] = r.boards_used;
   j["bearing_boards_placed"] = r.bearing_boards_placed;
   j["board_place_median_m"] = r.board_place_median_m;

@@ -779,6 +779,10 @@ void write_map(MapBytes& m, const MapSpec& s) {
   }
   if (s.version >= 4) m.u32(0);   // no calibration entries
   if (s.version >= 11) m.u32(0);  // no per-sample fix errors
+  if (s.version >= 13) {
+    m.f32(0.0F);  // no column gain
+    m.f32(0.0F);
+  }
   if (s.version >= 12) {
     m.f32(s.column_weight);
     if (s.column_weight > 0.0F) {
@@ -884,9 +888,11 @@ void test_map_codec() {
       BM_CHECK(again.size() == fw.size() && std::memcmp(again.data(), fw.data(), fw.size()) == 0);
     }
 #endif
-    // Cut inside the forward map (before the CRC, the column weight from version 12, the fix
-    // errors' count from version 11 and the calibration's count) and re-sealed: rejected.
-    fw.truncate(fw.size() - 4 - (version >= 12 ? 4U : 0U) - (version >= 11 ? 4U : 0U) - 8);
+    // Cut inside the forward map (before the CRC, the column weight from version 12, the column
+    // gain from version 13, the fix errors' count from version 11 and the calibration's count)
+    // and re-sealed: rejected.
+    fw.truncate(fw.size() - 4 - (version >= 12 ? 4U : 0U) - (version >= 13 ? 8U : 0U) -
+                (version >= 11 ? 4U : 0U) - 8);
     fw.seal();
     err = ha::decode_map(fw.data(), fw.size(), g_map);
     BM_CHECK(err && std::strstr(err.what, "truncated") != nullptr);

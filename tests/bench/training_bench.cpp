@@ -130,13 +130,15 @@ void train(benchmark::State& state, std::size_t frames, std::size_t labelled, in
 
 // The figure: an area log of a 4000-frame run with 64 labels and its wheel odometry,
 // every frame placed, board selection, the forward map and the calibration (<= 2 s).
-void train_placed(benchmark::State& state, bool bearings, bool columns = true) {
+void train_placed(benchmark::State& state, bool bearings, bool columns = true,
+                  bool column_gain = false) {
   Run run = make_run(4000, 64);
   add_odometry(run);
   hs::TrainOptions opt;
   opt.thresholds.count = 6;
   opt.bearings = bearings;
   opt.column_features = columns;
+  opt.column_gain = column_gain;
   auto map = std::make_unique<ha::MapFile>();
   for (auto _ : state) {
     const hs::TrainReport report = hs::train_on_areas(run.areas, run.labels, opt, *map);
@@ -146,6 +148,8 @@ void train_placed(benchmark::State& state, bool bearings, bool columns = true) {
     state.counters["forward_ms"] = report.forward_ms;
     state.counters["bearing_cells"] = static_cast<double>(report.forward.bearing_cells);
     state.counters["column_weight"] = report.column_weight;
+    state.counters["column_gain_observations"] =
+        static_cast<double>(report.column_gain.observations);
   }
   state.counters["samples"] = static_cast<double>(map->model.sample_count);
 }
@@ -161,6 +165,11 @@ void BM_TrainPlaced4000NoBearings(benchmark::State& state) {
 // their cross-validation costs.
 void BM_TrainPlaced4000NoColumns(benchmark::State& state) {
   train_placed(state, true, false);
+}
+// The same measuring the area's gain by column (harmoloc-train --column-gain): what finding the
+// pairs of frames over one place and the fit cost.
+void BM_TrainPlaced4000ColumnGain(benchmark::State& state) {
+  train_placed(state, true, true, true);
 }
 
 void BM_TrainMap204(benchmark::State& state) {
@@ -178,6 +187,7 @@ void BM_TrainMap1024(benchmark::State& state) {
 BENCHMARK(BM_TrainPlaced4000)->Unit(benchmark::kMillisecond)->Iterations(3);
 BENCHMARK(BM_TrainPlaced4000NoBearings)->Unit(benchmark::kMillisecond)->Iterations(3);
 BENCHMARK(BM_TrainPlaced4000NoColumns)->Unit(benchmark::kMillisecond)->Iterations(3);
+BENCHMARK(BM_TrainPlaced4000ColumnGain)->Unit(benchmark::kMillisecond)->Iterations(3);
 BENCHMARK(BM_TrainMap204)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_TrainMap204AllBoards)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_TrainMap1024)->Unit(benchmark::kMillisecond)->Iterations(3);

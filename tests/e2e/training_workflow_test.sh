@@ -16,6 +16,10 @@ offset=$(sed -n 's/^forward_offset_m = //p' "$WORK/train/metadata.toml")
 [ -n "$offset" ] || fail "the simulator's metadata.toml gives no camera.forward_offset_m"
 "$BIN/harmoloc-train" --areas "$out/areas.csv" --encoders "$WORK/train/encoders.log" --labels "$WORK/train/labels.tum" --camera-forward-m "$offset" --out "$out/from_areas.hmap" > "$out/train.txt"
 grep -q "seen from the camera's place, 100 mm ahead of the axle" "$out/train.txt" || fail "harmoloc-train did not map the bearings from the camera's place"
+! grep -q "^column gain" "$out/train.txt" || fail "the trainer measured the column gain unasked"
+# --column-gain (experimental, map format 13): the gain measured on the run's passes and said.
+"$BIN/harmoloc-train" --areas "$out/areas.csv" --encoders "$WORK/train/encoders.log" --labels "$WORK/train/labels.tum" --camera-forward-m "$offset" --column-gain --out "$out/gain.hmap" > "$out/gain.txt"
+grep -q "^column gain   a board's area x [0-9.]* a quarter frame from the centre, x [0-9.]* at the side ([0-9]* boards in [0-9]* pairs" "$out/gain.txt" || fail "the trainer did not measure the area's gain by column: $(grep '^column' "$out/gain.txt")"
 cat "$out/train.txt"
 cmp "$out/from_areas.hmap" "$WORK/tiny.hmap" || fail "the map trained from the area log differs from the one trained from the frames"
 grep -q "^boards  *start with" "$out/train.txt" || fail "the trainer did not say which boards it started from"

@@ -42,12 +42,14 @@ bool same_model(const MapFile& a, const MapFile& b) {
                       x.sigma_y,           x.gamma_x,
                       x.gamma_y,           x.max_nearest_distance,
                       x.max_dissimilarity, x.local_linear_ridge,
-                      x.column_weight};
+                      x.column_weight,     x.column_gain.c2,
+                      x.column_gain.c4};
   const float ys[] = {y.area_scale,        y.sigma_x,
                       y.sigma_y,           y.gamma_x,
                       y.gamma_y,           y.max_nearest_distance,
                       y.max_dissimilarity, y.local_linear_ridge,
-                      y.column_weight};
+                      y.column_weight,     y.column_gain.c2,
+                      y.column_gain.c4};
   const MapCalibration& ca = a.calibration;
   const MapCalibration& cb = b.calibration;
   const float cas[] = {ca.fix_rmse_x_m, ca.fix_rmse_y_m, ca.pass_spread_m};
@@ -208,6 +210,17 @@ void check_added_columns(const std::vector<std::uint8_t>& input) {
   check_given_round_trip("centroid columns");
 }
 
+// Any map given a column gain (version 13) within the bounds, drawn from the input's bytes: the
+// gain only loosens the column features' bound, so the map still reads.
+void check_added_column_gain(const std::vector<std::uint8_t>& input) {
+  HarmonicModel& m = g_map.model;
+  if (m.column_gain.present()) return;
+  m.column_gain.c2 = 0.02F * static_cast<float>(input[0] % 101) - 1.0F;
+  m.column_gain.c4 = -0.1F * static_cast<float>(input[input.size() - 1] % 41);
+  if (!m.column_gain.present()) m.column_gain.c2 = 0.5F;
+  check_given_round_trip("column gain");
+}
+
 void check_added_fix_errors(const std::vector<std::uint8_t>& input) {
   HarmonicModel& m = g_map.model;
   if (has_fix_errors(m)) return;
@@ -242,7 +255,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     // map of versions 3 and 4 with every tile of its grid stored, no bearings before version 6,
     // no heading terms before version 7, no heading coverage before version 8, no visibility
     // before version 10, no per-sample fix errors before version 11, no centroid columns before
-    // version 12.
+    // version 12, no column gain before version 13.
     HARMOLOC_FUZZ_CHECK(input[8] != 1 || g_map.model.max_dissimilarity == 1.0F,
                         "a version 1 map decodes with a dissimilarity bound");
     HARMOLOC_FUZZ_CHECK(input[8] >= 3 || !g_map.forward.present(),
@@ -267,8 +280,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
                         "a map before version 10 decodes with visibility");
     HARMOLOC_FUZZ_CHECK(input[8] >= 11 || !has_fix_errors(g_map.model),
                         "a map before version 11 decodes with fix errors");
-    HARMOLOC_FUZZ_CHECK(!g_map.model.uses_columns(),
+    HARMOLOC_FUZZ_CHECK(input[8] >= 12 || !g_map.model.uses_columns(),
                         "a map before version 12 decodes with centroid columns");
+    HARMOLOC_FUZZ_CHECK(!g_map.model.column_gain.present(),
+                        "a map before version 13 decodes with a column gain");
     HARMOLOC_FUZZ_CHECK(!decode_map(encoded.data(), encoded.size(), g_again),
                         "a re-encoded older map does not decode");
     HARMOLOC_FUZZ_CHECK(same_model(g_map, g_again), "decode(encode(older map)) differs");
@@ -278,6 +293,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     check_added_visibility(input);
     check_added_fix_errors(input);
     check_added_columns(input);
+    check_added_column_gain(input);
     return 0;
   }
   HARMOLOC_FUZZ_CHECK(encoded.size() == input.size(),
@@ -293,5 +309,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   check_added_visibility(input);
   check_added_fix_errors(input);
   check_added_columns(input);
+  check_added_column_gain(input);
   return 0;
 }

@@ -404,10 +404,10 @@ TEST(HarmonicModel, ColumnFeatures) {
   ha::areas_to_features(*model, areas, f);
   ha::ColumnFeatures c{};
   c.fill(7.0F);
-  EXPECT_FALSE(ha::areas_to_columns(*model, areas, f, c)) << "columns not measured";
+  EXPECT_FALSE(ha::areas_to_columns(*model, areas, c)) << "columns not measured";
   for (float v : c) EXPECT_EQ(v, 0.0F);
   areas.width_px = 320;
-  EXPECT_TRUE(ha::areas_to_columns(*model, areas, f, c));
+  EXPECT_TRUE(ha::areas_to_columns(*model, areas, c));
   EXPECT_FLOAT_EQ(c[0], -1.0F);  // board 2: 4 %, at the left edge
   EXPECT_FLOAT_EQ(c[1], 0.5F);   // board 0: 1 %, at the right edge
 }

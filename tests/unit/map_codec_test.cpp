@@ -42,11 +42,13 @@ constexpr std::size_t kOffSamples = kOffWeights + kFeatures * 4;
 // Version 3: the forward map's grid size (0 x 0 here: none), then the CRC.
 constexpr std::size_t kOffForward = kOffSamples + kSamples * (kFeatures + 2) * 4;
 // The forward map's grid size (0, 0: none), the calibration's entry count (0), the per-sample fix
-// errors' count (0, version 11), the column weight (0, version 12), the CRC.
+// errors' count (0, version 11), the column gain (0, 0, version 13), the column weight (0,
+// version 12), the CRC.
 constexpr std::size_t kOffCalibration = kOffForward + 8;
-constexpr std::size_t kExpectedSize = kOffCalibration + 4 + 4 + 4 + 4;
-// What follows the calibration entries: the fix errors' count, the column weight, the CRC.
-constexpr std::size_t kAfterCalibration = 4 + 4 + 4;
+constexpr std::size_t kExpectedSize = kOffCalibration + 4 + 4 + 8 + 4 + 4;
+// What follows the calibration entries: the fix errors' count, the column gain, the column
+// weight, the CRC.
+constexpr std::size_t kAfterCalibration = 4 + 8 + 4 + 4;
 
 std::unique_ptr<ha::MapFile> make_map() {
   auto map = std::make_unique<ha::MapFile>();
@@ -180,21 +182,27 @@ TEST(MapCodec, UnsupportedVersion) {
   EXPECT_NE(decode_error(b).find("version"), std::string::npos) << decode_error(b);
 }
 
-// Removes the version 12 column weight (a map without columns) before the CRC.
-static void strip_columns(std::vector<std::uint8_t>& b) {
-  b.erase(b.end() - 8, b.end() - 4);
+// Removes the version 13 column gain (a map without columns: before the column weight).
+static void strip_gain(std::vector<std::uint8_t>& b) {
+  b.erase(b.end() - 16, b.end() - 8);
 }
 
-// Removes the version 11 per-sample fix errors' count and the column weight (a map without them)
+// Removes the version 13 column gain and the version 12 column weight (a map without columns)
 // before the CRC.
-static void strip_fix_errors(std::vector<std::uint8_t>& b) {
-  b.erase(b.end() - 12, b.end() - 4);
+static void strip_columns(std::vector<std::uint8_t>& b) {
+  b.erase(b.end() - 16, b.end() - 4);
 }
 
-// Removes the version 4 calibration's entry count, the fix errors' count and the column weight
-// (a map with none of them) before the CRC.
+// Removes the version 11 per-sample fix errors' count, the column gain and the column weight (a
+// map without them) before the CRC.
+static void strip_fix_errors(std::vector<std::uint8_t>& b) {
+  b.erase(b.end() - 20, b.end() - 4);
+}
+
+// Removes the version 4 calibration's entry count and all that follows it (a map with none of
+// them) before the CRC.
 static void strip_calibration(std::vector<std::uint8_t>& b) {
-  b.erase(b.end() - 16, b.end() - 4);
+  b.erase(b.end() - 24, b.end() - 4);
 }
 
 // Removes the version 4 feature weights (after the calibration: offsets before it stay).
@@ -408,7 +416,7 @@ TEST(MapCodec, FixErrorsRoundTripAndChecks) {
     map->model.fix_error_m[i] = 0.01F * static_cast<float>(i % 4);
   const std::vector<std::uint8_t> bytes = ha::encode_map(*map);
   ASSERT_EQ(bytes.size(), kExpectedSize + 4 * kSamples);
-  const std::size_t count_at = kExpectedSize - 12;
+  const std::size_t count_at = kExpectedSize - 20;
   EXPECT_EQ(get_u32(bytes, count_at), kSamples);
   auto out = std::make_unique<ha::MapFile>();
   ASSERT_FALSE(ha::decode_map(bytes.data(), bytes.size(), *out));
@@ -518,6 +526,66 @@ TEST(MapCodec, ColumnsRoundTripAndChecks) {
   b = plain;
   strip_columns(b);
   put_u32(b, kOffVersion, 11);
+  fix_crc(b);
+  EXPECT_EQ(decode_error(b), "");
+}
+
+// Version 13's column gain sits between the fix errors and the column weight: two floats, 0 and 0
+// for none; a gain beyond a factor of 4 anywhere in the frame is refused. A column feature comes
+// from the plain area, so with a gain it may reach half the root of the sample's feature times
+// the gain's largest value.
+TEST(MapCodec, ColumnGainRoundTripAndChecks) {
+  auto map = make_map();
+  map->model.column_gain = ha::ColumnGain{2.0F, -6.0F};
+  map->model.column_weight = 0.5F;
+  // log G = 2 s - 6 s^2 over s = t^2 in [0, 0.25] is largest at s = 1/6: G = exp(1/6).
+  const float most = std::exp(1.0F / 6.0F);
+  for (std::size_t i = 0; i < kSamples; ++i) {
+    for (std::size_t k = 0; k < kFeatures; ++k)
+      map->model.sample_columns(i)[k] = 0.5F * std::sqrt(map->model.sample(i)[k] * most);
+  }
+  const std::vector<std::uint8_t> bytes = ha::encode_map(*map);
+  ASSERT_EQ(bytes.size(), kExpectedSize + 4 * kSamples * kFeatures);
+  const std::size_t gain_at = kExpectedSize - 16;
+  EXPECT_EQ(get_f32(bytes, gain_at), 2.0F);
+  EXPECT_EQ(get_f32(bytes, gain_at + 4), -6.0F);
+  auto out = std::make_unique<ha::MapFile>();
+  ASSERT_EQ(decode_error(bytes), "");
+  ASSERT_FALSE(ha::decode_map(bytes.data(), bytes.size(), *out));
+  EXPECT_EQ(out->model.column_gain.c2, 2.0F);
+  EXPECT_EQ(out->model.column_gain.c4, -6.0F);
+  EXPECT_TRUE(out->model.column_gain.present());
+  EXPECT_EQ(ha::encode_map(*out), bytes);
+  // The same column features are too large without the gain.
+  std::vector<std::uint8_t> b = bytes;
+  put_f32(b, gain_at, 0.0F);
+  put_f32(b, gain_at + 4, 0.0F);
+  fix_crc(b);
+  EXPECT_NE(decode_error(b).find("column feature"), std::string::npos) << decode_error(b);
+  // A plain map reads with no gain, whatever the object held before.
+  const std::vector<std::uint8_t> plain = ha::encode_map(*make_map());
+  ASSERT_FALSE(ha::decode_map(plain.data(), plain.size(), *out));
+  EXPECT_FALSE(out->model.column_gain.present());
+  // Refused: not finite; beyond a factor of 4 at the side (c2 = 6: G(0.5) = 4.48; -6: 1 / 4.48),
+  // or inside the frame only (c2 = 24, c4 = -96: G(0.5) = 1, but 4.48 at t^2 = 1/8).
+  for (const auto& [c2, c4] :
+       {std::pair{std::numeric_limits<float>::quiet_NaN(), 0.0F},
+        std::pair{0.0F, std::numeric_limits<float>::infinity()}, std::pair{6.0F, 0.0F},
+        std::pair{-6.0F, 0.0F}, std::pair{24.0F, -96.0F}}) {
+    b = plain;
+    put_f32(b, plain.size() - 16, c2);
+    put_f32(b, plain.size() - 12, c4);
+    fix_crc(b);
+    EXPECT_NE(decode_error(b).find("column gain"), std::string::npos)
+        << c2 << " " << c4 << ": " << decode_error(b);
+  }
+  b.assign(plain.begin(), plain.end() - 12);
+  fix_crc(b);
+  EXPECT_NE(decode_error(b).find("column gain is missing"), std::string::npos) << decode_error(b);
+  // A version 12 map has none: the same bytes without the gain read as before.
+  b = plain;
+  strip_gain(b);
+  put_u32(b, kOffVersion, 12);
   fix_crc(b);
   EXPECT_EQ(decode_error(b), "");
 }
@@ -1429,7 +1497,7 @@ TEST(MapCodec, ForwardMapBearingsCorruptionWithValidChecksum) {
   reject(
       "truncated inside the bearing cells",
       [](auto& b) {
-        b.erase(b.begin() + static_cast<std::ptrdiff_t>(kOffBearingsEnd - 16),
+        b.erase(b.begin() + static_cast<std::ptrdiff_t>(kOffBearingsEnd - 32),
                 b.begin() + static_cast<std::ptrdiff_t>(kOffBearingsEnd));
       },
       "truncated: the forward map's bearings");

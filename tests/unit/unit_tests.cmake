@@ -17,6 +17,7 @@ add_executable(algorithms_test
   ${HARMOLOC_UNIT_DIR}/fix_error_grid_test.cpp
   ${HARMOLOC_UNIT_DIR}/forward_map_test.cpp
   ${HARMOLOC_UNIT_DIR}/bearing_calibration_test.cpp
+  ${HARMOLOC_UNIT_DIR}/column_gain_test.cpp
   ${HARMOLOC_UNIT_DIR}/odometry_test.cpp
   ${HARMOLOC_UNIT_DIR}/particle_filter_test.cpp
   ${HARMOLOC_UNIT_DIR}/robust_filter_test.cpp

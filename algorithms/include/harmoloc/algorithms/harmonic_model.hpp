@@ -7,6 +7,7 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "harmoloc/algorithms/column_gain.hpp"
 #include "harmoloc/algorithms/segmentation.hpp"
 
 /// Whether the model has room for the boards' centroid columns (map format 12). A co-processor
@@ -31,8 +32,13 @@ struct HarmonicModel {
   /// board the kernel does without still tells a strange view from a trained one. Maps before
   /// version 4 have 1 everywhere.
   std::array<float, kMaxFeatures> feature_weight{1, 1, 1, 1, 1, 1, 1, 1};
-  /// feature = area_px * area_scale. The trainer sets 100 / (width * height): percent of frame.
+  /// feature = area_px * area_scale / column_gain.at(t), t the board's centroid column as an
+  /// offset from the frame's centre (column_gain.hpp). The trainer sets 100 / (width * height):
+  /// percent of frame.
   float area_scale = 0.0F;
+  /// The area's gain by column (version 13; absent, plain areas, before it). The samples hold
+  /// features with it removed, and so does every query (areas_to_features()).
+  ColumnGain column_gain;
   /// Kernel widths of W = exp(-sigma * ||O_i - O_j||^2), per output axis, in 1/feature^2.
   float sigma_x = 0.0F;
   float sigma_y = 0.0F;
@@ -87,7 +93,8 @@ float fix_error_near(const HarmonicModel& model, double x_m, double y_m);
 /// 0).
 bool has_fix_errors(const HarmonicModel& model);
 
-/// Converts a frame's board areas into the model's feature vector.
+/// Converts a frame's board areas into the model's feature vector (area_scale, then the column
+/// gain removed where the frame measured columns).
 void areas_to_features(const HarmonicModel& model, const AreaVector& areas,
                        std::array<float, HarmonicModel::kMaxFeatures>& features);
 
@@ -97,10 +104,10 @@ void areas_to_features(const HarmonicModel& model, const AreaVector& areas,
 /// whose centroid jumps weighs little.
 float column_feature(double centroid_column_px, std::uint32_t width_px, float feature);
 
-/// The frame's column features in the model's feature order (@p features from
-/// areas_to_features()). False (and all 0) when the frame's columns were not measured.
+/// The frame's column features in the model's feature order, each from the board's plain area
+/// (area_scale x pixels, the column gain not removed: the column carries the side's stretch as
+/// the trainer measured it). False (and all 0) when the frame's columns were not measured.
 bool areas_to_columns(const HarmonicModel& model, const AreaVector& areas,
-                      const std::array<float, HarmonicModel::kMaxFeatures>& features,
                       std::array<float, HarmonicModel::kMaxFeatures>& columns);
 
 }  // namespace harmoloc::algorithms

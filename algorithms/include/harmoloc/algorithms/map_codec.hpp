@@ -18,10 +18,11 @@ namespace harmoloc::algorithms {
 /// the training run instead of its whole grid, version 6 adds the board bearings, version 7 the
 /// heading terms of a floor map, version 8 the headings each place was trained from, version 9
 /// the camera's place the bearings are seen from, version 10 the visibility of a floor map,
-/// version 11 the fix error per sample; versions 1 to 10 are still read (without what they
+/// version 11 the fix error per sample, version 12 the boards' centroid columns, version 13 the
+/// area's gain by column; versions 1 to 12 are still read (without what they
 /// lack; a version 3 or 4 forward map as a grid of which every tile is stored, a forward map before
 /// version 6 without bearings).
-constexpr std::uint32_t kMapFormatVersion = 12;
+constexpr std::uint32_t kMapFormatVersion = 13;
 
 /// What the trainer measured on the training run that the firmware derives its scene-dependent
 /// settings from (docs/map-format.md): nothing of it is a constant tuned to one scene.
@@ -77,9 +78,9 @@ constexpr std::size_t kMaxMapFileBytes =
     ForwardMap::kMaxCells * 2U + 4U + kMaxCalibrationEntries * 8U +
     // Version 11: the per-sample fix errors.
     4U + HarmonicModel::kMaxSamples * 4U +
-    // Version 12: the column weight and every sample's column features (when this build holds
-    // them); the CRC.
-    4U +
+    // Version 13: the column gain. Version 12: the column weight and every sample's column
+    // features (when this build holds them); the CRC.
+    8U + 4U +
     (HarmonicModel::kHoldsColumns ? HarmonicModel::kMaxSamples * HarmonicModel::kMaxFeatures * 4U
                                   : 0U) +
     4U;

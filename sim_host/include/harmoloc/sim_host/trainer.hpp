@@ -63,6 +63,12 @@ struct TrainOptions {
   /// Also try the boards' centroid columns in the kernel (HarmonicModel::column_weight; kept,
   /// with the weight CV prefers, where CV improves by 5% or more). Off for a co-processor's map.
   bool column_features = true;
+  /// Measure the area's gain by column on the run's passes and remove it from the harmonic
+  /// features (algorithms/column_gain.hpp; map format 13). Off by default (plain areas, as before
+  /// it): on the random scenes it recovered more kidnaps and bettered the fused pose, but on the
+  /// strongest barrel lens the fit's fall at the frame's sides made the fix much worse there
+  /// (docs/sweep.md, 2026-12-02 (morning)).
+  bool column_gain = false;
   /// Frames held out in cross-validation (evenly spread).
   int max_cv_queries = 400;
   /// Cross-validation leaves out a held-out frame's own pass: the frames within this much
@@ -120,6 +126,15 @@ struct PlacementReport {
   std::vector<bool> placed;
 };
 
+/// The area's gain by column measured on the run's passes (algorithms/column_gain.hpp).
+struct ColumnGainReport {
+  /// False with too few observations or a fit beyond a factor of 4: the map keeps plain areas.
+  bool fitted = false;
+  std::size_t pairs = 0;         ///< pairs of frames over one place at one heading
+  std::size_t observations = 0;  ///< boards whole in both frames of a pair
+  algorithms::ColumnGain gain;
+};
+
 struct TrainReport {
   std::size_t frames = 0, labelled = 0, unlabelled = 0, labels_unmatched = 0, empty_frames = 0;
   AxisReport x, y;
@@ -142,6 +157,7 @@ struct TrainReport {
   /// without them (metres; 0 when columns were not tried).
   double column_weight = 0.0;
   double areas_only_cv_rmse_x_m = 0.0, areas_only_cv_rmse_y_m = 0.0;
+  ColumnGainReport column_gain;
   bool has_forward_map = false;
   ForwardMapReport forward;
   /// The offset added to the labels' times, and the estimate when it was estimated.
