@@ -31,6 +31,14 @@ mse() { python3 -c "import json,sys; print(json.load(open(sys.argv[1]))['estimat
 echo "harmonic fixes on the test run: MSE x $(mse mse_x_cm2) cm^2, y $(mse mse_y_cm2) cm^2"
 less_than "$(mse mse_x_cm2)" 10 "harmonic fix MSE x (cm^2)"
 less_than "$(mse mse_y_cm2)" 10 "harmonic fix MSE y (cm^2)"
+# The firmware takes the column gain out of every frame as the trainer took it out of the samples:
+# the map with it localizes the test run as well.
+"$BIN/harmoloc" --dataset "$WORK/test" --map "$out/gain.hmap" --fixes "$out/gain_fixes.tum" --quiet > /dev/null
+"$BIN/harmoloc-report" --truth "$WORK/test/groundtruth.tum" --estimate "$out/gain_fixes.tum" --out "$out/gain_report" > /dev/null
+gain_mse() { python3 -c "import json,sys; print(json.load(open(sys.argv[1]))['estimate']['all'][sys.argv[2]])" "$out/gain_report/summary.json" "$1"; }
+echo "with --column-gain: MSE x $(gain_mse mse_x_cm2) cm^2, y $(gain_mse mse_y_cm2) cm^2"
+less_than "$(gain_mse mse_x_cm2)" 10 "harmonic fix MSE x with the column gain (cm^2)"
+less_than "$(gain_mse mse_y_cm2)" 10 "harmonic fix MSE y with the column gain (cm^2)"
 
 # Mismatches: a log recorded with other thresholds, and a map used with another config.
 printf '[[board]]\nname = "red"\nhue_deg = [0, 20]\n' > "$out/other.toml"
