@@ -66,8 +66,8 @@ struct TrainOptions {
   /// Measure the area's gain by column on the run's passes and remove it from the harmonic
   /// features (algorithms/column_gain.hpp; map format 13). Off by default (plain areas, as before
   /// it): on the random scenes it recovered more kidnaps and bettered the fused pose, but on the
-  /// strongest barrel lens the fit's fall at the frame's sides made the fix much worse there
-  /// (docs/sweep.md, 2026-12-02 (morning)).
+  /// strongest barrel lens a few fixes at a turn went far off, and one dynamic run broke its
+  /// 10 cm target (docs/sweep.md, 2026-12-02 (morning)).
   bool column_gain = false;
   /// Frames held out in cross-validation (evenly spread).
   int max_cv_queries = 400;
