@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "harmoloc/algorithms/column_gain.hpp"
 #include "harmoloc/algorithms/forward_map.hpp"
 
 namespace harmoloc::algorithms {
@@ -104,8 +105,7 @@ double cost(const std::vector<std::vector<Ray>>& boards, const Law& law, double 
 
 double BearingCalibration::angle_rad(double u_px, std::uint32_t width_px) const {
   if (width_px == 0) return 0.0;
-  const double t = (u_px - 0.5 * (static_cast<double>(width_px) - 1.0)) / width_px;
-  return Law{a1_rad, a3_rad}.angle(t);
+  return Law{a1_rad, a3_rad}.angle(column_offset(u_px, width_px));
 }
 
 BearingCalibration calibrate_bearings(const std::vector<BearingFrame>& frames,
@@ -123,9 +123,7 @@ BearingCalibration calibrate_bearings(const std::vector<BearingFrame>& frames,
       // The firmware's rule (enough pixels, none on the frame's sides), so that the law is
       // learnt from the same centroids the filter will weigh.
       if (!gives_bearing(a, k)) continue;
-      const double u = a.centroid_column_px(k);
-      const double t = (u - 0.5 * (static_cast<double>(a.width_px) - 1.0)) / a.width_px;
-      rays[k].push_back(Ray{f.pose.x_m, f.pose.y_m, f.pose.yaw_rad, t});
+      rays[k].push_back(Ray{f.pose.x_m, f.pose.y_m, f.pose.yaw_rad, column_offset(a, k)});
     }
   }
   // Boards with too few frames take no part (an empty ray list).

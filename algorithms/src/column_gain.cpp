@@ -11,8 +11,13 @@ double ColumnGain::at(double t) const {
   return std::exp(static_cast<double>(c2) * t * t + static_cast<double>(c4) * t * t * t * t);
 }
 
+double column_offset(double u_px, std::uint32_t width_px) {
+  if (width_px == 0) return 0.0;
+  return (u_px - 0.5 * (static_cast<double>(width_px) - 1.0)) / width_px;
+}
+
 double column_offset(const AreaVector& areas, std::size_t board) {
-  return (areas.centroid_column_px(board) - 0.5 * (areas.width_px - 1.0)) / areas.width_px;
+  return column_offset(areas.centroid_column_px(board), areas.width_px);
 }
 
 float remove_column_gain(const ColumnGain& gain, const AreaVector& areas, std::size_t board,

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "harmoloc/algorithms/column_gain.hpp"
+
 namespace harmoloc::algorithms {
 
 namespace {
@@ -219,9 +221,7 @@ bool heading_covered(const ForwardMap& map, double x_m, double y_m, double yaw_r
 bool board_image_angle(const ForwardMap& map, const AreaVector& areas, std::size_t b,
                        float& angle_rad) {
   if (!map.has_bearings || !gives_bearing(areas, b)) return false;
-  const double width = static_cast<double>(areas.width_px);
-  const double u = areas.centroid_column_px(b);
-  const double t = (u - 0.5 * (width - 1.0)) / width;
+  const double t = column_offset(areas, b);
   angle_rad = static_cast<float>(t * (static_cast<double>(map.bearing_a1_rad) +
                                       static_cast<double>(map.bearing_a3_rad) * t * t));
   return true;

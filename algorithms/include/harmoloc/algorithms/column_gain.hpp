@@ -41,6 +41,9 @@ struct ColumnGain {
 /// the board has pixels.
 double column_offset(const AreaVector& areas, std::size_t board);
 
+/// A column @p u_px of a frame @p width_px wide as the same offset (0 when the width is 0).
+double column_offset(double u_px, std::uint32_t width_px);
+
 /// @p feature (board @p board's area feature in @p areas) divided by @p gain at the board's
 /// column; @p feature unchanged without a gain, without columns or without pixels.
 float remove_column_gain(const ColumnGain& gain, const AreaVector& areas, std::size_t board,
