@@ -34,7 +34,7 @@ if [ "${HARMOLOC_VM_MODE:-}" = loop-record ] || [ "${HARMOLOC_VM_MODE:-}" = loop
   K=${HARMOLOC_VM_SLOWDOWN:-1}
   say "loop: $(ls /tmp/in | tr '\n' ' ') slowdown $K, devices $(ls /dev/video* 2> /dev/null | tr '\n' ' ')"
   echo "VMTEST-BEGIN $HARMOLOC_VM_MODE"
-  /vm/vm_feeder /tmp/in/run /dev/video20 vcan0 "$K" /tmp/go > /tmp/out/feeder.out 2>&1 &
+  /vm/vm_feeder /tmp/in/run /dev/video20 vcan0 "$K" /tmp/go /tmp/out/feeder-events.csv > /tmp/out/feeder.out 2>&1 &
   feeder=$!
   for _ in $(seq 300); do grep -q 'FEEDER ready' /tmp/out/feeder.out && break; sleep 0.1; done
   /vm/notify_listener /tmp/notify 900 > /tmp/notify.log &

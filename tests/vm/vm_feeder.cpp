@@ -4,7 +4,7 @@
 // both at their dataset times on one CLOCK_MONOTONIC schedule, slowed by one factor:
 //   wall(t) = start + slowdown * (t - origin),  origin = the dataset's first event.
 //
-//   vm_feeder DATASET VIDEO_DEV CAN_IF SLOWDOWN [GO_FILE]
+//   vm_feeder DATASET VIDEO_DEV CAN_IF SLOWDOWN [GO_FILE [EVENTS_CSV]]
 //
 // Before the clock starts it writes the first frame once (with exclusive_caps=1 the loopback
 // offers a capture node only once a writer has set the format and written), then waits for
@@ -13,6 +13,11 @@
 //   FEEDER done frames=N can=M frame_late_p50_ms=.. frame_late_max_ms=.. can_late_max_ms=..
 //   frames_late_over_10ms=..
 //          can_late_over_10ms=.. wall_s=..                  at the end
+// and, with EVENTS_CSV, after the run, every event ("kind,t_ns,sent_mono_ns,done_mono_ns": f or
+// c, its dataset time, when its write() began and when it returned; the kernel stamps a frame in
+// between). When the VM cannot keep the schedule, the events go out late and in bursts;
+// tests/vm/loop_clock.py maps between the clocks through them instead of the schedule, so a slow
+// VM does not read as a wrong pose.
 #include <fcntl.h>
 #include <linux/can.h>
 #include <linux/can/raw.h>
@@ -148,8 +153,9 @@ bool parse_candump(const std::string& line, CanEntry& out) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc != 5 && argc != 6) {
-    std::fprintf(stderr, "usage: vm_feeder DATASET VIDEO_DEV CAN_IF SLOWDOWN [GO_FILE]\n");
+  if (argc < 5 || argc > 7) {
+    std::fprintf(stderr,
+                 "usage: vm_feeder DATASET VIDEO_DEV CAN_IF SLOWDOWN [GO_FILE [EVENTS_CSV]]\n");
     return 2;
   }
   const std::string dir = argv[1];
@@ -235,7 +241,7 @@ int main(int argc, char** argv) {
   std::printf("FEEDER ready frames=%zu can=%zu size=%dx%d format=%s\n", frames.size(), cans.size(),
               first.width, first.height, first.rgb ? "rgb24" : "yuyv");
   std::fflush(stdout);
-  if (argc == 6) {
+  if (argc >= 6) {
     const std::int64_t give_up = mono_ns() + 300LL * 1000000000LL;
     while (::access(argv[5], F_OK) != 0) {
       if (mono_ns() > give_up) die(std::string("no ") + argv[5] + " within 300 s");
@@ -257,6 +263,12 @@ int main(int argc, char** argv) {
   std::int64_t frame_late_max = 0, can_late_max = 0;
   int frames_late = 0, cans_late = 0;
   std::vector<std::int64_t> frame_lates;
+  struct Sent {
+    char kind;
+    std::int64_t t_ns, sent_mono_ns, done_mono_ns;
+  };
+  std::vector<Sent> sent;
+  sent.reserve(frames.size() + cans.size());
   const std::int64_t late_ns = 10000000LL;
   Pixels next = first;
   while (fi < frames.size() || ci < cans.size()) {
@@ -264,9 +276,11 @@ int main(int argc, char** argv) {
         ci >= cans.size() || (fi < frames.size() && frames[fi].t_ns <= cans[ci].t_ns);
     const std::int64_t due = wall(frame_next ? frames[fi].t_ns : cans[ci].t_ns);
     sleep_until(due);
-    const std::int64_t late = mono_ns() - due;  // when it starts to go out
+    const std::int64_t out_ns = mono_ns();  // when it starts to go out
+    const std::int64_t late = out_ns - due;
     if (frame_next) {
       write_frame(next);
+      sent.push_back({'f', frames[fi].t_ns, out_ns, mono_ns()});
       frame_late_max = std::max(frame_late_max, late);
       frame_lates.push_back(late);
       frames_late += late > late_ns ? 1 : 0;
@@ -277,6 +291,7 @@ int main(int argc, char** argv) {
       if (::write(can, &cans[ci].frame, sizeof(can_frame)) !=
           static_cast<ssize_t>(sizeof(can_frame)))
         die(std::string("CAN write: ") + std::strerror(errno));
+      sent.push_back({'c', cans[ci].t_ns, out_ns, mono_ns()});
       can_late_max = std::max(can_late_max, late);
       cans_late += late > late_ns ? 1 : 0;
       ++ci;
@@ -292,6 +307,15 @@ int main(int argc, char** argv) {
       static_cast<double>(can_late_max) * 1e-6, frames_late, cans_late,
       static_cast<double>(mono_ns() - start) * 1e-9);
   std::fflush(stdout);
+  if (argc == 7) {
+    std::FILE* events = std::fopen(argv[6], "w");
+    if (events == nullptr) die(std::string(argv[6]) + ": " + std::strerror(errno));
+    std::fprintf(events, "kind,t_ns,sent_mono_ns,done_mono_ns\n");
+    for (const Sent& e : sent)
+      std::fprintf(events, "%c,%" PRId64 ",%" PRId64 ",%" PRId64 "\n", e.kind, e.t_ns,
+                   e.sent_mono_ns, e.done_mono_ns);
+    if (std::fclose(events) != 0) die(std::string(argv[6]) + ": " + std::strerror(errno));
+  }
   ::close(can);
   ::close(video);
   return 0;
