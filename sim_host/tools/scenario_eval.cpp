@@ -144,6 +144,9 @@ RunRecord replay_scenario(const Scenario& scenario, std::uint64_t seed,
       f.chi2[b] = cycle->board_assessment().chi2[b];
       f.static_probability[b] = static_cast<float>(cycle->board_static_probability(b));
     }
+    for (std::size_t feature = 0; feature < map.model.feature_count; ++feature)
+      if (cycle->fix_check().suspect(feature))
+        f.fix_suspects |= static_cast<std::uint8_t>(1U << map.model.board_index[feature]);
     f.robust_fix = algorithms::Pose2{cycle->robust_fix().x_m, cycle->robust_fix().y_m, 0.0};
     f.preference = cycle->kidnap_input().preference;
     f.evidence_known = cycle->kidnap_input().fix_known;
@@ -197,7 +200,7 @@ void write_trace(const RunRecord& run, const std::string& path) {
                "fix_present,fix_known,fix_x_m,fix_y_m,verdict,distrusted,consensus,robust_fix_x_m,"
                "robust_fix_y_m,preference,sigma_m,sigma_yaw_rad,match,covered,evidence_known,"
                "evidence_x_m,evidence_y_m,evidence_distance_m,truth_nats,estimate_nats,board_seen,"
-               "cut_board");
+               "cut_board,fix_suspects");
   const std::size_t boards = run.frames.empty() ? 0 : run.frames.front().boards;
   for (std::size_t b = 0; b < boards; ++b) std::fprintf(f, ",chi2_%zu", b + 1);
   for (std::size_t b = 0; b < boards; ++b) std::fprintf(f, ",static_%zu", b + 1);
@@ -206,7 +209,7 @@ void write_trace(const RunRecord& run, const std::string& path) {
     std::fprintf(f,
                  "%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%d,%s,%d,%d,%.4f,%.4f,%d,%u,%d,%.4f,%.4f,"
                  "%.3f,%.4f,"
-                 "%.4f,%.4g,%d,%d,%.4f,%.4f,%.4f,%.3f,%.3f,%d,%d",
+                 "%.4f,%.4g,%d,%d,%.4f,%.4f,%.4f,%.3f,%.3f,%d,%d,%u",
                  r.t_s, r.truth.x_m, r.truth.y_m, r.truth.yaw_rad, r.estimate.x_m, r.estimate.y_m,
                  r.estimate.yaw_rad, r.position_error_m(), r.valid ? 1 : 0,
                  firmware::health_name(r.health), r.fix_present ? 1 : 0, r.fix_known ? 1 : 0,
@@ -214,7 +217,8 @@ void write_trace(const RunRecord& run, const std::string& path) {
                  static_cast<unsigned>(r.distrusted), r.consensus ? 1 : 0, r.robust_fix.x_m,
                  r.robust_fix.y_m, r.preference, r.sigma_m, r.sigma_yaw_rad, r.match, r.covered,
                  r.evidence_known ? 1 : 0, r.evidence.x_m, r.evidence.y_m, r.evidence_distance_m,
-                 r.truth_nats, r.estimate_nats, r.board_seen ? 1 : 0, r.cut_board ? 1 : 0);
+                 r.truth_nats, r.estimate_nats, r.board_seen ? 1 : 0, r.cut_board ? 1 : 0,
+                 static_cast<unsigned>(r.fix_suspects));
     for (std::size_t b = 0; b < boards; ++b)
       std::fprintf(f, ",%.3g", static_cast<double>(r.chi2[b]));
     for (std::size_t b = 0; b < boards; ++b)

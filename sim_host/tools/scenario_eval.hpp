@@ -57,9 +57,10 @@ struct FrameRecord {
   bool cut_board = false;
   algorithms::Pose2 fix;
   algorithms::KidnapVerdict verdict = algorithms::KidnapVerdict::kNone;
-  std::uint8_t distrusted = 0;  ///< bit b: board b's motion index is below one half
-  bool consensus = true;        ///< most boards agreed with the estimate
-  std::size_t boards = 0;       ///< boards of the map
+  std::uint8_t distrusted = 0;    ///< bit b: board b's motion index is below one half
+  std::uint8_t fix_suspects = 0;  ///< bit b: the fix check holds board b suspect (fix_board_check)
+  bool consensus = true;          ///< most boards agreed with the estimate
+  std::size_t boards = 0;         ///< boards of the map
   /// Per board: its residual at the estimate (chi2 in the widened sigma) and motion index.
   std::array<float, algorithms::kMaxBoards> chi2{};
   std::array<float, algorithms::kMaxBoards> static_probability{};

@@ -67,6 +67,12 @@ def main():
     elif any(r["cut_board"] not in ("0", "1") or (r["cut_board"] == "1" and r["board_seen"] != "1")
              for r in rows):
         problems.append("a cut_board entry that is not 0 or 1, or 1 on a frame without a fix")
+    # The fix check's suspects: a mask of the scene's boards (the chi2_N columns).
+    boards = sum(1 for k in rows[0] if k.startswith("chi2_")) if rows else 0
+    if rows and "fix_suspects" not in rows[0]:
+        problems.append("no fix_suspects column")
+    elif any(not r["fix_suspects"].isdigit() or int(r["fix_suspects"]) >> boards for r in rows):
+        problems.append(f"a fix_suspects entry that is not a mask of the {boards} boards")
     confirmed = sum(1 for r in rows if r["verdict"] == "2")
     if confirmed == 0:
         problems.append("no kidnap confirmed")
