@@ -23,6 +23,9 @@ import bisect
 import re
 import sys
 
+HEADER = 'kind,t_ns,sent_mono_ns,done_mono_ns'
+SNAP_NS = 1000
+
 
 def parse_feeder(line):
     f = dict(re.findall(r'(\w+)=(\S+)', line))
@@ -61,10 +64,6 @@ def read_events(path):
     return vm, ts
 
 
-HEADER = 'kind,t_ns,sent_mono_ns,done_mono_ns'
-SNAP_NS = 1000
-
-
 class Clock:
     def __init__(self, feeder_line, events_path):
         self.start, self.origin, self.k = parse_feeder(feeder_line)
@@ -74,12 +73,11 @@ class Clock:
         if not self.ts:
             return self.start + self.k * (t_ns - self.origin)
         # Within a microsecond of an event (TUM keeps microseconds): that event's time, and the
-        # last point with it (when its write() returned, when it was stamped).
+        # last point with it (when its write() returned, when it was stamped). Otherwise no event
+        # lies within the microsecond, so i is also where t_ns itself would go.
         i = bisect.bisect_right(self.ts, t_ns + SNAP_NS)
         if i > 0 and abs(self.ts[i - 1] - t_ns) <= SNAP_NS:
             t_ns = self.ts[i - 1]
-        else:
-            i = bisect.bisect_right(self.ts, t_ns)
         if i == 0:
             return self.vm[0] + self.k * (t_ns - self.ts[0])
         if i == len(self.ts) or self.ts[i - 1] == t_ns:

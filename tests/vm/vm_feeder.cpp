@@ -260,30 +260,21 @@ int main(int argc, char** argv) {
   std::fflush(stdout);
 
   std::size_t fi = 0, ci = 0;
-  std::int64_t frame_late_max = 0, can_late_max = 0;
-  int frames_late = 0, cans_late = 0;
-  std::vector<std::int64_t> frame_lates;
   struct Sent {
     char kind;
     std::int64_t t_ns, sent_mono_ns, done_mono_ns;
   };
   std::vector<Sent> sent;
   sent.reserve(frames.size() + cans.size());
-  const std::int64_t late_ns = 10000000LL;
   Pixels next = first;
   while (fi < frames.size() || ci < cans.size()) {
     const bool frame_next =
         ci >= cans.size() || (fi < frames.size() && frames[fi].t_ns <= cans[ci].t_ns);
-    const std::int64_t due = wall(frame_next ? frames[fi].t_ns : cans[ci].t_ns);
-    sleep_until(due);
+    sleep_until(wall(frame_next ? frames[fi].t_ns : cans[ci].t_ns));
     const std::int64_t out_ns = mono_ns();  // when it starts to go out
-    const std::int64_t late = out_ns - due;
     if (frame_next) {
       write_frame(next);
       sent.push_back({'f', frames[fi].t_ns, out_ns, mono_ns()});
-      frame_late_max = std::max(frame_late_max, late);
-      frame_lates.push_back(late);
-      frames_late += late > late_ns ? 1 : 0;
       ++fi;
       if (fi < frames.size())
         next = load_frame(frames[fi].path, meta_w, meta_h);  // before it is due
@@ -292,9 +283,23 @@ int main(int argc, char** argv) {
           static_cast<ssize_t>(sizeof(can_frame)))
         die(std::string("CAN write: ") + std::strerror(errno));
       sent.push_back({'c', cans[ci].t_ns, out_ns, mono_ns()});
+      ++ci;
+    }
+  }
+  // How late each event began to go out against its place in the schedule.
+  const std::int64_t late_ns = 10000000LL;
+  std::int64_t frame_late_max = 0, can_late_max = 0;
+  int frames_late = 0, cans_late = 0;
+  std::vector<std::int64_t> frame_lates;
+  for (const Sent& e : sent) {
+    const std::int64_t late = e.sent_mono_ns - wall(e.t_ns);
+    if (e.kind == 'f') {
+      frame_late_max = std::max(frame_late_max, late);
+      frame_lates.push_back(late);
+      frames_late += late > late_ns ? 1 : 0;
+    } else {
       can_late_max = std::max(can_late_max, late);
       cans_late += late > late_ns ? 1 : 0;
-      ++ci;
     }
   }
   std::sort(frame_lates.begin(), frame_lates.end());
