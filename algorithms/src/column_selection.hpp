@@ -25,16 +25,17 @@ inline std::vector<int> changing_columns(const Eigen::MatrixXd& features) {
   return columns;
 }
 
-// Backward elimination from @p current (the choice for all of @p columns): while more than one
-// column is left, drops the column whose removal gives the lowest summed x and y cross-validated
-// MSE, as long as that sum is lower than the current one by more than @p min_improvement
-// (relative). @p evaluate(columns) returns a pair of axis choices (`.first.cv_mse`,
+// Backward elimination from @p current (the choice for all of @p columns): while more than
+// @p min_columns (at least one) are left, drops the column whose removal gives the lowest summed x
+// and y cross-validated MSE, as long as that sum is lower than the current one by more than @p
+// min_improvement (relative). @p evaluate(columns) returns a pair of axis choices (`.first.cv_mse`,
 // `.second.cv_mse`); @p on_drop(columns, choice, dropped_column) sees each step. Returns the
 // choice for the columns left.
 template <typename Choice, typename Evaluate, typename OnDrop>
 Choice eliminate_columns(std::vector<int>& columns, Choice current, double min_improvement,
-                         Evaluate&& evaluate, OnDrop&& on_drop) {
-  while (columns.size() > 1) {
+                         std::size_t min_columns, Evaluate&& evaluate, OnDrop&& on_drop) {
+  const std::size_t keep = min_columns > 1 ? min_columns : 1;
+  while (columns.size() > keep) {
     double best_score = std::numeric_limits<double>::infinity();
     std::size_t best_drop = 0;
     Choice best_choice;

@@ -324,7 +324,7 @@ ModelSelection select_neighbour_model(const Eigen::MatrixXd& features,
   out.steps.push_back(SelectionStep{columns, current.first.cv_mse, current.second.cv_mse, -1});
   if (options.select_features) {
     current = detail::eliminate_columns(
-        columns, current, options.min_improvement, evaluate,
+        columns, current, options.min_improvement, options.min_boards, evaluate,
         [&](const std::vector<int>& left, const auto& choice, int dropped) {
           out.steps.push_back(
               SelectionStep{left, choice.first.cv_mse, choice.second.cv_mse, dropped});

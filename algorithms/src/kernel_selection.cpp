@@ -224,7 +224,7 @@ KernelSelection select_kernel_model(const PlacedSamples& samples, const PlacedSa
       return cross_validate_kernel(samples, queries, cols, options);
     };
     current = detail::eliminate_columns(
-        columns, current, options.min_improvement, evaluate,
+        columns, current, options.min_improvement, options.min_boards, evaluate,
         [&](const std::vector<int>& left, const auto& choice, int dropped) {
           out.steps.push_back(
               KernelSelectionStep{left, choice.first.cv_mse, choice.second.cv_mse, dropped});

@@ -244,6 +244,11 @@ TEST(NeighbourSelection, DropsANoiseBoardAndKeepsTheGoodOnes) {
   keep_all.select_features = false;
   EXPECT_EQ(ha::select_neighbour_model(with_noise, r.labelled, r.xy, keep_all).columns,
             (std::vector<int>{0, 1, 2, 3}));
+  // Never below min_boards (a fix from fewer cannot be checked for a moved board).
+  ha::SelectionOptions four;
+  four.min_boards = 4;
+  EXPECT_EQ(ha::select_neighbour_model(with_noise, r.labelled, r.xy, four).columns,
+            (std::vector<int>{0, 1, 2, 3}));
 }
 
 TEST(NeighbourSelection, Deterministic) {

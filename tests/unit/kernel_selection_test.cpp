@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <vector>
 
 #include "harmoloc/algorithms/random.hpp"
 
@@ -117,6 +118,40 @@ TEST(KernelSelection, CrossValidationMatchesTheDirectKernelAverage) {
     EXPECT_NEAR(sel.kernel_average_cv_mse_x, cv.first.cv_mse, 1e-6 * cv.first.cv_mse);
     EXPECT_NEAR(sel.kernel_average_cv_mse_y, cv.second.cv_mse, 1e-6 * cv.second.cv_mse);
   }
+}
+
+// Two boards that follow the position and three that are only noise: cross-validation would keep
+// the two, but a fix from two boards cannot be checked for a moved one, so the selection stops
+// at KernelSelectionOptions::min_boards (three). A run with only two boards that change keeps
+// both, whatever they are worth.
+TEST(KernelSelection, KeepsAtLeastMinBoards) {
+  const PlacedSamples route = straight_route(6, 0.005, 40);
+  PlacedSamples samples = route;
+  samples.features.resize(route.features.rows(), 5);
+  Pcg32 rng(11);
+  for (Eigen::Index i = 0; i < samples.features.rows(); ++i) {
+    samples.features(i, 0) = route.features(i, 0);
+    samples.features(i, 1) = route.features(i, 1);
+    for (Eigen::Index k = 2; k < 5; ++k) samples.features(i, k) = rng.uniform(0.0, 10.0);
+  }
+  KernelSelectionOptions options;
+  options.local_linear_ridges.clear();
+  options.min_boards = 1;
+  const KernelSelection free = select_kernel_model(samples, samples, options);
+  ASSERT_LE(free.columns.size(), 2U) << "the noise boards must hurt, or the test shows nothing";
+  options.min_boards = 3;
+  const KernelSelection three = select_kernel_model(samples, samples, options);
+  ASSERT_EQ(three.columns.size(), 3U);
+  EXPECT_EQ(three.columns[0], 0);
+  EXPECT_EQ(three.columns[1], 1);
+  EXPECT_EQ(KernelSelectionOptions{}.min_boards, 3U);
+
+  PlacedSamples two = samples;
+  two.features.conservativeResize(Eigen::NoChange, 2);
+  two.features.col(1).setConstant(1.0);  // one board that changes and one that does not
+  two.features.conservativeResize(Eigen::NoChange, 3);
+  two.features.col(2) = samples.features.col(2);
+  EXPECT_EQ(select_kernel_model(two, two, options).columns, (std::vector<int>{0, 2}));
 }
 
 }  // namespace

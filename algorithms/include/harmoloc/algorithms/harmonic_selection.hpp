@@ -10,6 +10,7 @@
 /// harmonic property). Same eq. 8, same eq. 9 online; only the graph differs.
 /// Host/start-up code: allocates freely, never runs in the cycle.
 
+#include <cstddef>
 #include <functional>
 #include <string>
 #include <vector>
@@ -65,6 +66,9 @@ struct SelectionOptions {
   /// desk routes: a 2% bar dropped boards that a test run needed, docs/training.md).
   bool select_features = true;
   double min_improvement = 0.25;
+  /// Boards the selection never goes below, where the run has that many that change (why:
+  /// KernelSelectionOptions::min_boards).
+  std::size_t min_boards = 3;
 };
 
 /// Cross-validates the neighbour-graph model on the labelled rows of @p features for the given

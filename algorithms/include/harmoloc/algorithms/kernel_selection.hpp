@@ -12,6 +12,7 @@
 ///
 /// Host code (training): allocates freely, never runs in the cycle.
 
+#include <cstddef>
 #include <vector>
 
 #include <Eigen/Dense>
@@ -34,6 +35,13 @@ struct KernelSelectionOptions {
   bool select_features = true;
   /// Drop a board while that lowers the summed x + y CV error by more than this fraction.
   double min_improvement = 0.05;
+  /// Boards the selection never goes below (where the run has that many that change). Two
+  /// boards fit a static training run well, but a fix from two cannot be checked: leaving one
+  /// out leaves a single board, so nothing tells which of the two moved, and a moved board drags
+  /// the fix and the filter with it (algorithms/fix_board_check.hpp keeps at least two and so
+  /// needs three). Cross-validation on the training run cannot see this, as no board moves in
+  /// it (docs/training.md).
+  std::size_t min_boards = 3;
   /// Ridges tried for eq. 9's local linear correction (HarmonicModel::local_linear_ridge); the
   /// one with the lowest x + y CV error is kept where it beats the plain kernel average by more
   /// than min_improvement. Empty: the plain average.
