@@ -46,7 +46,7 @@ HarmonicFix FixBoardCheck::fix(const HarmonicModel& model,
     return weighted(model, m) >= 2 ? m : use;
   };
   FeatureMask effective = trusted();
-  if (!(params.near_m > 0.0) || weighted(model, use) < 3)
+  if (!(params.near_m > 0.0) || weighted(model, use) < kFixCheckMinBoards)
     return harmonic_query(model, features, effective, columns);
 
   // The next allowed feature the kernel weighs, in turn.

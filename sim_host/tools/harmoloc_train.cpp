@@ -349,14 +349,16 @@ int main(int argc, char** argv) {
               "fix           kernel average (a local linear correction does not improve "
               "CV enough)\n");
       }
-      // The selection never goes below three boards (KernelSelectionOptions::min_boards).
+      // The selection never goes below kFixCheckMinBoards (KernelSelectionOptions::min_boards).
+      constexpr std::size_t kFloor = algorithms::kFixCheckMinBoards;
       const bool chosen =
           opt.boards.empty() && !all_boards && opt.method != sim_host::TrainMethod::kPaper;
       std::printf("features      %s%s\n", board_list(r.boards, names).c_str(),
                   !chosen                    ? ""
-                  : r.boards.size() < 3      ? " (every board whose area changes)"
-                  : r.boards.size() == 3     ? " (three are kept at least: a fix from fewer cannot "
-                                               "be checked for a moved board)"
+                  : r.boards.size() < kFloor ? " (every board whose area changes)"
+                  : r.boards.size() == kFloor
+                      ? " (three are kept at least: a fix from fewer cannot "
+                        "be checked for a moved board)"
                   : r.board_steps.size() > 1 ? ""
                                              : " (no board's removal improves CV enough)");
       const auto axis = [&](const char* name, const sim_host::AxisReport& a) {

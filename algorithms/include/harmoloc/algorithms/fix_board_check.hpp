@@ -17,12 +17,17 @@
 /// Online: fixed size, no allocation; two queries of the model a frame (one of which is the fix).
 
 #include <array>
+#include <cstddef>
 #include <cstdint>
 
 #include "harmoloc/algorithms/harmonic_localizer.hpp"
 #include "harmoloc/algorithms/harmonic_model.hpp"
 
 namespace harmoloc::algorithms {
+
+/// Boards a fix needs for the check to run: it leaves one out and the fix keeps two. The trainer's
+/// board selection keeps this many at least (KernelSelectionOptions::min_boards).
+inline constexpr std::size_t kFixCheckMinBoards = 3;
 
 struct FixCheckParams {
   double far_m = 0.0;    ///< the fix with the board at least this far from the estimate

@@ -17,6 +17,8 @@
 
 #include <Eigen/Dense>
 
+#include "harmoloc/algorithms/fix_board_check.hpp"
+
 namespace harmoloc::algorithms {
 
 /// Solves (P + gamma L) F = C for every column of @p labels at once (one sparse factorisation),
@@ -68,7 +70,7 @@ struct SelectionOptions {
   double min_improvement = 0.25;
   /// Boards the selection never goes below, where the run has that many that change (why:
   /// KernelSelectionOptions::min_boards).
-  std::size_t min_boards = 3;
+  std::size_t min_boards = kFixCheckMinBoards;
 };
 
 /// Cross-validates the neighbour-graph model on the labelled rows of @p features for the given

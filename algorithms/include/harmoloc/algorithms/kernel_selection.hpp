@@ -17,6 +17,8 @@
 
 #include <Eigen/Dense>
 
+#include "harmoloc/algorithms/fix_board_check.hpp"
+
 namespace harmoloc::algorithms {
 
 struct PlacedSamples {
@@ -41,7 +43,7 @@ struct KernelSelectionOptions {
   /// the fix and the filter with it (algorithms/fix_board_check.hpp keeps at least two and so
   /// needs three). Cross-validation on the training run cannot see this, as no board moves in
   /// it (docs/training.md).
-  std::size_t min_boards = 3;
+  std::size_t min_boards = kFixCheckMinBoards;
   /// Ridges tried for eq. 9's local linear correction (HarmonicModel::local_linear_ridge); the
   /// one with the lowest x + y CV error is kept where it beats the plain kernel average by more
   /// than min_improvement. Empty: the plain average.
