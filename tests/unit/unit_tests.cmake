@@ -90,6 +90,7 @@ endif()
 # sim_host/ and drivers/: dataset formats, the file-backed fakes, the simulator, the serial link.
 add_executable(sim_host_test
   ${HARMOLOC_UNIT_DIR}/area_log_test.cpp
+  ${HARMOLOC_UNIT_DIR}/board_projection_test.cpp
   ${HARMOLOC_UNIT_DIR}/dataset_test.cpp
   ${HARMOLOC_UNIT_DIR}/fakes_test.cpp
   ${HARMOLOC_UNIT_DIR}/forward_map_training_test.cpp
