@@ -14,14 +14,14 @@ namespace harmoloc::sim_host {
 /// What the frame shows of one board.
 struct BoardImage {
   double area_px = 0.0;  ///< of the outline's image inside the frame; 0 when none
-  double centroid_u_px =
-      0;  ///< the image's centroid (pixel centres at whole numbers); 0 when no area
-  double centroid_v_px = 0;
+  /// The image's centroid (pixel centres at whole numbers); 0 when there is no area.
+  double centroid_u_px = 0.0;
+  double centroid_v_px = 0.0;
   bool cut = false;  ///< the frame's border (or the lens's image circle) cuts the outline
 };
 
-/// Outline points per side of a rectangle (an ellipse gets four times as many round it): enough
-/// that a barrel lens's bent edges lose under 0.1% of the area at the frame's corners.
+/// Outline points per side of a rectangle (an ellipse gets four times as many round it): a lens
+/// bends the board's straight edges, and the projected polygon follows the bend between them.
 constexpr int kBoardOutlinePointsPerSide = 12;
 
 /// The image of @p board for the robot at @p robot_pose, through @p camera (its pose on the robot,
