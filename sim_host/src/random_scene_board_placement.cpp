@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "harmoloc/algorithms/geometry.hpp"
+#include "harmoloc/sim_host/board_projection.hpp"
 #include "harmoloc/sim_host/lens.hpp"
 #include "harmoloc/sim_host/random_scene.hpp"
 #include "random_scene_parts.hpp"
@@ -63,15 +64,17 @@ double clipped_area(std::vector<std::array<double, 2>> poly, double w, double h)
 
 // A board's approximate area (pixels) from the camera at @p f: its outline's corners projected
 // through the lens, clipped to the frame; 0 unless it faces the camera and every corner projects.
+// Coarser than project_board (board_projection.hpp), and kept so: the random scene family's
+// boards are drawn with it, and another area would draw other scenes for the same seeds.
 double approx_area(const Views& v, const CameraFrame& f, const BoardSpec& b) {
-  const double cy = std::cos(b.facing_yaw_rad), sy = std::sin(b.facing_yaw_rad);
-  const double ct = std::cos(b.tilt_rad), st = std::sin(b.tilt_rad);
-  const double n[3] = {cy * ct, sy * ct, st};
-  const double c[3] = {b.centre_x_m, b.centre_y_m, b.centre_z_m};
+  const BoardAxes axes = board_axes(b);
+  const double* n = axes.normal;
+  const double* c = axes.centre;
   const double to_cam =
       (f.origin[0] - c[0]) * n[0] + (f.origin[1] - c[1]) * n[1] + (f.origin[2] - c[2]) * n[2];
   if (to_cam <= 0.05) return 0.0;
-  const double u[3] = {-sy, cy, 0.0}, w[3] = {-cy * st, -sy * st, ct};
+  const double* u = axes.width_dir;
+  const double* w = axes.height_dir;
   const CameraSpec& cam = v.proxy.camera;
   std::vector<std::array<double, 2>> quad(4);
   const double su[4] = {-1, 1, 1, -1}, sv[4] = {-1, -1, 1, 1};

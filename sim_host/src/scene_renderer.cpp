@@ -1,5 +1,7 @@
 #include "harmoloc/sim_host/scene_renderer.hpp"
 
+#include "harmoloc/sim_host/board_projection.hpp"
+
 #include <algorithm>
 #include <cmath>
 
@@ -154,32 +156,24 @@ void SceneRenderer::set_time(double t_s) {
     cylinders_.push_back(PlacedCylinder{x, y, o.radius_m, o.height_m, o.colour});
   }
   occluders_present_ = cylinders_.size();
-  // The boards' geometry. Upright (tilt 0) the arithmetic is exactly the simulator's before
-  // tilted boards existed: the extra terms are products with 0.
+  // The boards' geometry (board_axes).
   placed_.clear();
   for (const BoardSpec& b : boards_) {
     PlacedBoard p{};
-    const double cy = std::cos(b.facing_yaw_rad), sy = std::sin(b.facing_yaw_rad);
-    const double ct = std::cos(b.tilt_rad), st = std::sin(b.tilt_rad);
-    p.c[0] = b.centre_x_m;
-    p.c[1] = b.centre_y_m;
-    p.c[2] = b.centre_z_m;
-    p.n[0] = cy * ct;
-    p.n[1] = sy * ct;
-    p.n[2] = st;
-    p.u[0] = -sy;
-    p.u[1] = cy;
-    p.u[2] = 0.0;
-    p.v[0] = -cy * st;
-    p.v[1] = -sy * st;
-    p.v[2] = ct;
+    const BoardAxes axes = board_axes(b);
+    for (int k = 0; k < 3; ++k) {
+      p.c[k] = axes.centre[k];
+      p.n[k] = axes.normal[k];
+      p.u[k] = axes.width_dir[k];
+      p.v[k] = axes.height_dir[k];
+    }
     p.half_w = 0.5 * b.width_m;
     p.half_h = 0.5 * b.height_m;
     p.shape = b.shape;
     p.colour = b.colour;
     placed_.push_back(p);
     if (b.stand) {
-      const double bottom = b.centre_z_m - 0.5 * b.height_m * std::fabs(ct);
+      const double bottom = b.centre_z_m - 0.5 * b.height_m * std::fabs(axes.height_dir[2]);
       if (bottom > 0.0) {
         cylinders_.push_back(
             PlacedCylinder{b.centre_x_m, b.centre_y_m, kStandRadius_m, bottom, kStandColour});

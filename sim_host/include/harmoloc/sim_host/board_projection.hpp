@@ -11,6 +11,18 @@
 
 namespace harmoloc::sim_host {
 
+/// A board's frame in the map: its centre, the normal of its coloured face and the directions of
+/// its width (horizontal) and height in the face's plane, as the renderer places it. Upright
+/// (tilt 0) the tilt's terms are products with 0, so the arithmetic equals that before tilted
+/// boards existed.
+struct BoardAxes {
+  double centre[3];
+  double normal[3];
+  double width_dir[3];
+  double height_dir[3];
+};
+BoardAxes board_axes(const BoardSpec& board);
+
 /// What the frame shows of one board.
 struct BoardImage {
   double area_px = 0.0;  ///< of the outline's image inside the frame; 0 when none
