@@ -60,9 +60,10 @@ using MaskCounts = std::array<std::uint32_t, 256>;
 using MaskColumns = std::array<std::uint64_t, 256>;
 
 void counts_from_masks(const MaskCounts& by_mask, const MaskColumns& columns_by_mask,
-                       std::size_t boards, AreaVector& areas) {
+                       const MaskColumns& rows_by_mask, std::size_t boards, AreaVector& areas) {
   areas.pixels.fill(0U);
   areas.column_sum.fill(0U);
+  areas.row_sum.fill(0U);
   areas.count = boards;
   for (std::size_t mask = 1; mask < 256; ++mask) {
     if (by_mask[mask] == 0) continue;
@@ -70,20 +71,23 @@ void counts_from_masks(const MaskCounts& by_mask, const MaskColumns& columns_by_
       if ((mask >> k) & 1U) {
         areas.pixels[k] += by_mask[mask];
         areas.column_sum[k] += columns_by_mask[mask];
+        areas.row_sum[k] += rows_by_mask[mask];
       }
     }
   }
 }
 
-[[maybe_unused]] void counts_from_totals(const detail::BoardTotals& totals,
-                                         const detail::BoardTotals& column_sums, std::size_t boards,
-                                         AreaVector& areas) {
+void counts_from_totals(const detail::BoardTotals& totals, const detail::BoardTotals& column_sums,
+                        const detail::BoardTotals& row_sums, std::size_t boards,
+                        AreaVector& areas) {
   areas.pixels.fill(0U);
   areas.column_sum.fill(0U);
+  areas.row_sum.fill(0U);
   areas.count = boards;
   for (std::size_t k = 0; k < boards; ++k) {
     areas.pixels[k] = static_cast<std::uint32_t>(totals[k]);
     areas.column_sum[k] = column_sums[k];
+    areas.row_sum[k] = row_sums[k];
   }
 }
 
@@ -94,6 +98,7 @@ void measure_sides(const detail::Image& im, std::size_t boards, ClassOf class_of
                    AreaVector& areas) {
   areas.side_pixels.fill(0U);
   areas.width_px = im.width_px;
+  areas.height_px = im.height_px;
   if (im.width_px == 0) return;
   const std::uint32_t last = im.width_px - 1U;
   for (std::uint32_t y = 0; y < im.height_px; ++y) {
@@ -224,15 +229,17 @@ void segment_rgb24_with(const std::uint8_t* data, std::uint32_t width_px, std::u
                         AreaVector& areas) {
   MaskCounts by_mask{};
   MaskColumns columns_by_mask{};
+  MaskColumns rows_by_mask{};
   for (std::uint32_t y = 0; y < height_px; ++y) {
     const std::uint8_t* p = data + static_cast<std::size_t>(y) * stride_bytes;
     for (std::uint32_t x = 0; x < width_px; ++x, p += 3) {
       const std::uint8_t m = classifier.classify(p[0], p[1], p[2]);
       ++by_mask[m];
       columns_by_mask[m] += x;
+      rows_by_mask[m] += y;
     }
   }
-  counts_from_masks(by_mask, columns_by_mask, classifier.board_count(), areas);
+  counts_from_masks(by_mask, columns_by_mask, rows_by_mask, classifier.board_count(), areas);
   measure_sides(
       detail::Image{data, width_px, height_px, stride_bytes}, classifier.board_count(),
       [&classifier](const std::uint8_t* row, std::uint32_t x) -> std::uint32_t {
@@ -248,6 +255,7 @@ void segment_yuyv_with(const std::uint8_t* data, std::uint32_t width_px, std::ui
                        AreaVector& areas) {
   MaskCounts by_mask{};
   MaskColumns columns_by_mask{};
+  MaskColumns rows_by_mask{};
   for (std::uint32_t y = 0; y < height_px; ++y) {
     const std::uint8_t* row = data + static_cast<std::size_t>(y) * stride_bytes;
     for (std::uint32_t x = 0; x < width_px; x += 2U) {
@@ -258,10 +266,11 @@ void segment_yuyv_with(const std::uint8_t* data, std::uint32_t width_px, std::ui
         const std::uint8_t m = classifier.classify(rgb.r, rgb.g, rgb.b);
         ++by_mask[m];
         columns_by_mask[m] += x + i;
+        rows_by_mask[m] += y;
       }
     }
   }
-  counts_from_masks(by_mask, columns_by_mask, classifier.board_count(), areas);
+  counts_from_masks(by_mask, columns_by_mask, rows_by_mask, classifier.board_count(), areas);
   measure_sides(
       detail::Image{data, width_px, height_px, stride_bytes}, classifier.board_count(),
       [&classifier](const std::uint8_t* row, std::uint32_t x) -> std::uint32_t {
@@ -276,46 +285,79 @@ void segment_yuyv_with(const std::uint8_t* data, std::uint32_t width_px, std::ui
 // then tally the chunk. Incrementing a counter chosen by the table load right away makes every
 // later table load wait on that store: on a frame of noise (a cache miss a pixel) that was 8
 // times slower (21 ms against 2.6 ms at 640x480 on the x86-64 host). Four histograms are used in
-// turn, so that runs of one class do not wait on each other's increments either; each has its
-// column sums beside it.
+// turn, so that runs of one class do not wait on each other's increments either. Beside each count
+// is the pixels' place, column + (row << 32): one add gives both sums, which are split into the
+// boards' column and row sums before either half can carry into the other.
 constexpr std::uint32_t kChunk = 256;
+constexpr std::uint64_t kHalf = 0xFFFFFFFFU;  // what a half of a place sum holds
 struct Histograms {
   std::array<MaskCounts, 4> counts;
-  std::array<MaskColumns, 4> columns;
+  std::array<MaskColumns, 4> places;
+  detail::BoardTotals column_sums;
+  detail::BoardTotals row_sums;
+  // Bounds on what any mask's halves hold since the last split.
+  std::uint64_t columns_bound;
+  std::uint64_t rows_bound;
 };
 
-void tally(const std::uint8_t* classes, std::uint32_t n, std::uint32_t x0, Histograms& h) {
+// Moves the place sums of the board masks into the boards' column and row sums.
+void split_places(Histograms& h, std::size_t boards) {
+  for (std::size_t m = 1; m < 256; ++m) {
+    const std::uint64_t p = h.places[0][m] + h.places[1][m] + h.places[2][m] + h.places[3][m];
+    h.places[0][m] = h.places[1][m] = h.places[2][m] = h.places[3][m] = 0;
+    if (p == 0) continue;
+    for (std::size_t k = 0; k < boards; ++k) {
+      if ((m >> k) & 1U) {
+        h.column_sums[k] += p & kHalf;
+        h.row_sums[k] += p >> 32U;
+      }
+    }
+  }
+  h.columns_bound = h.rows_bound = 0;
+}
+
+// Tallies @p n class bytes of row @p y from column @p x0; splits the place sums first if this
+// chunk could carry a half over (frames wider or taller than a few thousand pixels).
+void tally(const std::uint8_t* classes, std::uint32_t n, std::uint32_t x0, std::uint32_t y,
+           std::size_t boards, Histograms& h) {
+  const std::uint64_t columns = std::uint64_t{n} * (x0 + n - 1U);
+  const std::uint64_t rows = std::uint64_t{n} * y;
+  if (h.columns_bound + columns > kHalf || h.rows_bound + rows > kHalf) split_places(h, boards);
+  h.columns_bound += columns;
+  h.rows_bound += rows;
   const std::uint8_t* c = classes;
   const std::uint8_t* const end4 = classes + (n & ~3U);
-  std::uint64_t x = x0;
-  for (; c != end4; c += 4, x += 4) {
+  std::uint64_t place = x0 + (std::uint64_t{y} << 32U);
+  for (; c != end4; c += 4, place += 4) {
     ++h.counts[0][c[0]];
     ++h.counts[1][c[1]];
     ++h.counts[2][c[2]];
     ++h.counts[3][c[3]];
-    h.columns[0][c[0]] += x;
-    h.columns[1][c[1]] += x + 1U;
-    h.columns[2][c[2]] += x + 2U;
-    h.columns[3][c[3]] += x + 3U;
+    h.places[0][c[0]] += place;
+    h.places[1][c[1]] += place + 1U;
+    h.places[2][c[2]] += place + 2U;
+    h.places[3][c[3]] += place + 3U;
   }
-  for (; c != classes + n; ++c, ++x) {
+  for (; c != classes + n; ++c, ++place) {
     ++h.counts[0][*c];
-    h.columns[0][*c] += x;
+    h.places[0][*c] += place;
   }
 }
 
-void merge_histograms(const Histograms& h, std::size_t boards, AreaVector& areas) {
-  MaskCounts by_mask{};
-  MaskColumns columns_by_mask{};
-  for (std::size_t m = 0; m < 256; ++m) {
-    by_mask[m] = h.counts[0][m] + h.counts[1][m] + h.counts[2][m] + h.counts[3][m];
-    columns_by_mask[m] = h.columns[0][m] + h.columns[1][m] + h.columns[2][m] + h.columns[3][m];
+void merge_histograms(Histograms& h, std::size_t boards, AreaVector& areas) {
+  split_places(h, boards);
+  detail::BoardTotals totals{};
+  for (std::size_t m = 1; m < 256; ++m) {
+    const std::uint64_t n =
+        std::uint64_t{h.counts[0][m]} + h.counts[1][m] + h.counts[2][m] + h.counts[3][m];
+    for (std::size_t k = 0; k < boards; ++k) totals[k] += ((m >> k) & 1U) * n;
   }
-  counts_from_masks(by_mask, columns_by_mask, boards, areas);
+  counts_from_totals(totals, h.column_sums, h.row_sums, boards, areas);
 }
 
 template <bool kYuyv>
-void segment_scalar(const detail::Image& im, const std::uint8_t* table, Histograms& h) {
+void segment_scalar(const detail::Image& im, const std::uint8_t* table, std::size_t boards,
+                    Histograms& h) {
   std::uint8_t classes[kChunk];
   for (std::uint32_t y = 0; y < im.height_px; ++y) {
     const std::uint8_t* row = im.row(y);
@@ -325,7 +367,7 @@ void segment_scalar(const detail::Image& im, const std::uint8_t* table, Histogra
         detail::classify_yuyv_row(row, x, n, table, classes);
       else
         detail::classify_rgb24_row(row, im.width_px, x, n, table, classes);
-      tally(classes, n, x, h);
+      tally(classes, n, x, y, boards, h);
     }
   }
 }
@@ -350,11 +392,12 @@ void segment_by_path(Format format, const detail::Image& im, const MaskTable& ta
     case SegmentPath::kAvx2: {
       detail::BoardTotals totals{};
       detail::BoardTotals column_sums{};
+      detail::BoardTotals row_sums{};
       if (format == Format::kRgb24)
-        detail::count_rgb24_avx2(im, entries, boards, totals, column_sums);
+        detail::count_rgb24_avx2(im, entries, boards, totals, column_sums, row_sums);
       else
-        detail::count_yuyv_avx2(im, entries, boards, totals, column_sums);
-      counts_from_totals(totals, column_sums, boards, areas);
+        detail::count_yuyv_avx2(im, entries, boards, totals, column_sums, row_sums);
+      counts_from_totals(totals, column_sums, row_sums, boards, areas);
       return;
     }
 #endif
@@ -362,20 +405,21 @@ void segment_by_path(Format format, const detail::Image& im, const MaskTable& ta
     case SegmentPath::kNeon: {
       detail::BoardTotals totals{};
       detail::BoardTotals column_sums{};
+      detail::BoardTotals row_sums{};
       if (format == Format::kRgb24)
-        detail::count_rgb24_neon(im, entries, boards, totals, column_sums);
+        detail::count_rgb24_neon(im, entries, boards, totals, column_sums, row_sums);
       else
-        detail::count_yuyv_neon(im, entries, boards, totals, column_sums);
-      counts_from_totals(totals, column_sums, boards, areas);
+        detail::count_yuyv_neon(im, entries, boards, totals, column_sums, row_sums);
+      counts_from_totals(totals, column_sums, row_sums, boards, areas);
       return;
     }
 #endif
     default: {
       Histograms h{};
       if (format == Format::kRgb24)
-        segment_scalar<false>(im, entries, h);
+        segment_scalar<false>(im, entries, boards, h);
       else
-        segment_scalar<true>(im, entries, h);
+        segment_scalar<true>(im, entries, boards, h);
       merge_histograms(h, boards, areas);
       return;
     }
@@ -389,7 +433,9 @@ void segment_with_table(Format format, const detail::Image& im, const MaskTable&
     areas.pixels.fill(0U);
     areas.column_sum.fill(0U);
     areas.side_pixels.fill(0U);
+    areas.row_sum.fill(0U);
     areas.width_px = table.ready() ? im.width_px : 0U;
+    areas.height_px = table.ready() ? im.height_px : 0U;
     areas.count = table.ready() ? boards : 0;
     return;
   }

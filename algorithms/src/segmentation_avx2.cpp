@@ -2,8 +2,8 @@
 // build stays baseline x86-64). Per 32 pixels: the table indices built with two shuffles per 8
 // pixels, four vpgatherdd (8 table loads each), three blends into 32 class bytes, and the class
 // bits counted in 4-bit counters. A block with any board pixel also adds each board's columns,
-// from a movemask and five POPCNTs a board. Areas and columns are identical to the scalar path
-// (tested).
+// from a movemask and five POPCNTs a board, and their rows from the same count. Areas, columns and
+// rows are identical to the scalar path (tested).
 #include "segmentation_kernels.hpp"
 
 #if HARMOLOC_SEGMENT_AVX2
@@ -91,14 +91,16 @@ HARMOLOC_AVX2_INLINE __m256i gather_classes(const std::uint8_t* table, __m256i i
 // (gather g, dword j) in byte 4j + g; a row's tail, classified one by one, is in pixel order.
 enum class ByteOrder { kGathered, kPixels };
 
-// Adds the columns of each board's pixels among the 32 class bytes of the block at column @p x0.
+// Adds the columns of each board's pixels among the 32 class bytes of the block at column @p x0,
+// and their row @p y once per pixel.
 // Most blocks of a frame hold no board at all and cost one test. Bit k of every byte, shifted to
 // bit 7 (16-bit shifts: the bits pulled in from below come from the same byte), is movemasked
 // into a 32-bit set of bytes; the sum of their pixels' places in the block is taken bit by bit of
 // the byte number, one POPCNT for each of its five bits, weighted by what that bit is worth.
 template <int kBoards, ByteOrder kOrder>
-HARMOLOC_AVX2_INLINE void add_columns(__m256i classes, std::uint32_t x0,
-                                      std::uint64_t (&column_sums)[8]) {
+HARMOLOC_AVX2_INLINE void add_places(__m256i classes, std::uint32_t x0, std::uint32_t y,
+                                     std::uint64_t (&column_sums)[8],
+                                     std::uint64_t (&row_sums)[8]) {
   if (_mm256_testz_si256(classes, classes)) return;
   // log2 of the place worth of byte-number bits 0..4: 1, 2, 4, 8, 16 in pixel order; in gathered
   // order bits 0-1 (g) are worth 8 and 16 and bits 2-4 (j) 1, 2 and 4.
@@ -127,7 +129,9 @@ HARMOLOC_AVX2_INLINE void add_columns(__m256i classes, std::uint32_t x0,
         (count(0xAAAAAAAAU) << kShift[0]) + (count(0xCCCCCCCCU) << kShift[1]) +
         (count(0xF0F0F0F0U) << kShift[2]) + (count(0xFF00FF00U) << kShift[3]) +
         (count(0xFFFF0000U) << kShift[4]);
-    column_sums[k] += static_cast<std::uint64_t>(x0) * count(0xFFFFFFFFU) + places;
+    const std::uint64_t pixels = count(0xFFFFFFFFU);
+    column_sums[k] += x0 * pixels + places;
+    row_sums[k] += y * pixels;
   }
 }
 
@@ -189,7 +193,7 @@ struct YuyvLayout {
 
 template <typename Layout, int kBoards>
 HARMOLOC_AVX2 void count_frame(const Image& im, const std::uint8_t* table, BoardTotals& totals,
-                               BoardTotals& column_sums) {
+                               BoardTotals& column_sums, BoardTotals& row_sums) {
   const Layout layout = Layout::make();
   const __m256i odd_bytes = _mm256_set1_epi16(static_cast<short>(0xFF00));
   const __m256i bits = _mm256_set1_epi8(0x11);
@@ -211,7 +215,7 @@ HARMOLOC_AVX2 void count_frame(const Image& im, const std::uint8_t* table, Board
       for (std::uint32_t bx = x; block != end; block += Layout::kBytesPerBlock, bx += kBlock) {
         const __m256i classes = layout.classes(block, table, odd_bytes);
         add(c, classes, bits);
-        add_columns<kBoards, ByteOrder::kGathered>(classes, bx, column_sums);
+        add_places<kBoards, ByteOrder::kGathered>(classes, bx, y, column_sums, row_sums);
       }
       x += n * kBlock;
       pending += n;
@@ -226,7 +230,7 @@ HARMOLOC_AVX2 void count_frame(const Image& im, const std::uint8_t* table, Board
       Layout::tail(row, im.width_px, x, im.width_px - x, table, rest);
       const __m256i classes = load256(rest);
       add(c, classes, bits);
-      add_columns<kBoards, ByteOrder::kPixels>(classes, x, column_sums);
+      add_places<kBoards, ByteOrder::kPixels>(classes, x, y, column_sums, row_sums);
       if (++pending == kBlocksPerFlush) {
         flush(c, sums);
         pending = 0;
@@ -243,37 +247,37 @@ HARMOLOC_AVX2 void count_frame(const Image& im, const std::uint8_t* table, Board
 
 template <typename Layout>
 void count_boards(const Image& im, const std::uint8_t* table, std::size_t boards,
-                  BoardTotals& totals, BoardTotals& column_sums) {
+                  BoardTotals& totals, BoardTotals& column_sums, BoardTotals& row_sums) {
   switch (boards) {
     case 1:
-      return count_frame<Layout, 1>(im, table, totals, column_sums);
+      return count_frame<Layout, 1>(im, table, totals, column_sums, row_sums);
     case 2:
-      return count_frame<Layout, 2>(im, table, totals, column_sums);
+      return count_frame<Layout, 2>(im, table, totals, column_sums, row_sums);
     case 3:
-      return count_frame<Layout, 3>(im, table, totals, column_sums);
+      return count_frame<Layout, 3>(im, table, totals, column_sums, row_sums);
     case 4:
-      return count_frame<Layout, 4>(im, table, totals, column_sums);
+      return count_frame<Layout, 4>(im, table, totals, column_sums, row_sums);
     case 5:
-      return count_frame<Layout, 5>(im, table, totals, column_sums);
+      return count_frame<Layout, 5>(im, table, totals, column_sums, row_sums);
     case 6:
-      return count_frame<Layout, 6>(im, table, totals, column_sums);
+      return count_frame<Layout, 6>(im, table, totals, column_sums, row_sums);
     case 7:
-      return count_frame<Layout, 7>(im, table, totals, column_sums);
+      return count_frame<Layout, 7>(im, table, totals, column_sums, row_sums);
     default:
-      return count_frame<Layout, 8>(im, table, totals, column_sums);
+      return count_frame<Layout, 8>(im, table, totals, column_sums, row_sums);
   }
 }
 
 }  // namespace
 
 void count_rgb24_avx2(const Image& image, const std::uint8_t* table, std::size_t boards,
-                      BoardTotals& totals, BoardTotals& column_sums) {
-  count_boards<Rgb24Layout>(image, table, boards, totals, column_sums);
+                      BoardTotals& totals, BoardTotals& column_sums, BoardTotals& row_sums) {
+  count_boards<Rgb24Layout>(image, table, boards, totals, column_sums, row_sums);
 }
 
 void count_yuyv_avx2(const Image& image, const std::uint8_t* table, std::size_t boards,
-                     BoardTotals& totals, BoardTotals& column_sums) {
-  count_boards<YuyvLayout>(image, table, boards, totals, column_sums);
+                     BoardTotals& totals, BoardTotals& column_sums, BoardTotals& row_sums) {
+  count_boards<YuyvLayout>(image, table, boards, totals, column_sums, row_sums);
 }
 
 }  // namespace harmoloc::algorithms::detail

@@ -25,8 +25,8 @@ struct Image {
   }
 };
 
-/// Pixels (or their columns) summed per board; 64-bit while counting, so no frame size overflows a
-/// partial sum.
+/// Pixels (or their columns or rows) summed per board; 64-bit while counting, so no frame size
+/// overflows a partial sum.
 using BoardTotals = std::uint64_t[8];
 
 /// 4 bytes at @p p as a little-endian number (one unaligned load where the target allows it).
@@ -109,18 +109,18 @@ inline void classify_yuyv_row(const std::uint8_t* row, std::uint32_t x0, std::ui
 #if HARMOLOC_SEGMENT_AVX2
 /// AVX2 and POPCNT (every AVX2 CPU has both; the column sums use POPCNT).
 bool cpu_has_avx2();
-/// Adds each board's pixels of the whole frame to @p totals and the sum of their columns to
-/// @p column_sums (boards 1..8).
+/// Adds each board's pixels of the whole frame to @p totals, the sum of their columns to
+/// @p column_sums and of their rows to @p row_sums (boards 1..8).
 void count_rgb24_avx2(const Image& image, const std::uint8_t* table, std::size_t boards,
-                      BoardTotals& totals, BoardTotals& column_sums);
+                      BoardTotals& totals, BoardTotals& column_sums, BoardTotals& row_sums);
 void count_yuyv_avx2(const Image& image, const std::uint8_t* table, std::size_t boards,
-                     BoardTotals& totals, BoardTotals& column_sums);
+                     BoardTotals& totals, BoardTotals& column_sums, BoardTotals& row_sums);
 #endif
 #if HARMOLOC_SEGMENT_NEON
 void count_rgb24_neon(const Image& image, const std::uint8_t* table, std::size_t boards,
-                      BoardTotals& totals, BoardTotals& column_sums);
+                      BoardTotals& totals, BoardTotals& column_sums, BoardTotals& row_sums);
 void count_yuyv_neon(const Image& image, const std::uint8_t* table, std::size_t boards,
-                     BoardTotals& totals, BoardTotals& column_sums);
+                     BoardTotals& totals, BoardTotals& column_sums, BoardTotals& row_sums);
 #endif
 
 }  // namespace harmoloc::algorithms::detail

@@ -3,8 +3,8 @@
 // at a time (one bit test and one subtract per board), which replaces the scalar path's
 // load-add-store of a histogram counter per pixel. The columns are summed beside the counts: the
 // same bit test, masked with the byte's place in the 256-pixel chunk (which fits a byte), is
-// added pairwise into 16-bit lanes. Areas and columns are identical to the scalar path (tested
-// under qemu-aarch64 and qemu-arm).
+// added pairwise into 16-bit lanes; the rows are the chunk's pixels times its row. Areas, columns
+// and rows are identical to the scalar path (tested under qemu-aarch64 and qemu-arm).
 #include "segmentation_kernels.hpp"
 
 #if HARMOLOC_SEGMENT_NEON
@@ -63,7 +63,7 @@ struct YuyvRows {
 
 template <typename Rows, int kBoards>
 void count_frame(const Image& im, const std::uint8_t* table, BoardTotals& totals,
-                 BoardTotals& column_sums) {
+                 BoardTotals& column_sums, BoardTotals& row_sums) {
   static_assert(kChunk <= 256, "a pixel's place in the chunk must fit a byte");
   alignas(16) static constexpr std::uint8_t kPlaces[kLanes] = {0, 1, 2,  3,  4,  5,  6,  7,
                                                                8, 9, 10, 11, 12, 13, 14, 15};
@@ -115,6 +115,7 @@ void count_frame(const Image& im, const std::uint8_t* table, BoardTotals& totals
       for (int k = 0; k < kBoards; ++k) {
         const std::uint64_t pixels = sum_lanes(vsubq_u8(count[k], before[k]));
         column_sums[k] += pixels * x + sum_lanes(places[k]);
+        row_sums[k] += pixels * y;
       }
       pending += vectors;
       x += n;
@@ -125,37 +126,37 @@ void count_frame(const Image& im, const std::uint8_t* table, BoardTotals& totals
 
 template <typename Rows>
 void count_boards(const Image& im, const std::uint8_t* table, std::size_t boards,
-                  BoardTotals& totals, BoardTotals& column_sums) {
+                  BoardTotals& totals, BoardTotals& column_sums, BoardTotals& row_sums) {
   switch (boards) {
     case 1:
-      return count_frame<Rows, 1>(im, table, totals, column_sums);
+      return count_frame<Rows, 1>(im, table, totals, column_sums, row_sums);
     case 2:
-      return count_frame<Rows, 2>(im, table, totals, column_sums);
+      return count_frame<Rows, 2>(im, table, totals, column_sums, row_sums);
     case 3:
-      return count_frame<Rows, 3>(im, table, totals, column_sums);
+      return count_frame<Rows, 3>(im, table, totals, column_sums, row_sums);
     case 4:
-      return count_frame<Rows, 4>(im, table, totals, column_sums);
+      return count_frame<Rows, 4>(im, table, totals, column_sums, row_sums);
     case 5:
-      return count_frame<Rows, 5>(im, table, totals, column_sums);
+      return count_frame<Rows, 5>(im, table, totals, column_sums, row_sums);
     case 6:
-      return count_frame<Rows, 6>(im, table, totals, column_sums);
+      return count_frame<Rows, 6>(im, table, totals, column_sums, row_sums);
     case 7:
-      return count_frame<Rows, 7>(im, table, totals, column_sums);
+      return count_frame<Rows, 7>(im, table, totals, column_sums, row_sums);
     default:
-      return count_frame<Rows, 8>(im, table, totals, column_sums);
+      return count_frame<Rows, 8>(im, table, totals, column_sums, row_sums);
   }
 }
 
 }  // namespace
 
 void count_rgb24_neon(const Image& image, const std::uint8_t* table, std::size_t boards,
-                      BoardTotals& totals, BoardTotals& column_sums) {
-  count_boards<Rgb24Rows>(image, table, boards, totals, column_sums);
+                      BoardTotals& totals, BoardTotals& column_sums, BoardTotals& row_sums) {
+  count_boards<Rgb24Rows>(image, table, boards, totals, column_sums, row_sums);
 }
 
 void count_yuyv_neon(const Image& image, const std::uint8_t* table, std::size_t boards,
-                     BoardTotals& totals, BoardTotals& column_sums) {
-  count_boards<YuyvRows>(image, table, boards, totals, column_sums);
+                     BoardTotals& totals, BoardTotals& column_sums, BoardTotals& row_sums) {
+  count_boards<YuyvRows>(image, table, boards, totals, column_sums, row_sums);
 }
 
 }  // namespace harmoloc::algorithms::detail

@@ -407,25 +407,33 @@ void test_segmentation() {
   ha::segment_rgb24(g_image.data(), 160, 120, 160 * 3, six, again);
   BM_CHECK(again.pixels == rgb_areas.pixels);
   BM_CHECK(again.column_sum == rgb_areas.column_sum);
+  BM_CHECK(again.row_sum == rgb_areas.row_sum);
   BM_CHECK(rgb_areas.width_px == 160U && yuyv_areas.width_px == 160U);
+  BM_CHECK(rgb_areas.height_px == 120U && yuyv_areas.height_px == 120U);
   std::uint32_t total = 0;
   for (std::size_t k = 0; k < 6; ++k) total += rgb_areas.pixels[k];
   BM_CHECK(total > 0U);
   const char* rgb_names[] = {"rgb_0", "rgb_1", "rgb_2", "rgb_3", "rgb_4", "rgb_5"};
   const char* yuyv_names[] = {"yuyv_0", "yuyv_1", "yuyv_2", "yuyv_3", "yuyv_4", "yuyv_5"};
-  // Each board's column sum and side pixels, as bit-exact as the areas.
+  // Each board's column sum, side pixels and row sum, as bit-exact as the areas.
   const char* column_names[] = {"rgb_columns_0", "rgb_columns_1", "rgb_columns_2",
                                 "rgb_columns_3", "rgb_columns_4", "rgb_columns_5"};
   const char* yuyv_column_names[] = {"yuyv_columns_0", "yuyv_columns_1", "yuyv_columns_2",
                                      "yuyv_columns_3", "yuyv_columns_4", "yuyv_columns_5"};
   const char* side_names[] = {"rgb_sides_0", "rgb_sides_1", "rgb_sides_2",
                               "rgb_sides_3", "rgb_sides_4", "rgb_sides_5"};
+  const char* row_names[] = {"rgb_rows_0", "rgb_rows_1", "rgb_rows_2",
+                             "rgb_rows_3", "rgb_rows_4", "rgb_rows_5"};
+  const char* yuyv_row_names[] = {"yuyv_rows_0", "yuyv_rows_1", "yuyv_rows_2",
+                                  "yuyv_rows_3", "yuyv_rows_4", "yuyv_rows_5"};
   for (std::size_t k = 0; k < 6; ++k) {
     bm::value_u(rgb_names[k], rgb_areas.pixels[k]);
     bm::value_u(yuyv_names[k], yuyv_areas.pixels[k]);
     bm::value_u(column_names[k], rgb_areas.column_sum[k]);
     bm::value_u(yuyv_column_names[k], yuyv_areas.column_sum[k]);
     bm::value_u(side_names[k], rgb_areas.side_pixels[k]);
+    bm::value_u(row_names[k], rgb_areas.row_sum[k]);
+    bm::value_u(yuyv_row_names[k], yuyv_areas.row_sum[k]);
   }
   bm::info_u("sizeof_BoardClassifier", sizeof(ha::BoardClassifier));
 }

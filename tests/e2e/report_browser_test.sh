@@ -21,9 +21,10 @@ mkdir -p "$run"
 "$BIN/harmoloc" --dataset "$WORK/test" --map "$WORK/tiny.hmap" --trajectory "$run/trajectory.tum" \
   --fixes "$out/fixes.tum" --link "$out/link.bin" --stats "$run/stats.json" \
   --record-areas "$out/areas.csv" --quiet
-head -3 "$out/areas.csv" | tail -1 | grep -q ',distrusted_mask,column_sum_[^,]*,.*,side_px_[^,]*$' ||
-  fail "the area log has no distrusted_mask and column columns: $(head -3 "$out/areas.csv" | tail -1)"
-# The firmware measures every frame's columns: no '-' (not measured) in any frame's line.
+head -3 "$out/areas.csv" | tail -1 |
+  grep -q ',distrusted_mask,column_sum_[^,]*,.*,side_px_[^,]*,.*,row_sum_[^,]*$' ||
+  fail "the area log has no distrusted_mask, column and row columns: $(head -3 "$out/areas.csv" | tail -1)"
+# The firmware measures every frame's columns and rows: no '-' (not measured) in any frame's line.
 ! tail -n +4 "$out/areas.csv" | grep -q ',-' ||
   fail "the firmware's area log has frames without columns: $(tail -n +4 "$out/areas.csv" | grep -m1 ',-')"
 "$BIN/harmoloc-report" --truth "$WORK/test/groundtruth.tum" --estimate "$run/trajectory.tum" \

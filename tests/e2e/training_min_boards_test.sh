@@ -8,13 +8,14 @@ source "$(dirname "$0")/lib.sh" "$@"
 out="$WORK/min_boards"
 rm -rf "$out"; mkdir -p "$out"
 "$BIN/harmoloc" --dataset "$WORK/train" --record-areas "$out/areas.csv" --quiet > /dev/null
-# Noise areas between 50 and 500 px (fixed seed), each frame's column sum kept at the board's
-# centroid and no side pixels, as the area log requires.
+# Noise areas between 50 and 500 px (fixed seed), each frame's column and row sums kept at the
+# board's centroid and no side pixels, as the area log requires.
 python3 - "$out/areas.csv" "$out/noisy.csv" <<'PY'
 import random, sys
 rng = random.Random(1)
 lines = open(sys.argv[1]).read().splitlines()
 width = int(lines[1].split("width_px=")[1].split()[0])
+height = int(lines[1].split("height_px=")[1].split()[0])
 header = lines[2].split(",")
 noisy = header[1:header.index("distrusted_mask")][2:]
 with open(sys.argv[2], "w") as out:
@@ -23,10 +24,14 @@ with open(sys.argv[2], "w") as out:
         f = line.split(",")
         for name in noisy:
             a, c = header.index(name), header.index("column_sum_" + name)
-            centroid = int(f[c]) / int(f[a]) if int(f[a]) else width / 2
+            old = f[a]
+            centroid = int(f[c]) / int(old) if int(old) else width / 2
             area = rng.randint(50, 500)
             f[a], f[c] = str(area), str(round(area * centroid))
             f[header.index("side_px_" + name)] = "0"
+            r = header.index("row_sum_" + name)
+            row = int(f[r]) / int(old) if int(old) else height / 2
+            f[r] = str(round(area * row))
         out.write(",".join(f) + "\n")
 PY
 train() {

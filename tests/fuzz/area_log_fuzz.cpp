@@ -42,15 +42,22 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       HARMOLOC_FUZZ_CHECK(log.distrusted_mask[i] < (1U << a.count), "mask of a board not there");
     HARMOLOC_FUZZ_CHECK(!a.columns_measured() || (log.has_columns && a.width_px == w),
                         "columns measured in another width");
+    HARMOLOC_FUZZ_CHECK(
+        !a.rows_measured() || (log.has_rows && a.columns_measured() && a.height_px == h),
+        "rows measured in another height or without columns");
     for (std::size_t k = 0; k < algorithms::kMaxBoards; ++k) {
       HARMOLOC_FUZZ_CHECK(a.pixels[k] <= w * h, "area past the frame");
       HARMOLOC_FUZZ_CHECK(a.column_sum[k] <= std::uint64_t{a.pixels[k]} * (w - 1U),
                           "column sum past the width");
       HARMOLOC_FUZZ_CHECK(a.side_pixels[k] <= a.pixels[k] && a.side_pixels[k] <= 2U * h,
                           "side pixels past the board or the sides");
+      HARMOLOC_FUZZ_CHECK(a.row_sum[k] <= std::uint64_t{a.pixels[k]} * (h - 1U),
+                          "row sum past the height");
       if (!a.columns_measured())
         HARMOLOC_FUZZ_CHECK(a.column_sum[k] == 0 && a.side_pixels[k] == 0,
                             "columns of a frame not measured");
+      if (!a.rows_measured())
+        HARMOLOC_FUZZ_CHECK(a.row_sum[k] == 0, "rows of a frame not measured");
     }
   }
   return 0;

@@ -78,8 +78,12 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     HARMOLOC_FUZZ_CHECK(areas.side_pixels[k] <= areas.pixels[k] &&
                             areas.side_pixels[k] <= 2U * std::uint64_t{height},
                         "more side pixels than board pixels or sides");
+    const std::uint64_t last_row = height == 0 ? 0 : height - 1U;
+    HARMOLOC_FUZZ_CHECK(areas.row_sum[k] <= std::uint64_t{areas.pixels[k]} * last_row,
+                        "row sum past the frame's height");
   }
   HARMOLOC_FUZZ_CHECK(areas.width_px == width, "columns counted in the wrong width");
+  HARMOLOC_FUZZ_CHECK(areas.height_px == height, "rows counted in the wrong height");
 
   // The convenience overload (thresholds compiled on the stack) must agree.
   AreaVector again;
@@ -89,7 +93,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     segment_rgb24(frame, width, height, stride, set, again);
   HARMOLOC_FUZZ_CHECK(again.count == areas.count && again.pixels == areas.pixels &&
                           again.column_sum == areas.column_sum &&
-                          again.side_pixels == areas.side_pixels,
+                          again.side_pixels == areas.side_pixels && again.row_sum == areas.row_sum,
                       "overloads disagree");
   return 0;
 }

@@ -132,6 +132,57 @@ TEST(AreaLog, ColumnSumsRoundTripAndOlderLogsReadUnmeasured) {
   EXPECT_FALSE(old.areas[0].columns_measured());
 }
 
+// The row sums after the side pixels: read back exactly; a frame with columns but no rows writes
+// '-' in the row fields and reads back with its columns only; a log from before the rows reads
+// with columns and no rows.
+TEST(AreaLog, RowSumsRoundTripAndLogsWithoutThemReadWithColumnsOnly) {
+  ht::TempDir dir;
+  std::vector<ha::AreaVector> frames(3);
+  for (std::size_t i = 0; i < 3; ++i) {
+    ha::AreaVector& a = frames[i];
+    a.count = 6;
+    for (std::size_t k = 0; k < 6; ++k) {
+      a.pixels[k] = static_cast<std::uint32_t>(1000 + 10 * i + k);
+      a.column_sum[k] = std::uint64_t{a.pixels[k]} * (40U + 37U * k);
+      a.row_sum[k] = std::uint64_t{a.pixels[k]} * (20U + 31U * k) + i;
+    }
+    a.width_px = 320;
+    a.height_px = 240;
+  }
+  frames[1].height_px = 0;                 // columns measured, rows not
+  frames[2].row_sum[5] = 76800ULL * 239U;  // the largest sum a full frame can have
+  frames[2].pixels[5] = 76800U;
+  frames[2].column_sum[5] = 0;
+  const hd::AreaLog log = hd::read_area_log(write_log(dir, frames));
+  EXPECT_TRUE(log.has_columns);
+  EXPECT_TRUE(log.has_rows);
+  ASSERT_EQ(log.areas.size(), 3U);
+  for (std::size_t i : {0U, 2U}) {
+    EXPECT_EQ(log.areas[i].height_px, 240U) << i;
+    EXPECT_TRUE(log.areas[i].rows_measured()) << i;
+    EXPECT_EQ(log.areas[i].row_sum, frames[i].row_sum) << i;
+    EXPECT_EQ(log.areas[i].column_sum, frames[i].column_sum) << i;
+  }
+  EXPECT_TRUE(log.areas[1].columns_measured());
+  EXPECT_FALSE(log.areas[1].rows_measured());
+  EXPECT_EQ(log.areas[1].column_sum, frames[1].column_sum);
+  EXPECT_EQ(log.areas[1].row_sum, (std::array<std::uint64_t, ha::kMaxBoards>{}));
+  EXPECT_DOUBLE_EQ(log.areas[0].centroid_row_px(1), 51.0);
+
+  const std::string before = dir.path("before.csv");
+  ht::write_text(before,
+                 "# harmoloc area log v1: pixels of each board per frame\n"
+                 "# width_px=320 height_px=240 thresholds_crc32=0x0000abcd\n"
+                 "timestamp_ns,red,green,distrusted_mask,column_sum_red,column_sum_green,"
+                 "side_px_red,side_px_green\n100,1,2,0,5,7,0,0\n");
+  const hd::AreaLog old = hd::read_area_log(before);
+  EXPECT_TRUE(old.has_columns);
+  EXPECT_FALSE(old.has_rows);
+  EXPECT_TRUE(old.areas[0].columns_measured());
+  EXPECT_FALSE(old.areas[0].rows_measured());
+  EXPECT_EQ(old.areas[0].column_sum[1], 7U);
+}
+
 TEST(AreaLog, FingerprintFollowsEveryThresholdField) {
   const ha::ThresholdSet base = ht::board_windows();
   const std::uint32_t f = hd::thresholds_fingerprint(base);
@@ -171,6 +222,8 @@ TEST(AreaLog, BadFilesFailWithOneLine) {
   const std::string with_columns =
       head.substr(0, head.size() - 1) +
       ",distrusted_mask,column_sum_red,column_sum_green,side_px_red,side_px_green\n";
+  const std::string with_rows =
+      with_columns.substr(0, with_columns.size() - 1) + ",row_sum_red,row_sum_green\n";
   const std::vector<std::pair<std::string, std::string>> cases = {
       {"", "not an area log"},
       {"timestamp_ns,red\n1,2\n", "not an area log"},
@@ -209,6 +262,14 @@ TEST(AreaLog, BadFilesFailWithOneLine) {
       {with_columns + "100,1,2,0,0,0,0\n", "side_px_green"},
       {with_columns + "100,1,2,0,0,0,0,0,0\n", "more columns"},
       {with_columns + "100,1,2,0,-,-,-,-,-\n", "more columns"},
+      {with_columns.substr(0, with_columns.size() - 1) + ",row_sum_green,row_sum_red\n",
+       "after distrusted_mask"},
+      {with_rows + "100,1,2,0,0,0,0,0,240,0\n", "row_sum_red"},    // 1 pixel: row 239 at most
+      {with_rows + "100,1,2,0,0,0,0,0,0,479\n", "row_sum_green"},  // 2 pixels: 478 at most
+      {with_rows + "100,1,2,0,0,0,0,0,-,0\n", "row_sum_red"},      // '-' is all or none
+      {with_rows + "100,1,2,0,-,-,-,-,0,0\n", "row sums given"},   // rows without columns
+      {with_rows + "100,1,2,0,0,0,0,0,0\n", "row_sum_green"},
+      {with_rows + "100,1,2,0,0,0,0,0,0,0,0\n", "more columns"},
   };
   for (const auto& [text, what] : cases) {
     ht::write_text(p, text);

@@ -458,9 +458,20 @@ TEST(SegmentRgb24, CountsRectanglesOfKnownSizeAndIgnoresRowPadding) {
   EXPECT_EQ(areas.side_pixels[1], 0U);
   EXPECT_EQ(areas.side_pixels[2], 2U);
   EXPECT_EQ(areas.side_pixels[3], 60U);
+  // Rows: red 10 pixels in each of rows 4..8, 2 in rows 0 and 1, 3 in row 7; green 7 in each of
+  // rows 10..12; blue rows 0 and 29; everything 40 in each of rows 0..29.
+  EXPECT_EQ(areas.height_px, 30U);
+  EXPECT_TRUE(areas.rows_measured());
+  EXPECT_EQ(areas.row_sum[0], 10U * 30U + 2U * 1U + 3U * 7U);
+  EXPECT_EQ(areas.row_sum[1], 7U * 33U);
+  EXPECT_EQ(areas.row_sum[2], 29U);
+  EXPECT_EQ(areas.row_sum[3], 40U * 435U);
+  EXPECT_DOUBLE_EQ(areas.centroid_row_px(3), 14.5);  // (height - 1) / 2
+  EXPECT_DOUBLE_EQ(areas.centroid_row_px(1), 11.0);
   for (std::size_t k = 4; k < ha::kMaxBoards; ++k) {
     EXPECT_EQ(areas.column_sum[k], 0U) << k;
     EXPECT_EQ(areas.side_pixels[k], 0U) << k;
+    EXPECT_EQ(areas.row_sum[k], 0U) << k;
   }
 
   // The classifier compiled once gives the same areas as the convenience overload.
@@ -469,12 +480,15 @@ TEST(SegmentRgb24, CountsRectanglesOfKnownSizeAndIgnoresRowPadding) {
   again.pixels.fill(777U);
   again.column_sum.fill(777U);
   again.side_pixels.fill(777U);
+  again.row_sum.fill(777U);
   ha::segment_rgb24(img.data(), img.width(), img.height(), img.stride(), classifier, again);
   EXPECT_EQ(again.count, areas.count);
   EXPECT_EQ(again.pixels, areas.pixels);
   EXPECT_EQ(again.column_sum, areas.column_sum);
   EXPECT_EQ(again.side_pixels, areas.side_pixels);
+  EXPECT_EQ(again.row_sum, areas.row_sum);
   EXPECT_EQ(again.width_px, areas.width_px);
+  EXPECT_EQ(again.height_px, areas.height_px);
 }
 
 TEST(SegmentRgb24, OneColumnFrameCountsItsPixelsOnceAsSidePixels) {
@@ -485,6 +499,8 @@ TEST(SegmentRgb24, OneColumnFrameCountsItsPixelsOnceAsSidePixels) {
   EXPECT_EQ(areas.column_sum[0], 0U);
   EXPECT_EQ(areas.side_pixels[0], 5U);
   EXPECT_EQ(areas.width_px, 1U);
+  EXPECT_EQ(areas.row_sum[0], 0U + 1U + 2U + 3U + 4U);
+  EXPECT_EQ(areas.height_px, 5U);
 }
 
 TEST(SegmentRgb24, EmptyThresholdSetAndEmptyImage) {
@@ -796,6 +812,7 @@ std::uint64_t expect_paths_agree(const std::uint8_t* data, std::uint32_t w, std:
     areas.pixels.fill(12345U);  // stale values must be cleared
     areas.column_sum.fill(12345U);
     areas.side_pixels.fill(12345U);
+    areas.row_sum.fill(12345U);
     if (yuyv) {
       EXPECT_TRUE(tables.yuyv.set_path(path));
       ha::segment_yuyv(data, w, h, stride, tables.yuyv, areas);
@@ -812,7 +829,11 @@ std::uint64_t expect_paths_agree(const std::uint8_t* data, std::uint32_t w, std:
         << areas.column_sum[0] << " expected " << reference.column_sum[0];
     EXPECT_EQ(areas.side_pixels, reference.side_pixels)
         << what << ", path " << ha::segment_path_name(path);
+    EXPECT_EQ(areas.row_sum, reference.row_sum)
+        << what << ", path " << ha::segment_path_name(path) << ", rows [0] " << areas.row_sum[0]
+        << " expected " << reference.row_sum[0];
     EXPECT_EQ(areas.width_px, w) << what;
+    EXPECT_EQ(areas.height_px, h) << what;
   }
   tables.rgb.set_path(ha::best_segment_path());
   tables.yuyv.set_path(ha::best_segment_path());
@@ -977,8 +998,11 @@ TEST(SegmentPaths, CountersDoNotOverflowOnLargeUniformFrames) {
           tables.rgb.set_path(path);
           ha::segment_rgb24(frame.data(), w, h, stride, tables.rgb, areas);
         }
-        // The column sums reach 20000 * 33 * 32 / 2 and 700 * 4096 * 4095 / 2 (5.9e9).
+        // The column sums reach 20000 * 33 * 32 / 2 and 700 * 4096 * 4095 / 2 (5.9e9), the row
+        // sums 33 * 20000 * 19999 / 2 (6.6e9) and 4096 * 700 * 699 / 2: either half of the scalar
+        // path's packed sums must be split off before it carries.
         const std::uint64_t columns = std::uint64_t{h} * w * (w - 1U) / 2U;
+        const std::uint64_t rows = std::uint64_t{w} * h * (h - 1U) / 2U;
         for (std::size_t k = 0; k < 8; ++k) {
           EXPECT_EQ(areas.pixels[k], w * h)
               << (yuyv ? "YUYV " : "RGB24 ") << w << "x" << h << " board " << k << ", path "
@@ -987,6 +1011,9 @@ TEST(SegmentPaths, CountersDoNotOverflowOnLargeUniformFrames) {
               << (yuyv ? "YUYV " : "RGB24 ") << w << "x" << h << " board " << k << ", path "
               << ha::segment_path_name(path);
           EXPECT_EQ(areas.side_pixels[k], 2U * h);
+          EXPECT_EQ(areas.row_sum[k], rows)
+              << (yuyv ? "YUYV " : "RGB24 ") << w << "x" << h << " board " << k << ", path "
+              << ha::segment_path_name(path);
         }
       }
     }

@@ -18,10 +18,12 @@ namespace {
 constexpr const char* kMagic = "# harmoloc area log v1";
 // The optional column after the boards (added after v1's first release; a log without it still
 // reads), and the optional columns after it: each board's column sum, then its side pixels
-// (added later still; AreaVector::column_sum, side_pixels).
+// (added later still; AreaVector::column_sum, side_pixels), and after those each board's row sum
+// (AreaVector::row_sum, added last; a log with columns but no rows still reads).
 constexpr const char* kDistrustColumn = "distrusted_mask";
 constexpr const char* kColumnSumPrefix = "column_sum_";
 constexpr const char* kSidePrefix = "side_px_";
+constexpr const char* kRowSumPrefix = "row_sum_";
 
 [[noreturn]] void fail(const std::string& path, std::size_t line, const std::string& what) {
   throw std::runtime_error(path + ":" + std::to_string(line) + ": " + what);
@@ -130,12 +132,16 @@ AreaLog read_area_log(const std::string& path) {
       std::vector<std::string> expected;
       for (const std::string& b : log.board_names) expected.push_back(kColumnSumPrefix + b);
       for (const std::string& b : log.board_names) expected.push_back(kSidePrefix + b);
-      if (after != expected) {
+      std::vector<std::string> with_rows = expected;
+      for (const std::string& b : log.board_names) with_rows.push_back(kRowSumPrefix + b);
+      if (after != expected && after != with_rows) {
         fail(path, n,
-             "after distrusted_mask: expected " + std::string(kColumnSumPrefix) +
-                 "<board> and then " + kSidePrefix + "<board> for every board, in order");
+             "after distrusted_mask: expected " + std::string(kColumnSumPrefix) + "<board>, then " +
+                 kSidePrefix + "<board> and optionally " + kRowSumPrefix +
+                 "<board> for every board, in order");
       }
       log.has_columns = true;
+      log.has_rows = after == with_rows;
     }
   }
   const std::uint64_t max_area = wv * hv;
@@ -167,14 +173,25 @@ AreaLog read_area_log(const std::string& path) {
       log.distrusted_mask.push_back(static_cast<std::uint32_t>(mask));
     }
     if (log.has_columns) {
-      // A frame's column fields are all '-' (not measured) or all numbers: a pixel's column is
-      // below the width; a side pixel is one of the board's pixels, in the first or last column
-      // of a row.
+      // A pixel's column is below the width and its row below the height; a side pixel is one of
+      // the board's pixels, in the first or last column of a row.
+      const std::size_t fields = (log.has_rows ? 3U : 2U) * a.count;
       std::vector<std::string> f;
-      while (f.size() <= 2U * a.count && std::getline(s, field, ',')) f.push_back(field);
-      if (f.size() > 2U * a.count) fail(path, n, "more columns than boards");
-      bool unmeasured = f.size() == 2U * a.count;
-      for (const std::string& v : f) unmeasured = unmeasured && v == "-";
+      while (f.size() <= fields && std::getline(s, field, ',')) f.push_back(field);
+      if (f.size() > fields) fail(path, n, "more columns than boards");
+      // The columns' and sides' fields are all '-' (not measured) or all numbers, and so are the
+      // rows' fields; rows are measured only where columns are.
+      const auto all_dashes = [&f](std::size_t from, std::size_t to) {
+        for (std::size_t i = from; i < to; ++i) {
+          if (i >= f.size() || f[i] != "-") return false;
+        }
+        return true;
+      };
+      const bool unmeasured = all_dashes(0, 2U * a.count);
+      const bool rows_unmeasured = !log.has_rows || all_dashes(2U * a.count, fields);
+      if (unmeasured && !rows_unmeasured) {
+        fail(path, n, "row sums given for a frame whose column sums are '-'");
+      }
       for (std::size_t k = 0; !unmeasured && k < a.count; ++k) {
         std::uint64_t v = 0;
         if (k >= f.size() || !parse_u64(f[k], v) || v > std::uint64_t{a.pixels[k]} * (wv - 1U)) {
@@ -194,7 +211,18 @@ AreaLog read_area_log(const std::string& path) {
         }
         a.side_pixels[k] = static_cast<std::uint32_t>(v);
       }
+      for (std::size_t k = 0; !rows_unmeasured && k < a.count; ++k) {
+        std::uint64_t v = 0;
+        if (2U * a.count + k >= f.size() || !parse_u64(f[2U * a.count + k], v) ||
+            v > std::uint64_t{a.pixels[k]} * (hv - 1U)) {
+          fail(path, n,
+               kRowSumPrefix + log.board_names[k] +
+                   ": not a sum of rows of the board's pixels within the height");
+        }
+        a.row_sum[k] = v;
+      }
       if (!unmeasured) a.width_px = log.image_width_px;
+      if (!rows_unmeasured) a.height_px = log.image_height_px;
     }
     if (std::getline(s, field, ',')) fail(path, n, "more columns than boards");
     log.timestamp_ns.push_back(t);
@@ -222,7 +250,7 @@ bool AreaLogWriter::open(const std::string& path, std::uint32_t width_px, std::u
     }
   }
   std::fprintf(f, ",%s", kDistrustColumn);
-  for (const char* prefix : {kColumnSumPrefix, kSidePrefix}) {
+  for (const char* prefix : {kColumnSumPrefix, kSidePrefix, kRowSumPrefix}) {
     for (std::size_t k = 0; k < boards_; ++k) {
       if (k < board_names.size() && !board_names[k].empty()) {
         std::fprintf(f, ",%s%s", prefix, board_names[k].c_str());
@@ -238,8 +266,9 @@ bool AreaLogWriter::open(const std::string& path, std::uint32_t width_px, std::u
 void AreaLogWriter::write(std::uint64_t t_ns, const algorithms::AreaVector& areas,
                           std::uint32_t distrusted_mask) {
   if (!out_.is_open()) return;
-  // 20 digits of time, and per board (8 at most) 10 of pixels, 20 of column sum, 10 of sides.
-  char line[512];
+  // 20 digits of time, and per board (8 at most) 10 of pixels, 20 of column sum, 10 of sides and
+  // 20 of row sum, each with its comma.
+  char line[768];
   int n = std::snprintf(line, sizeof line, "%" PRIu64, t_ns);
   for (std::size_t k = 0; k < boards_ && n > 0 && static_cast<std::size_t>(n) < sizeof line; ++k) {
     n += std::snprintf(line + n, sizeof line - static_cast<std::size_t>(n), ",%" PRIu32,
@@ -269,6 +298,17 @@ void AreaLogWriter::write(std::uint64_t t_ns, const algorithms::AreaVector& area
     }
     n += std::snprintf(line + n, sizeof line - static_cast<std::size_t>(n), ",%" PRIu32,
                        k < areas.count ? areas.side_pixels[k] : 0U);
+  }
+  // Rows are measured with the columns by every segmentation path; areas with columns but no
+  // rows (made by hand, read from an older log) write '-' in all these fields.
+  const bool rows = columns && areas.rows_measured();
+  for (std::size_t k = 0; k < boards_ && n > 0 && static_cast<std::size_t>(n) < sizeof line; ++k) {
+    if (!rows) {
+      n += std::snprintf(line + n, sizeof line - static_cast<std::size_t>(n), ",-");
+      continue;
+    }
+    n += std::snprintf(line + n, sizeof line - static_cast<std::size_t>(n), ",%" PRIu64,
+                       k < areas.count ? areas.row_sum[k] : std::uint64_t{0});
   }
   if (n <= 0 || static_cast<std::size_t>(n) + 1 >= sizeof line) return;
   line[n++] = '\n';

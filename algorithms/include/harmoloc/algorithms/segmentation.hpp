@@ -30,7 +30,7 @@ struct ThresholdSet {
 bool operator==(const ColourThreshold& a, const ColourThreshold& b);
 bool operator==(const ThresholdSet& a, const ThresholdSet& b);
 
-/// Pixel counts per board, and where in the frame's width each board's pixels lie.
+/// Pixel counts per board, and where in the frame each board's pixels lie.
 struct AreaVector {
   std::array<std::uint32_t, kMaxBoards> pixels{};
   /// Sum of the column (0 = left) of every pixel of the board: column_sum / pixels is the
@@ -40,17 +40,30 @@ struct AreaVector {
   /// Pixels of the board in the frame's first and last column: a blob that touches either side
   /// is cut by the frame, and its centroid is pulled inwards.
   std::array<std::uint32_t, kMaxBoards> side_pixels{};
+  /// Sum of the row (0 = top) of every pixel of the board: row_sum / pixels is its centroid row,
+  /// which with the lens and the camera's pitch and height tells how high the board hangs; the
+  /// trainer fits the boards' geometry from it and the columns.
+  std::array<std::uint64_t, kMaxBoards> row_sum{};
   /// The frame's width the columns count in; 0 when the columns were not measured (area logs
   /// written before they were, areas made by hand).
   std::uint32_t width_px = 0;
+  /// The frame's height the rows count in; 0 when the rows were not measured (area logs written
+  /// before they were).
+  std::uint32_t height_px = 0;
   std::size_t count = 0;
 
   bool columns_measured() const { return width_px != 0; }
+  bool rows_measured() const { return height_px != 0; }
   /// Board @p k's centroid column in pixels, (width - 1) / 2 at the image centre; meaningful only
   /// when columns_measured() and pixels[k] > 0.
   double centroid_column_px(std::size_t k) const {
     return pixels[k] == 0 ? 0.0
                           : static_cast<double>(column_sum[k]) / static_cast<double>(pixels[k]);
+  }
+  /// Board @p k's centroid row in pixels, (height - 1) / 2 at the image centre; meaningful only
+  /// when rows_measured() and pixels[k] > 0.
+  double centroid_row_px(std::size_t k) const {
+    return pixels[k] == 0 ? 0.0 : static_cast<double>(row_sum[k]) / static_cast<double>(pixels[k]);
   }
 };
 

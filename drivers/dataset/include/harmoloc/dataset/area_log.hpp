@@ -34,6 +34,9 @@ struct AreaLog {
   /// side pixels, AreaVector::column_sum and side_pixels). Without them, or in a frame whose
   /// fields are '-', the areas read with width_px 0: columns not measured.
   bool has_columns = false;
+  /// The `row_sum_<board>` columns after those (AreaVector::row_sum). Without them, or in a frame
+  /// whose row fields are '-', the areas read with height_px 0: rows not measured.
+  bool has_rows = false;
 };
 
 /// Reads and checks an area log. Throws std::runtime_error with one line (file:line: what).
