@@ -91,7 +91,7 @@ endif()
 add_executable(sim_host_test
   ${HARMOLOC_UNIT_DIR}/area_log_test.cpp
   ${HARMOLOC_UNIT_DIR}/board_projection_test.cpp
-  ${HARMOLOC_UNIT_DIR}/board_geometry_fit_test.cpp
+  ${HARMOLOC_UNIT_DIR}/geometry_fit_test.cpp
   ${HARMOLOC_UNIT_DIR}/dataset_test.cpp
   ${HARMOLOC_UNIT_DIR}/fakes_test.cpp
   ${HARMOLOC_UNIT_DIR}/forward_map_training_test.cpp

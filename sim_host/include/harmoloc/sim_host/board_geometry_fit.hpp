@@ -1,11 +1,11 @@
 #pragma once
 /// @file A board's geometry (centre, size, the way its face looks) fitted to what a training run
 /// saw of it: at every pose, segmentation's pixel count and centroid column and row. The camera
-/// (intrinsics, lens, pose on the robot) is given. The model is project_board
-/// (board_projection.hpp): the fitted board predicts the board's area and centroid from any pose
-/// and heading, also where the run never drove. This is the trainer's floor model in the making
-/// (issue 20, docs/sweep.md: the study of 2026-12-02 found such a fit predicts the areas of
-/// untrained paths about five times closer than the floor map's tables).
+/// (intrinsics, lens, pose on the robot) is given; scene_geometry_fit.hpp fits it with the boards.
+/// The model is project_board (board_projection.hpp): the fitted board predicts the board's area
+/// and centroid from any pose and heading, also where the run never drove. This is the trainer's
+/// floor model in the making (issue 20, docs/sweep.md: the study of 2026-12-02 found such a fit
+/// predicts the areas of untrained paths about five times closer than the floor map's tables).
 ///
 /// Robust Levenberg-Marquardt on three residuals a sighting: sqrt(area) (so near and far boards
 /// weigh alike) and the centroid's column and row, each over its scale; Huber weights keep
@@ -40,6 +40,9 @@ struct BoardFitOptions {
   /// Huber's threshold in scaled units.
   double huber = 3.0;
   int max_iterations = 60;
+  /// Also start with the facing turned by +-40 and +-80 degrees (off when the start is a fit
+  /// already).
+  bool other_facings = true;
 };
 
 struct BoardFit {
@@ -63,8 +66,14 @@ BoardSpec start_board_geometry(const CameraSpec& camera, const LensModel& lens,
                                const std::vector<BoardSighting>& sightings, double x_m, double y_m,
                                const BoardSpec& like, const BoardFitOptions& options = {});
 
-/// Fits @p start's centre, width, height and facing to @p sightings, from @p start and from starts
-/// with the facing turned by +-40 and +-80 degrees; the best of those.
+/// The sightings a fit uses: those with options.min_area_px or more, at most
+/// options.max_sightings of them evenly spaced through @p all.
+std::vector<BoardSighting> usable_sightings(const std::vector<BoardSighting>& all,
+                                            const BoardFitOptions& options);
+
+/// Fits @p start's centre, width, height and facing to @p sightings, from @p start and (with
+/// options.other_facings) from starts with the facing turned by +-40 and +-80 degrees; the best of
+/// those.
 BoardFit fit_board_geometry(const CameraSpec& camera, const LensModel& lens,
                             const std::vector<BoardSighting>& sightings, const BoardSpec& start,
                             const BoardFitOptions& options = {});
