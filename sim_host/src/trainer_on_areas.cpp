@@ -199,6 +199,8 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<dataset::Sta
   }
   if (!bearing_frames.empty()) report.bearings = algorithms::calibrate_bearings(bearing_frames);
   report.bearings_ms = ms_since(t_bearings);
+  if (opt.fit_geometry)
+    report.geometry = trainer_detail::fit_training_geometry(run, frames, report.bearings, opt);
   BearingObservations observations;
   const bool with_bearings = opt.bearings && report.bearings.ok;
   if (with_bearings) {

@@ -38,6 +38,11 @@ algorithms::ColumnGain fit_column_gain(const AreaSeries& run,
 
 // trainer_checks.cpp
 void check_labels(const std::vector<dataset::StampedPose>& labels);
+
+/// The camera and the boards fitted to the placed @p frames (TrainOptions::fit_geometry).
+GeometryReport fit_training_geometry(const AreaSeries& run, const std::vector<PlacedFrame>& frames,
+                                     const algorithms::BearingCalibration& bearings,
+                                     const TrainOptions& opt);
 // The boards a map may use: those the user chose (0-based), or all @p boards; throws on a board
 // that is not configured.
 std::vector<int> candidate_boards(const std::vector<int>& chosen, std::size_t boards);

@@ -22,6 +22,43 @@ std::string board_list(const std::vector<int>& boards, const harmoloc::firmware:
   return out.empty() ? "-" : out;
 }
 
+// The --fit-geometry section: the fitted camera, then each board.
+void print_geometry(const harmoloc::sim_host::GeometryReport& g,
+                    const harmoloc::firmware::BoardNames& n) {
+  if (!g.tried) {
+    std::printf("geometry      not fitted: %s\n",
+                g.skipped.empty() ? "the frames were not placed by odometry" : g.skipped.c_str());
+    return;
+  }
+  const harmoloc::sim_host::SceneGeometryFit& f = g.fit;
+  if (!f.ok) {
+    std::printf("geometry      not fitted: fewer than two boards fit (%.0f ms)\n", g.ms);
+    return;
+  }
+  const harmoloc::sim_host::CameraSpec& c = f.camera;
+  std::printf(
+      "geometry      camera: field of view %.1f deg (pinhole; started at %.1f), k1 %.3f, k2 %.3f, "
+      "pitch %.1f deg, principal point %+.1f, %+.1f px, %.3f m ahead of the axle, %.3f m up "
+      "(given); residual column %.2f px, row %.2f px RMS (%.0f ms)\n",
+      c.horizontal_fov_deg, g.camera_start.horizontal_fov_deg, c.k1, c.k2, c.pitch_deg,
+      c.principal_offset_x_px, c.principal_offset_y_px, c.forward_offset_m, c.height_m,
+      f.rms_column_px, f.rms_row_px, g.ms);
+  for (std::size_t k = 0; k < f.boards.size(); ++k) {
+    const harmoloc::sim_host::BoardFit& b = f.boards[k];
+    const char* name = k < n.names.size() ? n.names[k].c_str() : "?";
+    if (!b.ok) {
+      std::printf("              %s not fitted (%zu sightings)\n", name, b.sightings_used);
+      continue;
+    }
+    std::printf(
+        "              %s at (%.2f, %.2f, %.2f) m, %.2f x %.2f m, facing %.0f deg, "
+        "%zu sightings, residual column %.2f px, row %.2f px\n",
+        name, b.board.centre_x_m, b.board.centre_y_m, b.board.centre_z_m, b.board.width_m,
+        b.board.height_m, b.board.facing_yaw_rad * 180.0 / harmoloc::algorithms::kPi,
+        b.sightings_used, b.rms_column_px, b.rms_row_px);
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -120,6 +157,18 @@ int main(int argc, char** argv) {
          "the camera's place and from every heading the run drove (map format 9);\n"
          "0, or no offset known: from the axle's place, each from the run's own heading there")
       ->check(CLI::Range(-1.0, 1.0));
+  bool fit_geometry = false;
+  app.add_flag("--fit-geometry", fit_geometry,
+               "also fit the camera (field of view, lens, pitch, principal point, offset) and\n"
+               "each board's centre, size and facing to the run's areas and centroids, and\n"
+               "print them (needs the bearings, an area log or dataset with row sums, and\n"
+               "--camera-height-m; seconds to tens of seconds). Reported only: the map does\n"
+               "not use it yet");
+  double camera_height = 0.0;
+  app.add_option("--camera-height-m", camera_height,
+                 "the camera's optical centre above the floor (metres), which --fit-geometry\n"
+                 "takes as given")
+      ->check(CLI::Range(0.01, 5.0));
   app.add_option("--out", out, "map file to write")->required();
   std::string coverage_path;
   app.add_option("--coverage", coverage_path,
@@ -180,6 +229,8 @@ int main(int argc, char** argv) {
     opt.forward.visibility = visibility;
     opt.forward.visibility_on_floors = !no_visibility;
     opt.forward.camera_forward_m = camera_forward;
+    opt.fit_geometry = fit_geometry;
+    opt.camera_height_m = camera_height;
     opt.label_tolerance_ns = static_cast<std::uint64_t>(std::llround(label_tolerance_ms * 1e6));
     if (label_offset == "auto") {
       opt.label_offset_auto = true;
@@ -501,6 +552,7 @@ int main(int argc, char** argv) {
                       p.rms_residual_rad * 180.0 / algorithms::kPi);
         }
       }
+      if (opt.fit_geometry) print_geometry(r.geometry, names);
       if (r.segment_ms > 0.0) {
         std::printf("time          segmentation %.0f ms, training %.1f ms, forward map %.0f ms\n",
                     r.segment_ms, r.train_ms, r.forward_ms);

@@ -9,17 +9,23 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <vector>
 
+#include "harmoloc/algorithms/map_codec.hpp"
 #include "harmoloc/algorithms/random.hpp"
 #include "harmoloc/algorithms/segmentation.hpp"
 #include "harmoloc/sim_host/board_projection.hpp"
 #include "harmoloc/sim_host/random_scene.hpp"
 #include "harmoloc/sim_host/scene_geometry_fit.hpp"
 #include "harmoloc/sim_host/scene_renderer.hpp"
+#include "harmoloc/sim_host/simulate.hpp"
+#include "harmoloc/sim_host/trainer.hpp"
+#include "test_support.hpp"
 
 namespace hs = harmoloc::sim_host;
 namespace ha = harmoloc::algorithms;
+namespace ht = harmoloc::test;
 
 namespace {
 
@@ -383,6 +389,42 @@ TEST(SceneGeometryFit, HoldsWithThePosesOffAsTheOdometryPlacementLeavesThem) {
   EXPECT_NEAR(fit.camera.horizontal_fov_deg, s.camera.horizontal_fov_deg, 1.0);
   EXPECT_LT(e.centre_cm[n / 2], 3.0);
   EXPECT_LT(e.centre_cm[n - 1], 8.0);
+}
+
+// harmoloc-train --fit-geometry on the tiny scenario's run (0.6 m of route, headings within 21
+// degrees: too little to pin the camera down well, so the check is loose): the fit is reported,
+// the map is the one trained without it, and without the camera's height it says why not.
+TEST(TrainerGeometry, ReportsTheFitAndLeavesTheMapAlone) {
+  ht::TempDir dir;
+  const std::string run = dir.path("run");
+  const hs::Scenario tiny = hs::load_scenario("tiny");
+  hs::simulate_dataset(tiny, 3, run, nullptr);
+  hs::TrainOptions opt;
+  opt.labels_path = run + "/labels.tum";
+  opt.thresholds = ht::board_windows();
+  opt.dataset_dir = run;
+  auto plain = std::make_unique<ha::MapFile>();
+  auto fitted = std::make_unique<ha::MapFile>();
+  const hs::TrainReport without = hs::train_map(opt, *plain);
+  EXPECT_FALSE(without.geometry.tried);
+  opt.fit_geometry = true;
+  const hs::TrainReport no_height = hs::train_map(opt, *fitted);
+  EXPECT_FALSE(no_height.geometry.tried);
+  EXPECT_NE(no_height.geometry.skipped.find("height"), std::string::npos);
+  opt.camera_height_m = tiny.camera.height_m;
+  opt.geometry_fit.board.max_sightings = 60;  // a quick fit
+  const hs::TrainReport with = hs::train_map(opt, *fitted);
+  ASSERT_TRUE(with.geometry.tried) << with.geometry.skipped;
+  EXPECT_TRUE(with.geometry.fit.ok);
+  EXPECT_EQ(ha::encode_map(*plain), ha::encode_map(*fitted));
+  const hs::CameraSpec& c = with.geometry.fit.camera;
+  std::printf("tiny: field of view %.1f (truth %.1f), k1 %.3f (%.3f), pitch %.1f (%.1f); %.0f ms\n",
+              c.horizontal_fov_deg, tiny.camera.horizontal_fov_deg, c.k1, tiny.camera.k1,
+              c.pitch_deg, tiny.camera.pitch_deg, with.geometry.ms);
+  EXPECT_NEAR(c.horizontal_fov_deg, tiny.camera.horizontal_fov_deg, 8.0);
+  EXPECT_NEAR(c.pitch_deg, tiny.camera.pitch_deg, 5.0);
+  EXPECT_DOUBLE_EQ(c.height_m, tiny.camera.height_m);
+  EXPECT_LT(with.geometry.fit.rms_column_px, 1.0);
 }
 
 }  // namespace

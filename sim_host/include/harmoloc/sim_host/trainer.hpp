@@ -18,6 +18,7 @@
 #include "harmoloc/dataset/tum.hpp"
 #include "harmoloc/sim_host/forward_map_training.hpp"
 #include "harmoloc/sim_host/label_offset.hpp"
+#include "harmoloc/sim_host/scene_geometry_fit.hpp"
 #include "harmoloc/sim_host/training_odometry.hpp"
 
 namespace harmoloc::sim_host {
@@ -91,6 +92,12 @@ struct TrainOptions {
   /// With the forward map from frames placed by odometry: also each board's bearing (the lens's
   /// law learnt from the run, docs/bearings.md).
   bool bearings = true;
+  /// Also fit the camera and the boards' geometry to the placed frames (scene_geometry_fit.hpp):
+  /// reported, not yet in the map. Needs the bearings, row sums in the areas and
+  /// camera_height_m (the fit's gauge). Takes seconds to tens of seconds.
+  bool fit_geometry = false;
+  double camera_height_m = 0.0;  ///< the camera's optical centre above the floor; 0: unknown
+  SceneFitOptions geometry_fit;
   ForwardMapOptions forward;
 };
 
@@ -135,6 +142,15 @@ struct ColumnGainReport {
   algorithms::ColumnGain gain;
 };
 
+/// The camera and the boards fitted to the run (TrainOptions::fit_geometry).
+struct GeometryReport {
+  bool tried = false;
+  std::string skipped;  ///< why it was not tried, when asked for
+  CameraSpec camera_start;
+  SceneGeometryFit fit;
+  double ms = 0.0;
+};
+
 struct TrainReport {
   std::size_t frames = 0, labelled = 0, unlabelled = 0, labels_unmatched = 0, empty_frames = 0;
   AxisReport x, y;
@@ -173,6 +189,7 @@ struct TrainReport {
   /// could be placed.
   algorithms::BearingCalibration bearings;
   double bearings_ms = 0;
+  GeometryReport geometry;
 };
 
 /// The board areas of every frame of a run, in time order.

@@ -1,0 +1,86 @@
+// The camera and the boards fitted to the training run (TrainOptions::fit_geometry): every
+// placed frame's areas and centroids, from the bearing calibration's board places and a camera
+// with the law's field of view. Reported only: nothing in the map uses it yet (issue 20).
+#include <chrono>
+#include <cmath>
+#include <string>
+
+#include "harmoloc/sim_host/board_geometry_fit.hpp"
+#include "harmoloc/sim_host/trainer.hpp"
+#include "trainer_parts.hpp"
+
+namespace harmoloc::sim_host::trainer_detail {
+
+GeometryReport fit_training_geometry(const AreaSeries& run, const std::vector<PlacedFrame>& frames,
+                                     const algorithms::BearingCalibration& bearings,
+                                     const TrainOptions& opt) {
+  GeometryReport report;
+  if (!(opt.camera_height_m > 0.0)) {
+    report.skipped = "the camera's height is not known (--camera-height-m)";
+    return report;
+  }
+  if (frames.empty()) {
+    report.skipped = "the frames were not placed by odometry";
+    return report;
+  }
+  if (!bearings.ok) {
+    report.skipped = "the boards could not be placed from their centroid columns";
+    return report;
+  }
+  std::size_t with_rows = 0;
+  for (const PlacedFrame& f : frames) with_rows += run.areas[f.index].rows_measured() ? 1U : 0U;
+  if (with_rows == 0) {
+    report.skipped = "the areas have no row sums (an area log from before them)";
+    return report;
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  CameraSpec camera;
+  camera.width_px = run.image_width_px;
+  camera.height_px = run.image_height_px;
+  // The law's view is the lens's; the pinhole's is a little narrower under a barrel lens, which
+  // the fit finds. A generic lens, the principal point at the centre, a pitch of 10 degrees.
+  camera.horizontal_fov_deg = 2.0 * bearings.half_fov_rad() * 180.0 / algorithms::kPi;
+  camera.k1 = -0.15;
+  camera.k2 = camera.k3 = camera.p1 = camera.p2 = 0.0;
+  camera.principal_offset_x_px = camera.principal_offset_y_px = 0.0;
+  camera.pitch_deg = 10.0;
+  camera.height_m = opt.camera_height_m;
+  const double forward = !std::isnan(opt.forward.camera_forward_m) ? opt.forward.camera_forward_m
+                                                                   : run.camera_forward_m;
+  camera.forward_offset_m = std::isnan(forward) ? 0.1 : forward;
+  camera.mount_yaw_deg = 0.0;
+  report.camera_start = camera;
+
+  const std::size_t boards = bearings.placements.size();
+  std::vector<std::vector<BoardSighting>> sightings(boards);
+  for (const PlacedFrame& f : frames) {
+    const algorithms::AreaVector& a = run.areas[f.index];
+    if (!a.rows_measured() || !a.columns_measured()) continue;
+    for (std::size_t b = 0; b < boards && b < a.count; ++b) {
+      sightings[b].push_back({f.pose, static_cast<double>(a.pixels[b]), a.centroid_column_px(b),
+                              a.centroid_row_px(b)});
+    }
+  }
+  const LensModel lens(camera);
+  std::vector<BoardSpec> starts(boards);
+  for (std::size_t b = 0; b < boards; ++b) {
+    const algorithms::BoardPlacement& p = bearings.placements[b];
+    BoardSpec like;
+    like.name = "board" + std::to_string(b + 1);
+    like.width_m = like.height_m = 0.5;
+    like.centre_z_m = camera.height_m;
+    if (!p.placed) {
+      sightings[b].clear();  // no place to start from: left out
+      starts[b] = like;
+      continue;
+    }
+    starts[b] = start_board_geometry(camera, lens, sightings[b], p.x_m, p.y_m, like,
+                                     opt.geometry_fit.board);
+  }
+  report.fit = fit_scene_geometry(camera, sightings, starts, opt.geometry_fit);
+  report.tried = true;
+  report.ms = ms_since(t0);
+  return report;
+}
+
+}  // namespace harmoloc::sim_host::trainer_detail
