@@ -115,35 +115,12 @@ BoardFit fit_board_geometry(const CameraSpec& camera, const LensModel& lens,
   fit.board = detail::board_from_params(best.p.data(), start);
   Eigen::VectorXd r;
   detail::board_residuals(camera, lens, fit.board, used, options, r);
-  double sa = 0.0, su = 0.0, sv = 0.0;
-  std::size_t na = 0, nu = 0, nv = 0, outliers = 0;
-  for (std::size_t i = 0; i < used.size(); ++i) {
-    const auto k = static_cast<Eigen::Index>(3 * i);
-    const double ra = r[k], ru = r[k + 1], rv = r[k + 2];
-    if (std::fabs(ra) > options.huber || std::fabs(ru) > options.huber ||
-        std::fabs(rv) > options.huber) {
-      ++outliers;
-    }
-    if (std::fabs(ra) <= options.huber) {
-      sa += ra * ra;
-      ++na;
-    }
-    if (std::fabs(ru) <= options.huber) {
-      su += ru * ru;
-      ++nu;
-    }
-    if (std::fabs(rv) <= options.huber) {
-      sv += rv * rv;
-      ++nv;
-    }
-  }
-  fit.rms_sqrt_area =
-      na > 0 ? options.sqrt_area_scale * std::sqrt(sa / static_cast<double>(na)) : 0.0;
-  fit.rms_column_px =
-      nu > 0 ? options.centroid_scale_px * std::sqrt(su / static_cast<double>(nu)) : 0.0;
-  fit.rms_row_px =
-      nv > 0 ? options.centroid_scale_px * std::sqrt(sv / static_cast<double>(nv)) : 0.0;
-  fit.outlier_share = static_cast<double>(outliers) / static_cast<double>(used.size());
+  detail::ResidualSpread spread;
+  spread.add(r, options.huber);
+  fit.rms_sqrt_area = spread.rms(0, options.sqrt_area_scale);
+  fit.rms_column_px = spread.rms(1, options.centroid_scale_px);
+  fit.rms_row_px = spread.rms(2, options.centroid_scale_px);
+  fit.outlier_share = static_cast<double>(spread.outliers) / static_cast<double>(used.size());
   fit.ok = best.converged && fit.outlier_share < 0.5;
   return fit;
 }

@@ -58,4 +58,33 @@ inline void board_residuals(const CameraSpec& camera, const LensModel& lens, con
   board_residuals(camera, lens, board, sightings, o, r, 0);
 }
 
+// The spread of residuals from board_residuals: per kind (sqrt area, column, row) the root mean
+// square over the residuals within Huber's threshold, and the sightings with any residual beyond.
+struct ResidualSpread {
+  double sum[3] = {0.0, 0.0, 0.0};
+  std::size_t count[3] = {0, 0, 0};
+  std::size_t sightings = 0, outliers = 0;
+
+  void add(const Eigen::VectorXd& r, double huber) {
+    for (Eigen::Index i = 0; i + 2 < r.size(); i += 3) {
+      bool outlier = false;
+      for (int k = 0; k < 3; ++k) {
+        const double v = r[i + k];
+        if (std::fabs(v) > huber) {
+          outlier = true;
+          continue;
+        }
+        sum[k] += v * v;
+        ++count[k];
+      }
+      ++sightings;
+      outliers += outlier ? 1U : 0U;
+    }
+  }
+  // Unscaled: times the residual's scale.
+  double rms(int k, double scale) const {
+    return count[k] > 0 ? scale * std::sqrt(sum[k] / static_cast<double>(count[k])) : 0.0;
+  }
+};
+
 }  // namespace harmoloc::sim_host::detail

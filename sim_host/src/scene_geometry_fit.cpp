@@ -150,8 +150,8 @@ SceneGeometryFit fit_scene_geometry(const CameraSpec& camera_start,
   const LensModel lens(fit.camera);
   BoardFitOptions final_options = options.board;
   final_options.other_facings = false;
-  double sa = 0.0, su = 0.0, sv = 0.0;
-  std::size_t na = 0, nu = 0, nv = 0, fitted = 0;
+  detail::ResidualSpread spread;
+  std::size_t fitted = 0;
   for (std::size_t k = 0; k < in.size(); ++k) {
     BoardFit& bf = fit.boards[in[k]];
     bf = fit_board_geometry(fit.camera, lens, sightings[in[k]], board_k(p, k), final_options);
@@ -159,19 +159,11 @@ SceneGeometryFit fit_scene_geometry(const CameraSpec& camera_start,
     ++fitted;
     Eigen::VectorXd r;
     detail::board_residuals(fit.camera, lens, bf.board, used[k], options.board, r);
-    const double h = options.board.huber;
-    for (Eigen::Index i = 0; i + 2 < r.size(); i += 3) {
-      if (std::fabs(r[i]) <= h) sa += r[i] * r[i], ++na;
-      if (std::fabs(r[i + 1]) <= h) su += r[i + 1] * r[i + 1], ++nu;
-      if (std::fabs(r[i + 2]) <= h) sv += r[i + 2] * r[i + 2], ++nv;
-    }
+    spread.add(r, options.board.huber);
   }
-  const auto rms = [](double sum, std::size_t count_in, double scale) {
-    return count_in > 0 ? scale * std::sqrt(sum / static_cast<double>(count_in)) : 0.0;
-  };
-  fit.rms_sqrt_area = rms(sa, na, options.board.sqrt_area_scale);
-  fit.rms_column_px = rms(su, nu, options.board.centroid_scale_px);
-  fit.rms_row_px = rms(sv, nv, options.board.centroid_scale_px);
+  fit.rms_sqrt_area = spread.rms(0, options.board.sqrt_area_scale);
+  fit.rms_column_px = spread.rms(1, options.board.centroid_scale_px);
+  fit.rms_row_px = spread.rms(2, options.board.centroid_scale_px);
   fit.ok = fitted >= 2;
   return fit;
 }
