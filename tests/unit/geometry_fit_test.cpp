@@ -232,6 +232,33 @@ TEST(BoardGeometryFit, FitsTheSegmentedFramesOfRandomScenes) {
   EXPECT_LT(e.facing_deg[n - 1], 15.0);
 }
 
+// What a trainer knows of @p truth: the field of view 6 degrees off, a generic lens (k1 -0.15, no
+// k2), the principal point at the centre, a pitch of 10 degrees and a forward offset of 10 cm;
+// only the height as it is.
+hs::CameraSpec rough_camera(const hs::CameraSpec& truth) {
+  hs::CameraSpec rough = truth;
+  rough.horizontal_fov_deg += 6.0;
+  rough.k1 = -0.15;
+  rough.k2 = 0.0;
+  rough.principal_offset_x_px = rough.principal_offset_y_px = 0.0;
+  rough.pitch_deg = 10.0;
+  rough.forward_offset_m = 0.10;
+  return rough;
+}
+
+// Starts for the boards under @p camera from places 21 cm off their true ones.
+std::vector<hs::BoardSpec> starts_off(const hs::CameraSpec& camera,
+                                      const std::vector<hs::BoardSpec>& truth,
+                                      const std::vector<std::vector<hs::BoardSighting>>& seen) {
+  const hs::LensModel lens(camera);
+  std::vector<hs::BoardSpec> starts;
+  for (std::size_t b = 0; b < truth.size(); ++b) {
+    starts.push_back(hs::start_board_geometry(camera, lens, seen[b], truth[b].centre_x_m + 0.15,
+                                              truth[b].centre_y_m + 0.15, truth[b]));
+  }
+  return starts;
+}
+
 // The camera known only roughly: the field of view 6 degrees off, a generic lens (k1 -0.15, no
 // k2), the principal point at the centre, a pitch of 10 degrees and a forward offset of 10 cm;
 // only the height is given. The fit recovers the camera and the boards together.
@@ -243,21 +270,9 @@ TEST(SceneGeometryFit, RecoversTheCameraAndTheBoardsFromSegmentedFrames) {
   for (std::uint64_t seed : {3U, 5U}) {
     const RenderedRun& run = rendered_run(seed);
     const hs::Scenario& s = run.scene;
-    hs::CameraSpec rough = s.camera;
-    rough.horizontal_fov_deg += 6.0;
-    rough.k1 = -0.15;
-    rough.k2 = 0.0;
-    rough.principal_offset_x_px = rough.principal_offset_y_px = 0.0;
-    rough.pitch_deg = 10.0;
-    rough.forward_offset_m = 0.10;
-    const hs::LensModel rough_lens(rough);
-    std::vector<hs::BoardSpec> starts;
-    for (std::size_t b = 0; b < s.boards.size(); ++b) {
-      const hs::BoardSpec& truth = s.boards[b];
-      starts.push_back(hs::start_board_geometry(
-          rough, rough_lens, run.seen[b], truth.centre_x_m + 0.15, truth.centre_y_m + 0.15, truth));
-    }
-    const hs::SceneGeometryFit fit = hs::fit_scene_geometry(rough, run.seen, starts);
+    const hs::CameraSpec rough = rough_camera(s.camera);
+    const hs::SceneGeometryFit fit =
+        hs::fit_scene_geometry(rough, run.seen, starts_off(rough, s.boards, run.seen));
     ASSERT_TRUE(fit.ok) << seed;
     const hs::CameraSpec& c = fit.camera;
     const hs::CameraSpec& t = s.camera;
@@ -356,21 +371,9 @@ TEST(SceneGeometryFit, HoldsWithThePosesOffAsTheOdometryPlacementLeavesThem) {
       board[i].pose.yaw_rad += off.yaw_rad;
     }
   }
-  hs::CameraSpec rough = s.camera;
-  rough.horizontal_fov_deg += 6.0;
-  rough.k1 = -0.15;
-  rough.k2 = 0.0;
-  rough.principal_offset_x_px = rough.principal_offset_y_px = 0.0;
-  rough.pitch_deg = 10.0;
-  rough.forward_offset_m = 0.10;
-  const hs::LensModel rough_lens(rough);
-  std::vector<hs::BoardSpec> starts;
-  for (std::size_t b = 0; b < s.boards.size(); ++b) {
-    const hs::BoardSpec& truth = s.boards[b];
-    starts.push_back(hs::start_board_geometry(rough, rough_lens, seen[b], truth.centre_x_m + 0.15,
-                                              truth.centre_y_m + 0.15, truth));
-  }
-  const hs::SceneGeometryFit fit = hs::fit_scene_geometry(rough, seen, starts);
+  const hs::CameraSpec rough = rough_camera(s.camera);
+  const hs::SceneGeometryFit fit =
+      hs::fit_scene_geometry(rough, seen, starts_off(rough, s.boards, seen));
   ASSERT_TRUE(fit.ok);
   BoardErrors e;
   for (std::size_t b = 0; b < s.boards.size(); ++b) {
