@@ -1,6 +1,7 @@
 // The camera and the boards fitted to the training run (TrainOptions::fit_geometry): every
 // placed frame's areas and centroids, from the bearing calibration's board places and a camera
-// with the law's field of view. Reported only: nothing in the map uses it yet (issue 20).
+// with the law's field of view. Reported, and with TrainOptions::visibility_from_geometry the
+// floor map's visibility tables come from it (forward_map_geometry.hpp).
 #include <chrono>
 #include <cmath>
 #include <string>

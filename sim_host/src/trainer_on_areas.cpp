@@ -199,7 +199,7 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<dataset::Sta
   }
   if (!bearing_frames.empty()) report.bearings = algorithms::calibrate_bearings(bearing_frames);
   report.bearings_ms = ms_since(t_bearings);
-  if (opt.fit_geometry)
+  if (opt.fit_geometry || opt.visibility_from_geometry)
     report.geometry = trainer_detail::fit_training_geometry(run, frames, report.bearings, opt);
   BearingObservations observations;
   const bool with_bearings = opt.bearings && report.bearings.ok;
@@ -233,6 +233,14 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<dataset::Sta
       forward_opt.camera_forward_m = run.camera_forward_m;
     forward_report = train_forward_map_placed(all, frames, boards, forward_opt, *forward,
                                               with_bearings ? &observations : nullptr);
+    if (opt.visibility_from_geometry) {
+      report.geometry.tables_asked = true;
+      if (report.geometry.tried)
+        report.geometry.tables = visibility_from_geometry(
+            report.geometry.fit, run.areas, frames, area_scale, *forward, opt.geometry_tables);
+      else
+        report.geometry.tables.skipped = "the geometry was not fitted";
+    }
     forward_ms = ms_since(t_forward);
     have_forward = true;
   }

@@ -102,6 +102,17 @@ int main(int argc, char** argv) {
                "floor: train the floor's map without visibility (harmoloc-train --no-visibility),\n"
                "for comparison")
       ->excludes(visibility_flag);
+  app.add_flag("--visibility-from-geometry", opt.visibility_from_geometry,
+               "floor: fill the floor map's visibility tables from the camera and boards fitted\n"
+               "to the coverage run (harmoloc-train --visibility-from-geometry, the camera's\n"
+               "height given as the scene's)")
+      ->excludes("--no-visibility");
+  app.add_option("--geometry-noise-ratio", opt.geometry_noise_ratio,
+                 "floor, with --visibility-from-geometry: a board takes the geometry's tables\n"
+                 "when its noise with them is at most this times the kernel's (measured near\n"
+                 "the lanes, its best case)")
+      ->check(CLI::Range(0.0, 1000.0))
+      ->capture_default_str();
   app.add_flag("--axle-bearings", opt.axle_bearings,
                "keep the maps' bearings over the axle's place, as when the camera's offset is\n"
                "not given (harmoloc-train --camera-forward-m 0), for comparison");
@@ -182,6 +193,8 @@ int main(int argc, char** argv) {
                     {"column_gain", opt.column_gain},
                     {"visibility", opt.visibility},
                     {"no_visibility", opt.no_visibility},
+                    {"visibility_from_geometry", opt.visibility_from_geometry},
+                    {"geometry_noise_ratio", opt.geometry_noise_ratio},
                     {"roams", opt.roams}};
     j["results"] = nlohmann::json::array();
     for (const SceneResult& r : finished) j["results"].push_back(to_json(r));

@@ -57,6 +57,28 @@ void print_geometry(const harmoloc::sim_host::GeometryReport& g,
         b.board.height_m, b.board.facing_yaw_rad * 180.0 / harmoloc::algorithms::kPi,
         b.sightings_used, b.rms_column_px, b.rms_row_px);
   }
+  if (!g.tables_asked) return;
+  const harmoloc::sim_host::GeometryTablesReport& t = g.tables;
+  if (!t.applied) {
+    std::printf("geometry      visibility tables: the kernel's, %s\n", t.skipped.c_str());
+    return;
+  }
+  std::printf(
+      "geometry      visibility tables from the geometry (%zu cells, %.0f ms); angle gain %.3f "
+      "(the kernel's %.3f):\n",
+      t.cells, t.ms, t.geometry_angle_gain, t.kernel_angle_gain);
+  for (std::size_t k = 0; k < t.from_geometry.size(); ++k) {
+    const char* name = k < n.names.size() ? n.names[k].c_str() : "?";
+    if (!(t.geometry_sigma[k] > 0.0)) continue;
+    constexpr double kDeg = 180.0 / harmoloc::algorithms::kPi;
+    std::printf(
+        "              %s %s: area noise %.4f with the geometry, %.4f with the kernel; "
+        "bearing spread %.2f deg with the geometry, %.2f with the kernel%s\n",
+        name, t.from_geometry[k] ? "from the geometry" : "kernel kept", t.geometry_sigma[k],
+        t.kernel_sigma[k], t.geometry_bearing_sigma_rad[k] * kDeg,
+        t.kernel_bearing_sigma_rad[k] * kDeg,
+        t.from_geometry[k] && t.kernel_bearings[k] ? " (the kernel's bearings kept)" : "");
+  }
 }
 
 }  // namespace
@@ -162,13 +184,22 @@ int main(int argc, char** argv) {
                "also fit the camera (field of view, lens, pitch, principal point, offset) and\n"
                "each board's centre, size and facing to the run's areas and centroids, and\n"
                "print them (needs the bearings, an area log or dataset with row sums, and\n"
-               "--camera-height-m; seconds to tens of seconds). Reported only: the map does\n"
-               "not use it yet");
+               "--camera-height-m; seconds to tens of seconds). Reported only, unless\n"
+               "--visibility-from-geometry");
+  bool visibility_from_geometry = false;
+  CLI::Option* visibility_from_geometry_flag = app.add_flag(
+      "--visibility-from-geometry", visibility_from_geometry,
+      "fit the geometry (as --fit-geometry) and fill a floor map's visibility tables\n"
+      "(each place's board area seen whole, bearing and width) from it instead of the\n"
+      "frames near each place, board by board where it predicts the run's areas\n"
+      "better (docs/training.md)");
   double camera_height = 0.0;
-  app.add_option("--camera-height-m", camera_height,
-                 "the camera's optical centre above the floor (metres), which --fit-geometry\n"
-                 "takes as given")
-      ->check(CLI::Range(0.01, 5.0));
+  CLI::Option* camera_height_option =
+      app.add_option("--camera-height-m", camera_height,
+                     "the camera's optical centre above the floor (metres), which --fit-geometry\n"
+                     "takes as given")
+          ->check(CLI::Range(0.01, 5.0));
+  visibility_from_geometry_flag->needs(camera_height_option);
   app.add_option("--out", out, "map file to write")->required();
   std::string coverage_path;
   app.add_option("--coverage", coverage_path,
@@ -229,7 +260,8 @@ int main(int argc, char** argv) {
     opt.forward.visibility = visibility;
     opt.forward.visibility_on_floors = !no_visibility;
     opt.forward.camera_forward_m = camera_forward;
-    opt.fit_geometry = fit_geometry;
+    opt.fit_geometry = fit_geometry || visibility_from_geometry;
+    opt.visibility_from_geometry = visibility_from_geometry;
     opt.camera_height_m = camera_height;
     opt.label_tolerance_ns = static_cast<std::uint64_t>(std::llround(label_tolerance_ms * 1e6));
     if (label_offset == "auto") {

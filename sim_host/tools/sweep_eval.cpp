@@ -162,6 +162,9 @@ void floor_part(const Scenario& scene, const algorithms::ThresholdSet& threshold
     train.forward.visibility_on_floors = !opt.no_visibility;
     if (opt.axle_bearings) train.forward.camera_forward_m = 0.0;
     train.column_gain = opt.column_gain;
+    train.visibility_from_geometry = opt.visibility_from_geometry;
+    train.geometry_tables.kernel_noise_ratio = opt.geometry_noise_ratio;
+    train.camera_height_m = coverage.camera.height_m;  // a tape measure gives it
     const TrainedMap trained =
         train_on_scenario(coverage, kCoverageSeed, nullptr, &thresholds, &train);
     r.floor_train_frames = trained.frames;
@@ -170,6 +173,11 @@ void floor_part(const Scenario& scene, const algorithms::ThresholdSet& threshold
     r.floor_pass_heading_spread_rad = trained.report.forward.pass_heading_spread_rad;
     const ForwardMapReport& fw = trained.report.forward;
     r.floor_heading_ridge = fw.heading_ridge;
+    const GeometryTablesReport& tables = trained.report.geometry.tables;
+    for (std::size_t b = 0; b < tables.from_geometry.size(); ++b) {
+      r.floor_geometry_boards += tables.from_geometry[b] ? 1 : 0;
+      r.floor_geometry_candidates += tables.geometry_sigma[b] > 0.0 ? 1 : 0;
+    }
     r.floor_heading_bandwidth_m = fw.heading_bandwidth_m;
     r.floor_covered_heading_fraction = fw.covered_heading_fraction;
     r.floor_validation_rmse = fw.validation_rmse;

@@ -37,8 +37,12 @@ struct SweepOptions {
   bool column_gain = false;
   bool visibility = false;     ///< floor: visibility asked for (harmoloc-train --visibility)
   bool no_visibility = false;  ///< floor: no visibility (harmoloc-train --no-visibility)
-  int kidnaps = 20;            ///< kidnaps in the kidnap run (each >= 1 m)
-  double long_minutes = 10.0;  ///< length of the long nominal run
+  /// floor: the visibility tables from the fitted geometry, the camera's height the scene's
+  /// (harmoloc-train --visibility-from-geometry --camera-height-m H).
+  bool visibility_from_geometry = false;
+  double geometry_noise_ratio = 1.0;  ///< GeometryTablesOptions::kernel_noise_ratio
+  int kidnaps = 20;                   ///< kidnaps in the kidnap run (each >= 1 m)
+  double long_minutes = 10.0;         ///< length of the long nominal run
   std::uint64_t filter_seed = 1;
   /// Errors count from this long after the first fix (the start-up target: under 5 cm within it).
   double settle_s = 2.0;
@@ -111,6 +115,10 @@ struct SceneResult {
   /// The coverage run's forward map: its heading terms' ridge (0: none), its validation RMS
   /// (feature units, over the modelled boards) and the same without heading terms.
   double floor_heading_ridge = 0.0;
+  /// --visibility-from-geometry: the floor map's boards whose visibility tables come from the
+  /// fitted geometry, and those the fit gave tables for (the others keep the kernel's).
+  int floor_geometry_boards = 0;
+  int floor_geometry_candidates = 0;
   double floor_heading_bandwidth_m = 0.0;  ///< their wide kernel (0: the narrow one)
   double floor_validation_rmse = -1.0, floor_mean_validation_rmse = -1.0;
   /// The share of the circle of headings the floor map covers near the coverage run (-1: none).

@@ -67,6 +67,8 @@ nlohmann::json to_json(const SceneResult& r) {
   j["floor_cv_rmse_x_m"] = r.floor_cv_rmse_x_m;
   j["floor_pass_heading_spread_rad"] = r.floor_pass_heading_spread_rad;
   j["floor_heading_ridge"] = r.floor_heading_ridge;
+  j["floor_geometry_boards"] = r.floor_geometry_boards;
+  j["floor_geometry_candidates"] = r.floor_geometry_candidates;
   j["floor_heading_bandwidth_m"] = r.floor_heading_bandwidth_m;
   j["floor_covered_heading_fraction"] = r.floor_covered_heading_fraction;
   j["floor_validation_rmse"] = r.floor_validation_rmse;

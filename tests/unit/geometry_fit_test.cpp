@@ -396,7 +396,8 @@ TEST(SceneGeometryFit, HoldsWithThePosesOffAsTheOdometryPlacementLeavesThem) {
 
 // harmoloc-train --fit-geometry on the tiny scenario's run (0.6 m of route, headings within 21
 // degrees: too little to pin the camera down well, so the check is loose): the fit is reported,
-// the map is the one trained without it, and without the camera's height it says why not.
+// the map is the one trained without it, and without the camera's height it says why not; the
+// visibility tables from it on a map that holds visibility.
 TEST(TrainerGeometry, ReportsTheFitAndLeavesTheMapAlone) {
   ht::TempDir dir;
   const std::string run = dir.path("run");
@@ -428,6 +429,22 @@ TEST(TrainerGeometry, ReportsTheFitAndLeavesTheMapAlone) {
   EXPECT_NEAR(c.pitch_deg, tiny.camera.pitch_deg, 5.0);
   EXPECT_DOUBLE_EQ(c.height_m, tiny.camera.height_m);
   EXPECT_LT(with.geometry.fit.rms_column_px, 1.0);
+
+  // --visibility-from-geometry: a route's map holds no visibility, so it says so and the map is
+  // the same; asked for visibility on the route, the tables are filled and each board measured.
+  opt.visibility_from_geometry = true;
+  const hs::TrainReport route = hs::train_map(opt, *fitted);
+  EXPECT_TRUE(route.geometry.tables_asked);
+  EXPECT_FALSE(route.geometry.tables.applied);
+  EXPECT_NE(route.geometry.tables.skipped.find("visibility"), std::string::npos);
+  EXPECT_EQ(ha::encode_map(*plain), ha::encode_map(*fitted));
+  opt.forward.visibility = true;
+  const hs::TrainReport seen = hs::train_map(opt, *fitted);
+  ASSERT_TRUE(fitted->forward.has_visibility);
+  EXPECT_GT(seen.geometry.tables.cells, 0U) << seen.geometry.tables.skipped;
+  std::size_t measured = 0;
+  for (double sigma : seen.geometry.tables.geometry_sigma) measured += sigma > 0.0 ? 1U : 0U;
+  EXPECT_GT(measured, 0U);
 }
 
 }  // namespace

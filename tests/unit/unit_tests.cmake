@@ -94,6 +94,7 @@ add_executable(sim_host_test
   ${HARMOLOC_UNIT_DIR}/geometry_fit_test.cpp
   ${HARMOLOC_UNIT_DIR}/dataset_test.cpp
   ${HARMOLOC_UNIT_DIR}/fakes_test.cpp
+  ${HARMOLOC_UNIT_DIR}/forward_map_geometry_test.cpp
   ${HARMOLOC_UNIT_DIR}/forward_map_training_test.cpp
   ${HARMOLOC_UNIT_DIR}/label_offset_test.cpp
   ${HARMOLOC_UNIT_DIR}/random_scene_test.cpp

@@ -16,6 +16,7 @@
 #include "harmoloc/algorithms/odometry_calibration.hpp"
 #include "harmoloc/algorithms/segmentation.hpp"
 #include "harmoloc/dataset/tum.hpp"
+#include "harmoloc/sim_host/forward_map_geometry.hpp"
 #include "harmoloc/sim_host/forward_map_training.hpp"
 #include "harmoloc/sim_host/label_offset.hpp"
 #include "harmoloc/sim_host/scene_geometry_fit.hpp"
@@ -93,9 +94,13 @@ struct TrainOptions {
   /// law learnt from the run, docs/bearings.md).
   bool bearings = true;
   /// Also fit the camera and the boards' geometry to the placed frames (scene_geometry_fit.hpp):
-  /// reported, not yet in the map. Needs the bearings, row sums in the areas and
-  /// camera_height_m (the fit's gauge). Takes seconds to tens of seconds.
+  /// reported, and in the map only with visibility_from_geometry. Needs the bearings, row sums
+  /// in the areas and camera_height_m (the fit's gauge). Takes seconds to tens of seconds.
   bool fit_geometry = false;
+  /// With fit_geometry: a floor map's visibility tables from the fitted geometry, board by board
+  /// where it predicts the run's areas better than the kernel means (forward_map_geometry.hpp).
+  bool visibility_from_geometry = false;
+  GeometryTablesOptions geometry_tables;
   double camera_height_m = 0.0;  ///< the camera's optical centre above the floor; 0: unknown
   SceneFitOptions geometry_fit;
   ForwardMapOptions forward;
@@ -149,6 +154,9 @@ struct GeometryReport {
   CameraSpec camera_start;
   SceneGeometryFit fit;
   double ms = 0.0;
+  /// TrainOptions::visibility_from_geometry: what the map took from the fit.
+  bool tables_asked = false;
+  GeometryTablesReport tables;
 };
 
 struct TrainReport {

@@ -1,0 +1,247 @@
+// A floor map's visibility tables from the fitted geometry (forward_map_geometry.hpp): a board
+// whose geometry predicts the frames better takes the geometry's tables, which then predict its
+// area at poses and headings no frame was taken from; a board whose kernel tables predict better
+// keeps them (rescaled to the geometry's angle gain); a board whose kernel bearings came closer
+// keeps those; a map without visibility is left alone.
+#include "harmoloc/sim_host/forward_map_geometry.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+#include <vector>
+
+#include "harmoloc/algorithms/geometry.hpp"
+#include "harmoloc/algorithms/random.hpp"
+#include "harmoloc/sim_host/board_projection.hpp"
+
+namespace hs = harmoloc::sim_host;
+namespace ha = harmoloc::algorithms;
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr float kKernelBearing = 0.5F, kKernelFeature = 0.123F, kKernelHalfWidth = 0.05F;
+
+struct Fixture {
+  hs::CameraSpec camera;
+  std::vector<hs::BoardSpec> boards;
+  std::unique_ptr<ha::ForwardMap> map = std::make_unique<ha::ForwardMap>();
+  hs::SceneGeometryFit fit;
+  std::vector<ha::AreaVector> areas;
+  std::vector<hs::PlacedFrame> frames;
+  float area_scale = 0.0F;
+  bool laid_out = false;
+
+  Fixture() {
+    camera.width_px = 320;
+    camera.height_px = 240;
+    camera.horizontal_fov_deg = 70.0;
+    camera.k1 = 0.0;  // a pinhole, so that the law below is the lens's own
+    camera.pitch_deg = 5.0;
+    camera.height_m = 0.45;
+    camera.forward_offset_m = 0.1;
+    area_scale = 100.0F / static_cast<float>(camera.width_px * camera.height_px);
+    hs::BoardSpec a;
+    a.name = "a";
+    a.centre_x_m = 3.0;
+    a.centre_y_m = 0.2;
+    a.centre_z_m = 0.5;
+    a.width_m = 0.5;
+    a.height_m = 0.4;
+    a.facing_yaw_rad = kPi;
+    hs::BoardSpec b = a;
+    b.name = "b";
+    b.centre_x_m = 0.3;
+    b.centre_y_m = 3.0;
+    b.facing_yaw_rad = -kPi / 2.0;
+    boards = {a, b};
+
+    // A grid over -1..1 m, both boards, bearings and visibility held.
+    laid_out = ha::lay_out_grid(*map, 41, 41);
+    map->origin_x_m = -1.0F;
+    map->origin_y_m = -1.0F;
+    map->cell_m = 0.05F;
+    map->board_count = 2;
+    map->sigma = {};
+    map->sigma[0] = 1.0F;   // the kernel predicts board a badly: the geometry wins
+    map->sigma[1] = 1e-6F;  // and board b perfectly: its kernel tables stay
+    map->has_bearings = true;
+    map->has_visibility = true;
+    map->bearing_camera_forward_m = static_cast<float>(camera.forward_offset_m);
+    map->bearing_sigma_rad[0] = map->bearing_sigma_rad[1] = 0.01F;
+    // The pinhole's law, angle = atan(2 t tan(fov / 2)), as a1 t + a3 t^3 by least squares.
+    const double k = std::tan(0.5 * camera.horizontal_fov_deg * kPi / 180.0);
+    double s11 = 0, s13 = 0, s33 = 0, r1 = 0, r3 = 0;
+    for (int i = -50; i <= 50; ++i) {
+      const double t = 0.01 * i, y = std::atan(2.0 * t * k);
+      s11 += t * t;
+      s13 += t * t * t * t;
+      s33 += t * t * t * t * t * t;
+      r1 += t * y;
+      r3 += t * t * t * y;
+    }
+    const double det = s11 * s33 - s13 * s13;
+    map->bearing_a1_rad = static_cast<float>((r1 * s33 - r3 * s13) / det);
+    map->bearing_a3_rad = static_cast<float>((s11 * r3 - s13 * r1) / det);
+    for (std::size_t at = 0; at < map->stored_cells(); ++at) {
+      for (std::size_t bd = 0; bd < 2; ++bd) {
+        map->bearing_rad[at * ha::kMaxBoards + bd] = kKernelBearing;
+        map->heading_terms[(at * ha::kMaxBoards + bd) * 2] = kKernelFeature;
+        map->heading_terms[(at * ha::kMaxBoards + bd) * 2 + 1] = kKernelHalfWidth;
+      }
+    }
+
+    fit.ok = true;
+    fit.camera = camera;
+    for (const hs::BoardSpec& s : boards) {
+      hs::BoardFit f;
+      f.ok = true;
+      f.board = s;
+      fit.boards.push_back(f);
+    }
+
+    // Frames from the projection at random poses and headings over the grid.
+    ha::Pcg32 rng(7);
+    const hs::LensModel lens(camera);
+    for (std::size_t i = 0; i < 400; ++i) {
+      const ha::Pose2 pose{rng.uniform(-0.9, 0.9), rng.uniform(-0.9, 0.9), rng.uniform(-kPi, kPi)};
+      ha::AreaVector v;
+      v.count = 2;
+      v.width_px = camera.width_px;
+      v.height_px = camera.height_px;
+      for (std::size_t bd = 0; bd < 2; ++bd) {
+        const hs::BoardImage im = hs::project_board(camera, lens, boards[bd], pose);
+        // The projection does not know the face from the back; the renderer shows the back grey.
+        const ha::Pose2 cam{pose.x_m + camera.forward_offset_m * std::cos(pose.yaw_rad),
+                            pose.y_m + camera.forward_offset_m * std::sin(pose.yaw_rad), 0.0};
+        const hs::BoardAxes ax = hs::board_axes(boards[bd]);
+        const bool face = (cam.x_m - boards[bd].centre_x_m) * ax.normal[0] +
+                              (cam.y_m - boards[bd].centre_y_m) * ax.normal[1] >
+                          0.0;
+        if (!face || !(im.area_px > 0.0)) continue;
+        v.pixels[bd] = static_cast<std::uint32_t>(std::lround(im.area_px));
+        v.column_sum[bd] =
+            static_cast<std::uint64_t>(std::llround(im.centroid_u_px * v.pixels[bd]));
+        v.row_sum[bd] = static_cast<std::uint64_t>(std::llround(im.centroid_v_px * v.pixels[bd]));
+        const bool side = im.centroid_u_px - 0.6 * std::sqrt(im.area_px) < 0.0 ||
+                          im.centroid_u_px + 0.6 * std::sqrt(im.area_px) > camera.width_px - 1.0;
+        v.side_pixels[bd] = im.cut && side ? 1U : 0U;
+      }
+      hs::PlacedFrame f;
+      f.index = areas.size();
+      f.t_s = 0.1 * static_cast<double>(i);
+      f.pose = pose;
+      frames.push_back(f);
+      areas.push_back(v);
+    }
+  }
+
+  // Board @p b's feature the map expects at @p pose (as the firmware reads it).
+  float expected(std::size_t b, const ha::Pose2& pose) const {
+    float out[ha::kMaxBoards] = {};
+    const ha::SeenHeading h = ha::seen_heading(pose.yaw_rad);
+    ha::expected_at_pose(*map, ha::locate(*map, pose.x_m, pose.y_m), pose.x_m, pose.y_m, h, out);
+    return out[b];
+  }
+  float projected(std::size_t b, const ha::Pose2& pose) const {
+    const hs::LensModel lens(camera);
+    return static_cast<float>(hs::project_board(camera, lens, boards[b], pose).area_px) *
+           area_scale;
+  }
+};
+
+}  // namespace
+
+TEST(ForwardMapGeometry, TheBetterBoardTakesTheGeometryAndPredictsPosesNoFrameSaw) {
+  Fixture fx;
+  ASSERT_TRUE(fx.laid_out);
+  const hs::GeometryTablesReport r =
+      hs::visibility_from_geometry(fx.fit, fx.areas, fx.frames, fx.area_scale, *fx.map);
+  ASSERT_TRUE(r.applied) << r.skipped;
+  ASSERT_EQ(r.from_geometry.size(), 2U);
+  EXPECT_EQ(r.from_geometry[0], 1);
+  EXPECT_EQ(r.from_geometry[1], 0);
+  EXPECT_GT(r.cells, 1000U);
+  // Board a's noise is the geometry's over the frames: small against its features (about 1 to
+  // 4 units here), and the map's noise is now that.
+  EXPECT_GT(r.geometry_sigma[0], 0.0);
+  EXPECT_LT(r.geometry_sigma[0], 0.1);
+  EXPECT_FLOAT_EQ(fx.map->sigma[0], static_cast<float>(r.geometry_sigma[0]));
+  EXPECT_LT(r.geometry_bearing_sigma_rad[0], 0.01);
+  EXPECT_EQ(r.kernel_bearings[0], 0);  // the kernel's spread is 0.01 rad: the geometry's kept
+  EXPECT_FLOAT_EQ(fx.map->bearing_sigma_rad[0],
+                  static_cast<float>(r.geometry_bearing_sigma_rad[0]));
+
+  // Poses and headings no frame had, the board seen whole at an angle, cut by the frame's edge,
+  // and from behind the camera: within 5% of the projection (the table is bilinear on a 5 cm
+  // grid, the law a cubic fit of the pinhole's), 0 when it is out of view.
+  const ha::Pose2 whole{0.33, -0.41, 0.25};
+  const float p_whole = fx.projected(0, whole);
+  ASSERT_GT(p_whole, 0.5F);
+  EXPECT_NEAR(fx.expected(0, whole), p_whole, 0.05F * p_whole);
+  const ha::Pose2 away{-0.27, 0.52, kPi};
+  EXPECT_EQ(fx.projected(0, away), 0.0F);
+  EXPECT_NEAR(fx.expected(0, away), 0.0F, 1e-3F);
+  const ha::Pose2 straight{0.61, 0.07, 0.0};
+  EXPECT_NEAR(fx.expected(0, straight), fx.projected(0, straight),
+              0.03F * fx.projected(0, straight));
+
+  // The map's angle gain is the geometry's: a pinhole stretches a board at image angle a by
+  // about 1 / cos^3 a = 1 + 1.5 a^2 + ...
+  EXPECT_GT(r.geometry_angle_gain, 1.2);
+  EXPECT_LT(r.geometry_angle_gain, 2.0);
+  EXPECT_FLOAT_EQ(fx.map->visibility_angle_gain, static_cast<float>(r.geometry_angle_gain));
+
+  // Board b keeps its kernel tables: the bearings and widths to the bit, the features scaled
+  // from the kernel's gain (0 here) to the geometry's by one factor (within 1 / (1 + gain a^2)
+  // at the frame's edge and 1), and its noise.
+  const float scaled = fx.map->heading_terms[ha::kMaxBoards * 0 + 1 * 2];
+  EXPECT_LT(scaled, kKernelFeature);
+  EXPECT_GT(scaled, 0.7F * kKernelFeature);
+  for (std::size_t at = 0; at < fx.map->stored_cells(); ++at) {
+    ASSERT_EQ(fx.map->bearing_rad[at * ha::kMaxBoards + 1], kKernelBearing);
+    ASSERT_EQ(fx.map->heading_terms[(at * ha::kMaxBoards + 1) * 2], scaled);
+    ASSERT_EQ(fx.map->heading_terms[(at * ha::kMaxBoards + 1) * 2 + 1], kKernelHalfWidth);
+  }
+  EXPECT_EQ(fx.map->sigma[1], 1e-6F);
+}
+
+TEST(ForwardMapGeometry, LeavesAMapWithoutVisibilityOrAFailedFitAlone) {
+  Fixture fx;
+  ASSERT_TRUE(fx.laid_out);
+  fx.map->has_visibility = false;
+  hs::GeometryTablesReport r =
+      hs::visibility_from_geometry(fx.fit, fx.areas, fx.frames, fx.area_scale, *fx.map);
+  EXPECT_FALSE(r.applied);
+  EXPECT_NE(r.skipped.find("visibility"), std::string::npos);
+  fx.map->has_visibility = true;
+  fx.fit.ok = false;
+  r = hs::visibility_from_geometry(fx.fit, fx.areas, fx.frames, fx.area_scale, *fx.map);
+  EXPECT_FALSE(r.applied);
+  EXPECT_NE(r.skipped.find("fit"), std::string::npos);
+  for (std::size_t at = 0; at < fx.map->stored_cells(); ++at) {
+    ASSERT_EQ(fx.map->bearing_rad[at * ha::kMaxBoards], kKernelBearing);
+    ASSERT_EQ(fx.map->heading_terms[at * ha::kMaxBoards * 2], kKernelFeature);
+  }
+  EXPECT_EQ(fx.map->sigma[0], 1.0F);
+}
+
+TEST(ForwardMapGeometry, KeepsTheKernelsBearingsWhereTheyCameCloser) {
+  Fixture fx;
+  ASSERT_TRUE(fx.laid_out);
+  fx.map->bearing_sigma_rad[0] = 1e-4F;  // tighter than the geometry's can be (0.1 degree at least)
+  const hs::GeometryTablesReport r =
+      hs::visibility_from_geometry(fx.fit, fx.areas, fx.frames, fx.area_scale, *fx.map);
+  ASSERT_EQ(r.from_geometry[0], 1);
+  EXPECT_EQ(r.kernel_bearings[0], 1);
+  EXPECT_EQ(fx.map->bearing_sigma_rad[0], 1e-4F);
+  // The bearings are the kernel's, the areas and widths the geometry's.
+  bool geometry_features = false;
+  for (std::size_t at = 0; at < fx.map->stored_cells(); ++at) {
+    ASSERT_EQ(fx.map->bearing_rad[at * ha::kMaxBoards], kKernelBearing);
+    geometry_features =
+        geometry_features || fx.map->heading_terms[at * ha::kMaxBoards * 2] != kKernelFeature;
+  }
+  EXPECT_TRUE(geometry_features);
+}
