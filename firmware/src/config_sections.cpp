@@ -127,11 +127,12 @@ void read_can(const Checker& check, const toml::table& root, FirmwareConfig& c) 
 // [filter]: the particle filter.
 void read_filter(const Checker& check, const toml::table& root, FirmwareConfig& c) {
   if (const toml::table* t = check.section(root, "filter")) {
-    check.only(*t, "filter.",
-               {"particles", "seed", "alpha", "fix_sigma_m", "outlier_probability",
-                "resample_threshold", "init_position_sigma_m", "vision_only_speed_mps",
-                "map_margin_m", "kld", "kld_min_particles", "kld_epsilon", "kld_bin_m",
-                "kld_bin_deg", "nearby_test", "nearby_bound_nats", "nearby_frames"});
+    check.only(
+        *t, "filter.",
+        {"particles", "seed", "alpha", "fix_sigma_m", "outlier_probability", "resample_threshold",
+         "init_position_sigma_m", "vision_only_speed_mps", "map_margin_m", "kld",
+         "kld_min_particles", "kld_epsilon", "kld_bin_m", "kld_bin_deg", "nearby_test",
+         "nearby_bound_nats", "nearby_frames", "seed_heading_from_boards"});
     auto& f = c.filter;
     f.particles = static_cast<std::size_t>(
         check.integer(*t, "particles", "filter.", static_cast<std::int64_t>(f.particles), 16,
@@ -176,6 +177,8 @@ void read_filter(const Checker& check, const toml::table& root, FirmwareConfig& 
                                         k.bin_yaw_rad * 180.0 / algorithms::kPi, 1.0, 90.0);
     k.bin_yaw_rad = bin_deg * algorithms::kPi / 180.0;
     f.nearby_test = flag(check, *t, "nearby_test", "filter.", f.nearby_test);
+    f.seed_heading_from_boards =
+        flag(check, *t, "seed_heading_from_boards", "filter.", f.seed_heading_from_boards);
     f.nearby.bound_nats =
         check.number(*t, "nearby_bound_nats", "filter.", f.nearby.bound_nats, 1.0, 1000.0);
     f.nearby.max_frames = static_cast<std::uint32_t>(check.integer(

@@ -13,28 +13,37 @@ bool LocalizationCycle::route_heading_known() const {
   return use_boards_ && map_.forward.has_heading;
 }
 
-algorithms::Pose2 LocalizationCycle::route_pose(double x_m, double y_m) const {
-  const double yaw = route_heading_known()
-                         ? static_cast<double>(algorithms::route_heading(map_.forward, x_m, y_m))
-                         : 0.0;
-  return Pose2{x_m, y_m, yaw};
-}
-
-double LocalizationCycle::reseed_yaw_sigma_rad() const {
+LocalizationCycle::SeedHeading LocalizationCycle::seed_heading(double x_m, double y_m) const {
   const double configured = config_.kidnap.yaw_sigma_deg * algorithms::kPi / 180.0;
+  if (seed_heading_from_boards_) {
+    // On a floor the training run drove each place at several headings: its mean there is none
+    // of them (random seed 25 started 100 degrees off, on a cloud as wide as its passes, and
+    // lost the heading in the turn that followed; docs/sweep.md). The frame's bearings say
+    // which: each board's world bearing at the place plus its image angle.
+    const algorithms::FloorPose seen = algorithms::floor_pose_seen_from(
+        map_.forward, observed_, x_m, y_m, board_params_, fix_.distrusted_mask);
+    if (seen.valid) return SeedHeading{seen.yaw_rad, configured, false, true};
+  }
+  if (!route_heading_known()) return SeedHeading{0.0, configured, true};
   // Without the route terms (a floor map) the heading at a place is one of several the training
   // run drove there: as wide as its passes over one place lie apart.
-  if (route_terms_) return configured;
-  return std::max(configured, static_cast<double>(map_.calibration.pass_heading_spread_rad));
+  const double sigma =
+      route_terms_
+          ? configured
+          : std::max(configured, static_cast<double>(map_.calibration.pass_heading_spread_rad));
+  return SeedHeading{static_cast<double>(algorithms::route_heading(map_.forward, x_m, y_m)), sigma,
+                     false};
 }
 
 void LocalizationCycle::reseed_around(double x_m, double y_m) {
   const double sigma_m = filter_.initialized() ? reseed_sigma_m_ : init_sigma_m_;
-  filter_.initialize(route_pose(x_m, y_m), sigma_m, reseed_yaw_sigma_rad(), !route_heading_known());
+  const SeedHeading h = seed_heading(x_m, y_m);
+  filter_.initialize(Pose2{x_m, y_m, h.yaw_rad}, sigma_m, h.sigma_rad, h.uniform);
   after_reseed();
 }
 
 void LocalizationCycle::after_reseed() {
+  start_waits_ = 0;
   if (gap_ == EncoderGap::kDiffused) gap_ = EncoderGap::kReseeded;
   kidnap_.reset();
   nearby_.reset();
@@ -56,8 +65,11 @@ void LocalizationCycle::reseed_between(double place_x_m, double place_y_m, doubl
     reseed_around(place_x_m, place_y_m);
     return;
   }
-  filter_.initialize_between(route_pose(place_x_m, place_y_m), route_pose(fix_x_m, fix_y_m),
-                             reseed_sigma_m_, reseed_yaw_sigma_rad(), !route_heading_known());
+  const SeedHeading place = seed_heading(place_x_m, place_y_m);
+  const SeedHeading fix = seed_heading(fix_x_m, fix_y_m);
+  filter_.initialize_between(
+      Pose2{place_x_m, place_y_m, place.yaw_rad}, Pose2{fix_x_m, fix_y_m, fix.yaw_rad},
+      reseed_sigma_m_, std::max(place.sigma_rad, fix.sigma_rad), place.uniform || fix.uniform);
   after_reseed();
 }
 

@@ -115,6 +115,7 @@ LocalizationCycle::LocalizationCycle(const FirmwareConfig& config, const algorit
   const bool searchable_floor =
       use_boards_ && !route_terms_ && algorithms::floor_search_possible(map.forward);
   nearby_on_ = searchable_floor && config.filter.nearby_test;
+  seed_heading_from_boards_ = searchable_floor && config.filter.seed_heading_from_boards;
   floor_search_on_ = searchable_floor && config.kidnap.floor_search;
   if (floor_search_on_) {
     // A pass tries at most kFloorPassPlaces places, kFloorPlacesPerCycle a cycle (12 cycles,

@@ -28,8 +28,19 @@ void LocalizationCycle::update(const algorithms::AreaVector& areas, const Featur
     }
     if (!filter_.initialized()) {
       if (fix_.fix.known_place) {
-        reseed_around(fix_.fix.x_m, fix_.fix.y_m);
-        vision = true;
+        // The seed's heading on a floor comes from this frame's bearings. A frame whose boards
+        // give none (all cut by the frame's side, or too small) is let pass, for a second at
+        // most: seeded at the training run's mean heading there instead, random seed 25's
+        // first cloud stood 100 degrees off and lost the heading in the turn that followed.
+        if (seed_heading_from_boards_)
+          observed_ = algorithms::board_features(map_.forward, map_.model.area_scale, areas);
+        if (seed_heading_from_boards_ && !seed_heading(fix_.fix.x_m, fix_.fix.y_m).from_boards &&
+            start_waits_ < kStartWaitFrames) {
+          ++start_waits_;
+        } else {
+          reseed_around(fix_.fix.x_m, fix_.fix.y_m);
+          vision = true;
+        }
       }
     } else if (use_boards_) {
       vision = update_with_boards(areas, features);

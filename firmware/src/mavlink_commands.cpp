@@ -101,9 +101,11 @@ mavlink::MavResult LocalizationCycle::relocalize(std::int32_t& how) {
   if (ever_fix_ && camera_fresh(last_fix_ns_)) {
     // The camera sees a trained place now: that fix is a global position (Yang et al.'s recovery,
     // with the harmonic localizer as the global guess). The heading is the training run's there
-    // when the map knows it, else unknown.
-    reseed_ = Reseed{Reseed::Kind::kAround, route_pose(last_known_fix_.x_m, last_known_fix_.y_m),
-                     sigma_m, reseed_yaw_sigma_rad(), !route_heading_known()};
+    // when the map knows it (on a floor, the one the boards' bearings give), else unknown.
+    const SeedHeading h = seed_heading(last_known_fix_.x_m, last_known_fix_.y_m);
+    reseed_ = Reseed{Reseed::Kind::kAround,
+                     algorithms::Pose2{last_known_fix_.x_m, last_known_fix_.y_m, h.yaw_rad},
+                     sigma_m, h.sigma_rad, h.uniform};
     how = kRelocalizedAroundFix;
   } else {
     // No trusted fix: the robot is somewhere on the trained route, nothing more is known.

@@ -112,6 +112,7 @@ kld_bin_deg = 15
 nearby_test = false
 nearby_bound_nats = 35
 nearby_frames = 90
+seed_heading_from_boards = false
 
 [link]
 system_id = 7
@@ -177,6 +178,7 @@ heartbeat_hz = 2
   EXPECT_FALSE(c.filter.nearby_test);
   EXPECT_DOUBLE_EQ(c.filter.nearby.bound_nats, 35.0);
   EXPECT_EQ(c.filter.nearby.max_frames, 90U);
+  EXPECT_FALSE(c.filter.seed_heading_from_boards);
 
   EXPECT_EQ(c.link.system_id, 7);
   EXPECT_EQ(c.link.component_id, 100);
@@ -448,6 +450,8 @@ TEST(Config, ObservationAndKidnapValuesAreChecked) {
       {"[filter]\nnearby_test = 1\n", "filter.nearby_test must be true or false"},
       {"[filter]\nnearby_bound_nats = 0.5\n", "filter.nearby_bound_nats"},
       {"[filter]\nnearby_frames = 0\n", "filter.nearby_frames"},
+      {"[filter]\nseed_heading_from_boards = \"yes\"\n",
+       "filter.seed_heading_from_boards must be true or false"},
   };
   for (const auto& [text, want] : bad) {
     const std::string path = dir.write("bad.toml", text);

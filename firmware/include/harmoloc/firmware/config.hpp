@@ -57,6 +57,11 @@ struct FilterConfig {
   /// (algorithms/nearby_pose_test.hpp, docs/filter.md "The nearby pose test").
   bool nearby_test = true;
   algorithms::NearbyPoseParams nearby;
+  /// On a floor map with bearings (route terms off): a seed (at start-up, after a kidnap) takes
+  /// its heading from the boards' bearings at its place (algorithms/floor_search.hpp) with the
+  /// kidnap's yaw spread, instead of the training run's mean heading there with the spread of
+  /// its passes (docs/filter.md, "The seed's heading on a floor").
+  bool seed_heading_from_boards = true;
 };
 
 /// What the particles are weighed by.

@@ -311,9 +311,14 @@ class LocalizationCycle {
   // Whether the map knows the training run's heading (and the boards are used): a re-seed then
   // takes it at its centre, else the heading is left unknown.
   bool route_heading_known() const;
-  // (x, y) with the training run's heading there when route_heading_known(), else 0.
-  algorithms::Pose2 route_pose(double x_m, double y_m) const;
-  double reseed_yaw_sigma_rad() const;
+  // The heading a seed at (x, y) starts from, its spread and whether it is unknown (uniform).
+  struct SeedHeading {
+    double yaw_rad = 0.0;
+    double sigma_rad = 0.0;
+    bool uniform = true;
+    bool from_boards = false;  ///< from the frame's bearings (a floor map)
+  };
+  SeedHeading seed_heading(double x_m, double y_m) const;
   void publish_pose_estimate();
 
   const FirmwareConfig& config_;
@@ -373,6 +378,11 @@ class LocalizationCycle {
   double floor_margin_nats_ = 0.0;  ///< ln of the places a pass tries (the luckiest's margin)
   algorithms::FloorSearch floor_search_;
   algorithms::FloorPose floor_fix_{};
+  // On a floor map with bearings: a seed's heading from the boards' bearings (observed_), and
+  // the frames the first seed has let pass for want of one (at most kStartWaitFrames).
+  bool seed_heading_from_boards_ = false;
+  static constexpr std::uint32_t kStartWaitFrames = 30;
+  std::uint32_t start_waits_ = 0;
   // On a floor map: the sequential test between the estimate and the best pose near it.
   bool nearby_on_ = false;
   algorithms::NearbyPoseTest nearby_;
