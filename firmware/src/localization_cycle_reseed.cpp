@@ -36,8 +36,11 @@ LocalizationCycle::SeedHeading LocalizationCycle::seed_heading(double x_m, doubl
 }
 
 void LocalizationCycle::reseed_around(double x_m, double y_m) {
+  reseed_around(x_m, y_m, seed_heading(x_m, y_m));
+}
+
+void LocalizationCycle::reseed_around(double x_m, double y_m, const SeedHeading& h) {
   const double sigma_m = filter_.initialized() ? reseed_sigma_m_ : init_sigma_m_;
-  const SeedHeading h = seed_heading(x_m, y_m);
   filter_.initialize(Pose2{x_m, y_m, h.yaw_rad}, sigma_m, h.sigma_rad, h.uniform);
   after_reseed();
 }

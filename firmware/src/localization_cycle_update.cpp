@@ -34,11 +34,11 @@ void LocalizationCycle::update(const algorithms::AreaVector& areas, const Featur
         // first cloud stood 100 degrees off and lost the heading in the turn that followed.
         if (seed_heading_from_boards_)
           observed_ = algorithms::board_features(map_.forward, map_.model.area_scale, areas);
-        if (seed_heading_from_boards_ && !seed_heading(fix_.fix.x_m, fix_.fix.y_m).from_boards &&
-            start_waits_ < kStartWaitFrames) {
+        const SeedHeading heading = seed_heading(fix_.fix.x_m, fix_.fix.y_m);
+        if (seed_heading_from_boards_ && !heading.from_boards && start_waits_ < kStartWaitFrames) {
           ++start_waits_;
         } else {
-          reseed_around(fix_.fix.x_m, fix_.fix.y_m);
+          reseed_around(fix_.fix.x_m, fix_.fix.y_m, heading);
           vision = true;
         }
       }

@@ -304,13 +304,6 @@ class LocalizationCycle {
   // Re-seeds: around a global fix (heading from the map where it knows one), around both the
   // boards' place and the fix's after a kidnap, or over the map; after_reseed() forgets what
   // was learnt against the old cloud.
-  void reseed_around(double x_m, double y_m);
-  void reseed_between(double place_x_m, double place_y_m, double fix_x_m, double fix_y_m);
-  void reseed_globally();
-  void after_reseed();
-  // Whether the map knows the training run's heading (and the boards are used): a re-seed then
-  // takes it at its centre, else the heading is left unknown.
-  bool route_heading_known() const;
   // The heading a seed at (x, y) starts from, its spread and whether it is unknown (uniform).
   struct SeedHeading {
     double yaw_rad = 0.0;
@@ -318,6 +311,16 @@ class LocalizationCycle {
     bool uniform = true;
     bool from_boards = false;  ///< from the frame's bearings (a floor map)
   };
+  void reseed_around(double x_m, double y_m);
+  // With the heading already found for (x, y): the first seed looks it up to decide whether to
+  // wait for a frame with a bearing.
+  void reseed_around(double x_m, double y_m, const SeedHeading& heading);
+  void reseed_between(double place_x_m, double place_y_m, double fix_x_m, double fix_y_m);
+  void reseed_globally();
+  void after_reseed();
+  // Whether the map knows the training run's heading (and the boards are used): a re-seed then
+  // takes it at its centre, else the heading is left unknown.
+  bool route_heading_known() const;
   SeedHeading seed_heading(double x_m, double y_m) const;
   void publish_pose_estimate();
 
