@@ -38,7 +38,8 @@ std::array<unsigned, 2> line_pair(const Checker& check, const toml::table& t, co
 void read_device_sections(const Checker& check, const toml::table& root, FirmwareConfig& c) {
   if (const toml::table* t = check.section(root, "camera")) {
     check.only(*t, "camera.",
-               {"driver", "device", "width", "height", "format", "buffers", "reopen_interval_ms"});
+               {"driver", "device", "width", "height", "format", "buffers", "reopen_interval_ms",
+                "height_m", "forward_offset_m"});
     auto& k = c.camera;
     k.driver = one_of(check, *t, "driver", "camera.", k.driver, {"v4l2", "libcamera"});
     // libcamera names cameras by id; "" picks the first. A v4l2 device needs a path.
@@ -56,6 +57,9 @@ void read_device_sections(const Checker& check, const toml::table& root, Firmwar
         static_cast<std::uint32_t>(check.integer(*t, "buffers", "camera.", k.buffers, 2, 8));
     k.reopen_interval_ms = static_cast<std::uint32_t>(
         check.integer(*t, "reopen_interval_ms", "camera.", k.reopen_interval_ms, 10, 600000));
+    k.mount_height_m = check.number(*t, "height_m", "camera.", k.mount_height_m, 0.01, 5.0);
+    k.mount_forward_m =
+        check.number(*t, "forward_offset_m", "camera.", k.mount_forward_m, -1.0, 1.0);
   }
   if (const toml::table* t = check.section(root, "encoders")) {
     check.only(*t, "encoders.",

@@ -91,6 +91,7 @@ SimulationSummary simulate_dataset(const Scenario& scenario, std::uint64_t seed,
   meta.frame_rate_hz = s.camera.rate_hz;
   meta.geometry = s.robot;
   meta.camera_forward_m = s.camera.forward_offset_m;
+  meta.camera_height_m = s.camera.height_m;
   meta.encoder_layout = s.can_layout;
   meta.ground_truth = "groundtruth.tum";
   dataset::write_metadata(out_dir, meta);

@@ -71,6 +71,16 @@ grep -q 'time limit' "$out/two_s.err" || fail "the time limit is not said"
 bytes=$(du -sb "$out/small/frames" | cut -f1)
 [ "$bytes" -le 1100000 ] || fail "--record-max-mb 1 wrote $bytes bytes of frames"
 
+# 5b. The camera's mounting from the config's [camera] goes into the recording's metadata, for the
+# trainer's geometry fit (docs/training.md).
+printf '[camera]\nheight_m = 0.42\nforward_offset_m = 0.125\n' > "$out/mount.toml"
+"$BIN/harmoloc" --dataset "$WORK/train" --config "$out/mount.toml" --record "$out/mounted" \
+  --record-seconds 1 --quiet > /dev/null 2>&1 || fail "recording with the camera's mounting"
+grep -q '^height_m = 0.42$' "$out/mounted/metadata.toml" || fail "camera.height_m not recorded"
+grep -q '^forward_offset_m = 0.125$' "$out/mounted/metadata.toml" \
+  || fail "camera.forward_offset_m not recorded"
+echo "ok  the config's camera mounting recorded in metadata.toml"
+
 # 6. Refused with one line and exit status 2: a folder that is not empty, a file, no map nor record.
 expect_refused() {  # expect_refused PATTERN ARGS...
   local pattern=$1; shift

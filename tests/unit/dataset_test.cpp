@@ -619,6 +619,29 @@ TEST(Metadata, CameraOffsetIsOptional) {
                       "metadata.toml: ", "camera.forward_offset_m");
 }
 
+// camera.height_m is optional too (the trainer's geometry fit needs it, else takes
+// --camera-height-m): absent NaN and not written; given it reads back; 0 or beyond 5 m refused.
+TEST(Metadata, CameraHeightIsOptional) {
+  ht::TempDir dir;
+  const std::string base = kMinimalMetadata;
+  dir.write("metadata.toml", base);
+  hd::DatasetMetadata m = hd::read_metadata(dir.dir());
+  EXPECT_TRUE(std::isnan(m.camera_height_m));
+  hd::write_metadata(dir.dir(), m);
+  const std::vector<std::uint8_t> plain = ht::read_bytes(dir.path("metadata.toml"));
+  EXPECT_EQ(std::string(plain.begin(), plain.end()).find("height_m"), std::string::npos);
+  m.camera_height_m = 0.355;
+  hd::write_metadata(dir.dir(), m);
+  EXPECT_DOUBLE_EQ(hd::read_metadata(dir.dir()).camera_height_m, 0.355);
+  for (const char* bad : {"height_m = 0\n", "height_m = 7.5\n", "height_m = \"low\"\n"}) {
+    std::string text = base;
+    text.insert(text.find("rate_hz"), bad);
+    dir.write("metadata.toml", text);
+    ht::expect_one_line(ht::error_of([&] { hd::read_metadata(dir.dir()); }),
+                        "metadata.toml: ", "camera.height_m");
+  }
+}
+
 TEST(Metadata, CalibratedGeometryKeepsItsPrecision) {
   // A calibrated robot's numbers (and an NTSC frame rate) must survive write -> read: the host
   // board takes the odometry geometry from the metadata when the config has no [odometry].

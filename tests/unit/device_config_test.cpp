@@ -45,6 +45,8 @@ height = 360
 format = "rgb24"
 buffers = 6
 reopen_interval_ms = 250
+height_m = 0.42
+forward_offset_m = -0.05
 
 [encoders]
 driver = "gpio"
@@ -67,6 +69,8 @@ baud = 921600
   EXPECT_EQ(c.camera.format, "rgb24");
   EXPECT_EQ(c.camera.buffers, 6U);
   EXPECT_EQ(c.camera.reopen_interval_ms, 250U);
+  EXPECT_DOUBLE_EQ(c.camera.mount_height_m, 0.42);
+  EXPECT_DOUBLE_EQ(c.camera.mount_forward_m, -0.05);
   EXPECT_EQ(c.encoders.driver, "gpio");
   EXPECT_FALSE(c.encoders.can_kernel_filter);
   EXPECT_EQ(c.encoders.gpio_chip, "gpio-sim.0-node0");
@@ -101,6 +105,11 @@ TEST(DeviceConfig, BadValuesGiveOneLine) {
   EXPECT_NE(error_for(dir, "[camera]\ndevice = \"\"\n").find("camera.device must name"),
             std::string::npos);
   EXPECT_NE(error_for(dir, "[camera]\nfps = 30\n").find("unknown key 'camera.fps'"),
+            std::string::npos);
+  EXPECT_NE(error_for(dir, "[camera]\nheight_m = 0\n").find("camera.height_m = 0 is outside"),
+            std::string::npos);
+  EXPECT_NE(error_for(dir, "[camera]\nforward_offset_m = \"ahead\"\n")
+                .find("camera.forward_offset_m must be a number"),
             std::string::npos);
   EXPECT_NE(error_for(dir, "[encoders]\ndriver = \"spi\"\n").find("encoders.driver must be one of"),
             std::string::npos);

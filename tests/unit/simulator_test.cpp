@@ -1091,14 +1091,15 @@ TEST(Dataset, TinyDatasetBytesArePinned) {
   // before events existed (same random streams, drawn in the same order). Then with metadata.toml
   // written by toml_writer.hpp: `wheel_radius_m = 0.05` and `track_m = 0.3` instead of
   // 0.050000000000000003 and 0.29999999999999999 (the same doubles; every other byte as before).
-  // Then with the camera's offset in metadata.toml (camera.forward_offset_m = 0.1).
+  // Then with the camera's offset in metadata.toml (camera.forward_offset_m = 0.1), then its
+  // height (camera.height_m = 0.35).
   ht::TempDir dir;
   const hs::SimulationSummary sum =
       hs::simulate_dataset(hs::load_scenario("tiny"), 1, dir.dir(), nullptr);
   EXPECT_EQ(sum.frames, 462U);
   EXPECT_EQ(sum.kidnaps, 0U);
   std::size_t files = 0;
-  EXPECT_EQ(folder_hash(dir.dir(), &files), 0x7b18da20b1ab890fULL);
+  EXPECT_EQ(folder_hash(dir.dir(), &files), 0x5416c3130e043b4fULL);
   EXPECT_EQ(files, 468U);  // 462 frames, frames.csv, encoders.log, 2 TUM files, 2 TOML files
   EXPECT_FALSE(std::filesystem::exists(dir.path("kidnaps.csv")));
 }

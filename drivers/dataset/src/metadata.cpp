@@ -111,6 +111,7 @@ DatasetMetadata read_metadata(const std::string& dataset_dir) {
   m.frames_index = text(t, "camera", "frames_index", "frames.csv");
   m.camera_forward_m =
       number<double>(t, "camera", "forward_offset_m", -1.0, 1.0, m.camera_forward_m, false);
+  m.camera_height_m = number<double>(t, "camera", "height_m", 0.01, 5.0, m.camera_height_m, false);
 
   const std::string source = text(t, "encoders", "source", "can");
   if (source == "can")
@@ -173,6 +174,7 @@ std::string metadata_toml(const DatasetMetadata& m) {
       .set("rate_hz", m.frame_rate_hz)
       .set("frames_index", m.frames_index);
   if (std::isfinite(m.camera_forward_m)) w.set("forward_offset_m", m.camera_forward_m);
+  if (std::isfinite(m.camera_height_m)) w.set("height_m", m.camera_height_m);
   // A CAN dataset's metadata does not name the source (the files written before it existed).
   w.table("encoders");
   if (m.encoder_source == EncoderSource::kGpio) w.set("source", "gpio");

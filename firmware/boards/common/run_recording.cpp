@@ -1,6 +1,7 @@
 #include "run_recording.hpp"
 
 #include <cerrno>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <system_error>
@@ -54,6 +55,11 @@ std::string RunRecording::start(const RecordOptions& options, dataset::DatasetMe
   meta.encoder_source = dataset::EncoderSource::kGpio;
   meta.encoder_log = "encoders.csv";
   meta.ground_truth.clear();
+  // The config's mounting, where it gives one, over a replayed dataset's.
+  if (std::isfinite(config.camera.mount_height_m))
+    meta.camera_height_m = config.camera.mount_height_m;
+  if (std::isfinite(config.camera.mount_forward_m))
+    meta.camera_forward_m = config.camera.mount_forward_m;
   meta_ = meta;
   try {
     dataset::write_metadata(dir_, meta_);

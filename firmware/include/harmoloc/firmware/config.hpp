@@ -5,6 +5,7 @@
 
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -161,6 +162,11 @@ struct CameraDeviceConfig {
   std::string format = "auto";              ///< "auto" (YUYV, else RGB24), "yuyv" or "rgb24"
   std::uint32_t buffers = 4;                ///< mmap buffers / libcamera requests, 2..8
   std::uint32_t reopen_interval_ms = 1000;  ///< v4l2: retry a failed device this often
+  /// The camera's mounting (metres; NaN: not given): its optical centre above the floor and its
+  /// offset ahead of the wheel axle's centre. The cycle does not use them; `harmoloc --record`
+  /// writes them into the recording's metadata.toml for the trainer (docs/training.md).
+  double mount_height_m = std::numeric_limits<double>::quiet_NaN();
+  double mount_forward_m = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// The wheel encoders of the Linux board: SocketCAN (layout in [can]) or GPIO quadrature.

@@ -35,6 +35,9 @@ struct DatasetMetadata {
   /// camera.forward_offset_m: the camera's offset ahead of the wheel axle's centre along the
   /// heading (metres); NaN when the file does not give it (optional).
   double camera_forward_m = std::numeric_limits<double>::quiet_NaN();
+  /// camera.height_m: the camera's optical centre above the floor (metres); NaN when the file
+  /// does not give it (optional). The trainer fits the camera and boards with it as the scale.
+  double camera_height_m = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// Reads DIR/metadata.toml. Throws std::runtime_error("metadata.toml: reason") when it is
