@@ -45,6 +45,7 @@ AreaSeries segment_dataset(const std::string& dataset_dir,
   run.segment_ms = ms_since(t0);
   run.odometry = read_dataset_odometry(dataset_dir, meta);
   run.camera_forward_m = meta.camera_forward_m;
+  run.camera_height_m = meta.camera_height_m;
   return run;
 }
 

@@ -12,12 +12,19 @@
 
 namespace harmoloc::sim_host::trainer_detail {
 
+double training_camera_height_m(const AreaSeries& run, const TrainOptions& opt) {
+  if (opt.camera_height_m > 0.0) return opt.camera_height_m;
+  return run.camera_height_m > 0.0 ? run.camera_height_m : 0.0;  // NaN: unknown
+}
+
 GeometryReport fit_training_geometry(const AreaSeries& run, const std::vector<PlacedFrame>& frames,
                                      const algorithms::BearingCalibration& bearings,
-                                     const TrainOptions& opt) {
+                                     const TrainOptions& opt, double camera_height_m) {
   GeometryReport report;
-  if (!(opt.camera_height_m > 0.0)) {
-    report.skipped = "the camera's height is not known (--camera-height-m)";
+  if (!(camera_height_m > 0.0)) {
+    report.skipped =
+        "the camera's height is not known (--camera-height-m, or camera.height_m in the "
+        "dataset's metadata.toml)";
     return report;
   }
   if (frames.empty()) {
@@ -45,7 +52,7 @@ GeometryReport fit_training_geometry(const AreaSeries& run, const std::vector<Pl
   camera.k2 = camera.k3 = camera.p1 = camera.p2 = 0.0;
   camera.principal_offset_x_px = camera.principal_offset_y_px = 0.0;
   camera.pitch_deg = 10.0;
-  camera.height_m = opt.camera_height_m;
+  camera.height_m = camera_height_m;
   const double forward = !std::isnan(opt.forward.camera_forward_m) ? opt.forward.camera_forward_m
                                                                    : run.camera_forward_m;
   camera.forward_offset_m = std::isnan(forward) ? 0.1 : forward;

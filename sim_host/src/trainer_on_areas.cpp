@@ -51,6 +51,12 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<dataset::Sta
   report.frames = run.areas.size();
   if (labels.empty()) throw std::runtime_error("no labels");
   if (run.areas.empty()) throw std::runtime_error("the run has no frames");
+  const double camera_height_m = trainer_detail::training_camera_height_m(run, opt);
+  if (opt.visibility_from_geometry && opt.geometry_tables_required && !(camera_height_m > 0.0)) {
+    throw std::runtime_error(
+        "--visibility-from-geometry: the camera's height is not known (give --camera-height-m "
+        "H, or camera.height_m in the dataset's metadata.toml)");
+  }
   const std::size_t boards = opt.thresholds.count;
   const float area_scale = 100.0F / static_cast<float>(run.image_width_px * run.image_height_px);
   std::vector<std::vector<float>> all(run.areas.size(), std::vector<float>(boards, 0.0F));
@@ -199,8 +205,9 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<dataset::Sta
   }
   if (!bearing_frames.empty()) report.bearings = algorithms::calibrate_bearings(bearing_frames);
   report.bearings_ms = ms_since(t_bearings);
-  if (opt.fit_geometry || opt.visibility_from_geometry)
-    report.geometry = trainer_detail::fit_training_geometry(run, frames, report.bearings, opt);
+  if (opt.fit_geometry)
+    report.geometry =
+        trainer_detail::fit_training_geometry(run, frames, report.bearings, opt, camera_height_m);
   BearingObservations observations;
   const bool with_bearings = opt.bearings && report.bearings.ok;
   if (with_bearings) {
@@ -233,13 +240,17 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<dataset::Sta
       forward_opt.camera_forward_m = run.camera_forward_m;
     forward_report = train_forward_map_placed(all, frames, boards, forward_opt, *forward,
                                               with_bearings ? &observations : nullptr);
-    if (opt.visibility_from_geometry) {
+    // The fit takes seconds: only for a map whose tables it fills (a floor's), unless asked.
+    if (opt.visibility_from_geometry && (opt.fit_geometry || forward->has_visibility)) {
+      if (!opt.fit_geometry)
+        report.geometry = trainer_detail::fit_training_geometry(run, frames, report.bearings, opt,
+                                                                camera_height_m);
       report.geometry.tables_asked = true;
       if (report.geometry.tried)
         report.geometry.tables = visibility_from_geometry(
             report.geometry.fit, run.areas, frames, area_scale, *forward, opt.geometry_tables);
       else
-        report.geometry.tables.skipped = "the geometry was not fitted";
+        report.geometry.tables.skipped = "the geometry was not fitted: " + report.geometry.skipped;
     }
     forward_ms = ms_since(t_forward);
     have_forward = true;

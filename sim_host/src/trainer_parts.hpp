@@ -39,10 +39,15 @@ algorithms::ColumnGain fit_column_gain(const AreaSeries& run,
 // trainer_checks.cpp
 void check_labels(const std::vector<dataset::StampedPose>& labels);
 
-/// The camera and the boards fitted to the placed @p frames (TrainOptions::fit_geometry).
+/// The camera and the boards fitted to the placed @p frames (TrainOptions::fit_geometry), the
+/// camera @p camera_height_m above the floor (0: unknown, not fitted).
 GeometryReport fit_training_geometry(const AreaSeries& run, const std::vector<PlacedFrame>& frames,
                                      const algorithms::BearingCalibration& bearings,
-                                     const TrainOptions& opt);
+                                     const TrainOptions& opt, double camera_height_m);
+
+/// The camera's height the fit takes: TrainOptions::camera_height_m, else the run's; 0 when
+/// neither knows it.
+double training_camera_height_m(const AreaSeries& run, const TrainOptions& opt);
 // The boards a map may use: those the user chose (0-based), or all @p boards; throws on a board
 // that is not configured.
 std::vector<int> candidate_boards(const std::vector<int>& chosen, std::size_t boards);

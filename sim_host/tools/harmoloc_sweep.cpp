@@ -102,13 +102,20 @@ int main(int argc, char** argv) {
                "floor: train the floor's map without visibility (harmoloc-train --no-visibility),\n"
                "for comparison")
       ->excludes(visibility_flag);
-  app.add_flag("--visibility-from-geometry", opt.visibility_from_geometry,
-               "floor: fill the floor map's visibility tables from the camera and boards fitted\n"
-               "to the coverage run (harmoloc-train --visibility-from-geometry, the camera's\n"
-               "height given as the scene's)")
+  bool geometry_flag = false, frames_flag = false;
+  CLI::Option* geometry_option =
+      app.add_flag("--visibility-from-geometry", geometry_flag,
+                   "floor: the floor map's visibility tables from the camera and boards fitted\n"
+                   "to the coverage run, the camera's height given as the scene's (the default;\n"
+                   "kept for older command lines)")
+          ->excludes("--no-visibility");
+  app.add_flag("--visibility-from-frames", frames_flag,
+               "floor: the floor map's visibility tables from the frames near each place only\n"
+               "(harmoloc-train --visibility-from-frames), for comparison")
+      ->excludes(geometry_option)
       ->excludes("--no-visibility");
   app.add_option("--geometry-noise-ratio", opt.geometry_noise_ratio,
-                 "floor, with --visibility-from-geometry: a board takes the geometry's tables\n"
+                 "floor, unless --visibility-from-frames: a board takes the geometry's tables\n"
                  "when its noise with them is at most this times the kernel's (measured near\n"
                  "the lanes, its best case)")
       ->check(CLI::Range(0.0, 1000.0))
@@ -122,6 +129,7 @@ int main(int argc, char** argv) {
   app.add_flag("--no-default-scene", no_default, "leave out the project's own default scene");
   app.add_flag("--quiet", quiet, "no progress on stderr");
   if (const auto status = harmoloc::cli::parse(app, argc, argv)) return *status;
+  opt.visibility_from_geometry = !frames_flag && !opt.no_visibility;
   if (quick) {
     opt.kidnaps = std::min(opt.kidnaps, 5);
     opt.long_minutes = std::min(opt.long_minutes, 1.0);

@@ -22,6 +22,36 @@ std::string board_list(const std::vector<int>& boards, const harmoloc::firmware:
   return out.empty() ? "-" : out;
 }
 
+// A floor map's visibility tables: from the fitted geometry, board by board, or the kernel's and
+// why.
+void print_geometry_tables(const harmoloc::sim_host::GeometryReport& g,
+                           const harmoloc::firmware::BoardNames& n) {
+  if (!g.tables_asked) return;
+  const harmoloc::sim_host::GeometryTablesReport& t = g.tables;
+  if (!t.applied) {
+    std::printf(
+        "geometry      visibility tables: the kernel's (from the frames near each place), %s\n",
+        t.skipped.c_str());
+    return;
+  }
+  std::printf(
+      "geometry      visibility tables from the geometry (%zu cells, %.0f ms); angle gain %.3f "
+      "(the kernel's %.3f):\n",
+      t.cells, t.ms, t.geometry_angle_gain, t.kernel_angle_gain);
+  for (std::size_t k = 0; k < t.from_geometry.size(); ++k) {
+    const char* name = k < n.names.size() ? n.names[k].c_str() : "?";
+    if (!(t.geometry_sigma[k] > 0.0)) continue;
+    constexpr double kDeg = 180.0 / harmoloc::algorithms::kPi;
+    std::printf(
+        "              %s %s: area noise %.4f with the geometry, %.4f with the kernel; "
+        "bearing spread %.2f deg with the geometry, %.2f with the kernel%s\n",
+        name, t.from_geometry[k] ? "from the geometry" : "kernel kept", t.geometry_sigma[k],
+        t.kernel_sigma[k], t.geometry_bearing_sigma_rad[k] * kDeg,
+        t.kernel_bearing_sigma_rad[k] * kDeg,
+        t.from_geometry[k] && t.kernel_bearings[k] ? " (the kernel's bearings kept)" : "");
+  }
+}
+
 // The --fit-geometry section: the fitted camera, then each board.
 void print_geometry(const harmoloc::sim_host::GeometryReport& g,
                     const harmoloc::firmware::BoardNames& n) {
@@ -57,28 +87,7 @@ void print_geometry(const harmoloc::sim_host::GeometryReport& g,
         b.board.height_m, b.board.facing_yaw_rad * 180.0 / harmoloc::algorithms::kPi,
         b.sightings_used, b.rms_column_px, b.rms_row_px);
   }
-  if (!g.tables_asked) return;
-  const harmoloc::sim_host::GeometryTablesReport& t = g.tables;
-  if (!t.applied) {
-    std::printf("geometry      visibility tables: the kernel's, %s\n", t.skipped.c_str());
-    return;
-  }
-  std::printf(
-      "geometry      visibility tables from the geometry (%zu cells, %.0f ms); angle gain %.3f "
-      "(the kernel's %.3f):\n",
-      t.cells, t.ms, t.geometry_angle_gain, t.kernel_angle_gain);
-  for (std::size_t k = 0; k < t.from_geometry.size(); ++k) {
-    const char* name = k < n.names.size() ? n.names[k].c_str() : "?";
-    if (!(t.geometry_sigma[k] > 0.0)) continue;
-    constexpr double kDeg = 180.0 / harmoloc::algorithms::kPi;
-    std::printf(
-        "              %s %s: area noise %.4f with the geometry, %.4f with the kernel; "
-        "bearing spread %.2f deg with the geometry, %.2f with the kernel%s\n",
-        name, t.from_geometry[k] ? "from the geometry" : "kernel kept", t.geometry_sigma[k],
-        t.kernel_sigma[k], t.geometry_bearing_sigma_rad[k] * kDeg,
-        t.kernel_bearing_sigma_rad[k] * kDeg,
-        t.from_geometry[k] && t.kernel_bearings[k] ? " (the kernel's bearings kept)" : "");
-  }
+  print_geometry_tables(g, n);
 }
 
 }  // namespace
@@ -183,23 +192,26 @@ int main(int argc, char** argv) {
   app.add_flag("--fit-geometry", fit_geometry,
                "also fit the camera (field of view, lens, pitch, principal point, offset) and\n"
                "each board's centre, size and facing to the run's areas and centroids, and\n"
-               "print them (needs the bearings, an area log or dataset with row sums, and\n"
-               "--camera-height-m; seconds to tens of seconds). Reported only, unless\n"
-               "--visibility-from-geometry");
-  bool visibility_from_geometry = false;
-  CLI::Option* visibility_from_geometry_flag = app.add_flag(
-      "--visibility-from-geometry", visibility_from_geometry,
-      "fit the geometry (as --fit-geometry) and fill a floor map's visibility tables\n"
-      "(each place's board area seen whole, bearing and width) from it instead of the\n"
-      "frames near each place, board by board where it predicts the run's areas\n"
-      "better (docs/training.md)");
+               "print them, on any map (needs the bearings, an area log or dataset with row\n"
+               "sums, and the camera's height; seconds to tens of seconds)");
+  bool visibility_from_geometry = false, visibility_from_frames = false;
+  CLI::Option* visibility_from_geometry_flag =
+      app.add_flag("--visibility-from-geometry", visibility_from_geometry,
+                   "a floor map's visibility tables (each place's board area seen whole, bearing\n"
+                   "and width) from the camera and boards fitted to the run, board by board where\n"
+                   "they predict the run's areas better than the frames near each place\n"
+                   "(docs/training.md). The default where the camera's height is known; given, an\n"
+                   "unknown height is an error");
+  visibility_from_geometry_flag->excludes("--no-visibility");
+  app.add_flag("--visibility-from-frames", visibility_from_frames,
+               "a floor map's visibility tables from the frames near each place only, as\n"
+               "when the camera's height is not known (no geometry fit)")
+      ->excludes(visibility_from_geometry_flag);
   double camera_height = 0.0;
-  CLI::Option* camera_height_option =
-      app.add_option("--camera-height-m", camera_height,
-                     "the camera's optical centre above the floor (metres), which --fit-geometry\n"
-                     "takes as given")
-          ->check(CLI::Range(0.01, 5.0));
-  visibility_from_geometry_flag->needs(camera_height_option);
+  app.add_option("--camera-height-m", camera_height,
+                 "the camera's optical centre above the floor (metres), the geometry fit's\n"
+                 "scale (default: the dataset's camera.height_m)")
+      ->check(CLI::Range(0.01, 5.0));
   app.add_option("--out", out, "map file to write")->required();
   std::string coverage_path;
   app.add_option("--coverage", coverage_path,
@@ -260,8 +272,9 @@ int main(int argc, char** argv) {
     opt.forward.visibility = visibility;
     opt.forward.visibility_on_floors = !no_visibility;
     opt.forward.camera_forward_m = camera_forward;
-    opt.fit_geometry = fit_geometry || visibility_from_geometry;
-    opt.visibility_from_geometry = visibility_from_geometry;
+    opt.fit_geometry = fit_geometry;
+    opt.visibility_from_geometry = !visibility_from_frames;
+    opt.geometry_tables_required = visibility_from_geometry;
     opt.camera_height_m = camera_height;
     opt.label_tolerance_ns = static_cast<std::uint64_t>(std::llround(label_tolerance_ms * 1e6));
     if (label_offset == "auto") {
@@ -584,7 +597,10 @@ int main(int argc, char** argv) {
                       p.rms_residual_rad * 180.0 / algorithms::kPi);
         }
       }
-      if (opt.fit_geometry) print_geometry(r.geometry, names);
+      if (opt.fit_geometry)
+        print_geometry(r.geometry, names);
+      else
+        print_geometry_tables(r.geometry, names);
       if (r.segment_ms > 0.0) {
         std::printf("time          segmentation %.0f ms, training %.1f ms, forward map %.0f ms\n",
                     r.segment_ms, r.train_ms, r.forward_ms);

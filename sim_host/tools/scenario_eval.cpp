@@ -61,6 +61,7 @@ TrainedMap train_on_scenario(const Scenario& scenario, std::uint64_t seed, const
   series.image_width_px = scenario.camera.width_px;
   series.image_height_px = scenario.camera.height_px;
   series.camera_forward_m = scenario.camera.forward_offset_m;
+  series.camera_height_m = scenario.camera.height_m;
   std::vector<std::uint8_t> rgb;
   for (std::size_t k = 0; k < run.frame_count(); ++k) {
     run.render(k, rgb);

@@ -38,8 +38,9 @@ struct SweepOptions {
   bool visibility = false;     ///< floor: visibility asked for (harmoloc-train --visibility)
   bool no_visibility = false;  ///< floor: no visibility (harmoloc-train --no-visibility)
   /// floor: the visibility tables from the fitted geometry, the camera's height the scene's
-  /// (harmoloc-train --visibility-from-geometry --camera-height-m H).
-  bool visibility_from_geometry = false;
+  /// (as harmoloc-train with the camera's height known); false: from the frames near each place
+  /// (harmoloc-train --visibility-from-frames).
+  bool visibility_from_geometry = true;
   double geometry_noise_ratio = 1.0;  ///< GeometryTablesOptions::kernel_noise_ratio
   int kidnaps = 20;                   ///< kidnaps in the kidnap run (each >= 1 m)
   double long_minutes = 10.0;         ///< length of the long nominal run

@@ -9,12 +9,14 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <memory>
 #include <vector>
 
 #include "harmoloc/algorithms/map_codec.hpp"
 #include "harmoloc/algorithms/random.hpp"
 #include "harmoloc/algorithms/segmentation.hpp"
+#include "harmoloc/dataset/metadata.hpp"
 #include "harmoloc/sim_host/board_projection.hpp"
 #include "harmoloc/sim_host/random_scene.hpp"
 #include "harmoloc/sim_host/scene_geometry_fit.hpp"
@@ -26,6 +28,7 @@
 namespace hs = harmoloc::sim_host;
 namespace ha = harmoloc::algorithms;
 namespace ht = harmoloc::test;
+namespace hd = harmoloc::dataset;
 
 namespace {
 
@@ -403,20 +406,35 @@ TEST(TrainerGeometry, ReportsTheFitAndLeavesTheMapAlone) {
   const std::string run = dir.path("run");
   const hs::Scenario tiny = hs::load_scenario("tiny");
   hs::simulate_dataset(tiny, 3, run, nullptr);
+  // The simulator writes the camera's height into the metadata; a recording does not.
+  hd::DatasetMetadata meta = hd::read_metadata(run);
+  EXPECT_DOUBLE_EQ(meta.camera_height_m, tiny.camera.height_m);
+  meta.camera_height_m = std::numeric_limits<double>::quiet_NaN();
+  hd::write_metadata(run, meta);
   hs::TrainOptions opt;
   opt.labels_path = run + "/labels.tum";
   opt.thresholds = ht::board_windows();
   opt.dataset_dir = run;
   auto plain = std::make_unique<ha::MapFile>();
   auto fitted = std::make_unique<ha::MapFile>();
+  // A route's map: the tables' default asks for no fit.
   const hs::TrainReport without = hs::train_map(opt, *plain);
   EXPECT_FALSE(without.geometry.tried);
+  EXPECT_FALSE(without.geometry.tables_asked);
   opt.fit_geometry = true;
   const hs::TrainReport no_height = hs::train_map(opt, *fitted);
   EXPECT_FALSE(no_height.geometry.tried);
   EXPECT_NE(no_height.geometry.skipped.find("height"), std::string::npos);
-  opt.camera_height_m = tiny.camera.height_m;
+  // Asked for by name (harmoloc-train --visibility-from-geometry), an unknown height stops the
+  // training with one line before any work.
+  opt.geometry_tables_required = true;
+  ht::expect_one_line(ht::error_of([&] { hs::train_map(opt, *fitted); }), "",
+                      "camera's height is not known");
+  opt.geometry_tables_required = false;
   opt.geometry_fit.board.max_sightings = 60;  // a quick fit
+  // The height from the dataset's metadata when not given.
+  meta.camera_height_m = tiny.camera.height_m;
+  hd::write_metadata(run, meta);
   const hs::TrainReport with = hs::train_map(opt, *fitted);
   ASSERT_TRUE(with.geometry.tried) << with.geometry.skipped;
   EXPECT_TRUE(with.geometry.fit.ok);

@@ -93,15 +93,22 @@ struct TrainOptions {
   /// With the forward map from frames placed by odometry: also each board's bearing (the lens's
   /// law learnt from the run, docs/bearings.md).
   bool bearings = true;
-  /// Also fit the camera and the boards' geometry to the placed frames (scene_geometry_fit.hpp):
-  /// reported, and in the map only with visibility_from_geometry. Needs the bearings, row sums
-  /// in the areas and camera_height_m (the fit's gauge). Takes seconds to tens of seconds.
+  /// Also fit the camera and the boards' geometry to the placed frames (scene_geometry_fit.hpp)
+  /// and report it, on any map. Needs the bearings, row sums in the areas and the camera's
+  /// height (the fit's gauge). Takes seconds to tens of seconds.
   bool fit_geometry = false;
-  /// With fit_geometry: a floor map's visibility tables from the fitted geometry, board by board
-  /// where it predicts the run's areas better than the kernel means (forward_map_geometry.hpp).
-  bool visibility_from_geometry = false;
+  /// A floor map's visibility tables from the geometry fitted to the run (fitted for them when
+  /// fit_geometry is off), board by board where it predicts the run's areas better than the
+  /// kernel means (forward_map_geometry.hpp). Where the camera's height is not known, or the fit
+  /// fails, the kernel's tables stay and GeometryReport says why. No effect on a route's map.
+  bool visibility_from_geometry = true;
+  /// With visibility_from_geometry: an unknown camera height is an error (thrown before any
+  /// work), not a fall back to the kernel's tables (`harmoloc-train --visibility-from-geometry`).
+  bool geometry_tables_required = false;
   GeometryTablesOptions geometry_tables;
-  double camera_height_m = 0.0;  ///< the camera's optical centre above the floor; 0: unknown
+  /// The camera's optical centre above the floor (metres); 0: the run's (the dataset's
+  /// camera.height_m), else unknown.
+  double camera_height_m = 0.0;
   SceneFitOptions geometry_fit;
   ForwardMapOptions forward;
 };
@@ -210,6 +217,9 @@ struct AreaSeries {
   /// The camera's offset ahead of the axle (metres; the dataset's camera.forward_offset_m); NaN
   /// when unknown. TrainOptions::forward.camera_forward_m, when given, comes first.
   double camera_forward_m = std::numeric_limits<double>::quiet_NaN();
+  /// The camera's height above the floor (metres; the dataset's camera.height_m); NaN when
+  /// unknown. TrainOptions::camera_height_m, when given, comes first.
+  double camera_height_m = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// Segments a dataset folder with @p thresholds (the firmware's own segmentation).
