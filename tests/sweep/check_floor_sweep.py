@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Checks a floor sweep's sweep.json (harmoloc-sweep --parts floor, issue 20): every scene's
 coverage run trained into a floor map (its passes 10 degrees or more apart in heading, so that
-the firmware drops the route terms) and its roams replayed and scored. No accuracy bound yet:
+the firmware drops the route terms), its visibility tables taken from the fitted geometry on some
+board, and its roams replayed and scored. No accuracy bound yet:
 the floor maps localize to tens of centimetres (docs/sweep.md, "Floor runs"). The nearby pose
 test must have drawn on some floor.
 """
@@ -41,6 +42,12 @@ def main():
             problems.append(f"seed {seed}: roams of {r.get('floor_roam_s', 0.0)} s")
         if r.get("floor_kidnaps", 0) < 1:
             problems.append(f"seed {seed}: no kidnap in the floor's kidnap roam")
+        # The floor map's visibility tables come from the fitted camera and boards by default
+        # (the sweep gives the scene's camera height): some board must have taken them.
+        if d.get("options", {}).get("visibility_from_geometry", True) and \
+                not r.get("floor_geometry_boards", 0) >= 1:
+            problems.append(f"seed {seed}: no board took the geometry's visibility tables "
+                            f"({r.get('floor_geometry_candidates', 0)} fitted)")
         if r.get("fused_rmse_m", -1.0) >= 0.0:
             problems.append(f"seed {seed}: a route part ran although only the floor was asked for")
     # The nearby pose test (filter.nearby_test, on by default) runs on every floor map with
