@@ -18,6 +18,18 @@ const std::vector<double> kSteps(detail::kBoardParams, 1e-4);
 
 }  // namespace
 
+BoardFitOptions for_frame(BoardFitOptions options, std::uint32_t width_px,
+                          std::uint32_t height_px) {
+  if (width_px == 0 || height_px == 0) return options;
+  const double linear = static_cast<double>(width_px) / kBoardFitReferenceWidthPx;
+  const double area = static_cast<double>(width_px) * static_cast<double>(height_px) /
+                      (static_cast<double>(kBoardFitReferenceWidthPx) * kBoardFitReferenceHeightPx);
+  options.centroid_scale_px *= linear;
+  options.sqrt_area_scale *= std::sqrt(area);
+  options.min_area_px *= area;
+  return options;
+}
+
 std::vector<BoardSighting> usable_sightings(const std::vector<BoardSighting>& all,
                                             const BoardFitOptions& options) {
   std::vector<BoardSighting> kept;

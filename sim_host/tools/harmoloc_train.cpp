@@ -61,23 +61,39 @@ void print_geometry(const harmoloc::sim_host::GeometryReport& g,
     return;
   }
   const harmoloc::sim_host::SceneGeometryFit& f = g.fit;
+  const harmoloc::sim_host::CameraSpec& c = f.camera;
   if (!f.ok) {
     std::printf("geometry      not fitted: fewer than two boards fit (%.0f ms)\n", g.ms);
-    return;
+  } else {
+    std::printf(
+        "geometry      camera: field of view %.1f deg (pinhole; started at %.1f), "
+        "k1 %.3f, k2 %.3f, "
+        "pitch %.1f deg, principal point %+.1f, %+.1f px, %.3f m ahead of the axle, %.3f m up "
+        "(given); residual column %.2f px, row %.2f px RMS (%.0f ms)\n",
+        c.horizontal_fov_deg, g.camera_start.horizontal_fov_deg, c.k1, c.k2, c.pitch_deg,
+        c.principal_offset_x_px, c.principal_offset_y_px, c.forward_offset_m, c.height_m,
+        f.rms_column_px, f.rms_row_px, g.ms);
   }
-  const harmoloc::sim_host::CameraSpec& c = f.camera;
-  std::printf(
-      "geometry      camera: field of view %.1f deg (pinhole; started at %.1f), k1 %.3f, k2 %.3f, "
-      "pitch %.1f deg, principal point %+.1f, %+.1f px, %.3f m ahead of the axle, %.3f m up "
-      "(given); residual column %.2f px, row %.2f px RMS (%.0f ms)\n",
-      c.horizontal_fov_deg, g.camera_start.horizontal_fov_deg, c.k1, c.k2, c.pitch_deg,
-      c.principal_offset_x_px, c.principal_offset_y_px, c.forward_offset_m, c.height_m,
-      f.rms_column_px, f.rms_row_px, g.ms);
+  if (g.frame_scales) {
+    std::printf(
+        "              residual scales taken to the %ux%u frame (with a 320x240 frame's, fewer "
+        "than two boards fitted)\n",
+        g.camera_start.width_px, g.camera_start.height_px);
+  }
+  // Each board, fitted or not: a failed fit says which boards failed and by how much.
   for (std::size_t k = 0; k < f.boards.size(); ++k) {
     const harmoloc::sim_host::BoardFit& b = f.boards[k];
     const char* name = k < n.names.size() ? n.names[k].c_str() : "?";
     if (!b.ok) {
-      std::printf("              %s not fitted (%zu sightings)\n", name, b.sightings_used);
+      if (b.sightings_used == 0) {
+        std::printf("              %s not fitted (not placed from its bearings, or never seen)\n",
+                    name);
+      } else {
+        std::printf(
+            "              %s not fitted (%zu sightings, %.0f%% beyond the robust threshold; "
+            "residual column %.2f px, row %.2f px)\n",
+            name, b.sightings_used, 100.0 * b.outlier_share, b.rms_column_px, b.rms_row_px);
+      }
       continue;
     }
     std::printf(
@@ -87,7 +103,7 @@ void print_geometry(const harmoloc::sim_host::GeometryReport& g,
         b.board.height_m, b.board.facing_yaw_rad * 180.0 / harmoloc::algorithms::kPi,
         b.sightings_used, b.rms_column_px, b.rms_row_px);
   }
-  print_geometry_tables(g, n);
+  if (f.ok) print_geometry_tables(g, n);
 }
 
 }  // namespace

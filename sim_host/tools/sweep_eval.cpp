@@ -146,6 +146,33 @@ void trace(const SweepOptions& opt, std::uint64_t seed, const char* part, const 
   write_trace(run, opt.trace_dir + "/seed-" + std::to_string(seed) + "-" + part + ".csv");
 }
 
+// How far the geometry fitted to the coverage run is from the scene's: the trainer sees only
+// the frames, the sweep knows the truth. Board b of the fit is the scene's board b (the areas'
+// order is the scenario's).
+void geometry_against_truth(const GeometryReport& g, const Scenario& scene, SceneResult& r) {
+  if (!g.tried || !g.fit.ok) return;
+  std::vector<double> errors;
+  for (std::size_t b = 0; b < g.fit.boards.size() && b < scene.boards.size(); ++b) {
+    if (!g.fit.boards[b].ok) continue;
+    const BoardSpec& fit = g.fit.boards[b].board;
+    const BoardSpec& truth = scene.boards[b];
+    errors.push_back(
+        std::hypot(std::hypot(fit.centre_x_m - truth.centre_x_m, fit.centre_y_m - truth.centre_y_m),
+                   fit.centre_z_m - truth.centre_z_m));
+  }
+  if (!errors.empty()) {
+    std::sort(errors.begin(), errors.end());
+    const std::size_t n = errors.size();
+    r.floor_geometry_board_error_median_m =
+        n % 2 == 1 ? errors[n / 2] : 0.5 * (errors[n / 2 - 1] + errors[n / 2]);
+    r.floor_geometry_board_error_max_m = errors.back();
+  }
+  const CameraSpec& c = g.fit.camera;
+  r.floor_geometry_fov_error_deg = c.horizontal_fov_deg - scene.camera.horizontal_fov_deg;
+  r.floor_geometry_pitch_error_deg = c.pitch_deg - scene.camera.pitch_deg;
+  r.floor_geometry_forward_error_m = c.forward_offset_m - scene.camera.forward_offset_m;
+}
+
 // Issue 20's floor runs: train on the coverage run, replay the roams, pool their frames.
 void floor_part(const Scenario& scene, const algorithms::ThresholdSet& thresholds,
                 std::uint64_t seed, const SweepOptions& opt, SceneResult& r,
@@ -178,6 +205,7 @@ void floor_part(const Scenario& scene, const algorithms::ThresholdSet& threshold
       r.floor_geometry_boards += tables.from_geometry[b] ? 1 : 0;
       r.floor_geometry_candidates += tables.geometry_sigma[b] > 0.0 ? 1 : 0;
     }
+    geometry_against_truth(trained.report.geometry, coverage, r);
     r.floor_heading_bandwidth_m = fw.heading_bandwidth_m;
     r.floor_covered_heading_fraction = fw.covered_heading_fraction;
     r.floor_validation_rmse = fw.validation_rmse;

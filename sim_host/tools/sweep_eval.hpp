@@ -8,6 +8,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -120,6 +121,14 @@ struct SceneResult {
   /// fitted geometry, and those the fit gave tables for (the others keep the kernel's).
   int floor_geometry_boards = 0;
   int floor_geometry_candidates = 0;
+  /// The fitted geometry against the scene's truth (-1 or NaN: not fitted): the fitted boards'
+  /// centres from the true ones (median and largest, metres), and the camera's field of view
+  /// (pinhole, degrees), pitch (degrees) and offset ahead of the axle (metres), fitted less true.
+  double floor_geometry_board_error_median_m = -1.0;
+  double floor_geometry_board_error_max_m = -1.0;
+  double floor_geometry_fov_error_deg = std::numeric_limits<double>::quiet_NaN();
+  double floor_geometry_pitch_error_deg = std::numeric_limits<double>::quiet_NaN();
+  double floor_geometry_forward_error_m = std::numeric_limits<double>::quiet_NaN();
   double floor_heading_bandwidth_m = 0.0;  ///< their wide kernel (0: the narrow one)
   double floor_validation_rmse = -1.0, floor_mean_validation_rmse = -1.0;
   /// The share of the circle of headings the floor map covers near the coverage run (-1: none).

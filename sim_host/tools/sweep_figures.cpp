@@ -90,6 +90,18 @@ std::vector<Figure> figures() {
        [](const SceneResult& r) { return cm2(r.floor_fix_mse_x_m2); }},
       {"floor_fix_mse_y", "floor roams: harmonic localizer alone, MSE y", "cm^2",
        [](const SceneResult& r) { return cm2(r.floor_fix_mse_y_m2); }},
+      // The camera and boards fitted to the coverage run against the scene's (the trainer does
+      // not see the truth; the sweep does).
+      {"floor_geometry_board", "floor geometry fit: board centre error, median board", "cm",
+       [](const SceneResult& r) { return cm(r.floor_geometry_board_error_median_m); }},
+      {"floor_geometry_board_max", "floor geometry fit: board centre error, worst board", "cm",
+       [](const SceneResult& r) { return cm(r.floor_geometry_board_error_max_m); }},
+      {"floor_geometry_fov", "floor geometry fit: field of view error (absolute)", "deg",
+       [](const SceneResult& r) { return std::fabs(r.floor_geometry_fov_error_deg); }},
+      {"floor_geometry_pitch", "floor geometry fit: pitch error (absolute)", "deg",
+       [](const SceneResult& r) { return std::fabs(r.floor_geometry_pitch_error_deg); }},
+      {"floor_geometry_forward", "floor geometry fit: camera offset error (absolute)", "cm",
+       [](const SceneResult& r) { return 100.0 * std::fabs(r.floor_geometry_forward_error_m); }},
   };
 }
 

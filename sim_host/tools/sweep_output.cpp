@@ -69,6 +69,11 @@ nlohmann::json to_json(const SceneResult& r) {
   j["floor_heading_ridge"] = r.floor_heading_ridge;
   j["floor_geometry_boards"] = r.floor_geometry_boards;
   j["floor_geometry_candidates"] = r.floor_geometry_candidates;
+  j["floor_geometry_board_error_median_m"] = r.floor_geometry_board_error_median_m;
+  j["floor_geometry_board_error_max_m"] = r.floor_geometry_board_error_max_m;
+  j["floor_geometry_fov_error_deg"] = r.floor_geometry_fov_error_deg;
+  j["floor_geometry_pitch_error_deg"] = r.floor_geometry_pitch_error_deg;
+  j["floor_geometry_forward_error_m"] = r.floor_geometry_forward_error_m;
   j["floor_heading_bandwidth_m"] = r.floor_heading_bandwidth_m;
   j["floor_covered_heading_fraction"] = r.floor_covered_heading_fraction;
   j["floor_validation_rmse"] = r.floor_validation_rmse;

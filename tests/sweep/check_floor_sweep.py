@@ -48,6 +48,18 @@ def main():
                 not r.get("floor_geometry_boards", 0) >= 1:
             problems.append(f"seed {seed}: no board took the geometry's visibility tables "
                             f"({r.get('floor_geometry_candidates', 0)} fitted)")
+        # The fitted geometry against the scene's truth: recorded wherever boards were fitted,
+        # and near the truth (a board matched to the wrong scene board, or a fit gone astray,
+        # lands metres off; the fits of random floors are off by centimetres to decimetres).
+        if r.get("floor_geometry_candidates", 0) >= 1:
+            err = r.get("floor_geometry_board_error_median_m")
+            if err is None or not 0.0 <= err < 0.5:
+                problems.append(f"seed {seed}: fitted boards' median centre error {err} m "
+                                "(not recorded, or 50 cm or more off the scene's)")
+            for key in ("floor_geometry_fov_error_deg", "floor_geometry_pitch_error_deg",
+                        "floor_geometry_forward_error_m"):
+                if not isinstance(r.get(key), (int, float)):
+                    problems.append(f"seed {seed}: {key} not recorded")
         if r.get("fused_rmse_m", -1.0) >= 0.0:
             problems.append(f"seed {seed}: a route part ran although only the floor was asked for")
     # The nearby pose test (filter.nearby_test, on by default) runs on every floor map with

@@ -145,6 +145,46 @@ TEST(BoardGeometryFit, TooFewSightingsIsNotOk) {
   EXPECT_LE(fit.sightings_used, 5U);
 }
 
+// The residual scales are for a 320 x 240 frame. The same scene seen by a 1280 x 720 camera with
+// the same share of centroid noise (1.5 px of 320, 6 px of 1280) is fitted only with the scales
+// taken to that frame (for_frame): with the 320 x 240 scales most sightings fall beyond the robust
+// threshold, and on a random scene so recorded no board was fitted at all.
+TEST(BoardGeometryFit, ScalesFollowTheFrameSize) {
+  const hs::Scenario s = hs::random_scenario(4);
+  const std::vector<ha::Pose2> poses = grid_poses(hs::floor_plan(s), 4, 3);
+  const auto noisy_fit = [&](std::uint32_t width_px, std::uint32_t height_px,
+                             const hs::BoardFitOptions& options) {
+    hs::CameraSpec camera = s.camera;
+    camera.width_px = width_px;
+    camera.height_px = height_px;
+    const hs::LensModel lens(camera);
+    const hs::BoardSpec truth = s.boards[best_seen_board(s, lens, poses)];
+    std::vector<hs::BoardSighting> seen = projected_sightings(camera, lens, truth, poses);
+    ha::Pcg32 rng(5);
+    const double sigma_px = 1.5 * width_px / 320.0;
+    for (hs::BoardSighting& b : seen) {
+      b.centroid_u_px += rng.normal(0.0, sigma_px);
+      b.centroid_v_px += rng.normal(0.0, sigma_px);
+    }
+    return hs::fit_board_geometry(camera, lens, seen, truth, options);
+  };
+  const hs::BoardFitOptions reference;
+  EXPECT_TRUE(noisy_fit(320, 240, reference).ok);
+  EXPECT_TRUE(noisy_fit(320, 240, hs::for_frame(reference, 320, 240)).ok);
+  const hs::BoardFit raw = noisy_fit(1280, 720, reference);
+  EXPECT_FALSE(raw.ok);
+  EXPECT_GT(raw.outlier_share, 0.5);
+  const hs::BoardFit scaled = noisy_fit(1280, 720, hs::for_frame(reference, 1280, 720));
+  EXPECT_TRUE(scaled.ok);
+  EXPECT_LT(scaled.outlier_share, 0.2);
+
+  const hs::BoardFitOptions wide = hs::for_frame(reference, 1280, 720);
+  EXPECT_DOUBLE_EQ(wide.centroid_scale_px, 4.0 * reference.centroid_scale_px);
+  EXPECT_DOUBLE_EQ(wide.sqrt_area_scale, std::sqrt(12.0) * reference.sqrt_area_scale);
+  EXPECT_DOUBLE_EQ(wide.min_area_px, 12.0 * reference.min_area_px);
+  EXPECT_DOUBLE_EQ(hs::for_frame(reference, 0, 0).centroid_scale_px, reference.centroid_scale_px);
+}
+
 // The real path: frames rendered with noise, vignetting and the scene's light, segmented by the
 // firmware, each board's pixels and centroid column and row as sightings. Boards hidden behind
 // others, stands, lens edges and the frame's border are all in there. Rendered once for the tests

@@ -11,6 +11,7 @@
 /// weigh alike) and the centroid's column and row, each over its scale; Huber weights keep
 /// sightings of a partly hidden board (a person, another board, a stand) from pulling the fit.
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
 #include "harmoloc/algorithms/geometry.hpp"
@@ -26,6 +27,11 @@ struct BoardSighting {
   double centroid_u_px = 0.0;  ///< column, pixel centres at whole numbers
   double centroid_v_px = 0.0;  ///< row
 };
+
+/// The pixel figures of BoardFitOptions are for a frame of this size; for_frame takes them to
+/// another.
+constexpr int kBoardFitReferenceWidthPx = 320;
+constexpr int kBoardFitReferenceHeightPx = 240;
 
 struct BoardFitOptions {
   /// Sightings with fewer pixels are left out: a few pixels' centroid says little.
@@ -57,6 +63,14 @@ struct BoardFit {
   /// Share of the sightings beyond Huber's threshold in any residual.
   double outlier_share = 0.0;
 };
+
+/// @p options, whose pixel figures are for a 320 x 240 frame, for a frame of @p width_px x
+/// @p height_px: the centroid's scale grows with the width, sqrt(area)'s with the square root of
+/// the frame's area and the smallest area with the frame's area. Unchanged for a 320 x 240 frame
+/// or a size of 0. With a 320 x 240 frame's scales, most sightings of a 1280 x 720 random floor
+/// fell beyond the robust threshold and no board was fitted; yet where those tight scales fit,
+/// they fitted closer (docs/sweep.md), so the trainer takes these only as a fallback.
+BoardFitOptions for_frame(BoardFitOptions options, std::uint32_t width_px, std::uint32_t height_px);
 
 /// A start for fit_board_geometry from a board's place on the floor (@p x_m, @p y_m, as
 /// calibrate_bearings triangulates it): the height whose projection best matches the centroid

@@ -160,6 +160,9 @@ struct GeometryReport {
   std::string skipped;  ///< why it was not tried, when asked for
   CameraSpec camera_start;
   SceneGeometryFit fit;
+  /// The fit's residual scales were taken to the run's frame size (for_frame): with the
+  /// 320 x 240 frame's scales fewer than two boards fitted.
+  bool frame_scales = false;
   double ms = 0.0;
   /// TrainOptions::visibility_from_geometry: what the map took from the fit.
   bool tables_asked = false;
