@@ -69,13 +69,13 @@ GeometryReport fit_training_geometry(const AreaSeries& run, const std::vector<Pl
                               a.centroid_row_px(b)});
     }
   }
-  // The residual scales are a 320 x 240 frame's. A larger frame's centroids are finer in its
-  // own pixels (more of them on each board's edge), and those tight scales fitted closer there:
-  // taken to the frame's size on the 21 random floors at 640 x 480 and 1280 x 720, the floor
-  // roams' RMSE went from 12.5 to 15.0 cm median on the 1280 x 720 ones (10.7 to 10.2 on the
-  // 640 x 480 ones; docs/sweep.md, 2026-12-04 (later)). So they
-  // are tried first, and the frame's scales only when they leave fewer than two boards fitted
-  // (random floor 3, where two thirds of the sightings fell beyond the robust threshold).
+  // The residual scales are a 320 x 240 frame's. A larger frame's centroids are finer in its own
+  // pixels (more of them on each board's edge), and those tight scales fitted closer there: taken
+  // to the frame's size on the 21 random floors at 640 x 480 and 1280 x 720, the floor roams'
+  // RMSE went from 12.5 to 15.0 cm median on the 1280 x 720 ones (10.7 to 10.2 on the 640 x 480
+  // ones; docs/sweep.md, 2026-12-04 (later)). So they are tried first, and the frame's scales
+  // only when they leave fewer than two boards fitted (random floor 3, where two thirds of the
+  // sightings fell beyond the robust threshold).
   const auto fit_with = [&](const SceneFitOptions& options) {
     const LensModel lens(camera);
     std::vector<BoardSpec> starts(boards);
@@ -98,11 +98,11 @@ GeometryReport fit_training_geometry(const AreaSeries& run, const std::vector<Pl
     if (!bearings.placements[b].placed) sightings[b].clear();  // no place to start from
   }
   report.fit = fit_with(opt.geometry_fit);
-  SceneFitOptions frame_options = opt.geometry_fit;
-  frame_options.board = for_frame(frame_options.board, camera.width_px, camera.height_px);
   const bool reference_frame = camera.width_px == kBoardFitReferenceWidthPx &&
                                camera.height_px == kBoardFitReferenceHeightPx;
   if (!report.fit.ok && !reference_frame) {
+    SceneFitOptions frame_options = opt.geometry_fit;
+    frame_options.board = for_frame(frame_options.board, camera.width_px, camera.height_px);
     report.fit = fit_with(frame_options);
     report.frame_scales = true;
   }
