@@ -1,5 +1,6 @@
 #include "harmoloc/sim_host/lens.hpp"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 
@@ -206,6 +207,42 @@ bool project_point(const CameraSpec& camera, const LensModel& lens, const Camera
   u = in.focal_px * xd + in.cx_px;
   v = in.focal_px * yd + in.cy_px;
   return true;
+}
+
+ColumnLaw column_law_of(const CameraSpec& camera) {
+  ColumnLaw law;
+  const LensModel lens(camera);
+  const Intrinsics in = intrinsics_of(camera);
+  const CameraFrame f = camera_frame_of(camera, algorithms::Pose2{0.0, 0.0, 0.0});
+  const double w = static_cast<double>(camera.width_px), h = static_cast<double>(camera.height_px);
+  Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d atb = Eigen::Vector3d::Zero();
+  std::size_t n = 0;
+  for (const double row : {0.35, 0.5, 0.65}) {
+    const double v = row * (h - 1.0);
+    for (int k = -32; k <= 32; ++k) {
+      const double t = k / 64.0;
+      const double u = 0.5 * (w - 1.0) + t * w;
+      double x = 0.0, y = 0.0;
+      if (!lens.undistort((u - in.cx_px) / in.focal_px, (v - in.cy_px) / in.focal_px, x, y))
+        continue;
+      double ray[3];
+      for (int i = 0; i < 3; ++i) ray[i] = f.right[i] * x + f.down[i] * y + f.forward[i];
+      const double angle = -std::atan2(ray[1], ray[0]);  // positive to the right
+      const Eigen::Vector3d basis(1.0, t, t * t * t);
+      ata += basis * basis.transpose();
+      atb += basis * angle;
+      ++n;
+    }
+  }
+  if (n < 20) return law;
+  const Eigen::Vector3d c = ata.ldlt().solve(atb);
+  if (!c.allFinite() || !(c[1] > 0.0)) return law;
+  law.ok = true;
+  law.axis_rad = c[0];
+  law.a1_rad = c[1];
+  law.a3_rad = c[2];
+  return law;
 }
 
 }  // namespace harmoloc::sim_host

@@ -120,6 +120,9 @@ int main(int argc, char** argv) {
                  "the lanes, its best case)")
       ->check(CLI::Range(0.0, 1000.0))
       ->capture_default_str();
+  app.add_flag("--law-from-frames", opt.law_from_frames,
+               "floor: keep the column-to-angle law triangulated from the frames, not the fitted\n"
+               "camera's (harmoloc-train --law-from-frames), for comparison");
   app.add_flag("--axle-bearings", opt.axle_bearings,
                "keep the maps' bearings over the axle's place, as when the camera's offset is\n"
                "not given (harmoloc-train --camera-forward-m 0), for comparison");
@@ -203,6 +206,7 @@ int main(int argc, char** argv) {
                     {"no_visibility", opt.no_visibility},
                     {"visibility_from_geometry", opt.visibility_from_geometry},
                     {"geometry_noise_ratio", opt.geometry_noise_ratio},
+                    {"law_from_frames", opt.law_from_frames},
                     {"roams", opt.roams}};
     j["results"] = nlohmann::json::array();
     for (const SceneResult& r : finished) j["results"].push_back(to_json(r));

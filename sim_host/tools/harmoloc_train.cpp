@@ -27,6 +27,14 @@ std::string board_list(const std::vector<int>& boards, const harmoloc::firmware:
 void print_geometry_tables(const harmoloc::sim_host::GeometryReport& g,
                            const harmoloc::firmware::BoardNames& n) {
   if (!g.tables_asked) return;
+  if (g.law_from_camera) {
+    constexpr double kDeg = 180.0 / harmoloc::algorithms::kPi;
+    std::printf(
+        "geometry      column-to-angle law from the fitted camera: half field of view %.2f deg "
+        "(a1 %.4f, a3 %.4f); the optical axis %+.2f deg right of the centre column\n",
+        (0.5 * g.law_a1_rad + 0.125 * g.law_a3_rad) * kDeg, g.law_a1_rad, g.law_a3_rad,
+        g.law_axis_rad * kDeg);
+  }
   const harmoloc::sim_host::GeometryTablesReport& t = g.tables;
   if (!t.applied) {
     std::printf(
@@ -223,6 +231,11 @@ int main(int argc, char** argv) {
                "a floor map's visibility tables from the frames near each place only, as\n"
                "when the camera's height is not known (no geometry fit)")
       ->excludes(visibility_from_geometry_flag);
+  bool law_from_frames = false;
+  app.add_flag("--law-from-frames", law_from_frames,
+               "keep the column-to-angle law triangulated from the frames' centroid columns; by\n"
+               "default a map whose visibility tables the geometry fit serves takes the fitted\n"
+               "camera's law, and its forward map is trained again with it (docs/training.md)");
   double camera_height = 0.0;
   app.add_option("--camera-height-m", camera_height,
                  "the camera's optical centre above the floor (metres), the geometry fit's\n"
@@ -291,6 +304,7 @@ int main(int argc, char** argv) {
     opt.fit_geometry = fit_geometry;
     opt.visibility_from_geometry = !visibility_from_frames;
     opt.geometry_tables_required = visibility_from_geometry;
+    opt.law_from_geometry = !law_from_frames;
     opt.camera_height_m = camera_height;
     opt.label_tolerance_ns = static_cast<std::uint64_t>(std::llround(label_tolerance_ms * 1e6));
     if (label_offset == "auto") {

@@ -191,6 +191,7 @@ void floor_part(const Scenario& scene, const algorithms::ThresholdSet& threshold
     train.column_gain = opt.column_gain;
     train.visibility_from_geometry = opt.visibility_from_geometry;
     train.geometry_tables.kernel_noise_ratio = opt.geometry_noise_ratio;
+    train.law_from_geometry = !opt.law_from_frames;
     train.camera_height_m = coverage.camera.height_m;  // a tape measure gives it
     const TrainedMap trained =
         train_on_scenario(coverage, kCoverageSeed, nullptr, &thresholds, &train);
@@ -206,6 +207,9 @@ void floor_part(const Scenario& scene, const algorithms::ThresholdSet& threshold
       r.floor_geometry_candidates += tables.geometry_sigma[b] > 0.0 ? 1 : 0;
     }
     geometry_against_truth(trained.report.geometry, coverage, r);
+    r.floor_law_from_camera = trained.report.geometry.law_from_camera;
+    if (r.floor_law_from_camera)
+      r.floor_law_axis_deg = trained.report.geometry.law_axis_rad * 180.0 / algorithms::kPi;
     r.floor_heading_bandwidth_m = fw.heading_bandwidth_m;
     r.floor_covered_heading_fraction = fw.covered_heading_fraction;
     r.floor_validation_rmse = fw.validation_rmse;

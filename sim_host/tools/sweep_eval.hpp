@@ -43,8 +43,11 @@ struct SweepOptions {
   /// (harmoloc-train --visibility-from-frames).
   bool visibility_from_geometry = true;
   double geometry_noise_ratio = 1.0;  ///< GeometryTablesOptions::kernel_noise_ratio
-  int kidnaps = 20;                   ///< kidnaps in the kidnap run (each >= 1 m)
-  double long_minutes = 10.0;         ///< length of the long nominal run
+  /// The floor map's column-to-angle law triangulated from the frames, not the fitted camera's
+  /// (TrainOptions::law_from_geometry off).
+  bool law_from_frames = false;
+  int kidnaps = 20;            ///< kidnaps in the kidnap run (each >= 1 m)
+  double long_minutes = 10.0;  ///< length of the long nominal run
   std::uint64_t filter_seed = 1;
   /// Errors count from this long after the first fix (the start-up target: under 5 cm within it).
   double settle_s = 2.0;
@@ -129,6 +132,10 @@ struct SceneResult {
   double floor_geometry_fov_error_deg = std::numeric_limits<double>::quiet_NaN();
   double floor_geometry_pitch_error_deg = std::numeric_limits<double>::quiet_NaN();
   double floor_geometry_forward_error_m = std::numeric_limits<double>::quiet_NaN();
+  /// The floor map's column-to-angle law is the fitted camera's (GeometryReport::law_from_camera),
+  /// and the optical axis's angle from the centre column under it (degrees; NaN: not taken).
+  bool floor_law_from_camera = false;
+  double floor_law_axis_deg = std::numeric_limits<double>::quiet_NaN();
   double floor_heading_bandwidth_m = 0.0;  ///< their wide kernel (0: the narrow one)
   double floor_validation_rmse = -1.0, floor_mean_validation_rmse = -1.0;
   /// The share of the circle of headings the floor map covers near the coverage run (-1: none).

@@ -60,6 +60,15 @@ def main():
                         "floor_geometry_forward_error_m"):
                 if not isinstance(r.get(key), (int, float)):
                     problems.append(f"seed {seed}: {key} not recorded")
+            # With the fit, the floor map's column-to-angle law is the fitted camera's (unless the
+            # sweep was asked to keep the frames' law), and its axis a few degrees at most off
+            # the frame's centre column.
+            if not d.get("options", {}).get("law_from_frames", False):
+                axis = r.get("floor_law_axis_deg")
+                if not r.get("floor_law_from_camera", False):
+                    problems.append(f"seed {seed}: the law did not come from the fitted camera")
+                elif not isinstance(axis, (int, float)) or not abs(axis) < 10.0:
+                    problems.append(f"seed {seed}: the fitted camera's axis at {axis} deg")
         if r.get("fused_rmse_m", -1.0) >= 0.0:
             problems.append(f"seed {seed}: a route part ran although only the floor was asked for")
     # The nearby pose test (filter.nearby_test, on by default) runs on every floor map with

@@ -209,3 +209,97 @@ TEST(BoardProjection, SegmentedCentroidsAreTheProjectedCentroids) {
 }
 
 }  // namespace
+
+namespace {
+
+// The law's angle of centroid column @p u_px (forward_map.hpp), the optical axis's offset added.
+double law_angle_rad(const hs::ColumnLaw& law, double u_px, std::uint32_t width_px) {
+  const double t = (u_px - 0.5 * (width_px - 1.0)) / width_px;
+  return law.axis_rad + (law.a1_rad + law.a3_rad * t * t) * t;
+}
+
+// The worst difference (degrees) over headings -30..30 degrees between where the law puts a
+// small board 4 m away, @p rise_m above the camera (its projected centroid's column), and where
+// it is from the camera.
+double worst_law_error_deg(const hs::CameraSpec& c, const hs::ColumnLaw& law, double rise_m) {
+  const hs::LensModel lens(c);
+  hs::BoardSpec b = board_ahead(4.0);
+  b.width_m = b.height_m = 0.06;
+  b.centre_z_m = c.height_m + rise_m;
+  double worst = 0.0;
+  for (int deg = -30; deg <= 30; deg += 2) {
+    const ha::Pose2 robot{0.0, 0.0, deg * kPi / 180.0};
+    const hs::BoardImage image = hs::project_board(c, lens, b, robot);
+    if (!(image.area_px > 0.0) || image.cut) continue;
+    // The board's direction from the camera's place, as an image angle (positive to the right).
+    const double cx = c.forward_offset_m * std::cos(robot.yaw_rad);
+    const double cy = c.forward_offset_m * std::sin(robot.yaw_rad);
+    const double truth = robot.yaw_rad - std::atan2(b.centre_y_m - cy, b.centre_x_m - cx);
+    worst = std::max(worst, std::fabs(law_angle_rad(law, image.centroid_u_px, c.width_px) - truth));
+  }
+  return worst * 180.0 / kPi;
+}
+
+}  // namespace
+
+// The firmware's column-to-angle law from a known camera (lens.hpp; a floor map's law, from the
+// fitted camera): on a pinhole it is the arctangent's cubic; the principal point's offset and the
+// mounting's yaw go to its axis, not into a1 and a3; with that offset, through a barrel lens and
+// from ahead of the axle, where a board appears still gives its direction within a quarter of a
+// degree over +-30 degrees. The law has no row: under a pitch it holds for boards seen about the
+// frame's middle rows, and one seen lower is off by a few percent of its angle.
+TEST(ColumnLaw, TakesTheAxisApartAndGivesTheBoardsDirection) {
+  const hs::CameraSpec level = pinhole();
+  const hs::ColumnLaw plain = hs::column_law_of(level);
+  ASSERT_TRUE(plain.ok);
+  EXPECT_NEAR(plain.axis_rad, 0.0, 1e-9);
+  // atan(2 tan(35 deg) t) near the centre: slope 2 tan(35 deg) = 1.40.
+  EXPECT_NEAR(plain.a1_rad, 2.0 * std::tan(35.0 * kPi / 180.0), 0.05);
+  EXPECT_LT(plain.a3_rad, 0.0);  // the arctangent flattens towards the edges
+  const double plain_error = worst_law_error_deg(level, plain, 0.0);
+
+  hs::CameraSpec off = level;
+  off.principal_offset_x_px = -6.0;  // as -25 px at 1280 (random floor 1)
+  off.mount_yaw_deg = 2.0;           // turned to the left: the centre column's ray 2 degrees left
+  const hs::ColumnLaw shifted = hs::column_law_of(off);
+  ASSERT_TRUE(shifted.ok);
+  // The axis: 2 degrees left, and 1.5 degrees right at the centre column; a little less over
+  // the columns (the arctangent's slope falls away from the principal point).
+  EXPECT_LT(shifted.axis_rad * 180.0 / kPi, std::atan(6.0 / focal_px(off)) * 180.0 / kPi - 2.0);
+  EXPECT_GT(shifted.axis_rad * 180.0 / kPi, -2.0);
+  EXPECT_NEAR(shifted.a1_rad, plain.a1_rad, 0.01 * plain.a1_rad);
+  // The offset bends the columns' angles unevenly about the centre, which an odd law cannot
+  // follow: a quarter of a degree at 30 degrees.
+  EXPECT_LT(worst_law_error_deg(off, shifted, 0.0), 0.3);
+
+  hs::CameraSpec lens = off;
+  lens.k1 = -0.17;
+  lens.forward_offset_m = 0.18;
+  const hs::ColumnLaw lens_law = hs::column_law_of(lens);
+  ASSERT_TRUE(lens_law.ok);
+  const double lens_error = worst_law_error_deg(lens, lens_law, 0.0);
+  hs::ColumnLaw no_axis = lens_law;  // the same law without its axis
+  no_axis.axis_rad = 0.0;
+  const double no_axis_error = worst_law_error_deg(lens, no_axis, 0.0);
+
+  hs::CameraSpec pitched = lens;
+  pitched.pitch_deg = 9.0;
+  const hs::ColumnLaw pitched_law = hs::column_law_of(pitched);
+  ASSERT_TRUE(pitched_law.ok);
+  // Seen on the middle row (4 m away and tan(9 deg) 4 m above the camera), and at the camera's
+  // height (36 px lower in the frame).
+  const double middle_error =
+      worst_law_error_deg(pitched, pitched_law, 4.0 * std::tan(9.0 * kPi / 180.0));
+  const double low_error = worst_law_error_deg(pitched, pitched_law, 0.0);
+  std::printf(
+      "law: pinhole a1 %.4f a3 %.4f, worst %.3f deg; axis %.3f deg; lens a1 %.4f a3 %.4f, "
+      "worst %.3f deg (%.3f without its axis); pitched 9 deg: middle row %.3f deg, lower %.3f "
+      "deg\n",
+      plain.a1_rad, plain.a3_rad, plain_error, shifted.axis_rad * 180.0 / kPi, lens_law.a1_rad,
+      lens_law.a3_rad, lens_error, no_axis_error, middle_error, low_error);
+  EXPECT_LT(plain_error, 0.1);
+  EXPECT_LT(lens_error, 0.3);
+  EXPECT_GT(no_axis_error, lens_error + 0.4);
+  EXPECT_LT(middle_error, 0.3);
+  EXPECT_GT(low_error, 2.0 * middle_error);
+}

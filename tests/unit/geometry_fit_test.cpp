@@ -18,6 +18,7 @@
 #include "harmoloc/algorithms/segmentation.hpp"
 #include "harmoloc/dataset/metadata.hpp"
 #include "harmoloc/sim_host/board_projection.hpp"
+#include "harmoloc/sim_host/lens.hpp"
 #include "harmoloc/sim_host/random_scene.hpp"
 #include "harmoloc/sim_host/scene_geometry_fit.hpp"
 #include "harmoloc/sim_host/scene_renderer.hpp"
@@ -503,6 +504,19 @@ TEST(TrainerGeometry, ReportsTheFitAndLeavesTheMapAlone) {
   std::size_t measured = 0;
   for (double sigma : seen.geometry.tables.geometry_sigma) measured += sigma > 0.0 ? 1U : 0U;
   EXPECT_GT(measured, 0U);
+  // Its column-to-angle law is the fitted camera's (hs::column_law_of), not the one triangulated
+  // from the frames; asked to keep that one, it does.
+  ASSERT_TRUE(seen.geometry.law_from_camera);
+  const hs::ColumnLaw law = hs::column_law_of(seen.geometry.fit.camera);
+  EXPECT_EQ(fitted->forward.bearing_a1_rad, static_cast<float>(law.a1_rad));
+  EXPECT_EQ(fitted->forward.bearing_a3_rad, static_cast<float>(law.a3_rad));
+  EXPECT_DOUBLE_EQ(seen.geometry.law_a1_rad, law.a1_rad);
+  EXPECT_NE(fitted->forward.bearing_a1_rad, static_cast<float>(seen.bearings.a1_rad));
+  opt.law_from_geometry = false;
+  const hs::TrainReport frames_law = hs::train_map(opt, *fitted);
+  EXPECT_FALSE(frames_law.geometry.law_from_camera);
+  EXPECT_EQ(fitted->forward.bearing_a1_rad, static_cast<float>(frames_law.bearings.a1_rad));
+  EXPECT_EQ(fitted->forward.bearing_a3_rad, static_cast<float>(frames_law.bearings.a3_rad));
 }
 
 }  // namespace

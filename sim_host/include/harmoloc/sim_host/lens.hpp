@@ -63,4 +63,19 @@ CameraFrame camera_frame_of(const CameraSpec& camera, const algorithms::Pose2& r
 bool project_point(const CameraSpec& camera, const LensModel& lens, const CameraFrame& frame,
                    const double point[3], double& u, double& v);
 
+/// The firmware's column-to-angle law (forward_map.hpp: angle a1 t + a3 t^3 for the centroid
+/// column u, t = (u - (W - 1) / 2) / W, positive to the right) that @p camera implies: the
+/// least-squares a0 + a1 t + a3 t^3 over the frame's columns, at three rows about its middle, of
+/// the angle between a pixel's ray and the robot's heading, seen from above.
+struct ColumnLaw {
+  bool ok = false;  ///< false: columns that do not turn one way, or a lens that cannot undistort
+  double a1_rad = 0.0, a3_rad = 0.0;
+  /// a0: where the optical axis lies under the law (the principal point's offset and the
+  /// mounting's yaw). The law leaves it out: it would add the same angle to every image angle
+  /// the firmware measures and take it from every world bearing the trainer stores (the heading
+  /// less the image angle), so it cancels in the filter's comparison of the two.
+  double axis_rad = 0.0;
+};
+ColumnLaw column_law_of(const CameraSpec& camera);
+
 }  // namespace harmoloc::sim_host

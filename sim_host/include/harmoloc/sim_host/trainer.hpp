@@ -105,6 +105,10 @@ struct TrainOptions {
   /// With visibility_from_geometry: an unknown camera height is an error (thrown before any
   /// work), not a fall back to the kernel's tables (`harmoloc-train --visibility-from-geometry`).
   bool geometry_tables_required = false;
+  /// Where a map takes visibility tables from the geometry: its column-to-angle law from the
+  /// fitted camera too (GeometryReport::law_from_camera), the forward map trained again with it.
+  /// false: the law triangulated from the frames (calibrate_bearings) stays.
+  bool law_from_geometry = true;
   GeometryTablesOptions geometry_tables;
   /// The camera's optical centre above the floor (metres); 0: the run's (the dataset's
   /// camera.height_m), else unknown.
@@ -167,6 +171,13 @@ struct GeometryReport {
   /// TrainOptions::visibility_from_geometry: what the map took from the fit.
   bool tables_asked = false;
   GeometryTablesReport tables;
+  /// TrainOptions::law_from_geometry: the map's column-to-angle law is the fitted camera's (the
+  /// tables took at least one board from the geometry with it), and that law.
+  bool law_from_camera = false;
+  double law_a1_rad = 0.0, law_a3_rad = 0.0;
+  /// The fitted camera's optical axis, as an angle from the frame's centre column under its law
+  /// (radians, positive to the right): the principal point's offset and the mounting's yaw.
+  double law_axis_rad = 0.0;
 };
 
 struct TrainReport {
