@@ -291,7 +291,7 @@ void apply_visibility(const ForwardMap& map, const GridPoint& seen_from, float y
     // turn of it: two turns at most, and a value that is not finite reads as out of view.
     float a = yaw_rad - (reference + turn * inv);
     for (int k = 0; k < 2; ++k) a = a > kPiF ? a - 2.0F * kPiF : (a < -kPiF ? a + 2.0F * kPiF : a);
-    out[b] = area * inv * angle_gain(map.visibility_angle_gain, a) *
+    out[b] = area * inv * visibility_gain(map, a) *
              visible_share(half_fov, half_width * inv, a < 0.0F ? -a : a);
   }
 }

@@ -114,16 +114,29 @@ MapError decode_heading_terms(Reader& r, ForwardMap& f) {
   return MapError{};
 }
 
-// The visibility (version 10), in the heading terms' place: the angle gain, then every stored
-// cell's feature seen whole on the axis and angular half-width of every board, in storage order.
-MapError decode_visibility(Reader& r, ForwardMap& f) {
+// The visibility (version 10), in the heading terms' place: the angle gain (version 14: and its
+// optical axis), then every stored cell's feature seen whole on the axis and angular half-width
+// of every board, in storage order.
+MapError decode_visibility(Reader& r, std::uint32_t version, ForwardMap& f) {
   const std::size_t boards = f.board_count, cells = f.stored_cells();
-  float gain = 0.0F;
+  float gain = 0.0F, axis = 0.0F;
   if (!r.f32(gain, "forward map visibility"))
     return MapError{"truncated: the forward map's visibility is cut short", r.pos()};
   if (!finite_in(gain, -2.0F, 2.0F))
     return MapError{"forward map visibility: angle gain not finite and in -2..2", r.pos()};
+  if (version >= 14) {
+    if (!r.f32(axis, "forward map visibility"))
+      return MapError{"truncated: the forward map's visibility is cut short", r.pos()};
+    // Within the lens's half field of view (the law's half_field_of_view; the map format's
+    // bound on a1 + a3 / 4 keeps it under pi / 2).
+    if (!finite_in(axis, -half_field_of_view(f), half_field_of_view(f)))
+      return MapError{
+          "forward map visibility: optical axis not finite and within the field of "
+          "view",
+          r.pos()};
+  }
   f.visibility_angle_gain = gain;
+  f.visibility_axis_rad = axis;
   if (!r.need(cells * boards * 8U, "forward map visibility"))
     return MapError{"truncated: the forward map's visibility is shorter than its size says",
                     r.pos()};
@@ -168,6 +181,7 @@ MapError decode_forward(Reader& r, std::uint32_t version, std::uint32_t boards, 
   f.has_heading_coverage = false;
   f.has_visibility = false;
   f.visibility_angle_gain = 0.0F;
+  f.visibility_axis_rad = 0.0F;
   if (!r.u32(columns, "forward map size") || !r.u32(rows, "forward map size"))
     return MapError{"truncated: no room for the forward map's size", r.pos()};
   if (columns == 0 && rows == 0) return MapError{};
@@ -294,7 +308,7 @@ MapError decode_forward(Reader& r, std::uint32_t version, std::uint32_t boards, 
     f.has_heading_terms = !e;
   }
   if (!e && (flag & 16U) != 0U) {
-    e = decode_visibility(r, f);
+    e = decode_visibility(r, version, f);
     f.has_visibility = !e;
   }
   if (!e && (flag & 8U) != 0U) {

@@ -121,8 +121,11 @@ std::vector<std::uint8_t> encode_map(const MapFile& map) {
     }
     // Version 7: every stored cell's heading terms, per board c then s; version 10: in their
     // place, the visibility: its angle gain, then per board the feature seen whole on the axis
-    // and the angular half-width.
-    if (seen) w.f32(f.visibility_angle_gain);
+    // and the angular half-width; version 14: the gain's optical axis after the gain.
+    if (seen) {
+      w.f32(f.visibility_angle_gain);
+      w.f32(f.visibility_axis_rad);
+    }
     if (terms || seen) {
       for (std::size_t c = 0; c < cells; ++c) {
         for (std::size_t b = 0; b < 2 * f.board_count; ++b)

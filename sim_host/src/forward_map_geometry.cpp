@@ -19,7 +19,7 @@ using algorithms::kMaxBoards;
 // What a camera at a map place sees of a board when turned to face it: the cell's entries.
 struct CellView {
   float bearing_rad = 0.0F;
-  float feature = 0.0F;  // on the optical axis (angle_gain taken out)
+  float feature = 0.0F;  // on the optical axis (visibility_gain taken out)
   float half_width_rad = 0.0F;
   bool cut = false;  // the frame's border cuts the board even facing it
 };
@@ -45,7 +45,8 @@ class GeometryView {
 
   // The camera at the map's bearing place (@p x_m, @p y_m) turned towards @p board's centre: a
   // board whose face looks away shows nothing (its back is not its colour).
-  // @p gain: the angle gain the feature is taken back to the axis by.
+  // @p gain: the angle gain the feature is taken back to the axis by (centred on the map's
+  // visibility_axis_rad).
   CellView from(const BoardSpec& board, double x_m, double y_m, float gain) const {
     const double dx = board.centre_x_m - x_m, dy = board.centre_y_m - y_m;
     const double yaw = std::atan2(dy, dx);
@@ -61,9 +62,10 @@ class GeometryView {
     v.cut = image.cut;
     const double angle = angle_rad(image.centroid_u_px);
     v.bearing_rad = static_cast<float>(algorithms::wrap_angle_rad(yaw - angle));
-    v.feature = static_cast<float>(
-        image.area_px * area_scale_ /
-        static_cast<double>(algorithms::angle_gain(gain, static_cast<float>(angle))));
+    v.feature =
+        static_cast<float>(image.area_px * area_scale_ /
+                           static_cast<double>(algorithms::angle_gain(
+                               gain, static_cast<float>(angle) - map_.visibility_axis_rad)));
     // As the trainer measures a frame's (trainer_on_areas.cpp): a board about as wide as high
     // spans the square root of its pixels in columns.
     v.half_width_rad =
@@ -90,7 +92,7 @@ class GeometryView {
 // views.
 double geometry_angle_gain(const SceneGeometryFit& fit, const std::vector<std::size_t>& boards,
                            const std::vector<PlacedFrame>& frames, const GeometryView& view,
-                           double forward_m) {
+                           double forward_m, double axis_rad) {
   const LensModel lens(fit.camera);
   double xy = 0.0, xx = 0.0;
   std::size_t n = 0;
@@ -103,7 +105,8 @@ double geometry_angle_gain(const SceneGeometryFit& fit, const std::vector<std::s
       if (!(image.area_px >= 30.0) || image.cut) continue;
       const CellView facing = view.from(board, cx, cy, 0.0F);
       if (!(facing.feature > 0.0F) || facing.cut) continue;
-      const double a = view.angle_rad(image.centroid_u_px);
+      // From the optical axis (the map's visibility_axis_rad), where the gain is centred.
+      const double a = view.angle_rad(image.centroid_u_px) - axis_rad;
       const double axis = static_cast<double>(facing.feature) / view.area_scale();
       xy += a * a * (image.area_px / axis - 1.0);
       xx += a * a * a * a;
@@ -131,7 +134,8 @@ void rescale_kernel_boards(const std::vector<algorithms::AreaVector>& areas,
     for (const PlacedFrame& f : frames) {
       const algorithms::AreaVector& a = areas[f.index];
       if (!algorithms::gives_bearing(a, b)) continue;
-      const auto angle = static_cast<float>(view.angle_rad(a.centroid_column_px(b)));
+      const auto angle =
+          static_cast<float>(view.angle_rad(a.centroid_column_px(b))) - map.visibility_axis_rad;
       sum += static_cast<double>(algorithms::angle_gain(old_gain, angle) /
                                  algorithms::angle_gain(new_gain, angle));
       ++n;
@@ -200,7 +204,8 @@ GeometryTablesReport visibility_from_geometry(const SceneGeometryFit& fit,
   const GeometryView view(fit.camera, map, area_scale);
   report.kernel_angle_gain = static_cast<double>(map.visibility_angle_gain);
   report.geometry_angle_gain = geometry_angle_gain(
-      fit, candidates, frames, view, static_cast<double>(map.bearing_camera_forward_m));
+      fit, candidates, frames, view, static_cast<double>(map.bearing_camera_forward_m),
+      static_cast<double>(map.visibility_axis_rad));
   // The geometry's own stretch towards the frame's edge: the kernel's gain is measured through
   // the frames' noise and the kernel's blur (on random scene 5: -0.22 against the projection's
   // 0.35). The boards that keep the kernel's tables are rescaled to it at the end.

@@ -104,8 +104,9 @@ ForwardMapReport train_forward_map_placed(const std::vector<std::vector<float>>&
                                 bearing, half_width});
   }
   report.has_heading = true;
-  const double law[2] = {bearings != nullptr ? bearings->a1_rad : 0.0,
-                         bearings != nullptr ? bearings->a3_rad : 0.0};
+  const double law[3] = {bearings != nullptr ? bearings->a1_rad : 0.0,
+                         bearings != nullptr ? bearings->a3_rad : 0.0,
+                         bearings != nullptr ? bearings->axis_rad : 0.0};
   std::vector<double> places(2 * board_count, std::numeric_limits<double>::quiet_NaN());
   if (bearings != nullptr) {
     for (std::size_t b = 0; b < board_count && b < bearings->placements.size(); ++b) {

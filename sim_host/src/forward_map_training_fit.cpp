@@ -406,12 +406,13 @@ Carry carry(const double* places, std::size_t b, double from_x, double from_y, d
 // unit vector is (@p anchor_cos, @p anchor_sin) (every frame when @p every_heading) and that
 // @p keep accepts, weighted exp(-(d^2 - d2_min) / 2h^2); with @p places (where the boards stand,
 // x and y per board, NaN: not placed), each frame's view carried to (x, y); each frame's feature
-// taken back to the axis by @p angle_gain (ForwardMap::visibility_angle_gain).
+// taken back to the axis by @p angle_gain (ForwardMap::visibility_angle_gain) centred on
+// @p axis_rad (ForwardMap::visibility_axis_rad).
 template <typename Keep>
 BearingSums bearing_sums(const FrameIndex& index, const FrameVectors& v, double x, double y,
                          double anchor_cos, double anchor_sin, bool every_heading, double d2_min,
                          double reach_m, double h, Keep keep, const double* places = nullptr,
-                         float angle_gain = 0.0F) {
+                         float angle_gain = 0.0F, float axis_rad = 0.0F) {
   BearingSums s;
   const double inv = 0.5 / (h * h);
   index.within(x, y, reach_m, [&](const Positioned& p) {
@@ -432,8 +433,10 @@ BearingSums bearing_sums(const FrameIndex& index, const FrameVectors& v, double 
       s.cos[b] += w * (unit[2 * b] * c.cos - unit[2 * b + 1] * c.sin);
       s.sin[b] += w * (unit[2 * b + 1] * c.cos + unit[2 * b] * c.sin);
       s.weight[b] += w;
-      const auto angle = static_cast<float>(
-          algorithms::wrap_angle_rad(p.yaw_rad - static_cast<double>(p.bearing_rad[b])));
+      // From the optical axis, where the gain is centred.
+      const auto angle = static_cast<float>(algorithms::wrap_angle_rad(
+                             p.yaw_rad - static_cast<double>(p.bearing_rad[b]))) -
+                         axis_rad;
       s.angle_sq[b] += w * static_cast<double>(angle * angle);
       s.feature[b] += w * c.area * static_cast<double>((*p.features)[b]) /
                       static_cast<double>(algorithms::angle_gain(angle_gain, angle));
@@ -482,6 +485,7 @@ void fit_bearings_from(const std::vector<Positioned>& frames, const std::vector<
   const bool visibility = every_heading && report.visibility_wanted &&
                           ForwardMap::kHeadingTermStorage && !out.has_heading_terms;
   const auto half_fov = static_cast<float>(std::fabs(0.5 * law[0] + 0.125 * law[1]));
+  const auto axis = static_cast<float>(law[2]);
   // Per board, the squared residuals of the areas as the visibility predicts them from other
   // passes, and how many frames it could not predict (no bearing from other passes there).
   std::vector<double> seen_sq(boards, 0.0);
@@ -514,7 +518,7 @@ void fit_bearings_from(const std::vector<Positioned>& frames, const std::vector<
       if (!(d2_min <= near_m * near_m)) continue;
       visit(i, bearing_sums(index, vectors, p.x_m, p.y_m, vectors.heading[2 * i],
                             vectors.heading[2 * i + 1], every_heading, d2_min,
-                            std::sqrt(d2_min + 2.0 * kCut * h * h), h, other, carried, gain));
+                            std::sqrt(d2_min + 2.0 * kCut * h * h), h, other, carried, gain, axis));
     }
   };
   // The angle gain: a board seen whole shows more (or less) towards the frame's edge than its
@@ -533,7 +537,8 @@ void fit_bearings_from(const std::vector<Positioned>& frames, const std::vector<
             !mean_bearing(s, b, every_heading, mean) || !(s.feature[b] > 0.0))
           continue;
         const double a =
-            algorithms::wrap_angle_rad(p.yaw_rad - static_cast<double>(p.bearing_rad[b]));
+            algorithms::wrap_angle_rad(p.yaw_rad - static_cast<double>(p.bearing_rad[b])) -
+            static_cast<double>(axis);
         const double x = a * a - s.angle_sq[b] / s.weight[b];
         xy += x * std::log(v * s.weight[b] / s.feature[b]);
         xx += x * x;
@@ -553,7 +558,7 @@ void fit_bearings_from(const std::vector<Positioned>& frames, const std::vector<
           const double predicted =
               s.feature[b] / s.weight[b] *
               static_cast<double>(
-                  algorithms::angle_gain(gain, a) *
+                  algorithms::angle_gain(gain, a - axis) *
                   algorithms::visible_share(
                       half_fov, static_cast<float>(s.half_width[b] / s.weight[b]), std::fabs(a)));
           const double r = static_cast<double>((*p.features)[b]) - predicted;
@@ -591,6 +596,9 @@ void fit_bearings_from(const std::vector<Positioned>& frames, const std::vector<
   report.has_bearings = true;
   out.has_visibility = visibility;
   out.visibility_angle_gain = visibility ? gain : 0.0F;
+  // Within half the half field of view (the map format's bound is the whole): an axis beyond
+  // that is no lens's.
+  out.visibility_axis_rad = visibility ? std::clamp(axis, -0.5F * half_fov, 0.5F * half_fov) : 0.0F;
   report.visibility = visibility;
   report.visibility_angle_gain = visibility ? static_cast<double>(gain) : 0.0;
   // With visibility each board's noise is that of the areas it predicts from other passes, and

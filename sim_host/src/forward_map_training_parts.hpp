@@ -25,7 +25,8 @@ struct Positioned {
 
 // forward_map_training_fit.cpp
 // Fits the grid to frames that already have a position (shared by both ways of placing them).
-// With @p law (a1, a3; nullptr: none) and frames' bearing_rad, also the boards' bearings;
+// With @p law (a1, a3 and the optical axis under the law, ForwardMap::visibility_axis_rad;
+// nullptr: none) and frames' bearing_rad, also the boards' bearings;
 // @p board_places: where each board stands (x, y per board, NaN: not placed; nullptr: none).
 ForwardMapReport fit_grid(std::vector<Positioned>& frames, std::size_t board_count,
                           const ForwardMapOptions& opt, algorithms::ForwardMap& out,

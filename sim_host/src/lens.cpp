@@ -240,6 +240,7 @@ ColumnLaw column_law_of(const CameraSpec& camera) {
   if (!c.allFinite() || !(c[1] > 0.0)) return law;
   law.ok = true;
   law.axis_rad = c[0];
+  law.optical_axis_rad = -std::atan2(f.forward[1], f.forward[0]) - c[0];
   law.a1_rad = c[1];
   law.a3_rad = c[2];
   return law;

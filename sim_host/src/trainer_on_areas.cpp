@@ -211,10 +211,11 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<dataset::Sta
         trainer_detail::fit_training_geometry(run, frames, report.bearings, opt, camera_height_m);
   const bool with_bearings = opt.bearings && report.bearings.ok;
   // Every placed frame's world bearing of each board under the law (a1, a3), for the forward map.
-  const auto observations_under = [&](double a1_rad, double a3_rad) {
+  const auto observations_under = [&](double a1_rad, double a3_rad, double axis_rad) {
     BearingObservations o;
     o.a1_rad = a1_rad;
     o.a3_rad = a3_rad;
+    o.axis_rad = axis_rad;
     o.placements = report.bearings.placements;
     o.world_rad.resize(run.areas.size());
     o.half_width_rad.resize(run.areas.size());
@@ -241,7 +242,7 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<dataset::Sta
   };
   BearingObservations observations;
   if (with_bearings)
-    observations = observations_under(report.bearings.a1_rad, report.bearings.a3_rad);
+    observations = observations_under(report.bearings.a1_rad, report.bearings.a3_rad, 0.0);
   if (opt.forward_map) {
     const auto t_forward = std::chrono::steady_clock::now();
     ForwardMapOptions forward_opt = opt.forward;
@@ -261,19 +262,20 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<dataset::Sta
       // them: on random floor 1 (the principal point 25 px left of the centre) a board's bearing
       // at the truth was off by +1.2 degrees at the frame's left edge and by 0 at its right. The
       // fitted camera's law has neither error, and the forward map is trained again with it:
-      // its bearings, and its visibility tables from the kernel or the geometry.
+      // its bearings, and its visibility tables from the kernel or the geometry, their angle
+      // gain centred on the camera's optical axis (the law's angles start at the centre column).
       const ColumnLaw law = g.tried && g.fit.ok ? column_law_of(g.fit.camera) : ColumnLaw{};
       if (opt.law_from_geometry && with_bearings && forward->has_visibility && law.ok) {
         auto first = std::make_unique<algorithms::ForwardMap>(*forward);
         const ForwardMapReport first_report = forward_report;
-        observations = observations_under(law.a1_rad, law.a3_rad);
+        observations = observations_under(law.a1_rad, law.a3_rad, law.optical_axis_rad);
         forward_report =
             train_forward_map_placed(all, frames, boards, forward_opt, *forward, &observations);
         if (forward->has_visibility) {
           g.law_from_camera = true;
           g.law_a1_rad = law.a1_rad;
           g.law_a3_rad = law.a3_rad;
-          g.law_axis_rad = law.axis_rad;
+          g.law_axis_rad = static_cast<double>(forward->visibility_axis_rad);
         } else {  // not seen so far: the same frames under another law lost the visibility
           *forward = *first;
           forward_report = first_report;

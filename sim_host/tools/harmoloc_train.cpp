@@ -31,9 +31,9 @@ void print_geometry_tables(const harmoloc::sim_host::GeometryReport& g,
     constexpr double kDeg = 180.0 / harmoloc::algorithms::kPi;
     std::printf(
         "geometry      column-to-angle law from the fitted camera: half field of view %.2f deg "
-        "(a1 %.4f, a3 %.4f); the optical axis %+.2f deg right of the centre column\n",
+        "(a1 %.4f, a3 %.4f); the optical axis %.2f deg %s of the centre column\n",
         (0.5 * g.law_a1_rad + 0.125 * g.law_a3_rad) * kDeg, g.law_a1_rad, g.law_a3_rad,
-        g.law_axis_rad * kDeg);
+        std::fabs(g.law_axis_rad) * kDeg, g.law_axis_rad < 0.0 ? "left" : "right");
   }
   const harmoloc::sim_host::GeometryTablesReport& t = g.tables;
   if (!t.applied) {
@@ -594,7 +594,16 @@ int main(int argc, char** argv) {
               "bearing noise %s (deg, against other passes; %zu of %zu cells hold one, seen from "
               "%s)\n",
               spread.c_str(), fw.bearing_cells, grid.stored_cells(), from);
-          if (fw.visibility)
+          if (fw.visibility && grid.visibility_axis_rad != 0.0F)
+            std::printf(
+                "visibility    each board's area seen whole from the camera's place, in view by "
+                "its bearing; towards the frame's edge it grows by 1 + %.2f a^2, a from the "
+                "optical axis (%.2f deg %s of the centre column)\n",
+                fw.visibility_angle_gain,
+                std::fabs(static_cast<double>(grid.visibility_axis_rad)) * 180.0 /
+                    harmoloc::algorithms::kPi,
+                grid.visibility_axis_rad < 0.0F ? "left" : "right");
+          else if (fw.visibility)
             std::printf(
                 "visibility    each board's area seen whole from the camera's place, in view by "
                 "its bearing; towards the frame's edge it grows by 1 + %.2f a^2\n",

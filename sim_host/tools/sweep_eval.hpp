@@ -133,7 +133,8 @@ struct SceneResult {
   double floor_geometry_pitch_error_deg = std::numeric_limits<double>::quiet_NaN();
   double floor_geometry_forward_error_m = std::numeric_limits<double>::quiet_NaN();
   /// The floor map's column-to-angle law is the fitted camera's (GeometryReport::law_from_camera),
-  /// and the optical axis's angle from the centre column under it (degrees; NaN: not taken).
+  /// and the optical axis's image angle under it, where the map's angle gain is centred (degrees
+  /// right of the centre column; NaN: not taken).
   bool floor_law_from_camera = false;
   double floor_law_axis_deg = std::numeric_limits<double>::quiet_NaN();
   double floor_heading_bandwidth_m = 0.0;  ///< their wide kernel (0: the narrow one)

@@ -101,6 +101,7 @@ bool same_model(const MapFile& a, const MapFile& b) {
   // Version 10: the angle gain and every stored cell's visibility, in the heading terms' place.
   if (f.has_visibility &&
       (!same_bits(&f.visibility_angle_gain, &g.visibility_angle_gain, sizeof(float)) ||
+       !same_bits(&f.visibility_axis_rad, &g.visibility_axis_rad, sizeof(float)) ||
        !same_bits(f.heading_terms.data(), g.heading_terms.data(),
                   cells * kMaxBoards * 2 * sizeof(float))))
     return false;
@@ -185,6 +186,9 @@ void check_added_visibility(const std::vector<std::uint8_t>& input) {
   f.has_heading_terms = false;
   f.has_visibility = true;
   f.visibility_angle_gain = 0.01F * static_cast<float>(input[0]) - 1.28F;
+  // Within the law's half field of view, as the decoder asks (version 14).
+  f.visibility_axis_rad =
+      half_field_of_view(f) * (static_cast<float>(input[input.size() / 2]) / 255.0F - 0.5F);
   const std::size_t cells = f.stored_cells();
   for (std::size_t i = 0; i < cells * f.board_count * 2; ++i) {
     const std::size_t c = i / (2 * f.board_count), k = i % (2 * f.board_count);
@@ -255,7 +259,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     // map of versions 3 and 4 with every tile of its grid stored, no bearings before version 6,
     // no heading terms before version 7, no heading coverage before version 8, no visibility
     // before version 10, no per-sample fix errors before version 11, no centroid columns before
-    // version 12, no column gain before version 13.
+    // version 12, no column gain before version 13, the visibility's gain centred on the centre
+    // column before version 14.
     HARMOLOC_FUZZ_CHECK(input[8] != 1 || g_map.model.max_dissimilarity == 1.0F,
                         "a version 1 map decodes with a dissimilarity bound");
     HARMOLOC_FUZZ_CHECK(input[8] >= 3 || !g_map.forward.present(),
@@ -282,8 +287,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
                         "a map before version 11 decodes with fix errors");
     HARMOLOC_FUZZ_CHECK(input[8] >= 12 || !g_map.model.uses_columns(),
                         "a map before version 12 decodes with centroid columns");
-    HARMOLOC_FUZZ_CHECK(!g_map.model.column_gain.present(),
+    HARMOLOC_FUZZ_CHECK(input[8] >= 13 || !g_map.model.column_gain.present(),
                         "a map before version 13 decodes with a column gain");
+    HARMOLOC_FUZZ_CHECK(input[8] >= 14 || f.visibility_axis_rad == 0.0F,
+                        "a map before version 14 decodes with a visibility axis");
     HARMOLOC_FUZZ_CHECK(!decode_map(encoded.data(), encoded.size(), g_again),
                         "a re-encoded older map does not decode");
     HARMOLOC_FUZZ_CHECK(same_model(g_map, g_again), "decode(encode(older map)) differs");

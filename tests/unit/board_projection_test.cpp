@@ -253,6 +253,7 @@ TEST(ColumnLaw, TakesTheAxisApartAndGivesTheBoardsDirection) {
   const hs::ColumnLaw plain = hs::column_law_of(level);
   ASSERT_TRUE(plain.ok);
   EXPECT_NEAR(plain.axis_rad, 0.0, 1e-9);
+  EXPECT_NEAR(plain.optical_axis_rad, 0.0, 1e-9);
   // atan(2 tan(35 deg) t) near the centre: slope 2 tan(35 deg) = 1.40.
   EXPECT_NEAR(plain.a1_rad, 2.0 * std::tan(35.0 * kPi / 180.0), 0.05);
   EXPECT_LT(plain.a3_rad, 0.0);  // the arctangent flattens towards the edges
@@ -267,6 +268,9 @@ TEST(ColumnLaw, TakesTheAxisApartAndGivesTheBoardsDirection) {
   // the columns (the arctangent's slope falls away from the principal point).
   EXPECT_LT(shifted.axis_rad * 180.0 / kPi, std::atan(6.0 / focal_px(off)) * 180.0 / kPi - 2.0);
   EXPECT_GT(shifted.axis_rad * 180.0 / kPi, -2.0);
+  // The optical axis under the law: the principal point's 6 px left of the centre column, about
+  // atan(6 / f) to the left; the mounting's yaw turns the law's origin and the axis together.
+  EXPECT_NEAR(shifted.optical_axis_rad, -std::atan(6.0 / focal_px(off)), 0.2 * kPi / 180.0);
   EXPECT_NEAR(shifted.a1_rad, plain.a1_rad, 0.01 * plain.a1_rad);
   // The offset bends the columns' angles unevenly about the centre, which an odd law cannot
   // follow: a quarter of a degree at 30 degrees.

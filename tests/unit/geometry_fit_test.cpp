@@ -511,12 +511,17 @@ TEST(TrainerGeometry, ReportsTheFitAndLeavesTheMapAlone) {
   EXPECT_EQ(fitted->forward.bearing_a1_rad, static_cast<float>(law.a1_rad));
   EXPECT_EQ(fitted->forward.bearing_a3_rad, static_cast<float>(law.a3_rad));
   EXPECT_DOUBLE_EQ(seen.geometry.law_a1_rad, law.a1_rad);
+  // Its angle gain centred on that camera's optical axis (map version 14).
+  EXPECT_EQ(fitted->forward.visibility_axis_rad, static_cast<float>(law.optical_axis_rad));
+  EXPECT_DOUBLE_EQ(seen.geometry.law_axis_rad,
+                   static_cast<double>(fitted->forward.visibility_axis_rad));
   EXPECT_NE(fitted->forward.bearing_a1_rad, static_cast<float>(seen.bearings.a1_rad));
   opt.law_from_geometry = false;
   const hs::TrainReport frames_law = hs::train_map(opt, *fitted);
   EXPECT_FALSE(frames_law.geometry.law_from_camera);
   EXPECT_EQ(fitted->forward.bearing_a1_rad, static_cast<float>(frames_law.bearings.a1_rad));
   EXPECT_EQ(fitted->forward.bearing_a3_rad, static_cast<float>(frames_law.bearings.a3_rad));
+  EXPECT_EQ(fitted->forward.visibility_axis_rad, 0.0F);
 }
 
 }  // namespace

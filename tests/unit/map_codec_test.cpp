@@ -1547,15 +1547,17 @@ TEST(MapCodec, ForwardMapBearingsTruncatedAtEveryLength) {
 }
 
 // Version 10: a floor map's visibility (bit 4) takes the heading terms' place after the
-// bearings, per board the feature seen whole and the angular half-width, and reads back exactly.
-// It needs bearings, excludes heading terms, and a value out of range is refused; before version
-// 10 the bit is unknown.
+// bearings, per board the feature seen whole and the angular half-width, and reads back exactly;
+// version 14 adds the gain's optical axis after the gain. It needs bearings, excludes heading
+// terms, and a value out of range is refused; before version 10 the bit is unknown, and a version
+// 13 map without the axis loads with 0.
 TEST(MapCodec, VisibilityRoundTripAndChecks) {
   auto map = make_map_with_bearings();
   const std::vector<std::uint8_t> plain = ha::encode_map(*map);
   ha::ForwardMap& f = map->forward;
   f.has_visibility = true;
   f.visibility_angle_gain = 0.4F;
+  f.visibility_axis_rad = -0.03F;
   for (std::size_t c = 0; c < f.stored_cells(); ++c) {
     for (std::size_t b = 0; b < kBoards; ++b) {
       f.heading_terms[(c * ha::kMaxBoards + b) * 2] = 0.01F * static_cast<float>(c + b);
@@ -1563,19 +1565,20 @@ TEST(MapCodec, VisibilityRoundTripAndChecks) {
     }
   }
   const std::vector<std::uint8_t> bytes = ha::encode_map(*map);
-  ASSERT_EQ(bytes.size(), plain.size() + 4 + f.stored_cells() * kBoards * 8);
+  ASSERT_EQ(bytes.size(), plain.size() + 8 + f.stored_cells() * kBoards * 8);
   EXPECT_EQ(bytes[kOffFlags], plain[kOffFlags] | 16U);
   auto out = std::make_unique<ha::MapFile>();
   ASSERT_FALSE(ha::decode_map(bytes.data(), bytes.size(), *out));
   EXPECT_TRUE(out->forward.has_visibility);
   EXPECT_FLOAT_EQ(out->forward.visibility_angle_gain, 0.4F);
+  EXPECT_FLOAT_EQ(out->forward.visibility_axis_rad, -0.03F);
   EXPECT_FALSE(out->forward.has_heading_terms);
   for (std::size_t i = 0; i < f.stored_cells() * ha::kMaxBoards * 2; ++i)
     ASSERT_EQ(out->forward.heading_terms[i], f.heading_terms[i]) << i;
   EXPECT_EQ(ha::encode_map(*out), bytes);
-  // The angle gain sits right after the bearings, before the two counts, the column weight and
-  // the CRC; then the first cell's first feature and its half-width.
-  const std::size_t first = plain.size() - 4 - kAfterCalibration + 4;
+  // The angle gain and the axis sit right after the bearings, before the two counts, the column
+  // weight and the CRC; then the first cell's first feature and its half-width.
+  const std::size_t first = plain.size() - 4 - kAfterCalibration + 8;
   const auto refused = [&](std::size_t at, float v, const char* what) {
     std::vector<std::uint8_t> b = bytes;
     put_f32(b, at, v);
@@ -1583,7 +1586,11 @@ TEST(MapCodec, VisibilityRoundTripAndChecks) {
     EXPECT_NE(decode_error(b).find(what), std::string::npos) << v << ": " << decode_error(b);
   };
   for (float v : {std::numeric_limits<float>::quiet_NaN(), -2.1F, 2.1F})
-    refused(first - 4, v, "visibility: angle gain");
+    refused(first - 8, v, "visibility: angle gain");
+  // The axis within the law's half field of view.
+  const float half_fov = ha::half_field_of_view(f);
+  for (float v : {std::numeric_limits<float>::quiet_NaN(), -1.01F * half_fov, 1.01F * half_fov})
+    refused(first - 4, v, "visibility: optical axis");
   for (float v : {std::numeric_limits<float>::quiet_NaN(), -0.1F, 2.0e6F})
     refused(first, v, "visibility: a feature");
   for (float v : {std::numeric_limits<float>::infinity(), -0.01F, 3.3F})
@@ -1609,6 +1616,18 @@ TEST(MapCodec, VisibilityRoundTripAndChecks) {
   put_u32(b, kOffVersion, 9);
   fix_crc(b);
   EXPECT_NE(decode_error(b).find("unknown bits"), std::string::npos) << decode_error(b);
+  // Version 13: no axis; the same map centred on the centre column.
+  b = bytes;
+  b.erase(b.begin() + static_cast<std::ptrdiff_t>(first - 4),
+          b.begin() + static_cast<std::ptrdiff_t>(first));
+  put_u32(b, kOffVersion, 13);
+  fix_crc(b);
+  ASSERT_FALSE(ha::decode_map(b.data(), b.size(), *out)) << decode_error(b);
+  EXPECT_TRUE(out->forward.has_visibility);
+  EXPECT_FLOAT_EQ(out->forward.visibility_angle_gain, 0.4F);
+  EXPECT_EQ(out->forward.visibility_axis_rad, 0.0F);
+  for (std::size_t i = 0; i < f.stored_cells() * ha::kMaxBoards * 2; ++i)
+    ASSERT_EQ(out->forward.heading_terms[i], f.heading_terms[i]) << i;
   // Written only with bearings: a map that lost them writes no visibility.
   map->forward.has_bearings = false;
   ASSERT_FALSE(ha::decode_map(ha::encode_map(*map).data(), ha::encode_map(*map).size(), *out));

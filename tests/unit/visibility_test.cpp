@@ -82,6 +82,13 @@ TEST(Visibility, ABoardShowsItsWholeFeatureInViewAndNoneBeyondTheLensEdge) {
   map->visibility_angle_gain = 0.4F;
   EXPECT_NEAR(seen_at(*map, x, y, facing - 0.3)[0], 2.0F * (1.0F + 0.4F * 0.09F), 1e-3F);
   EXPECT_NEAR(seen_at(*map, x, y, facing)[0], 2.0F, 1e-4F);
+  // Centred on the optical axis (map version 14): least there, and the same either side of it.
+  map->visibility_axis_rad = -0.1F;
+  EXPECT_NEAR(seen_at(*map, x, y, facing - 0.1)[0], 2.0F, 1e-4F);
+  EXPECT_NEAR(seen_at(*map, x, y, facing - 0.3)[0], 2.0F * (1.0F + 0.4F * 0.04F), 1e-3F);
+  EXPECT_NEAR(seen_at(*map, x, y, facing + 0.1)[0], 2.0F * (1.0F + 0.4F * 0.04F), 1e-3F);
+  EXPECT_NEAR(seen_at(*map, x, y, facing)[0], 2.0F * (1.0F + 0.4F * 0.01F), 1e-4F);
+  map->visibility_axis_rad = 0.0F;
   // A gain that would take it below a quarter is held there.
   map->visibility_angle_gain = -20.0F;
   EXPECT_NEAR(seen_at(*map, x, y, facing - 0.3)[0], 0.5F, 1e-3F);

@@ -154,6 +154,12 @@ struct ForwardMap {
   /// cell's feature times 1 + visibility_angle_gain a^2 (angle_gain; at least 1/4). Measured by
   /// the trainer over the training run.
   float visibility_angle_gain = 0.0F;
+  /// Where that stretch is centred (map version 14): the optical axis's image angle under the
+  /// bearings' law (radians, positive to the right). The law's angles start at the frame's centre
+  /// column, the lens's stretch and vignetting at its principal point (on a random floor 25 px
+  /// apart at 1280 px, 1.8 degrees). 0: at the centre column (maps before version 14, and laws
+  /// triangulated from the frames, which do not know the axis).
+  float visibility_axis_rad = 0.0F;
 
   bool present() const { return columns > 0 && rows > 0; }
   /// Stored cells (whole tiles, including the cells of border tiles beyond the grid).
@@ -308,11 +314,17 @@ inline float angle_gain(float gain, float angle_rad) {
   return g > 0.25F ? g : 0.25F;
 }
 
+/// The same under @p map's gain, centred on its optical axis: a board seen whole at image angle
+/// @p angle_rad (from the law) shows its feature on the axis times this.
+inline float visibility_gain(const ForwardMap& map, float angle_rad) {
+  return angle_gain(map.visibility_angle_gain, angle_rad - map.visibility_axis_rad);
+}
+
 /// Where @p map has visibility: every board's feature as the camera at @p seen_from (its place,
-/// bearing_point) facing @p yaw_rad sees it (the cell's feature on the axis, times angle_gain and
-/// visible_share at its image angle), written to @p out[b] for the boards whose bearing
-/// the corners of @p seen_from hold (the others keep @p out's value). With @p bearing_rad, each
-/// board's expected_bearing there as well (ForwardMap::kNoBearing where none), read on the way.
+/// bearing_point) facing @p yaw_rad sees it (the cell's feature on the axis, times visibility_gain
+/// and visible_share at its image angle), written to @p out[b] for the boards whose bearing the
+/// corners of @p seen_from hold (the others keep @p out's value). With @p bearing_rad, each board's
+/// expected_bearing there as well (ForwardMap::kNoBearing where none), read on the way.
 void apply_visibility(const ForwardMap& map, const GridPoint& seen_from, float yaw_rad, float* out,
                       float* bearing_rad = nullptr);
 

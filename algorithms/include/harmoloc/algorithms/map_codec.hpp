@@ -19,10 +19,11 @@ namespace harmoloc::algorithms {
 /// heading terms of a floor map, version 8 the headings each place was trained from, version 9
 /// the camera's place the bearings are seen from, version 10 the visibility of a floor map,
 /// version 11 the fix error per sample, version 12 the boards' centroid columns, version 13 the
-/// area's gain by column; versions 1 to 12 are still read (without what they
+/// area's gain by column, version 14 the visibility's optical axis; versions 1 to 13 are still
+/// read (without what they
 /// lack; a version 3 or 4 forward map as a grid of which every tile is stored, a forward map before
 /// version 6 without bearings).
-constexpr std::uint32_t kMapFormatVersion = 13;
+constexpr std::uint32_t kMapFormatVersion = 14;
 
 /// What the trainer measured on the training run that the firmware derives its scene-dependent
 /// settings from (docs/map-format.md): nothing of it is a constant tuned to one scene.
@@ -72,8 +73,8 @@ constexpr std::size_t kMaxMapFileBytes =
     // version 9 the camera's offset.
     8U + 4U + kMaxBoards * 4U + ForwardMap::kMaxCells * kMaxBoards * 4U +
     // Version 7: every cell's heading terms (version 10: or the visibility, in their place, and
-    // its angle gain).
-    4U + ForwardMap::kMaxCells * kMaxBoards * 8U +
+    // its angle gain; version 14 its optical axis).
+    8U + ForwardMap::kMaxCells * kMaxBoards * 8U +
     // Version 8: every cell's heading coverage.
     ForwardMap::kMaxCells * 2U + 4U + kMaxCalibrationEntries * 8U +
     // Version 11: the per-sample fix errors.

@@ -132,6 +132,9 @@ struct PlacedFrame {
 /// Board bearings for the forward map: the lens's law and what each frame saw.
 struct BearingObservations {
   double a1_rad = 0.0, a3_rad = 0.0;  ///< the law (algorithms/bearing_calibration.hpp)
+  /// The optical axis's image angle under the law, where the visibility's angle gain is centred
+  /// (ForwardMap::visibility_axis_rad); 0: the centre column (a law triangulated from frames).
+  double axis_rad = 0.0;
   /// Per frame of the run (PlacedFrame::index) and board: the world bearing the frame saw the
   /// board at (yaw - angle of its centroid column), NaN where the board gave none.
   std::vector<std::vector<float>> world_rad;

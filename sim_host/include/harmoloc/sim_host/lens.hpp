@@ -70,11 +70,15 @@ bool project_point(const CameraSpec& camera, const LensModel& lens, const Camera
 struct ColumnLaw {
   bool ok = false;  ///< false: columns that do not turn one way, or a lens that cannot undistort
   double a1_rad = 0.0, a3_rad = 0.0;
-  /// a0: where the optical axis lies under the law (the principal point's offset and the
-  /// mounting's yaw). The law leaves it out: it would add the same angle to every image angle
-  /// the firmware measures and take it from every world bearing the trainer stores (the heading
-  /// less the image angle), so it cancels in the filter's comparison of the two.
+  /// a0: the centre column's direction from the robot's heading (the principal point's offset
+  /// and the mounting's yaw). The law leaves it out: it would add the same angle to every image
+  /// angle the firmware measures and take it from every world bearing the trainer stores (the
+  /// heading less the image angle), so it cancels in the filter's comparison of the two.
   double axis_rad = 0.0;
+  /// The optical axis's image angle under the law (positive to the right of the centre column):
+  /// where the lens's stretch and vignetting are centred (ForwardMap::visibility_axis_rad). The
+  /// principal point's offset alone; without a mounting yaw, -axis_rad.
+  double optical_axis_rad = 0.0;
 };
 ColumnLaw column_law_of(const CameraSpec& camera);
 

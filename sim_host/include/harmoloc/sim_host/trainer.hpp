@@ -175,8 +175,8 @@ struct GeometryReport {
   /// tables took at least one board from the geometry with it), and that law.
   bool law_from_camera = false;
   double law_a1_rad = 0.0, law_a3_rad = 0.0;
-  /// The fitted camera's optical axis, as an angle from the frame's centre column under its law
-  /// (radians, positive to the right): the principal point's offset and the mounting's yaw.
+  /// The fitted camera's optical axis, as an image angle under its law (radians, positive to the
+  /// right of the centre column): the principal point's offset; the map's visibility_axis_rad.
   double law_axis_rad = 0.0;
 };
 
