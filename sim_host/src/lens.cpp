@@ -209,7 +209,7 @@ bool project_point(const CameraSpec& camera, const LensModel& lens, const Camera
   return true;
 }
 
-ColumnLaw column_law_of(const CameraSpec& camera) {
+ColumnLaw column_law_of(const CameraSpec& camera, const std::vector<double>& rows) {
   ColumnLaw law;
   const LensModel lens(camera);
   const Intrinsics in = intrinsics_of(camera);
@@ -218,7 +218,9 @@ ColumnLaw column_law_of(const CameraSpec& camera) {
   Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
   Eigen::Vector3d atb = Eigen::Vector3d::Zero();
   std::size_t n = 0;
-  for (const double row : {0.35, 0.5, 0.65}) {
+  const std::vector<double> middle{0.35, 0.5, 0.65};
+  for (const double row : rows.empty() ? middle : rows) {
+    if (!(row >= 0.0 && row <= 1.0)) continue;
     const double v = row * (h - 1.0);
     for (int k = -32; k <= 32; ++k) {
       const double t = k / 64.0;

@@ -35,6 +35,27 @@ double rms(const std::vector<double>& v) {
   return v.empty() ? 0.0 : std::sqrt(s / static_cast<double>(v.size()));
 }
 
+// Where in the frame the placed frames saw the boards that give a bearing: the deciles 10-90%
+// of their centroid rows, as fractions of the height (0 the top row). Under the camera's pitch a
+// column's direction changes with the row, and the column-to-angle law fitted at these rows is
+// the one the boards are seen under (column_law_of). Empty with fewer than 20 such sightings.
+std::vector<double> seen_rows(const std::vector<algorithms::AreaVector>& areas,
+                              const std::vector<PlacedFrame>& frames) {
+  std::vector<double> rows;
+  for (const PlacedFrame& f : frames) {
+    const algorithms::AreaVector& a = areas[f.index];
+    if (!a.rows_measured() || a.height_px < 2) continue;
+    for (std::size_t b = 0; b < a.count; ++b) {
+      if (algorithms::gives_bearing(a, b))
+        rows.push_back(a.centroid_row_px(b) / static_cast<double>(a.height_px - 1));
+    }
+  }
+  if (rows.size() < 20) return {};
+  std::vector<double> deciles;
+  for (int k = 1; k <= 9; ++k) deciles.push_back(trainer_detail::quantile(rows, 0.1 * k));
+  return deciles;
+}
+
 }  // namespace
 
 using trainer_detail::check_labels;
@@ -264,7 +285,8 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<dataset::Sta
       // fitted camera's law has neither error, and the forward map is trained again with it:
       // its bearings, and its visibility tables from the kernel or the geometry, their angle
       // gain centred on the camera's optical axis (the law's angles start at the centre column).
-      const ColumnLaw law = g.tried && g.fit.ok ? column_law_of(g.fit.camera) : ColumnLaw{};
+      const std::vector<double> rows = seen_rows(run.areas, frames);
+      const ColumnLaw law = g.tried && g.fit.ok ? column_law_of(g.fit.camera, rows) : ColumnLaw{};
       if (opt.law_from_geometry && with_bearings && forward->has_visibility && law.ok) {
         auto first = std::make_unique<algorithms::ForwardMap>(*forward);
         const ForwardMapReport first_report = forward_report;
@@ -276,6 +298,7 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<dataset::Sta
           g.law_a1_rad = law.a1_rad;
           g.law_a3_rad = law.a3_rad;
           g.law_axis_rad = static_cast<double>(forward->visibility_axis_rad);
+          g.law_rows = rows;
         } else {  // not seen so far: the same frames under another law lost the visibility
           *forward = *first;
           forward_report = first_report;

@@ -34,6 +34,11 @@ void print_geometry_tables(const harmoloc::sim_host::GeometryReport& g,
         "(a1 %.4f, a3 %.4f); the optical axis %.2f deg %s of the centre column\n",
         (0.5 * g.law_a1_rad + 0.125 * g.law_a3_rad) * kDeg, g.law_a1_rad, g.law_a3_rad,
         std::fabs(g.law_axis_rad) * kDeg, g.law_axis_rad < 0.0 ? "left" : "right");
+    if (!g.law_rows.empty())
+      std::printf(
+          "              fitted at the rows the boards were seen at: %.0f-%.0f%% of the height "
+          "(10-90%% of the sightings, 0 the top)\n",
+          100.0 * g.law_rows.front(), 100.0 * g.law_rows.back());
   }
   const harmoloc::sim_host::GeometryTablesReport& t = g.tables;
   if (!t.applied) {

@@ -306,4 +306,22 @@ TEST(ColumnLaw, TakesTheAxisApartAndGivesTheBoardsDirection) {
   EXPECT_GT(no_axis_error, lens_error + 0.4);
   EXPECT_LT(middle_error, 0.3);
   EXPECT_GT(low_error, 2.0 * middle_error);
+  // Fitted at the row where those boards are seen (the trainer passes the rows of its frames'
+  // sightings), the law holds there too.
+  hs::BoardSpec low_board = board_ahead(4.0);
+  low_board.width_m = low_board.height_m = 0.06;
+  low_board.centre_z_m = pitched.height_m;
+  const hs::BoardImage low_image =
+      hs::project_board(pitched, hs::LensModel(pitched), low_board, ha::Pose2{0.0, 0.0, 0.0});
+  ASSERT_GT(low_image.area_px, 0.0);
+  const double low_row = low_image.centroid_v_px / (pitched.height_px - 1.0);
+  EXPECT_GT(low_row, 0.6);  // below the middle rows
+  const hs::ColumnLaw low_law = hs::column_law_of(pitched, {low_row});
+  ASSERT_TRUE(low_law.ok);
+  const double low_fitted_error = worst_law_error_deg(pitched, low_law, 0.0);
+  std::printf("pitched 9 deg, the law fitted at row %.3f: lower %.3f deg\n", low_row,
+              low_fitted_error);
+  EXPECT_LT(low_fitted_error, 0.5 * low_error);
+  // Rows outside the frame are not rows: none left, no law.
+  EXPECT_FALSE(hs::column_law_of(pitched, {-0.5, 1.5}).ok);
 }

@@ -507,7 +507,10 @@ TEST(TrainerGeometry, ReportsTheFitAndLeavesTheMapAlone) {
   // Its column-to-angle law is the fitted camera's (hs::column_law_of), not the one triangulated
   // from the frames; asked to keep that one, it does.
   ASSERT_TRUE(seen.geometry.law_from_camera);
-  const hs::ColumnLaw law = hs::column_law_of(seen.geometry.fit.camera);
+  // Fitted at the rows the training frames saw the boards at.
+  ASSERT_EQ(seen.geometry.law_rows.size(), 9U);
+  EXPECT_TRUE(std::is_sorted(seen.geometry.law_rows.begin(), seen.geometry.law_rows.end()));
+  const hs::ColumnLaw law = hs::column_law_of(seen.geometry.fit.camera, seen.geometry.law_rows);
   EXPECT_EQ(fitted->forward.bearing_a1_rad, static_cast<float>(law.a1_rad));
   EXPECT_EQ(fitted->forward.bearing_a3_rad, static_cast<float>(law.a3_rad));
   EXPECT_DOUBLE_EQ(seen.geometry.law_a1_rad, law.a1_rad);

@@ -4,6 +4,8 @@
 /// along), and the pinhole intrinsics a CameraSpec implies. A pixel whose distorted coordinates
 /// have no preimage on the lens's monotonic region is outside the image circle: black.
 
+#include <vector>
+
 #include "harmoloc/algorithms/geometry.hpp"
 #include "harmoloc/sim_host/scenario.hpp"
 
@@ -65,8 +67,10 @@ bool project_point(const CameraSpec& camera, const LensModel& lens, const Camera
 
 /// The firmware's column-to-angle law (forward_map.hpp: angle a1 t + a3 t^3 for the centroid
 /// column u, t = (u - (W - 1) / 2) / W, positive to the right) that @p camera implies: the
-/// least-squares a0 + a1 t + a3 t^3 over the frame's columns, at three rows about its middle, of
-/// the angle between a pixel's ray and the robot's heading, seen from above.
+/// least-squares a0 + a1 t + a3 t^3 over the frame's columns, at @p rows (fractions of the
+/// frame's height, 0 the top row, 1 the bottom; empty: three rows about its middle), of the
+/// angle between a pixel's ray and the robot's heading, seen from above. Under a pitch a
+/// column's direction changes with the row: the rows the boards are seen at give their law.
 struct ColumnLaw {
   bool ok = false;  ///< false: columns that do not turn one way, or a lens that cannot undistort
   double a1_rad = 0.0, a3_rad = 0.0;
@@ -80,6 +84,6 @@ struct ColumnLaw {
   /// principal point's offset alone; without a mounting yaw, -axis_rad.
   double optical_axis_rad = 0.0;
 };
-ColumnLaw column_law_of(const CameraSpec& camera);
+ColumnLaw column_law_of(const CameraSpec& camera, const std::vector<double>& rows = {});
 
 }  // namespace harmoloc::sim_host

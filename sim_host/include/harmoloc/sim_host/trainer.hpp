@@ -178,6 +178,9 @@ struct GeometryReport {
   /// The fitted camera's optical axis, as an image angle under its law (radians, positive to the
   /// right of the centre column): the principal point's offset; the map's visibility_axis_rad.
   double law_axis_rad = 0.0;
+  /// The rows the law was fitted at (column_law_of): the deciles of the rows the training
+  /// frames saw the boards at, as fractions of the height; empty: the middle rows.
+  std::vector<double> law_rows;
 };
 
 struct TrainReport {
