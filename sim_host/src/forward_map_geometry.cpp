@@ -35,6 +35,8 @@ class GeometryView {
         width_px_(static_cast<double>(camera.width_px)) {}
 
   double area_scale() const { return area_scale_; }
+  // Where the map's angle gain is centred (ForwardMap::visibility_axis_rad).
+  double axis_rad() const { return static_cast<double>(map_.visibility_axis_rad); }
 
   // The image angle of a centroid column under the map's law (forward_map.hpp).
   double angle_rad(double u_px) const {
@@ -92,7 +94,7 @@ class GeometryView {
 // views.
 double geometry_angle_gain(const SceneGeometryFit& fit, const std::vector<std::size_t>& boards,
                            const std::vector<PlacedFrame>& frames, const GeometryView& view,
-                           double forward_m, double axis_rad) {
+                           double forward_m) {
   const LensModel lens(fit.camera);
   double xy = 0.0, xx = 0.0;
   std::size_t n = 0;
@@ -106,7 +108,7 @@ double geometry_angle_gain(const SceneGeometryFit& fit, const std::vector<std::s
       const CellView facing = view.from(board, cx, cy, 0.0F);
       if (!(facing.feature > 0.0F) || facing.cut) continue;
       // From the optical axis (the map's visibility_axis_rad), where the gain is centred.
-      const double a = view.angle_rad(image.centroid_u_px) - axis_rad;
+      const double a = view.angle_rad(image.centroid_u_px) - view.axis_rad();
       const double axis = static_cast<double>(facing.feature) / view.area_scale();
       xy += a * a * (image.area_px / axis - 1.0);
       xx += a * a * a * a;
@@ -204,8 +206,7 @@ GeometryTablesReport visibility_from_geometry(const SceneGeometryFit& fit,
   const GeometryView view(fit.camera, map, area_scale);
   report.kernel_angle_gain = static_cast<double>(map.visibility_angle_gain);
   report.geometry_angle_gain = geometry_angle_gain(
-      fit, candidates, frames, view, static_cast<double>(map.bearing_camera_forward_m),
-      static_cast<double>(map.visibility_axis_rad));
+      fit, candidates, frames, view, static_cast<double>(map.bearing_camera_forward_m));
   // The geometry's own stretch towards the frame's edge: the kernel's gain is measured through
   // the frames' noise and the kernel's blur (on random scene 5: -0.22 against the projection's
   // 0.35). The boards that keep the kernel's tables are rescaled to it at the end.

@@ -51,8 +51,11 @@ std::vector<double> seen_rows(const std::vector<algorithms::AreaVector>& areas,
     }
   }
   if (rows.size() < 20) return {};
+  std::sort(rows.begin(), rows.end());  // once, for all nine (as trainer_detail::quantile picks)
   std::vector<double> deciles;
-  for (int k = 1; k <= 9; ++k) deciles.push_back(trainer_detail::quantile(rows, 0.1 * k));
+  for (int k = 1; k <= 9; ++k)
+    deciles.push_back(rows[std::min(
+        rows.size() - 1, static_cast<std::size_t>(0.1 * k * static_cast<double>(rows.size())))]);
   return deciles;
 }
 
@@ -285,8 +288,10 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<dataset::Sta
       // fitted camera's law has neither error, and the forward map is trained again with it:
       // its bearings, and its visibility tables from the kernel or the geometry, their angle
       // gain centred on the camera's optical axis (the law's angles start at the centre column).
-      const std::vector<double> rows = seen_rows(run.areas, frames);
-      const ColumnLaw law = g.tried && g.fit.ok ? column_law_of(g.fit.camera, rows) : ColumnLaw{};
+      const bool fitted = g.tried && g.fit.ok;
+      const std::vector<double> rows =
+          fitted ? seen_rows(run.areas, frames) : std::vector<double>{};
+      const ColumnLaw law = fitted ? column_law_of(g.fit.camera, rows) : ColumnLaw{};
       if (opt.law_from_geometry && with_bearings && forward->has_visibility && law.ok) {
         auto first = std::make_unique<algorithms::ForwardMap>(*forward);
         const ForwardMapReport first_report = forward_report;

@@ -6,6 +6,7 @@
 #include <limits>
 #include <memory>
 #include <sstream>
+#include <string>
 
 #include <CLI/CLI.hpp>
 
@@ -22,6 +23,15 @@ std::string board_list(const std::vector<int>& boards, const harmoloc::firmware:
   return out.empty() ? "-" : out;
 }
 
+// An image angle under the law as "1.54 deg left of the centre column".
+std::string side_of_centre(double angle_rad) {
+  char text[64];
+  std::snprintf(text, sizeof text, "%.2f deg %s of the centre column",
+                std::fabs(angle_rad) * 180.0 / harmoloc::algorithms::kPi,
+                angle_rad < 0.0 ? "left" : "right");
+  return text;
+}
+
 // A floor map's visibility tables: from the fitted geometry, board by board, or the kernel's and
 // why.
 void print_geometry_tables(const harmoloc::sim_host::GeometryReport& g,
@@ -31,9 +41,9 @@ void print_geometry_tables(const harmoloc::sim_host::GeometryReport& g,
     constexpr double kDeg = 180.0 / harmoloc::algorithms::kPi;
     std::printf(
         "geometry      column-to-angle law from the fitted camera: half field of view %.2f deg "
-        "(a1 %.4f, a3 %.4f); the optical axis %.2f deg %s of the centre column\n",
+        "(a1 %.4f, a3 %.4f); the optical axis %s\n",
         (0.5 * g.law_a1_rad + 0.125 * g.law_a3_rad) * kDeg, g.law_a1_rad, g.law_a3_rad,
-        std::fabs(g.law_axis_rad) * kDeg, g.law_axis_rad < 0.0 ? "left" : "right");
+        side_of_centre(g.law_axis_rad).c_str());
     if (!g.law_rows.empty())
       std::printf(
           "              fitted at the rows the boards were seen at: %.0f-%.0f%% of the height "
@@ -599,21 +609,16 @@ int main(int argc, char** argv) {
               "bearing noise %s (deg, against other passes; %zu of %zu cells hold one, seen from "
               "%s)\n",
               spread.c_str(), fw.bearing_cells, grid.stored_cells(), from);
-          if (fw.visibility && grid.visibility_axis_rad != 0.0F)
+          if (fw.visibility) {
             std::printf(
                 "visibility    each board's area seen whole from the camera's place, in view by "
-                "its bearing; towards the frame's edge it grows by 1 + %.2f a^2, a from the "
-                "optical axis (%.2f deg %s of the centre column)\n",
-                fw.visibility_angle_gain,
-                std::fabs(static_cast<double>(grid.visibility_axis_rad)) * 180.0 /
-                    harmoloc::algorithms::kPi,
-                grid.visibility_axis_rad < 0.0F ? "left" : "right");
-          else if (fw.visibility)
-            std::printf(
-                "visibility    each board's area seen whole from the camera's place, in view by "
-                "its bearing; towards the frame's edge it grows by 1 + %.2f a^2\n",
+                "its bearing; towards the frame's edge it grows by 1 + %.2f a^2",
                 fw.visibility_angle_gain);
-          else if (fw.visibility_wanted)
+            if (grid.visibility_axis_rad != 0.0F)
+              std::printf(", a from the optical axis (%s)",
+                          side_of_centre(static_cast<double>(grid.visibility_axis_rad)).c_str());
+            std::printf("\n");
+          } else if (fw.visibility_wanted)
             std::printf(
                 "visibility    none: it needs the bearings seen from the camera's place "
                 "(--camera-forward-m) and no heading terms\n");
