@@ -175,17 +175,31 @@ bool FloorSearch::step(const ForwardMap& map, const BoardFeatures& observed,
 
 FloorPose FloorSearch::refine(const ForwardMap& map, const BoardFeatures& observed,
                               const FloorPose& around, double radius_m,
-                              const BoardModelParams& params, std::uint32_t leave_out) {
+                              const BoardModelParams& params, std::uint32_t leave_out, int levels) {
   FloorPose best;
   if (!around.valid) return best;
   const auto d = static_cast<double>(map.bearing_camera_forward_m);
-  const double cx = around.x_m + d * std::cos(around.yaw_rad);
-  const double cy = around.y_m + d * std::sin(around.yaw_rad);
-  const double step = radius_m / 2.0;
+  double cx = around.x_m + d * std::cos(around.yaw_rad);
+  double cy = around.y_m + d * std::sin(around.yaw_rad);
+  double step = radius_m / 2.0;
   for (int j = -2; j <= 2; ++j) {
     for (int i = -2; i <= 2; ++i) {
       best = better_of(best, floor_pose_seen_from(map, observed, cx + i * step, cy + j * step,
                                                   params, leave_out));
+    }
+  }
+  // Each further level: the eight places around the best at half the step (the best lies
+  // within half a step of the optimum the coarser grid can see).
+  for (int level = 1; level < levels && best.valid; ++level) {
+    cx = best.x_m + d * std::cos(best.yaw_rad);
+    cy = best.y_m + d * std::sin(best.yaw_rad);
+    step *= 0.5;
+    for (int j = -1; j <= 1; ++j) {
+      for (int i = -1; i <= 1; ++i) {
+        if (i == 0 && j == 0) continue;
+        best = better_of(best, floor_pose_seen_from(map, observed, cx + i * step, cy + j * step,
+                                                    params, leave_out));
+      }
     }
   }
   return best;

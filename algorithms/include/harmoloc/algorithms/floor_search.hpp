@@ -66,10 +66,13 @@ class FloorSearch {
   const FloorPose& last_pass() const { return last_; }
 
   /// @p around refined on the current frame: the best pose with its camera within @p radius_m
-  /// of @p around's camera place, on a grid of 5 x 5 places (@p around's own included).
+  /// of @p around's camera place, on a grid of 5 x 5 places (@p around's own included). Each
+  /// level beyond the first tries the 8 places around the best so far at half the last step: a
+  /// board's area in its trained width changes by a width over a centimetre or two, finer than
+  /// a pass's places.
   static FloorPose refine(const ForwardMap& map, const BoardFeatures& observed,
                           const FloorPose& around, double radius_m, const BoardModelParams& params,
-                          std::uint32_t leave_out);
+                          std::uint32_t leave_out, int levels = 1);
 
  private:
   std::uint64_t cursor_ = 0;  ///< the next place of the pass, row-major over the strided grid
