@@ -153,7 +153,7 @@ bool LocalizationCycle::update_with_boards(
   // a second, and without them the search had no bearing left. On random floor 6 its pose stood
   // 2 cm from the robot, 20 nats better than the estimate, 0.4 s after a kidnap, and was gone
   // the next frame for 30 s. A moved board costs it at most ln(1 / c) at every place.
-  if (floor_search_on_) follow_floor(observed, 0U);
+  if (floor_search_on_) follow_floor(observed);
   // On a floor the cloud cannot follow boards that keep preferring a place 10 cm or more away
   // (no particle is there to be weighed); the nearby pose test draws some there when they do.
   algorithms::Pose2 draw_at;
@@ -168,7 +168,7 @@ bool LocalizationCycle::update_with_boards(
   }
 
   if (config_.kidnap.enabled && floor_search_on_) {
-    floor_kidnap_test(observed, estimate, match, 0U);  // the search's boards, for both places
+    floor_kidnap_test(observed, estimate, match);
   } else if (config_.kidnap.enabled) {
     algorithms::KidnapInput in;
     in.match = match;
@@ -211,8 +211,8 @@ bool LocalizationCycle::update_with_boards(
   return assessment_.consensus || robust_fix_.known_place;
 }
 
-void LocalizationCycle::follow_floor(const algorithms::BoardFeatures& observed,
-                                     std::uint32_t leave_out) {
+void LocalizationCycle::follow_floor(const algorithms::BoardFeatures& observed) {
+  constexpr std::uint32_t leave_out = kFloorSearchLeaveOut;
   using algorithms::FloorSearch;
   const algorithms::BoardModelParams& params = board_params_;
   // The pose followed so far, refined on this frame (the robot moved), against the best of a
@@ -229,8 +229,8 @@ void LocalizationCycle::follow_floor(const algorithms::BoardFeatures& observed,
 }
 
 void LocalizationCycle::floor_kidnap_test(const algorithms::BoardFeatures& observed,
-                                          const algorithms::Pose2& estimate, double match,
-                                          std::uint32_t leave_out) {
+                                          const algorithms::Pose2& estimate, double match) {
+  constexpr std::uint32_t leave_out = kFloorSearchLeaveOut;
   // The floor search's pose stands for the harmonic fix: a known place where it is valid, far
   // when it is, and the boards (areas and bearings) prefer it to the estimate by the difference
   // of their fits.

@@ -294,13 +294,13 @@ class LocalizationCycle {
       const algorithms::AreaVector& areas,
       const std::array<float, algorithms::HarmonicModel::kMaxFeatures>& features);
   // On a floor: the search's slice of this cycle and the pose it follows (floor_fix_), then the
-  // kidnap test with that pose as its evidence.
-  void follow_floor(const algorithms::BoardFeatures& observed, std::uint32_t leave_out);
+  // kidnap test with that pose as its evidence. Both weigh every board (kFloorSearchLeaveOut).
+  void follow_floor(const algorithms::BoardFeatures& observed);
   // The kidnap test's step on @p in (its counters; on "lost" the re-seed over the map and the
   // STATUSTEXT, on a kidnap the STATUSTEXT: the caller re-seeds).
   algorithms::KidnapVerdict step_kidnap_test(const algorithms::KidnapInput& in);
   void floor_kidnap_test(const algorithms::BoardFeatures& observed,
-                         const algorithms::Pose2& estimate, double match, std::uint32_t leave_out);
+                         const algorithms::Pose2& estimate, double match);
   // Re-seeds: around a global fix (heading from the map where it knows one), around both the
   // boards' place and the fix's after a kidnap, or over the map; after_reseed() forgets what
   // was learnt against the old cloud.
@@ -379,6 +379,10 @@ class LocalizationCycle {
   /// 0.75 cm at a 3-cell stride of 2 cm cells; 41 places, against 25 at one level): a board's
   /// area changes by its trained width over a centimetre or two, finer than a pass's places.
   static constexpr int kFloorRefineLevels = 3;
+  /// The search and its comparison with the estimate leave no board out: after a kidnap the
+  /// boards the robot now sees are the ones the motion index writes off
+  /// (localization_cycle_update.cpp).
+  static constexpr std::uint32_t kFloorSearchLeaveOut = 0U;
   bool floor_search_on_ = false;
   std::uint32_t floor_stride_ = 1;  ///< cells between the places a pass tries, along each axis
   double floor_refine_m_ = 0.02;    ///< the refinement's reach: a stride
