@@ -4,17 +4,28 @@ docs/filter.md, "The floor search"): the search gave the kidnap test its evidenc
 robot within 10 cm of its new place after a kidnap, and a kidnap was confirmed from it; and the
 boards' fit columns (truth_nats, estimate_nats) hold fits, the truth's the better just after a
 kidnap. The figures themselves are the sweep's (docs/sweep.md); this only shows the path works
-end to end."""
+end to end.
+
+With --sweep and --min-recovered it also asks that many of the roam's kidnaps to have come back
+under 10 cm within 2 s (the sweep's own count, floor_kidnaps_recovered_2s in its sweep.json)."""
+import argparse
 import csv
+import json
 import math
 import sys
 
 
 def main():
-    if len(sys.argv) != 2:
-        print("usage: check_floor_search_trace.py SEED-N-floor-kidnap.csv", file=sys.stderr)
-        return 2
-    path = sys.argv[1]
+    parser = argparse.ArgumentParser(
+        description="Checks the trace of a floor's kidnap roam run with the floor search on.")
+    parser.add_argument("trace", help="the kidnap roam's trace, SEED-N-floor-kidnap.csv")
+    parser.add_argument("--sweep", help="the sweep's sweep.json (for --min-recovered)")
+    parser.add_argument("--min-recovered", type=int, default=0,
+                        help="kidnaps that must be back under 10 cm within 2 s (default 0)")
+    args = parser.parse_args()
+    if args.min_recovered > 0 and not args.sweep:
+        parser.error("--min-recovered needs --sweep")
+    path = args.trace
     with open(path) as f:
         lines = f.readlines()
     kidnaps = [float(l.split()[3]) for l in lines if l.startswith("# kidnap at")]
@@ -76,11 +87,21 @@ def main():
     confirmed = sum(1 for r in rows if r["verdict"] == "2")
     if confirmed == 0:
         problems.append("no kidnap confirmed")
+    recovered = None
+    if args.sweep:
+        with open(args.sweep) as f:
+            results = json.load(f)["results"]
+        recovered = sum(r.get("floor_kidnaps_recovered_2s", 0) for r in results)
+        total = sum(r.get("floor_kidnaps", 0) for r in results)
+        if recovered < args.min_recovered:
+            problems.append(f"{recovered} of {total} kidnaps back under 10 cm within 2 s, "
+                            f"fewer than {args.min_recovered}")
     for p in problems:
         print("check_floor_search_trace: " + p)
     print(f"check_floor_search_trace: {len(kidnaps)} kidnaps, evidence in {len(evidence)} of "
           f"{len(rows)} frames, the robot found within 10 cm after {found}, {confirmed} confirmed; "
-          f"the truth fitted better in {truth_better} of {len(away)} frames 0.5 m off")
+          f"the truth fitted better in {truth_better} of {len(away)} frames 0.5 m off" +
+          ("" if recovered is None else f"; {recovered} back within 2 s"))
     return 1 if problems else 0
 
 
