@@ -372,7 +372,7 @@ lost_frames = 120
 reseed = "uniform"
 position_sigma_m = 0.1
 yaw_sigma_deg = 30
-floor_search = true
+floor_search = false
 )");
   const hf::FirmwareConfig c = hf::load_config(path);
   EXPECT_EQ(c.observation.model, hf::ObservationModel::kFix);
@@ -406,13 +406,13 @@ floor_search = true
   EXPECT_EQ(k.reseed, hf::ReseedStrategy::kUniform);
   EXPECT_DOUBLE_EQ(k.position_sigma_m, 0.1);
   EXPECT_DOUBLE_EQ(k.yaw_sigma_deg, 30.0);
-  EXPECT_TRUE(k.floor_search);
+  EXPECT_FALSE(k.floor_search);
 
   // Defaults: the robust per-board model, kidnap test on, re-seed around the fix.
   const hf::FirmwareConfig d = hf::default_config();
   EXPECT_EQ(d.observation.model, hf::ObservationModel::kBoards);
   EXPECT_EQ(d.observation.route_terms, hf::RouteTerms::kAuto);
-  EXPECT_FALSE(d.kidnap.floor_search);
+  EXPECT_TRUE(d.kidnap.floor_search);
   EXPECT_EQ(hf::load_config(dir.write("on.toml", "[observation]\nroute_terms = \"on\"\n"))
                 .observation.route_terms,
             hf::RouteTerms::kOn);
