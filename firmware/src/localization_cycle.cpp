@@ -52,6 +52,10 @@ bool LocalizationCycle::off_map(const Pose2& p) const {
            p.y_m <= region_max_y_m_);
 }
 
+bool LocalizationCycle::fix_on_map(const algorithms::HarmonicFix& fix) const {
+  return !off_map(Pose2{fix.x_m, fix.y_m, 0.0});
+}
+
 bool LocalizationCycle::camera_fresh(std::uint64_t t_ns) const {
   return data_time_ns_ - t_ns <= static_cast<std::uint64_t>(config_.cycle.camera_timeout_ms * 1e6);
 }

@@ -180,8 +180,7 @@ bool LocalizationCycle::update_with_boards(
     // prefer the fix's place as well (algorithms/kidnap_detector.hpp). A fix beyond the mapped
     // region (a local linear correction extrapolates) is no evidence either way: a re-seed there
     // would be published as off the map.
-    const bool fix_usable = std::isfinite(evidence_fix.x_m) && std::isfinite(evidence_fix.y_m) &&
-                            !off_map(algorithms::Pose2{evidence_fix.x_m, evidence_fix.y_m, 0.0});
+    const bool fix_usable = fix_on_map(evidence_fix);
     if (!fix_usable) in.fix_known = false;
     in.fix_distance_m =
         fix_usable ? std::hypot(evidence_fix.x_m - estimate.x_m, evidence_fix.y_m - estimate.y_m)
@@ -273,8 +272,7 @@ void LocalizationCycle::floor_kidnap_test(const algorithms::BoardFeatures& obser
     // 2: the truth at -8 to -20 nats, a place 0.2-0.6 m off at -0.7, the fix 4-10 cm from the
     // robot). The filter weighs the fix as well, and the next frames choose between the two.
     const algorithms::HarmonicFix& fix = fix_.fix;
-    const bool fix_apart = fix.known_place && std::isfinite(fix.x_m) && std::isfinite(fix.y_m) &&
-                           !off_map(algorithms::Pose2{fix.x_m, fix.y_m, 0.0}) &&
+    const bool fix_apart = fix.known_place && fix_on_map(fix) &&
                            std::hypot(fix.x_m - searched.x_m, fix.y_m - searched.y_m) > sigma_m;
     const SeedHeading at_fix = fix_apart ? seed_heading(fix.x_m, fix.y_m) : SeedHeading{};
     if (at_fix.from_boards) {

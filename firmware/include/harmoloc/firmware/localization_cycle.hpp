@@ -287,6 +287,8 @@ class LocalizationCycle {
   // so (HealthCause::kHeadingNotCovered).
   void set_published_health();
   bool off_map(const algorithms::Pose2& pose) const;
+  // Whether a fix's place is finite and within the mapped region (off_map's test).
+  bool fix_on_map(const algorithms::HarmonicFix& fix) const;
   // Whether a frame taken at @p t_ns is within cycle.camera_timeout_ms of the data clock.
   bool camera_fresh(std::uint64_t t_ns) const;
   // The measurement update with the per-board model; returns whether the frame counts as vision.
