@@ -38,17 +38,30 @@ void NearbyPoseTest::reset() {
 bool NearbyPoseTest::step(const ForwardMap& map, const BoardFeatures& observed,
                           const BoardUpdate& update, const Pose2& estimate,
                           const BoardModelParams& params, std::uint32_t leave_out,
-                          const NearbyPoseParams& test, Pose2& draw_at) {
+                          const NearbyPoseParams& test, Pose2& draw_at, const FloorPose& hint) {
   if (update.map == nullptr || !floor_search_possible(map)) return false;
   Pose2 alternative;
   if (!holding_) {
+    const auto apart = [&](const FloorPose& p) {
+      return p.valid &&
+             std::hypot(p.x_m - estimate.x_m, p.y_m - estimate.y_m) >= test.min_distance_m;
+    };
     const FloorPose around{estimate.x_m, estimate.y_m, estimate.yaw_rad, 0.0, true};
     const FloorPose found =
         FloorSearch::refine(map, observed, around, test.search_radius_m, params, leave_out);
-    if (!found.valid ||
-        std::hypot(found.x_m - estimate.x_m, found.y_m - estimate.y_m) < test.min_distance_m)
-      return false;
-    alternative = Pose2{found.x_m, found.y_m, found.yaw_rad};
+    const bool have_found = apart(found), have_hint = apart(hint);
+    if (!have_found && !have_hint) return false;
+    alternative = have_found ? Pose2{found.x_m, found.y_m, found.yaw_rad}
+                             : Pose2{hint.x_m, hint.y_m, hint.yaw_rad};
+    if (have_found && have_hint) {
+      // The floor search's pose where it fits this frame better in the filter's model: beyond
+      // the refinement's reach (a re-seed that chose the wrong start, 0.3 m or more from the
+      // robot) only the search has seen the place.
+      double found_nats = 0.0, hint_nats = 0.0;
+      best_near(update, alternative, test.refine_step_m, found_nats);
+      best_near(update, Pose2{hint.x_m, hint.y_m, hint.yaw_rad}, test.refine_step_m, hint_nats);
+      if (hint_nats > found_nats) alternative = Pose2{hint.x_m, hint.y_m, hint.yaw_rad};
+    }
     holding_ = true;
     sum_nats_ = 0.0;
     frames_ = 0;

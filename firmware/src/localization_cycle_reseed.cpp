@@ -50,6 +50,7 @@ void LocalizationCycle::after_reseed() {
   if (gap_ == EncoderGap::kDiffused) gap_ = EncoderGap::kReseeded;
   kidnap_.reset();
   nearby_.reset();
+  nearby_hint_frames_ = config_.filter.nearby.max_frames;
   // What the boards' motion indices learnt was learnt against the old, wrong estimate.
   reliability_.reset(board_params_);
   fix_check_.reset();

@@ -121,3 +121,29 @@ TEST(NearbyPoseTest, DropsTheAlternativeAfterItsFramesAndWithoutAMap) {
   EXPECT_FALSE(none.step(plain, o, u, estimate, params, 0U, test, at));
   EXPECT_FALSE(none.holding());
 }
+
+TEST(NearbyPoseTest, TakesTheFloorSearchsPoseBeyondTheRefinementsReach) {
+  const auto map = make_floor();
+  const ha::BoardModelParams params;
+  const ha::NearbyPoseParams test;
+  // The estimate 40 cm off the robot, twice the refinement's radius (a re-seed that chose the
+  // wrong start): without the search's pose the test cannot draw at the robot. Returns the
+  // draw's distance from the robot (infinite: no draw in 60 frames).
+  const auto run = [&](bool with_hint) {
+    ha::NearbyPoseTest t;
+    for (int frames = 0; frames < 60; ++frames) {
+      const double x = 0.8 + 0.01 * frames, y = 0.9, yaw = 0.3;
+      const ha::Pose2 estimate{x, y + 0.40, yaw};
+      const ha::BoardFeatures o = seen(x, y, yaw);
+      const ha::FloorPose hint =
+          with_hint ? ha::FloorPose{x + 0.01, y - 0.01, yaw, 0.0, true} : ha::FloorPose{};
+      ha::Pose2 at;
+      if (t.step(*map, o, update_for(*map, o, estimate, params), estimate, params, 0U, test, at,
+                 hint))
+        return std::hypot(at.x_m - x, at.y_m - y);
+    }
+    return HUGE_VAL;
+  };
+  EXPECT_GT(run(false), 0.15);
+  EXPECT_LT(run(true), 0.04);
+}

@@ -43,10 +43,12 @@ class NearbyPoseTest {
   /// @p estimate, the heading from the bearings), else carries it by the estimate's motion;
   /// refines both on @p update (the filter's board update of this frame) and adds the
   /// log-ratio. Returns true, with the pose in @p draw_at, when the sum passed the bound (the
-  /// alternative is then dropped).
+  /// alternative is then dropped). @p hint: the floor search's pose, where there is one; when
+  /// no alternative is held it is taken instead of the refinement's where it lies apart from the
+  /// estimate and fits the frame better (it may lie beyond search_radius_m).
   bool step(const ForwardMap& map, const BoardFeatures& observed, const BoardUpdate& update,
             const Pose2& estimate, const BoardModelParams& params, std::uint32_t leave_out,
-            const NearbyPoseParams& test, Pose2& draw_at);
+            const NearbyPoseParams& test, Pose2& draw_at, const FloorPose& hint = FloorPose{});
 
   bool holding() const { return holding_; }
   double summed_nats() const { return sum_nats_; }

@@ -399,6 +399,9 @@ class LocalizationCycle {
   // On a floor map: the sequential test between the estimate and the best pose near it.
   bool nearby_on_ = false;
   algorithms::NearbyPoseTest nearby_;
+  /// Frames left in which the nearby pose test may take the floor search's pose (after a
+  /// re-seed, for as many frames as it tests an alternative).
+  std::uint32_t nearby_hint_frames_ = 0;
   algorithms::KidnapVerdict kidnap_verdict_ = algorithms::KidnapVerdict::kNone;
   algorithms::KidnapInput kidnap_input_{};
   const char* pending_text_ = nullptr;  ///< a STATUSTEXT this cycle's publish sends
