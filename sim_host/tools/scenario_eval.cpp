@@ -166,6 +166,9 @@ RunRecord replay_scenario(const Scenario& scenario, std::uint64_t seed,
       f.estimate_nats = algorithms::floor_fit(map.forward, seen, out.pose.x_m, out.pose.y_m,
                                               out.pose.yaw_rad, params, 0U);
     }
+    if (map.forward.present())
+      f.truth_lane_m = static_cast<double>(algorithms::route_distance(
+          map.forward, algorithms::locate(map.forward, f.truth.x_m, f.truth.y_m)));
     f.match = cycle->kidnap_input().match;
     f.sigma_m = std::sqrt(std::max(0.0, 0.5 * (out.covariance(0, 0) + out.covariance(1, 1))));
     f.sigma_yaw_rad = std::sqrt(std::max(0.0, out.covariance(2, 2)));
@@ -201,7 +204,7 @@ void write_trace(const RunRecord& run, const std::string& path) {
                "fix_present,fix_known,fix_x_m,fix_y_m,verdict,distrusted,consensus,robust_fix_x_m,"
                "robust_fix_y_m,preference,sigma_m,sigma_yaw_rad,match,covered,evidence_known,"
                "evidence_x_m,evidence_y_m,evidence_distance_m,truth_nats,estimate_nats,board_seen,"
-               "cut_board,fix_suspects");
+               "cut_board,fix_suspects,truth_lane_m");
   const std::size_t boards = run.frames.empty() ? 0 : run.frames.front().boards;
   for (std::size_t b = 0; b < boards; ++b) std::fprintf(f, ",chi2_%zu", b + 1);
   for (std::size_t b = 0; b < boards; ++b) std::fprintf(f, ",static_%zu", b + 1);
@@ -210,7 +213,7 @@ void write_trace(const RunRecord& run, const std::string& path) {
     std::fprintf(f,
                  "%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%d,%s,%d,%d,%.4f,%.4f,%d,%u,%d,%.4f,%.4f,"
                  "%.3f,%.4f,"
-                 "%.4f,%.4g,%d,%d,%.4f,%.4f,%.4f,%.3f,%.3f,%d,%d,%u",
+                 "%.4f,%.4g,%d,%d,%.4f,%.4f,%.4f,%.3f,%.3f,%d,%d,%u,%.3f",
                  r.t_s, r.truth.x_m, r.truth.y_m, r.truth.yaw_rad, r.estimate.x_m, r.estimate.y_m,
                  r.estimate.yaw_rad, r.position_error_m(), r.valid ? 1 : 0,
                  firmware::health_name(r.health), r.fix_present ? 1 : 0, r.fix_known ? 1 : 0,
@@ -219,7 +222,7 @@ void write_trace(const RunRecord& run, const std::string& path) {
                  r.robust_fix.y_m, r.preference, r.sigma_m, r.sigma_yaw_rad, r.match, r.covered,
                  r.evidence_known ? 1 : 0, r.evidence.x_m, r.evidence.y_m, r.evidence_distance_m,
                  r.truth_nats, r.estimate_nats, r.board_seen ? 1 : 0, r.cut_board ? 1 : 0,
-                 static_cast<unsigned>(r.fix_suspects));
+                 static_cast<unsigned>(r.fix_suspects), r.truth_lane_m);
     for (std::size_t b = 0; b < boards; ++b)
       std::fprintf(f, ",%.3g", static_cast<double>(r.chi2[b]));
     for (std::size_t b = 0; b < boards; ++b)

@@ -79,6 +79,10 @@ struct FrameRecord {
   /// fit that the boards cannot tell the two apart.
   double truth_nats = std::numeric_limits<double>::quiet_NaN();
   double estimate_nats = std::numeric_limits<double>::quiet_NaN();
+  /// The forward map's distance from the true pose to the training run (route_distance, metres):
+  /// on a floor, how far the true place lies from the coverage run's lanes. NaN without a
+  /// forward map.
+  double truth_lane_m = std::numeric_limits<double>::quiet_NaN();
   double sigma_m = 0.0;        ///< the published position spread (root of the mean variance)
   double sigma_yaw_rad = 0.0;  ///< the published heading spread
   double match = 0.0;          ///< the kidnap test's d_t (the particles' summed weights)

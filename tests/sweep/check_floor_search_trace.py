@@ -3,7 +3,8 @@
 docs/filter.md, "The floor search"): the search gave the kidnap test its evidence pose, found the
 robot within 10 cm of its new place after a kidnap, and a kidnap was confirmed from it; and the
 boards' fit columns (truth_nats, estimate_nats) hold fits, the truth's the better just after a
-kidnap. The figures themselves are the sweep's (docs/sweep.md); this only shows the path works
+kidnap; every row has the header's columns, and the distance off the lanes (truth_lane_m) is
+known. The figures themselves are the sweep's (docs/sweep.md); this only shows the path works
 end to end.
 
 With --sweep and --min-recovered it also asks that many of the roam's kidnaps to have come back
@@ -32,6 +33,10 @@ def main():
     bounds = [float(l.split()[3]) for l in lines if l.startswith("# fit bound")]
     rows = list(csv.DictReader(l for l in lines if not l.startswith("#")))
     problems = []
+    # Every row as many fields as the header names: a column written without its value (or a
+    # value without its column) shifts every column after it.
+    if any(None in r or None in r.values() for r in rows):
+        problems.append("a row whose fields do not match the header's columns")
     if not kidnaps:
         problems.append("no kidnap in the run")
     evidence = [r for r in rows if r["evidence_known"] == "1"]
@@ -84,6 +89,16 @@ def main():
         problems.append("no fix_suspects column")
     elif any(not r["fix_suspects"].isdigit() or int(r["fix_suspects"]) >> boards for r in rows):
         problems.append(f"a fix_suspects entry that is not a mask of the {boards} boards")
+    # The distance off the coverage run's lanes: known on a floor map, never negative, and the
+    # kidnap roam goes anywhere on the floor, so it cannot hold on a lane throughout.
+    if rows and "truth_lane_m" not in rows[0]:
+        problems.append("no truth_lane_m column")
+    elif rows:
+        lanes = [float(r["truth_lane_m"]) for r in rows]
+        if any(not (d >= 0.0) for d in lanes):
+            problems.append("a truth_lane_m entry that is negative or not a number")
+        elif max(lanes) <= 0.0:
+            problems.append("truth_lane_m is 0 throughout the roam")
     confirmed = sum(1 for r in rows if r["verdict"] == "2")
     if confirmed == 0:
         problems.append("no kidnap confirmed")
