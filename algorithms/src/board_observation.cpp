@@ -9,8 +9,10 @@ namespace harmoloc::algorithms {
 BoardFeatures board_features(float area_scale, const AreaVector& areas) {
   BoardFeatures f;
   f.count = std::min(areas.count, kMaxBoards);
-  for (std::size_t b = 0; b < f.count; ++b)
+  for (std::size_t b = 0; b < f.count; ++b) {
     f.value[b] = static_cast<float>(areas.pixels[b]) * area_scale;
+    if (areas.pixels[b] > 0U && areas.side_pixels[b] > 0U) f.cut_mask |= 1U << b;
+  }
   return f;
 }
 
@@ -148,10 +150,12 @@ double preference(const ForwardMap& map, const BoardFeatures& observed, const fl
   double sum = 0.0;
   for (std::size_t b = 0; b < boards; ++b) {
     if (!(map.sigma[b] > 0.0F) || ((leave_out >> b) & 1U) != 0U) continue;
+    const double cut = cut_width(observed, params, b);
+    if (!(cut > 0.0)) continue;
     // The trained noise itself, not widened by sigma_scale: that widening is for weighing a
     // cloud frame after frame; here two places are compared, and the evidence must hold for
     // several frames before it counts.
-    const double width = static_cast<double>(map.sigma[b]);
+    const double width = cut * static_cast<double>(map.sigma[b]);
     const double ra = (static_cast<double>(observed.value[b]) - static_cast<double>(ea[b])) / width;
     const double rb = (static_cast<double>(observed.value[b]) - static_cast<double>(eb[b])) / width;
     const double la = std::exp(-0.5 * ra * ra) + c;
@@ -292,9 +296,10 @@ BoardAssessment BoardReliability::assess(const ForwardMap& map, const BoardFeatu
   update.bearing_mask = 0;
   for (std::size_t b = 0; b < update.boards; ++b) {
     update.observed[b] = observed.value[b];
-    update.use[b] = map.sigma[b] > 0.0F;
+    const double cut = cut_width(observed, params, b);
+    update.use[b] = map.sigma[b] > 0.0F && cut > 0.0;
     if (!update.use[b]) continue;
-    const double width = params.sigma_scale * static_cast<double>(map.sigma[b]);
+    const double width = cut * params.sigma_scale * static_cast<double>(map.sigma[b]);
     inv_var[b] = 1.0 / (width * width);
     const float o = observed.value[b];
     const double r = o < lo[b]   ? static_cast<double>(o) - static_cast<double>(lo[b])

@@ -57,9 +57,11 @@ double fit(const ForwardMap& map, const BoardFeatures& observed, double x_m, dou
   double product = 1.0;
   for (std::size_t b = 0; b < boards_of(map, observed); ++b) {
     if (!counts(map, b, leave_out)) continue;
+    const double cut = cut_width(observed, params, b);
+    if (!(cut > 0.0)) continue;
     // The trained noise itself, as board_preference weighs two places against each other.
     product *= robust((static_cast<double>(observed.value[b]) - static_cast<double>(expected[b])) /
-                          static_cast<double>(map.sigma[b]),
+                          (cut * static_cast<double>(map.sigma[b])),
                       c);
     if (phi[b] == ForwardMap::kNoBearing) continue;
     const double d = wrap_angle_rad(yaw_rad - static_cast<double>(observed.angle_rad[b]) -

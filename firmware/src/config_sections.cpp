@@ -212,6 +212,7 @@ void read_observation(const Checker& check, const toml::table& root, Observation
               "route_heading_sigma_deg",
               "implausible_ratio",
               "bearings",
+              "cut_board_width",
               "route_terms"});
   const std::string model = check.text(*t, "model", w, "boards");
   if (model == "boards")
@@ -235,6 +236,7 @@ void read_observation(const Checker& check, const toml::table& root, Observation
   auto& b = o.boards;
   b.robust = flag(check, *t, "robust", w, b.robust);
   b.bearings = flag(check, *t, "bearings", w, b.bearings);
+  b.cut_board_width = check.number(*t, "cut_board_width", w, b.cut_board_width, 0.0, 100.0);
   b.sigma_scale = check.number(*t, "sigma_scale", w, b.sigma_scale, 0.1, 100.0);
   b.tempering = check.number(*t, "tempering", w, b.tempering, 1.0, 1e4);
   b.outlier_floor = check.number(*t, "outlier_floor", w, b.outlier_floor, 1e-9, 1.0);

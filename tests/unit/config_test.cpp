@@ -358,6 +358,7 @@ route_free_m = 0.05
 route_sigma_m = 0
 route_terms = "off"
 implausible_ratio = 3.5
+cut_board_width = 0
 
 [kidnap]
 enabled = false
@@ -393,6 +394,7 @@ floor_search = false
   EXPECT_DOUBLE_EQ(b.route_sigma_m, 0.0);
   EXPECT_EQ(c.observation.route_terms, hf::RouteTerms::kOff);
   EXPECT_DOUBLE_EQ(b.implausible_ratio, 3.5);
+  EXPECT_DOUBLE_EQ(b.cut_board_width, 0.0);
   const auto& k = c.kidnap;
   EXPECT_FALSE(k.enabled);
   EXPECT_DOUBLE_EQ(k.detector.change_threshold, 0.7);
@@ -432,6 +434,7 @@ TEST(Config, ObservationAndKidnapValuesAreChecked) {
       {"[observation]\ntempering = 0.5\n", "observation.tempering"},
       {"[observation]\nrobust = 1\n", "observation.robust must be true or false"},
       {"[observation]\nimplausible_ratio = 0.5\n", "observation.implausible_ratio"},
+      {"[observation]\ncut_board_width = -1\n", "observation.cut_board_width"},
       {"[observation]\nimplausible_ratio = -1\n", "observation.implausible_ratio"},
       {"[observation]\nmotion_index_min = 0.9\nmotion_index_max = 0.5\n", "motion_index_min"},
       {"[observation]\nmotion_index_rise_rate = 1.5\n", "observation.motion_index_rise_rate"},

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <memory>
 
+#include "harmoloc/algorithms/board_observation.hpp"
 #include "harmoloc/algorithms/floor_search.hpp"
 #include "harmoloc/algorithms/geometry.hpp"
 #include "synthetic_floor.hpp"
@@ -68,6 +69,52 @@ TEST(FloorSearch, AMovedBoardLeftOutDoesNotMislead) {
   ASSERT_TRUE(fine.valid);
   EXPECT_LT(std::hypot(fine.x_m - x, fine.y_m - y), 0.03);
   EXPECT_LT(std::fabs(ha::wrap_angle_rad(fine.yaw_rad - yaw)), 0.02);
+}
+
+TEST(FloorSearch, ACutBoardsAreaIsWeighedAsWideAsConfigured) {
+  const auto map = make_floor();
+  const double x = 1.2, y = 1.1, yaw = 0.8;
+  const ha::BoardFeatures whole = seen(x, y, yaw);
+  std::size_t b = 0;
+  while (b < whole.count && !(whole.value[b] > 0.0F)) ++b;
+  ASSERT_LT(b, whole.count);
+  // The frame's side cuts the board: it shows twice its trained noise less than the map expects
+  // and gives no bearing.
+  ASSERT_GT(whole.value[b], 2.0F * map->sigma[b]);
+  ha::BoardFeatures cut = whole;
+  cut.value[b] -= 2.0F * map->sigma[b];
+  cut.angle_mask &= ~(1U << b);
+  cut.cut_mask = 1U << b;
+  ha::BoardModelParams as_whole, wider, none;
+  wider.cut_board_width = 3.0;
+  none.cut_board_width = 0.0;
+  const double reference = ha::floor_fit(*map, whole, x, y, yaw, as_whole, 0U);
+  const double at_one = ha::floor_fit(*map, cut, x, y, yaw, as_whole, 0U);
+  const double at_three = ha::floor_fit(*map, cut, x, y, yaw, wider, 0U);
+  const double left_out = ha::floor_fit(*map, cut, x, y, yaw, none, 0U);
+  EXPECT_LT(at_one, at_three);
+  EXPECT_LT(at_three, left_out);
+  // Left out, the frame fits as the whole frame without that board's area and bearing: each a
+  // perfect fit's ln(1 + c) at most.
+  EXPECT_NEAR(left_out, reference, 2.0 * std::log(1.0 + as_whole.outlier_floor) + 1e-6);
+  // The same weighs a particle: the board is not used at all with 0.
+  ha::BoardReliability reliability;
+  reliability.reset(none);
+  ha::BoardUpdate update;
+  reliability.assess(*map, cut, ha::Pose2{x, y, yaw}, none, update, 0.0);
+  EXPECT_FALSE(update.use[b]);
+  reliability.assess(*map, cut, ha::Pose2{x, y, yaw}, wider, update, 0.0);
+  EXPECT_TRUE(update.use[b]);
+}
+
+TEST(FloorSearch, BoardFeaturesMarkTheBoardsTheFramesSideCuts) {
+  ha::AreaVector a;
+  a.count = 3;
+  a.width_px = 320;
+  a.pixels = {400, 300, 0};
+  a.side_pixels = {0, 12, 0};
+  const ha::BoardFeatures f = ha::board_features(1.0F, a);
+  EXPECT_EQ(f.cut_mask, 1U << 1);
 }
 
 TEST(FloorSearch, StepsAreBoundedAndNothingWithoutBearings) {

@@ -32,6 +32,9 @@ struct BoardFeatures {
   std::size_t count = 0;
   std::array<float, kMaxBoards> angle_rad{};  ///< where bit b of angle_mask is set
   std::uint32_t angle_mask = 0;
+  /// Bit b set when board b touches the frame's left or right side (AreaVector::side_pixels):
+  /// the frame cuts it, and its area depends on exactly where the side falls across it.
+  std::uint32_t cut_mask = 0;
 };
 
 BoardFeatures board_features(float area_scale, const AreaVector& areas);
@@ -58,6 +61,9 @@ struct BoardModelParams {
   /// The kidnap test's likelihood of a board that shows less than expected: it may be hidden (a
   /// person, a box), which is likelier than an arbitrary outlier (board_preference).
   double hidden_floor = 0.1;
+  /// The area noise of a board the frame's side cuts (BoardFeatures::cut_mask), in multiples of
+  /// its trained noise; 0: such a board's area is not weighed at all.
+  double cut_board_width = 1.0;
   double dcs_phi = 1.0;         ///< Cheng et al.'s Phi
   double consensus_chi2 = 9.0;  ///< a board agrees with the estimate when its chi2 is below
   /// More than this share of the modelled boards must agree: a majority (4 of 6 or 7, 5 of 8).
@@ -97,6 +103,13 @@ struct BoardModelParams {
   /// frame of noise, a blinded sensor): it is not used. 0 turns the check off.
   double implausible_ratio = 2.0;
 };
+
+/// The factor board @p b's area noise is widened by in @p observed: 1 for a board seen whole,
+/// BoardModelParams::cut_board_width for one the frame's side cuts (0: not weighed).
+inline double cut_width(const BoardFeatures& observed, const BoardModelParams& params,
+                        std::size_t b) {
+  return ((observed.cut_mask >> b) & 1U) != 0U ? params.cut_board_width : 1.0;
+}
 
 /// What the particle filter needs for one update: per board, the mixture's weights and the
 /// (scaled) Gaussian width; the route term.
