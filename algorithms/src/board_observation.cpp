@@ -11,7 +11,7 @@ BoardFeatures board_features(float area_scale, const AreaVector& areas) {
   f.count = std::min(areas.count, kMaxBoards);
   for (std::size_t b = 0; b < f.count; ++b) {
     f.value[b] = static_cast<float>(areas.pixels[b]) * area_scale;
-    if (areas.pixels[b] > 0U && areas.side_pixels[b] > 0U) f.cut_mask |= 1U << b;
+    if (areas.cut_by_side(b)) f.cut_mask |= 1U << b;
   }
   return f;
 }

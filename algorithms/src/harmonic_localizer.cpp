@@ -242,7 +242,7 @@ bool uncut_features(const HarmonicModel& model, const AreaVector& areas,
   for (std::size_t k = 0; k < model.feature_count; ++k) {
     const std::size_t b = model.board_index[k];
     if (!(features[k] > 0.0F)) continue;  // not in view: nothing to cut
-    if (b < areas.count && areas.side_pixels[b] > 0) {
+    if (b < areas.count && areas.cut_by_side(b)) {
       use[k] = false;
       any_cut = true;
     } else if (model.feature_weight[k] > 0.0F) {

@@ -198,7 +198,7 @@ constexpr std::uint32_t kBearingMinPixels = 30;
 /// none on the frame's left or right edge).
 inline bool gives_bearing(const AreaVector& areas, std::size_t b) {
   return areas.columns_measured() && b < areas.count && areas.pixels[b] >= kBearingMinPixels &&
-         areas.side_pixels[b] == 0U;
+         !areas.cut_by_side(b);
 }
 
 /// The image angle of board @p b in @p areas under @p map's law (radians, positive to the right

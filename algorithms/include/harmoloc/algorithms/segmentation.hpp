@@ -53,6 +53,8 @@ struct AreaVector {
   std::size_t count = 0;
 
   bool columns_measured() const { return width_px != 0; }
+  /// Whether the frame's left or right side cuts board @p k (it has pixels in either column).
+  bool cut_by_side(std::size_t k) const { return side_pixels[k] > 0U; }
   bool rows_measured() const { return height_px != 0; }
   /// Board @p k's centroid column in pixels, (width - 1) / 2 at the image centre; meaningful only
   /// when columns_measured() and pixels[k] > 0.
