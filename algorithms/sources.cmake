@@ -17,6 +17,7 @@ set(HARMOLOC_ALGORITHMS_SOURCES
   src/floor_search.cpp
   src/nearby_pose_test.cpp
   src/forward_map.cpp
+  src/projected_bearing.cpp
   src/fix_board_check.cpp
   src/fix_error_grid.cpp
   src/kidnap_detector.cpp

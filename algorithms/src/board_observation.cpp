@@ -227,19 +227,86 @@ PlacePreference board_preference_near(const ForwardMap& map, const BoardFeatures
 
 namespace {
 
-/// For each board of @p boards (bit b) whose bearing the map holds at @p at: the smaller of
-/// @p residual[b] and |yaw - angle_b - phi_b(at)| (infinite: none yet).
-void fit_bearings(const ForwardMap& map, const GridPoint& at, const BoardFeatures& observed,
-                  double yaw_rad, std::uint32_t boards, std::array<double, kMaxBoards>& residual) {
+/// For each board of @p boards (bit b) whose bearing the map holds for a robot at (@p x_m,
+/// @p y_m) facing @p yaw_rad (@p cos_yaw, @p sin_yaw): the smaller of @p residual[b] and
+/// |yaw - angle_b - phi_b| (infinite: none yet), phi_b read at the bearings' place, or the
+/// difference of the angles where the map projects the board's bearing.
+void fit_bearings(const ForwardMap& map, double x_m, double y_m, double yaw_rad, double cos_yaw,
+                  double sin_yaw, const BoardFeatures& observed, std::uint32_t boards,
+                  std::array<double, kMaxBoards>& residual) {
+  if (boards == 0U) return;
+  const GridPoint at = bearing_point(map, x_m, y_m, cos_yaw, sin_yaw);
+  bool placed = false;
+  CameraAtPose camera{};
   for (std::uint32_t mask = boards; mask != 0U; mask &= mask - 1U) {
     const auto b = static_cast<std::size_t>(__builtin_ctz(mask));
+    if (b >= observed.count) continue;
+    if (map.projection.points[b] != 0U) {
+      if (!placed) {
+        camera = camera_at_pose(map.projection, static_cast<float>(x_m), static_cast<float>(y_m),
+                                static_cast<float>(cos_yaw), static_cast<float>(sin_yaw));
+        placed = true;
+      }
+      float angle = 0.0F;
+      if (!projected_image_angle(map, camera, b, angle)) continue;
+      residual[b] = std::min(residual[b], std::fabs(static_cast<double>(angle) -
+                                                    static_cast<double>(observed.angle_rad[b])));
+      continue;
+    }
     float bearing = 0.0F;
-    if (b >= observed.count || !expected_bearing(map, at, b, bearing)) continue;
+    if (!expected_bearing(map, at, b, bearing)) continue;
     double d = yaw_rad - static_cast<double>(observed.angle_rad[b]) - static_cast<double>(bearing);
     // yaw and bearing lie in [-pi, pi] and the law's angle within a half turn (as in the
     // particle filter's update): two turns at most.
     d = wrap_once_rad(wrap_once_rad(d));
     residual[b] = std::min(residual[b], std::fabs(d));
+  }
+}
+
+/// The projected image angle of board @p b for a robot at @p pose; false where the projection
+/// gives none.
+bool projected_angle_at(const ForwardMap& map, double x_m, double y_m, double yaw_rad,
+                        std::size_t b, float& angle_rad) {
+  const CameraAtPose camera =
+      camera_at_pose(map.projection, static_cast<float>(x_m), static_cast<float>(y_m),
+                     static_cast<float>(std::cos(yaw_rad)), static_cast<float>(std::sin(yaw_rad)));
+  return projected_image_angle(map, camera, b, angle_rad);
+}
+
+/// BoardUpdate's linearised projection about @p at for the projected boards of @p boards: the
+/// angle there, its central differences over the reach along x, y and the heading, and how far
+/// the straight line misses at the reach (half the second difference) against the tolerance.
+/// Seven projections a board a frame, where the particles would take one each.
+void linearise_projection(const ForwardMap& map, const Pose2& at, std::uint32_t boards,
+                          BoardUpdate& update) {
+  update.linear_mask = 0;
+  update.linear_at = at;
+  const double reach[3] = {BoardUpdate::kLinearReach_m, BoardUpdate::kLinearReach_m,
+                           BoardUpdate::kLinearReach_rad};
+  for (std::uint32_t mask = boards; mask != 0U; mask &= mask - 1U) {
+    const auto b = static_cast<std::size_t>(__builtin_ctz(mask));
+    if (map.projection.points[b] == 0U) continue;
+    float centre = 0.0F;
+    if (!projected_angle_at(map, at.x_m, at.y_m, at.yaw_rad, b, centre)) continue;
+    std::array<float, 4>& line = update.linear[b];
+    line[0] = centre;
+    double miss = 0.0;
+    bool ok = true;
+    for (int k = 0; k < 3 && ok; ++k) {
+      float lo = 0.0F, hi = 0.0F;
+      const double h = reach[k];
+      const double dx = k == 0 ? h : 0.0, dy = k == 1 ? h : 0.0, dyaw = k == 2 ? h : 0.0;
+      ok = projected_angle_at(map, at.x_m - dx, at.y_m - dy, at.yaw_rad - dyaw, b, lo) &&
+           projected_angle_at(map, at.x_m + dx, at.y_m + dy, at.yaw_rad + dyaw, b, hi);
+      line[static_cast<std::size_t>(k) + 1] =
+          static_cast<float>((static_cast<double>(hi) - static_cast<double>(lo)) / (2.0 * h));
+      miss += 0.5 * std::fabs(static_cast<double>(hi) + static_cast<double>(lo) -
+                              2.0 * static_cast<double>(centre));
+    }
+    // At most the tolerance at a corner of the reach too: the misses along the three axes add.
+    if (ok && miss <= static_cast<double>(BoardUpdate::kLinearTolerance) *
+                          static_cast<double>(map.bearing_sigma_rad[b]))
+      update.linear_mask |= 1U << b;
   }
 }
 
@@ -270,8 +337,9 @@ BoardAssessment BoardReliability::assess(const ForwardMap& map, const BoardFeatu
   std::array<double, kMaxBoards> bearing_residual{};
   bearing_residual.fill(std::numeric_limits<double>::infinity());
   const double cos_yaw = std::cos(estimate.yaw_rad), sin_yaw = std::sin(estimate.yaw_rad);
-  fit_bearings(map, bearing_point(map, estimate.x_m, estimate.y_m, cos_yaw, sin_yaw), observed,
-               estimate.yaw_rad, bearing_boards, bearing_residual);
+  fit_bearings(map, estimate.x_m, estimate.y_m, estimate.yaw_rad, cos_yaw, sin_yaw, observed,
+               bearing_boards, bearing_residual);
+  linearise_projection(map, estimate, bearing_boards, update);
   if (params.position_spread_m > 0.0) {
     const double d = params.position_spread_m;
     const double offsets[4][2] = {{d, 0.0}, {-d, 0.0}, {0.0, d}, {0.0, -d}};
@@ -283,9 +351,8 @@ BoardAssessment BoardReliability::assess(const ForwardMap& map, const BoardFeatu
         lo[b] = std::min(lo[b], e[b]);
         hi[b] = std::max(hi[b], e[b]);
       }
-      fit_bearings(map,
-                   bearing_point(map, estimate.x_m + o[0], estimate.y_m + o[1], cos_yaw, sin_yaw),
-                   observed, estimate.yaw_rad, bearing_boards, bearing_residual);
+      fit_bearings(map, estimate.x_m + o[0], estimate.y_m + o[1], estimate.yaw_rad, cos_yaw,
+                   sin_yaw, observed, bearing_boards, bearing_residual);
     }
   }
 

@@ -26,7 +26,7 @@ MapError decode_map(const std::uint8_t* data, std::size_t size, MapFile& map) {
   std::uint32_t version = 0;
   if (!r.u32(version, "version")) return r.error;
   if (version < 1 || version > kMapFormatVersion)
-    return MapError{"unsupported map format version (this firmware reads versions 1 to 14)", 8};
+    return MapError{"unsupported map format version (this firmware reads versions 1 to 15)", 8};
   if (crc32(data, body) != stored) return MapError{"checksum mismatch: the map is corrupt", body};
 
   std::uint32_t boards = 0;
@@ -127,9 +127,16 @@ MapError decode_map(const std::uint8_t* data, std::size_t size, MapFile& map) {
   map.forward.has_heading_coverage = false;  // before version 8: none
   map.forward.has_visibility = false;        // before version 10: none
   map.forward.visibility_angle_gain = 0.0F;
-  map.forward.visibility_axis_rad = 0.0F;  // before version 14: the centre column
+  map.forward.visibility_axis_rad = 0.0F;        // before version 14: the centre column
+  map.forward.projection = BearingProjection{};  // before version 15: none
   if (version >= 3) {
     if (const MapError e = decode_forward(r, version, boards, map.forward)) return e;
+    // The projection's columns are compared with the frame's under the map's law.
+    const BearingProjection& p = map.forward.projection;
+    if (p.present() && (p.width_px != map.image_width_px || p.height_px != map.image_height_px)) {
+      map.forward.projection = BearingProjection{};
+      return MapError{"forward map projection: frame size differs from the map's", r.pos()};
+    }
   }
   map.calibration = MapCalibration{};
   map.model.local_linear_ridge = 0.0F;

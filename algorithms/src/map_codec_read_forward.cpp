@@ -170,6 +170,80 @@ MapError decode_heading_coverage(Reader& r, ForwardMap& f) {
   return MapError{};
 }
 
+// The projected bearings (version 15), last in the section: the frame's size, the camera on the
+// robot (origin, then its right, down and forward axes), its intrinsics and lens, then per board
+// its outline's point count (0, or 3 to BearingProjection::kMaxPoints) and points.
+MapError decode_projection(Reader& r, ForwardMap& f) {
+  BearingProjection p;
+  if (!r.need(8U + 12U * 4U + 9U * 4U, "forward map projection"))
+    return MapError{"truncated: the forward map's projection is cut short", r.pos()};
+  r.u32(p.width_px, "forward map projection");
+  r.u32(p.height_px, "forward map projection");
+  if (p.width_px == 0 || p.height_px == 0 || p.width_px > 8192 || p.height_px > 8192)
+    return MapError{"forward map projection: frame size out of range", r.pos()};
+  for (auto* v : {&p.origin_m, &p.right, &p.down, &p.forward}) {
+    for (float& x : *v) r.f32(x, "forward map projection");
+  }
+  for (const float x : p.origin_m) {
+    if (!finite_in(x, -10.0F, 10.0F))
+      return MapError{"forward map projection: camera place not finite and within 10 m", r.pos()};
+  }
+  // The axes: unit vectors at right angles (within float rounding of the trainer's doubles).
+  const auto dot = [](const std::array<float, 3>& a, const std::array<float, 3>& b) {
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+  };
+  for (const auto* a : {&p.right, &p.down, &p.forward}) {
+    if (!finite_in(dot(*a, *a), 0.999F, 1.001F))
+      return MapError{"forward map projection: a camera axis is not a unit vector", r.pos()};
+  }
+  if (!finite_in(dot(p.right, p.down), -1e-3F, 1e-3F) ||
+      !finite_in(dot(p.right, p.forward), -1e-3F, 1e-3F) ||
+      !finite_in(dot(p.down, p.forward), -1e-3F, 1e-3F))
+    return MapError{"forward map projection: the camera's axes are not at right angles", r.pos()};
+  for (float* x :
+       {&p.focal_px, &p.cx_px, &p.cy_px, &p.k1, &p.k2, &p.k3, &p.p1, &p.p2, &p.max_radius2})
+    r.f32(*x, "forward map projection");
+  const auto w = static_cast<float>(p.width_px), h = static_cast<float>(p.height_px);
+  if (!finite_in(p.focal_px, 1.0F, 100.0F * w) || !finite_in(p.cx_px, 0.0F, w) ||
+      !finite_in(p.cy_px, 0.0F, h))
+    return MapError{
+        "forward map projection: intrinsics out of range (focal length, principal "
+        "point in the frame)",
+        r.pos()};
+  for (const float k : {p.k1, p.k2, p.k3, p.p1, p.p2}) {
+    if (!finite_in(k, -100.0F, 100.0F))
+      return MapError{"forward map projection: a lens coefficient not finite and within 100",
+                      r.pos()};
+  }
+  if (!finite_in(p.max_radius2, 1e-4F, 1e18F))
+    return MapError{"forward map projection: lens radius not finite and positive", r.pos()};
+  bool any = false;
+  for (std::size_t b = 0; b < f.board_count; ++b) {
+    std::uint32_t n = 0;
+    if (!r.u32(n, "forward map projection"))
+      return MapError{"truncated: the forward map's projection is cut short", r.pos()};
+    if (n != 0 && (n < 3 || n > BearingProjection::kMaxPoints))
+      return MapError{"forward map projection: an outline has neither 0 nor 3 to 8 points",
+                      r.pos()};
+    if (n != 0 && !(f.bearing_sigma_rad[b] > 0.0F))
+      return MapError{"forward map projection: an outline for a board without bearings", r.pos()};
+    if (!r.need(12U * n, "forward map projection"))
+      return MapError{"truncated: the forward map's projection is cut short", r.pos()};
+    p.points[b] = static_cast<std::uint8_t>(n);
+    for (std::size_t i = 0; i < 3U * n; ++i) {
+      float& x = p.point_m(b, i / 3, i % 3);
+      r.f32(x, "forward map projection");
+      if (!finite_in(x, -1.0e4F, 1.0e4F))
+        return MapError{"forward map projection: an outline point not finite and within 10 km",
+                        r.pos()};
+    }
+    any = any || n != 0;
+  }
+  if (!any) return MapError{"forward map projection holds no outline", r.pos()};
+  f.projection = p;
+  return MapError{};
+}
+
 }  // namespace
 
 // The forward map section (version 3; tiled from version 5, bearings from version 6).
@@ -182,6 +256,7 @@ MapError decode_forward(Reader& r, std::uint32_t version, std::uint32_t boards, 
   f.has_visibility = false;
   f.visibility_angle_gain = 0.0F;
   f.visibility_axis_rad = 0.0F;
+  f.projection = BearingProjection{};
   if (!r.u32(columns, "forward map size") || !r.u32(rows, "forward map size"))
     return MapError{"truncated: no room for the forward map's size", r.pos()};
   if (columns == 0 && rows == 0) return MapError{};
@@ -227,17 +302,20 @@ MapError decode_forward(Reader& r, std::uint32_t version, std::uint32_t boards, 
   }
   // Bit 0: headings; bit 1 (version 6 on): bearings; bit 2 (version 7 on): heading terms; bit 3
   // (version 8 on): heading coverage; bit 4 (version 10 on): visibility.
-  const unsigned known = version >= 10  ? 31U
-                         : version >= 8 ? 15U
-                         : version >= 7 ? 7U
-                         : version >= 6 ? 3U
-                                        : 1U;
+  const unsigned known = version >= 15   ? 63U
+                         : version >= 10 ? 31U
+                         : version >= 8  ? 15U
+                         : version >= 7  ? 7U
+                         : version >= 6  ? 3U
+                                         : 1U;
   if ((flag & ~known) != 0U || pad[0] != 0 || pad[1] != 0 || pad[2] != 0)
     return MapError{"forward map flags: unknown bits set", r.pos()};
   if ((flag & 8U) != 0U && (flag & 1U) == 0U)
     return MapError{"forward map holds heading coverage but no headings", r.pos()};
   if ((flag & 16U) != 0U && ((flag & 2U) == 0U || (flag & 4U) != 0U))
     return MapError{"forward map holds visibility without bearings or with heading terms", r.pos()};
+  if ((flag & 32U) != 0U && (flag & 2U) == 0U)
+    return MapError{"forward map holds projected bearings but no bearings", r.pos()};
   if ((flag & 2U) != 0U && !ForwardMap::kBearingStorage)
     return MapError{
         "forward map holds bearings this build has no room for (train it with "
@@ -315,8 +393,10 @@ MapError decode_forward(Reader& r, std::uint32_t version, std::uint32_t boards, 
     e = decode_heading_coverage(r, f);
     f.has_heading_coverage = !e && ForwardMap::kHeadingTermStorage;
   }
+  if (!e && (flag & 32U) != 0U) e = decode_projection(r, f);
   if (e) {
     f.columns = f.rows = 0;
+    f.projection = BearingProjection{};
     return e;
   }
   return MapError{};

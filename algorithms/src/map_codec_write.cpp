@@ -84,8 +84,11 @@ std::vector<std::uint8_t> encode_map(const MapFile& map) {
     const bool cover = ForwardMap::kHeadingTermStorage && f.has_heading && f.has_heading_coverage;
     const bool seen = ForwardMap::kHeadingTermStorage && f.has_bearings && f.has_visibility &&
                       !f.has_heading_terms;
+    // Bit 5 (version 15): the projected bearings follow, last.
+    const bool projected = f.has_bearings && f.projection.present();
     w.u8(static_cast<std::uint8_t>((f.has_heading ? 1U : 0U) | (f.has_bearings ? 2U : 0U) |
-                                   (terms ? 4U : 0U) | (cover ? 8U : 0U) | (seen ? 16U : 0U)));
+                                   (terms ? 4U : 0U) | (cover ? 8U : 0U) | (seen ? 16U : 0U) |
+                                   (projected ? 32U : 0U)));
     w.u8(0);
     w.u8(0);
     w.u8(0);
@@ -135,6 +138,23 @@ std::vector<std::uint8_t> encode_map(const MapFile& map) {
     // Version 8: every stored cell's covered heading sectors.
     if (cover) {
       for (std::size_t c = 0; c < cells; ++c) w.u16(f.heading_cover[c]);
+    }
+    // Version 15: the frame's size, the camera on the robot, its intrinsics and lens, then per
+    // board its outline's point count and points.
+    if (projected) {
+      const BearingProjection& p = f.projection;
+      w.u32(p.width_px);
+      w.u32(p.height_px);
+      for (const auto* v : {&p.origin_m, &p.right, &p.down, &p.forward}) {
+        for (const float x : *v) w.f32(x);
+      }
+      for (const float x :
+           {p.focal_px, p.cx_px, p.cy_px, p.k1, p.k2, p.k3, p.p1, p.p2, p.max_radius2})
+        w.f32(x);
+      for (std::size_t b = 0; b < f.board_count; ++b) {
+        w.u32(p.points[b]);
+        for (std::size_t i = 0; i < 3U * p.points[b]; ++i) w.f32(p.point_m(b, i / 3, i % 3));
+      }
     }
   }
   // Version 4: the calibration, as (id, value) entries.

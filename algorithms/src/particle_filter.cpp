@@ -159,10 +159,18 @@ bool camera_bearings_of(const BoardUpdate& u) {
   return (u.bearing_mask != 0U || map.has_visibility) && map.bearing_camera_forward_m != 0.0F;
 }
 
+// Whether a board measured this frame takes its bearing from the map's projection.
+bool projects_bearings(const BoardUpdate& u) {
+  for (std::uint32_t mask = u.bearing_mask; mask != 0U; mask &= mask - 1U) {
+    if (u.map->projection.points[static_cast<std::size_t>(__builtin_ctz(mask))] != 0U) return true;
+  }
+  return false;
+}
+
 // Whether the boards' likelihood needs the pose's heading as a unit vector: the heading terms,
 // or the camera's place.
 bool needs_unit_heading(const BoardUpdate& u) {
-  return u.map->has_heading_terms || camera_bearings_of(u);
+  return u.map->has_heading_terms || camera_bearings_of(u) || projects_bearings(u);
 }
 
 // The boards' untempered likelihood at one pose, its cell @p at located and its heading's
@@ -204,9 +212,51 @@ inline double likelihood_at(const BoardUpdate& u, const GridPoint& at, const Pos
   // Bearings: the particle sees board b at world bearing yaw - angle; the map says where the
   // training run saw it from here (from the particle's camera place, where the map's bearings
   // are seen from it).
+  // A board with an outline in the map's projection: its centroid column projected from the
+  // particle's own pose, under the same law as the measured one (their difference is the
+  // residual). The camera is placed once per particle, when a board first needs it.
+  bool placed = false;
+  CameraAtPose camera{};
+  // Within the reach of the estimate, the projection's straight line there (BoardUpdate).
+  float dx = 0.0F, dy = 0.0F, dyaw = 0.0F;
+  bool near_linear = false;
+  if (u.linear_mask != 0U) {
+    dx = static_cast<float>(pose.x_m - u.linear_at.x_m);
+    dy = static_cast<float>(pose.y_m - u.linear_at.y_m);
+    dyaw = static_cast<float>(wrap_once_rad(pose.yaw_rad - u.linear_at.yaw_rad));
+    near_linear = std::fabs(dx) <= BoardUpdate::kLinearReach_m &&
+                  std::fabs(dy) <= BoardUpdate::kLinearReach_m &&
+                  std::fabs(dyaw) <= BoardUpdate::kLinearReach_rad;
+  }
   for (std::uint32_t mask = u.bearing_mask; mask != 0U; mask &= mask - 1U) {
     const auto b = static_cast<std::size_t>(__builtin_ctz(mask));
     float bearing = 0.0F;
+    if (((u.linear_mask >> b) & 1U) != 0U && near_linear) {
+      const float r = u.linear[b][0] + u.linear[b][1] * dx + u.linear[b][2] * dy +
+                      u.linear[b][3] * dyaw - u.angle_rad[b];
+      likelihood *=
+          static_cast<double>(u.gain[b] * std::exp(-r * r * u.bearing_inv_two_var[b]) + u.floor[b]);
+      continue;
+    }
+    if (map.projection.points[b] != 0U) {
+      if (!placed) {
+        camera = camera_at_pose(map.projection, static_cast<float>(pose.x_m),
+                                static_cast<float>(pose.y_m), cos_yaw, sin_yaw);
+        placed = true;
+      }
+      // A particle from which the board lies behind the camera (or beyond the lens's image)
+      // expects no board where the frame shows one whole: an outlier, as a far miss is.
+      float angle = 0.0F;
+      if (!projected_image_angle(map, camera, b, angle)) {
+        likelihood *= static_cast<double>(u.floor[b]);
+        continue;
+      }
+      const float r = angle - u.angle_rad[b];
+      // Both within the lens's half field of view (under pi / 2): no wrap needed.
+      likelihood *=
+          static_cast<double>(u.gain[b] * std::exp(-r * r * u.bearing_inv_two_var[b]) + u.floor[b]);
+      continue;
+    }
     if (map.has_visibility) {
       bearing = seen_bearing[b];
       if (bearing == ForwardMap::kNoBearing) continue;

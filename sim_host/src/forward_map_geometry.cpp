@@ -307,4 +307,69 @@ GeometryTablesReport visibility_from_geometry(const SceneGeometryFit& fit,
   return report;
 }
 
+std::size_t project_bearings_from_geometry(const SceneGeometryFit& fit,
+                                           const std::vector<char>& boards,
+                                           algorithms::ForwardMap& map) {
+  using algorithms::BearingProjection;
+  map.projection = BearingProjection{};
+  if (!fit.ok || !map.has_bearings) return 0;
+  BearingProjection p;
+  const CameraSpec& camera = fit.camera;
+  // The robot at the map's origin facing +x: the camera's frame is then the robot's.
+  const CameraFrame frame = camera_frame_of(camera, algorithms::Pose2{0.0, 0.0, 0.0});
+  for (int k = 0; k < 3; ++k) {
+    const auto i = static_cast<std::size_t>(k);
+    p.origin_m[i] = static_cast<float>(frame.origin[k]);
+    p.right[i] = static_cast<float>(frame.right[k]);
+    p.down[i] = static_cast<float>(frame.down[k]);
+    p.forward[i] = static_cast<float>(frame.forward[k]);
+  }
+  const Intrinsics in = intrinsics_of(camera);
+  p.focal_px = static_cast<float>(in.focal_px);
+  p.cx_px = static_cast<float>(in.cx_px);
+  p.cy_px = static_cast<float>(in.cy_px);
+  p.width_px = camera.width_px;
+  p.height_px = camera.height_px;
+  p.k1 = static_cast<float>(camera.k1);
+  p.k2 = static_cast<float>(camera.k2);
+  p.k3 = static_cast<float>(camera.k3);
+  p.p1 = static_cast<float>(camera.p1);
+  p.p2 = static_cast<float>(camera.p2);
+  const double r_max = LensModel(camera).max_radius();
+  p.max_radius2 = static_cast<float>(std::min(r_max * r_max, 1e16));
+  std::size_t given = 0;
+  for (std::size_t b = 0; b < boards.size() && b < map.board_count && b < fit.boards.size(); ++b) {
+    if (!boards[b] || !fit.boards[b].ok || !(map.bearing_sigma_rad[b] > 0.0F)) continue;
+    const BoardSpec& board = fit.boards[b].board;
+    const BoardAxes axes = board_axes(board);
+    const double hw = 0.5 * board.width_m, hh = 0.5 * board.height_m;
+    // In the order project_board goes round the outline.
+    std::array<std::array<double, 2>, BearingProjection::kMaxPoints> outline{};
+    std::size_t n = 0;
+    if (board.shape == BoardShape::kEllipse) {
+      for (; n < BearingProjection::kMaxPoints; ++n) {
+        const double a = 2.0 * algorithms::kPi * static_cast<double>(n) /
+                         static_cast<double>(BearingProjection::kMaxPoints);
+        outline[n] = {hw * std::cos(a), hh * std::sin(a)};
+      }
+    } else {
+      outline[n++] = {-hw, -hh};
+      outline[n++] = {hw, -hh};
+      outline[n++] = {hw, hh};
+      outline[n++] = {-hw, hh};
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      for (int k = 0; k < 3; ++k) {
+        p.point_m(b, i, static_cast<std::size_t>(k)) =
+            static_cast<float>(axes.centre[k] + outline[i][0] * axes.width_dir[k] +
+                               outline[i][1] * axes.height_dir[k]);
+      }
+    }
+    p.points[b] = static_cast<std::uint8_t>(n);
+    ++given;
+  }
+  if (given > 0) map.projection = p;
+  return given;
+}
+
 }  // namespace harmoloc::sim_host

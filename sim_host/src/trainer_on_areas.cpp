@@ -309,10 +309,13 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<dataset::Sta
           forward_report = first_report;
         }
       }
-      if (g.tried)
+      if (g.tried) {
         g.tables = visibility_from_geometry(g.fit, run.areas, frames, area_scale, *forward,
                                             opt.geometry_tables);
-      else
+        if (opt.projected_bearings && g.tables.applied)
+          g.projected_boards =
+              project_bearings_from_geometry(g.fit, g.tables.from_geometry, *forward);
+      } else
         g.tables.skipped = "the geometry was not fitted: " + g.skipped;
     }
     forward_ms = ms_since(t_forward);

@@ -123,6 +123,9 @@ int main(int argc, char** argv) {
   app.add_flag("--law-from-frames", opt.law_from_frames,
                "floor: keep the column-to-angle law triangulated from the frames, not the fitted\n"
                "camera's (harmoloc-train --law-from-frames), for comparison");
+  app.add_flag("--projected-bearings", opt.projected_bearings,
+               "floor: project the bearings of the geometry's boards from the fitted camera at\n"
+               "each particle's pose (harmoloc-train --projected-bearings)");
   app.add_flag("--axle-bearings", opt.axle_bearings,
                "keep the maps' bearings over the axle's place, as when the camera's offset is\n"
                "not given (harmoloc-train --camera-forward-m 0), for comparison");
@@ -207,6 +210,7 @@ int main(int argc, char** argv) {
                     {"visibility_from_geometry", opt.visibility_from_geometry},
                     {"geometry_noise_ratio", opt.geometry_noise_ratio},
                     {"law_from_frames", opt.law_from_frames},
+                    {"projected_bearings", opt.projected_bearings},
                     {"roams", opt.roams}};
     j["results"] = nlohmann::json::array();
     for (const SceneResult& r : finished) j["results"].push_back(to_json(r));

@@ -73,6 +73,11 @@ void print_geometry_tables(const harmoloc::sim_host::GeometryReport& g,
         t.kernel_bearing_sigma_rad[k] * kDeg,
         t.from_geometry[k] && t.kernel_bearings[k] ? " (the kernel's bearings kept)" : "");
   }
+  if (g.projected_boards > 0)
+    std::printf(
+        "geometry      bearings of the %zu boards from the geometry projected from the fitted "
+        "camera at each pose (map version 15)\n",
+        g.projected_boards);
 }
 
 // The --fit-geometry section: the fitted camera, then each board.
@@ -251,6 +256,12 @@ int main(int argc, char** argv) {
                "keep the column-to-angle law triangulated from the frames' centroid columns; by\n"
                "default a map whose visibility tables the geometry fit serves takes the fitted\n"
                "camera's law, and its forward map is trained again with it (docs/training.md)");
+  bool projected_bearings = false;
+  app.add_flag("--projected-bearings", projected_bearings,
+               "store the fitted camera and the outlines of the boards whose visibility tables\n"
+               "come from the geometry fit, and have the filter project their bearings at each\n"
+               "particle's pose instead of reading the map's cells (map version 15,\n"
+               "docs/bearings.md; an experiment, off by default)");
   double camera_height = 0.0;
   app.add_option("--camera-height-m", camera_height,
                  "the camera's optical centre above the floor (metres), the geometry fit's\n"
@@ -320,6 +331,7 @@ int main(int argc, char** argv) {
     opt.visibility_from_geometry = !visibility_from_frames;
     opt.geometry_tables_required = visibility_from_geometry;
     opt.law_from_geometry = !law_from_frames;
+    opt.projected_bearings = projected_bearings;
     opt.camera_height_m = camera_height;
     opt.label_tolerance_ns = static_cast<std::uint64_t>(std::llround(label_tolerance_ms * 1e6));
     if (label_offset == "auto") {

@@ -192,6 +192,7 @@ void floor_part(const Scenario& scene, const algorithms::ThresholdSet& threshold
     train.visibility_from_geometry = opt.visibility_from_geometry;
     train.geometry_tables.kernel_noise_ratio = opt.geometry_noise_ratio;
     train.law_from_geometry = !opt.law_from_frames;
+    train.projected_bearings = opt.projected_bearings;
     train.camera_height_m = coverage.camera.height_m;  // a tape measure gives it
     const TrainedMap trained =
         train_on_scenario(coverage, kCoverageSeed, nullptr, &thresholds, &train);
@@ -206,6 +207,7 @@ void floor_part(const Scenario& scene, const algorithms::ThresholdSet& threshold
       r.floor_geometry_boards += tables.from_geometry[b] ? 1 : 0;
       r.floor_geometry_candidates += tables.geometry_sigma[b] > 0.0 ? 1 : 0;
     }
+    r.floor_projected_boards = static_cast<int>(trained.report.geometry.projected_boards);
     geometry_against_truth(trained.report.geometry, coverage, r);
     r.floor_law_from_camera = trained.report.geometry.law_from_camera;
     if (r.floor_law_from_camera)

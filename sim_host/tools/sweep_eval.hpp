@@ -46,6 +46,8 @@ struct SweepOptions {
   /// The floor map's column-to-angle law triangulated from the frames, not the fitted camera's
   /// (TrainOptions::law_from_geometry off).
   bool law_from_frames = false;
+  /// The floor map projects the geometry's boards' bearings (harmoloc-train --projected-bearings).
+  bool projected_bearings = false;
   int kidnaps = 20;            ///< kidnaps in the kidnap run (each >= 1 m)
   double long_minutes = 10.0;  ///< length of the long nominal run
   std::uint64_t filter_seed = 1;
@@ -123,6 +125,7 @@ struct SceneResult {
   /// --visibility-from-geometry: the floor map's boards whose visibility tables come from the
   /// fitted geometry, and those the fit gave tables for (the others keep the kernel's).
   int floor_geometry_boards = 0;
+  int floor_projected_boards = 0;  ///< boards whose bearings the floor map projects
   int floor_geometry_candidates = 0;
   /// The fitted geometry against the scene's truth (-1 or NaN: not fitted): the fitted boards'
   /// centres from the true ones (median and largest, metres), and the camera's field of view

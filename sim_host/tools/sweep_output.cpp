@@ -68,6 +68,7 @@ nlohmann::json to_json(const SceneResult& r) {
   j["floor_pass_heading_spread_rad"] = r.floor_pass_heading_spread_rad;
   j["floor_heading_ridge"] = r.floor_heading_ridge;
   j["floor_geometry_boards"] = r.floor_geometry_boards;
+  j["floor_projected_boards"] = r.floor_projected_boards;
   j["floor_geometry_candidates"] = r.floor_geometry_candidates;
   j["floor_geometry_board_error_median_m"] = r.floor_geometry_board_error_median_m;
   j["floor_geometry_board_error_max_m"] = r.floor_geometry_board_error_max_m;

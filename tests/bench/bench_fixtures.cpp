@@ -115,6 +115,35 @@ void synthetic_map(std::size_t samples, std::uint32_t width_px, std::uint32_t he
   for (std::size_t b = 0; b < f.board_count; ++b) f.bearing_sigma_rad[b] = 0.007F;
 }
 
+void project_every_board(algorithms::ForwardMap& f) {
+  algorithms::BearingProjection& p = f.projection;
+  p.width_px = 320;
+  p.height_px = 240;
+  // Level, 10 cm ahead of the axle and 30 cm up, about 60 degrees across, a barrel lens.
+  p.origin_m = {0.1F, 0.0F, 0.3F};
+  p.right = {0.0F, -1.0F, 0.0F};
+  p.down = {0.0F, 0.0F, -1.0F};
+  p.forward = {1.0F, 0.0F, 0.0F};
+  p.focal_px = 277.0F;
+  p.cx_px = 159.5F;
+  p.cy_px = 119.5F;
+  p.k1 = -0.15F;
+  p.k2 = 0.02F;
+  p.max_radius2 = 2.0F;
+  // The boards of synthetic_map's bearings: 20 cm squares at the camera's height, facing -y.
+  for (std::size_t b = 0; b < f.board_count; ++b) {
+    p.points[b] = 4;
+    const float cx = 1.2F + 0.3F * static_cast<float>(b);
+    const float corners[4][3] = {{cx + 0.1F, 2.7F, 0.2F},
+                                 {cx - 0.1F, 2.7F, 0.2F},
+                                 {cx - 0.1F, 2.7F, 0.4F},
+                                 {cx + 0.1F, 2.7F, 0.4F}};
+    for (std::size_t i = 0; i < 4; ++i) {
+      for (std::size_t d = 0; d < 3; ++d) p.point_m(b, i, d) = corners[i][d];
+    }
+  }
+}
+
 void bench_observation(const algorithms::ForwardMap& map, algorithms::BoardFeatures& observed) {
   observed.count = map.board_count;
   observed.angle_mask = 0;

@@ -33,6 +33,10 @@ algorithms::ThresholdSet board_thresholds(std::size_t boards = 6);
 void synthetic_map(std::size_t samples, std::uint32_t width_px, std::uint32_t height_px,
                    algorithms::MapFile& map, std::size_t boards = 6);
 
+/// Gives synthetic_map's forward map projected bearings (map version 15): a camera and an outline
+/// for every board, where its bearings place it, all seen whole from the benchmarks' pose.
+void project_every_board(algorithms::ForwardMap& map);
+
 /// One frame's observation for the filter benchmarks on synthetic_map's forward map: every board
 /// with an area and a bearing (the default update's whole cost).
 void bench_observation(const algorithms::ForwardMap& map, algorithms::BoardFeatures& observed);

@@ -105,6 +105,32 @@ bool same_model(const MapFile& a, const MapFile& b) {
        !same_bits(f.heading_terms.data(), g.heading_terms.data(),
                   cells * kMaxBoards * 2 * sizeof(float))))
     return false;
+  // Version 15: the projected bearings' camera and outlines.
+  const BearingProjection& fp = f.projection;
+  const BearingProjection& gp = g.projection;
+  if (fp.present() != gp.present()) return false;
+  if (fp.present()) {
+    const float fc[] = {fp.focal_px, fp.cx_px, fp.cy_px, fp.k1,         fp.k2,
+                        fp.k3,       fp.p1,    fp.p2,    fp.max_radius2};
+    const float gc[] = {gp.focal_px, gp.cx_px, gp.cy_px, gp.k1,         gp.k2,
+                        gp.k3,       gp.p1,    gp.p2,    gp.max_radius2};
+    if (fp.width_px != gp.width_px || fp.height_px != gp.height_px ||
+        !same_bits(fc, gc, sizeof fc) ||
+        !same_bits(fp.origin_m.data(), gp.origin_m.data(), sizeof fp.origin_m) ||
+        !same_bits(fp.right.data(), gp.right.data(), sizeof fp.right) ||
+        !same_bits(fp.down.data(), gp.down.data(), sizeof fp.down) ||
+        !same_bits(fp.forward.data(), gp.forward.data(), sizeof fp.forward) ||
+        fp.points != gp.points)
+      return false;
+    for (std::size_t b = 0; b < kMaxBoards; ++b) {
+      for (std::size_t d = 0; d < 3; ++d) {
+        for (std::size_t i = 0; i < fp.points[b]; ++i) {
+          const float x = fp.point_m(b, i, d), y = gp.point_m(b, i, d);
+          if (!same_bits(&x, &y, sizeof x)) return false;
+        }
+      }
+    }
+  }
   if (f.has_heading_coverage != g.has_heading_coverage) return false;
   // Version 8: every stored cell's heading coverage.
   if (f.has_heading_coverage &&
@@ -197,6 +223,33 @@ void check_added_visibility(const std::vector<std::uint8_t>& input) {
   check_given_round_trip("visibility");
 }
 
+// A decoded forward map with bearings and without projected bearings is given them (map version
+// 15): a camera looking ahead, and an outline for each board whose bearings the map models,
+// drawn from the input's bytes, within the decoder's bounds.
+void check_added_projection(const std::vector<std::uint8_t>& input) {
+  ForwardMap& f = g_map.forward;
+  if (!f.present() || !f.has_bearings || f.projection.present()) return;
+  BearingProjection& p = f.projection;
+  p.width_px = g_map.image_width_px;
+  p.height_px = g_map.image_height_px;
+  p.origin_m = {0.1F, 0.0F, 0.3F};
+  p.right = {0.0F, -1.0F, 0.0F};
+  p.down = {0.0F, 0.0F, -1.0F};
+  p.forward = {1.0F, 0.0F, 0.0F};
+  p.focal_px = 0.5F * static_cast<float>(p.width_px) + static_cast<float>(input[0]);
+  p.cx_px = 0.5F * static_cast<float>(p.width_px);
+  p.cy_px = 0.5F * static_cast<float>(p.height_px);
+  p.k1 = 0.01F * static_cast<float>(input[input.size() / 2]) - 1.28F;
+  p.max_radius2 = 1.0F + static_cast<float>(input[input.size() - 1]);
+  for (std::size_t b = 0; b < f.board_count; ++b) {
+    if (!(f.bearing_sigma_rad[b] > 0.0F)) continue;
+    p.points[b] = static_cast<std::uint8_t>(3 + input[b % input.size()] % 6);
+    for (std::size_t i = 0; i < 3U * p.points[b]; ++i)
+      p.point_m(b, i / 3, i % 3) = 0.05F * static_cast<float>(input[(b + i) % input.size()]) - 6.0F;
+  }
+  check_given_round_trip("projected bearings");
+}
+
 // A decoded map without per-sample fix errors is given some (version 11), drawn from the input's
 // bytes (one value in 256 is 0), and must survive encode and decode.
 // Any map given centroid columns (version 12): within half the root of each area feature.
@@ -260,7 +313,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     // no heading terms before version 7, no heading coverage before version 8, no visibility
     // before version 10, no per-sample fix errors before version 11, no centroid columns before
     // version 12, no column gain before version 13, the visibility's gain centred on the centre
-    // column before version 14.
+    // column before version 14, no projected bearings before version 15.
     HARMOLOC_FUZZ_CHECK(input[8] != 1 || g_map.model.max_dissimilarity == 1.0F,
                         "a version 1 map decodes with a dissimilarity bound");
     HARMOLOC_FUZZ_CHECK(input[8] >= 3 || !g_map.forward.present(),
@@ -291,6 +344,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
                         "a map before version 13 decodes with a column gain");
     HARMOLOC_FUZZ_CHECK(input[8] >= 14 || f.visibility_axis_rad == 0.0F,
                         "a map before version 14 decodes with a visibility axis");
+    HARMOLOC_FUZZ_CHECK(input[8] >= 15 || !f.projection.present(),
+                        "a map before version 15 decodes with projected bearings");
     HARMOLOC_FUZZ_CHECK(!decode_map(encoded.data(), encoded.size(), g_again),
                         "a re-encoded older map does not decode");
     HARMOLOC_FUZZ_CHECK(same_model(g_map, g_again), "decode(encode(older map)) differs");
@@ -301,6 +356,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     check_added_fix_errors(input);
     check_added_columns(input);
     check_added_column_gain(input);
+    check_added_projection(input);
     return 0;
   }
   HARMOLOC_FUZZ_CHECK(encoded.size() == input.size(),
@@ -317,5 +373,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   check_added_fix_errors(input);
   check_added_columns(input);
   check_added_column_gain(input);
+  check_added_projection(input);
   return 0;
 }

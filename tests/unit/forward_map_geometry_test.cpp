@@ -7,13 +7,18 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <memory>
+#include <random>
 #include <vector>
 
 #include "harmoloc/algorithms/geometry.hpp"
+#include "harmoloc/algorithms/projected_bearing.hpp"
 #include "harmoloc/algorithms/random.hpp"
 #include "harmoloc/sim_host/board_projection.hpp"
+#include "harmoloc/sim_host/random_scene.hpp"
 
 namespace hs = harmoloc::sim_host;
 namespace ha = harmoloc::algorithms;
@@ -244,4 +249,99 @@ TEST(ForwardMapGeometry, KeepsTheKernelsBearingsWhereTheyCameCloser) {
         geometry_features || fx.map->heading_terms[at * ha::kMaxBoards * 2] != kKernelFeature;
   }
   EXPECT_TRUE(geometry_features);
+}
+
+// The projected bearings (map version 15, projected_bearing.hpp) from the true camera and boards
+// of random scenes: the firmware's projection of a board's few outline points must find the
+// centroid column that the 48-point outline gives (board_projection.hpp), for every pose from
+// which a board is seen whole. Its outline's corners exactly where the geometry puts them; its
+// polygon's centroid within a few pixels (a lens bends the edges between the corners).
+TEST(ProjectedBearing, FindsTheOutlinesCentroidColumnFromAnyPose) {
+  for (const std::uint64_t seed : {1U, 5U, 8U}) {
+    const hs::Scenario scene = hs::random_scenario(seed);
+    hs::SceneGeometryFit fit;
+    fit.ok = true;
+    fit.camera = scene.camera;
+    for (const hs::BoardSpec& b : scene.boards) {
+      hs::BoardFit f;
+      f.ok = true;
+      f.board = b;
+      fit.boards.push_back(f);
+    }
+    auto map = std::make_unique<ha::ForwardMap>();
+    map->has_bearings = true;
+    map->board_count = static_cast<std::uint32_t>(scene.boards.size());
+    for (std::size_t b = 0; b < scene.boards.size(); ++b) map->bearing_sigma_rad[b] = 0.01F;
+    std::vector<char> boards(scene.boards.size(), 1);
+    boards[0] = 0;  // left to the tables
+    ASSERT_EQ(hs::project_bearings_from_geometry(fit, boards, *map), scene.boards.size() - 1);
+    const ha::BearingProjection& p = map->projection;
+    EXPECT_EQ(p.points[0], 0U);
+    const hs::LensModel lens(scene.camera);
+    double lo_x = 1e9, hi_x = -1e9, lo_y = 1e9, hi_y = -1e9;
+    for (const hs::BoardSpec& b : scene.boards) {
+      lo_x = std::min(lo_x, b.centre_x_m);
+      hi_x = std::max(hi_x, b.centre_x_m);
+      lo_y = std::min(lo_y, b.centre_y_m);
+      hi_y = std::max(hi_y, b.centre_y_m);
+    }
+    std::mt19937 rng(static_cast<unsigned>(seed));
+    std::uniform_real_distribution<double> ux(lo_x, hi_x), uy(lo_y, hi_y), uyaw(-kPi, kPi);
+    std::vector<double> miss_px;
+    std::size_t corner_checks = 0;
+    for (int i = 0; i < 3000; ++i) {
+      const ha::Pose2 pose{ux(rng), uy(rng), uyaw(rng)};
+      const ha::CameraAtPose at = ha::camera_at_pose(
+          p, static_cast<float>(pose.x_m), static_cast<float>(pose.y_m),
+          static_cast<float>(std::cos(pose.yaw_rad)), static_cast<float>(std::sin(pose.yaw_rad)));
+      for (std::size_t b = 1; b < scene.boards.size(); ++b) {
+        const hs::BoardImage image = hs::project_board(scene.camera, lens, scene.boards[b], pose);
+        float column = 0.0F;
+        const bool seen = ha::projected_centroid_column(p, at, b, column);
+        if (!(image.area_px > 100.0) || image.cut) continue;
+        // Seen whole by the outline, the corners are in the frame too (but for a pixel's rounding
+        // where the lens bends an edge outwards).
+        if (!seen) continue;
+        miss_px.push_back(std::fabs(static_cast<double>(column) - image.centroid_u_px));
+        // The first outline point alone, as a tiny board at that corner would show it.
+        if (corner_checks < 50) {
+          hs::BoardSpec dot = scene.boards[b];
+          dot.centre_x_m = p.point_m(b, 0, 0);
+          dot.centre_y_m = p.point_m(b, 0, 1);
+          dot.centre_z_m = p.point_m(b, 0, 2);
+          dot.width_m = dot.height_m = 1e-4;
+          const hs::BoardImage point = hs::project_board(scene.camera, lens, dot, pose);
+          // A 3 mm triangle in the board's plane about the corner: the mean of its projected
+          // vertices (the centroid of a triangle) is the corner's projection, to 0.01 px.
+          ha::BearingProjection one = p;
+          one.points = {};
+          one.points[b] = 3;
+          const hs::BoardAxes axes = hs::board_axes(scene.boards[b]);
+          for (std::size_t d = 0; d < 3; ++d) {
+            const auto w = static_cast<float>(3e-3 * axes.width_dir[d]);
+            const auto h = static_cast<float>(3e-3 * axes.height_dir[d]);
+            const float c = p.point_m(b, 0, d);
+            one.point_m(b, 0, d) = c + w;
+            one.point_m(b, 1, d) = c + h;
+            one.point_m(b, 2, d) = c - w - h;
+          }
+          float single = 0.0F;
+          if (point.area_px > 0.0 && !point.cut &&
+              ha::projected_centroid_column(one, at, b, single)) {
+            EXPECT_NEAR(single, point.centroid_u_px, 0.05) << "seed " << seed << " board " << b;
+            ++corner_checks;
+          }
+        }
+      }
+    }
+    ASSERT_GT(miss_px.size(), 200U) << "seed " << seed;
+    EXPECT_GT(corner_checks, 10U) << "seed " << seed;
+    std::sort(miss_px.begin(), miss_px.end());
+    const double median = miss_px[miss_px.size() / 2];
+    const double p90 = miss_px[miss_px.size() * 9 / 10];
+    std::printf("seed %llu: %zu views, centroid column missed by %.3f px median, %.3f px p90\n",
+                static_cast<unsigned long long>(seed), miss_px.size(), median, p90);
+    EXPECT_LT(median, 1.0) << "seed " << seed;
+    EXPECT_LT(p90, 3.0) << "seed " << seed;
+  }
 }

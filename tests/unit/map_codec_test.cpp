@@ -1217,7 +1217,7 @@ TEST(MapCodec, ForwardMapCorruptionWithValidChecksum) {
       },
       "models no board");
   reject(
-      "unknown flag", [](auto& b) { b[kOffFlags] = 33; }, "flags");
+      "unknown flag", [](auto& b) { b[kOffFlags] = 65; }, "flags");
   reject(
       "unknown high flag", [](auto& b) { b[kOffFlags] = 0x81; }, "flags");
   reject(
@@ -1632,4 +1632,128 @@ TEST(MapCodec, VisibilityRoundTripAndChecks) {
   map->forward.has_bearings = false;
   ASSERT_FALSE(ha::decode_map(ha::encode_map(*map).data(), ha::encode_map(*map).size(), *out));
   EXPECT_FALSE(out->forward.has_visibility);
+}
+
+// Version 15: the projected bearings follow the forward map's other sections, flagged by bit 5:
+// the frame's size, the camera on the robot, its intrinsics and lens, then per board its outline's
+// point count and points; they read back exactly. They need bearings, an outline only for a board
+// whose bearings are modelled, and the map's frame size; a value out of range is refused; before
+// version 15 the bit is unknown.
+TEST(MapCodec, ProjectionRoundTripAndChecks) {
+  auto map = make_map_with_bearings();
+  const std::vector<std::uint8_t> plain = ha::encode_map(*map);
+  ha::BearingProjection& p = map->forward.projection;
+  p.width_px = map->image_width_px;
+  p.height_px = map->image_height_px;
+  p.origin_m = {0.1F, 0.0F, 0.35F};
+  p.right = {0.0F, -1.0F, 0.0F};
+  p.down = {0.0F, 0.0F, -1.0F};
+  p.forward = {1.0F, 0.0F, 0.0F};
+  p.focal_px = 400.0F;
+  p.cx_px = 320.5F;
+  p.cy_px = 239.0F;
+  p.k1 = -0.2F;
+  p.k2 = 0.03F;
+  p.p1 = 1e-3F;
+  p.max_radius2 = 2.5F;
+  p.points[0] = 4;
+  p.points[2] = 8;
+  for (std::size_t i = 0; i < 3 * 4; ++i) p.point_m(0, i / 3, i % 3) = 0.1F * static_cast<float>(i);
+  for (std::size_t i = 0; i < 3 * 8; ++i)
+    p.point_m(2, i / 3, i % 3) = -0.2F * static_cast<float>(i);
+  const std::vector<std::uint8_t> bytes = ha::encode_map(*map);
+  ASSERT_EQ(bytes.size(), plain.size() + 92 + 4 * kBoards + 12 * (4 + 8));
+  EXPECT_EQ(bytes[kOffFlags], plain[kOffFlags] | 32U);
+  auto out = std::make_unique<ha::MapFile>();
+  ASSERT_FALSE(ha::decode_map(bytes.data(), bytes.size(), *out)) << decode_error(bytes);
+  const ha::BearingProjection& q = out->forward.projection;
+  EXPECT_TRUE(q.present());
+  EXPECT_EQ(q.points, p.points);
+  EXPECT_EQ(q.outline_m, p.outline_m);
+  EXPECT_EQ(q.forward, p.forward);
+  EXPECT_EQ(q.origin_m, p.origin_m);
+  EXPECT_FLOAT_EQ(q.focal_px, 400.0F);
+  EXPECT_FLOAT_EQ(q.k2, 0.03F);
+  EXPECT_FLOAT_EQ(q.max_radius2, 2.5F);
+  EXPECT_EQ(ha::encode_map(*out), bytes);
+
+  // Its offsets: right after the bearings (the map has no heading terms, visibility or coverage).
+  const std::size_t first = plain.size() - 4 - kAfterCalibration;
+  const auto refused = [&](std::size_t at, float v, const char* what) {
+    std::vector<std::uint8_t> b = bytes;
+    put_f32(b, at, v);
+    fix_crc(b);
+    EXPECT_NE(decode_error(b).find(what), std::string::npos) << v << ": " << decode_error(b);
+  };
+  const auto refused_u32 = [&](std::size_t at, std::uint32_t v, const char* what) {
+    std::vector<std::uint8_t> b = bytes;
+    put_u32(b, at, v);
+    fix_crc(b);
+    EXPECT_NE(decode_error(b).find(what), std::string::npos) << v << ": " << decode_error(b);
+  };
+  refused_u32(first, 0, "frame size out of range");
+  refused_u32(first, 1280, "frame size differs from the map's");
+  refused(first + 8, std::numeric_limits<float>::quiet_NaN(), "camera place");
+  refused(first + 8 + 8, 11.0F, "camera place");
+  refused(first + 20, 0.5F, "not a unit vector");      // right x: |right| > 1
+  refused(first + 32 + 4, 0.5F, "not a unit vector");  // down y
+  refused(first + 44, 0.5F, "not a unit vector");      // forward x
+  const std::size_t intrinsics = first + 56;
+  refused(intrinsics, 0.5F, "intrinsics out of range");
+  refused(intrinsics + 4, -1.0F, "intrinsics out of range");
+  refused(intrinsics + 8, std::numeric_limits<float>::infinity(), "intrinsics out of range");
+  refused(intrinsics + 12, 101.0F, "lens coefficient");
+  refused(intrinsics + 28, std::numeric_limits<float>::quiet_NaN(), "lens coefficient");
+  refused(intrinsics + 32, 0.0F, "lens radius");
+  const std::size_t boards = first + 92;
+  refused_u32(boards, 2, "neither 0 nor 3 to 8 points");
+  refused_u32(boards, 9, "neither 0 nor 3 to 8 points");
+  refused(boards + 4, std::numeric_limits<float>::quiet_NaN(), "outline point");
+  refused(boards + 4 + 8, 2.0e4F, "outline point");
+  for (const std::size_t length : {first + 2, boards + 6, bytes.size() - kAfterCalibration - 6}) {
+    std::vector<std::uint8_t> cut(bytes.begin(),
+                                  bytes.begin() + static_cast<std::ptrdiff_t>(length));
+    EXPECT_FALSE(decode_error(cut).empty());
+  }
+  // Axes at right angles: down turned towards forward.
+  {
+    std::vector<std::uint8_t> b = bytes;
+    put_f32(b, first + 32, 0.6F);   // down = (0.6, 0, -0.8): a unit vector, not at right angles
+    put_f32(b, first + 40, -0.8F);  // with forward (1, 0, 0)
+    fix_crc(b);
+    EXPECT_NE(decode_error(b).find("not at right angles"), std::string::npos) << decode_error(b);
+  }
+  // An outline for board 3, whose bearings the map does not model; one without bearings; no
+  // outline at all; a version 14 map.
+  {
+    auto other = make_map_with_bearings();
+    other->forward.projection = p;
+    other->forward.projection.points[3] = 4;
+    const std::vector<std::uint8_t> b = ha::encode_map(*other);
+    EXPECT_NE(decode_error(b).find("a board without bearings"), std::string::npos)
+        << decode_error(b);
+  }
+  std::vector<std::uint8_t> b = bytes;
+  b[kOffFlags] &= static_cast<std::uint8_t>(~2U);
+  fix_crc(b);
+  EXPECT_NE(decode_error(b).find("projected bearings but no bearings"), std::string::npos)
+      << decode_error(b);
+  b = bytes;
+  put_u32(b, boards, 0);
+  b.erase(b.begin() + static_cast<std::ptrdiff_t>(boards + 4),
+          b.begin() + static_cast<std::ptrdiff_t>(boards + 4 + 48));
+  put_u32(b, boards + 4 * 2, 0);
+  b.erase(b.begin() + static_cast<std::ptrdiff_t>(boards + 12),
+          b.begin() + static_cast<std::ptrdiff_t>(boards + 12 + 96));
+  fix_crc(b);
+  EXPECT_NE(decode_error(b).find("holds no outline"), std::string::npos) << decode_error(b);
+  b = bytes;
+  put_u32(b, kOffVersion, 14);
+  fix_crc(b);
+  EXPECT_NE(decode_error(b).find("unknown bits"), std::string::npos) << decode_error(b);
+  // Written only with bearings.
+  map->forward.has_bearings = false;
+  const std::vector<std::uint8_t> without = ha::encode_map(*map);
+  ASSERT_FALSE(ha::decode_map(without.data(), without.size(), *out)) << decode_error(without);
+  EXPECT_FALSE(out->forward.projection.present());
 }

@@ -1314,3 +1314,169 @@ TEST(HarmonicQueryMasked, AMaskedFeatureCannotDragTheFix) {
   ha::FeatureMask none{};
   EXPECT_FALSE(ha::harmonic_query(*m, q, none).known_place);
 }
+
+namespace {
+
+// make_bearing_map's map with projected bearings (map version 15): a level camera (200 px focal
+// length, a little barrel) 5 cm ahead of the axle and 30 cm up, and board 0 a 20 cm square
+// centred at (x, y, 0.3) facing the grid (place_projected_board).
+void place_projected_board(ha::BearingProjection& p, float x, float y) {
+  const float corners[4][3] = {
+      {x - 0.1F, y, 0.2F}, {x + 0.1F, y, 0.2F}, {x + 0.1F, y, 0.4F}, {x - 0.1F, y, 0.4F}};
+  for (std::size_t i = 0; i < 4; ++i) {
+    for (std::size_t d = 0; d < 3; ++d) p.point_m(0, i, d) = corners[i][d];
+  }
+}
+
+std::unique_ptr<ha::ForwardMap> make_projected_map(float board_x, float board_y) {
+  auto map = make_bearing_map();
+  ha::BearingProjection& p = map->projection;
+  p.width_px = 320;
+  p.height_px = 240;
+  p.origin_m = {0.05F, 0.0F, 0.3F};
+  p.right = {0.0F, -1.0F, 0.0F};
+  p.down = {0.0F, 0.0F, -1.0F};
+  p.forward = {1.0F, 0.0F, 0.0F};
+  p.focal_px = 200.0F;
+  p.cx_px = 159.5F;
+  p.cy_px = 119.5F;
+  p.k1 = -0.1F;
+  p.max_radius2 = 1.5F;
+  p.points[0] = 4;
+  place_projected_board(p, board_x, board_y);
+  return map;
+}
+
+// Board 0's projected image angle seen from @p pose.
+bool projected_angle(const ha::ForwardMap& map, const ha::Pose2& pose, float& angle) {
+  const ha::CameraAtPose camera = ha::camera_at_pose(
+      map.projection, static_cast<float>(pose.x_m), static_cast<float>(pose.y_m),
+      static_cast<float>(std::cos(pose.yaw_rad)), static_cast<float>(std::sin(pose.yaw_rad)));
+  return ha::projected_image_angle(map, camera, 0, angle);
+}
+
+}  // namespace
+
+// Projected bearings (map version 15): a board with an outline in the map's projection takes its
+// expected image angle from the outline projected at each particle's own pose, not from the
+// cells. Board 0 is a 20 cm square at (1.5, 2.0, 0.3) facing the grid; the cells' bearings are
+// made 0.1 rad wrong: read from them the truth would lose, projected it wins against a place
+// 10 cm beside it and a heading 3 degrees off, as the mixture at the projected residual says. A
+// particle that would not see the board at all takes the mixture's floor.
+TEST(ParticleFilterBoards, ProjectedBearingsComeFromTheOutlineAtTheParticlesPose) {
+  const auto map = make_projected_map(1.5F, 2.0F);
+  for (std::size_t c = 0; c < map->stored_cells(); ++c)
+    map->bearing_rad[c * ha::kMaxBoards] += 0.1F;
+  ha::BearingProjection& p = map->projection;
+  const double yaw = 1.5;
+  const ha::Pose2 truth{1.45, 0.75, yaw};
+  const auto angle_at = [&](const ha::Pose2& pose, float& angle) {
+    return projected_angle(*map, pose, angle);
+  };
+  ha::BoardFeatures seen = observe(truth.x_m, truth.y_m);
+  ASSERT_TRUE(angle_at(truth, seen.angle_rad[0]));
+  seen.angle_mask = 1U;
+  ha::BoardModelParams params;
+  params.route_heading_sigma_deg = 0.0;
+  params.tempering = 1.0;
+  ha::BoardUpdate u;
+  const auto ratio = [&](const ha::Pose2& other) {
+    ha::BoardReliability reliability;
+    reliability.reset(params);
+    reliability.assess(*map, seen, truth, params, u);
+    for (std::size_t k = 0; k < u.boards; ++k) u.use[k] = false;  // the bearing alone
+    ha::ParticleFilter pf;
+    pf.configure(100, 3, ha::MotionNoise{});
+    pf.initialize_between(truth, other, 0.0, 0.0, false);
+    pf.update_boards(u);
+    double at_truth = 0.0, at_other = 0.0;
+    for (std::size_t i = 0; i < pf.size(); ++i)
+      (std::fabs(pf.particle(i).x_m - truth.x_m) + std::fabs(pf.particle(i).yaw_rad - yaw) < 1e-9
+           ? at_truth
+           : at_other) += pf.weight(i);
+    return at_other / at_truth;
+  };
+  const ha::Pose2 beside{1.55, 0.75, yaw};
+  const double projected = ratio(beside);
+  ASSERT_EQ(u.bearing_mask, 1U);
+  float angle_beside = 0.0F;
+  ASSERT_TRUE(angle_at(beside, angle_beside));
+  const double miss = static_cast<double>(angle_beside) - static_cast<double>(seen.angle_rad[0]);
+  const double l_beside =
+      static_cast<double>(u.gain[0]) *
+          std::exp(-miss * miss * static_cast<double>(u.bearing_inv_two_var[0])) +
+      static_cast<double>(u.floor[0]);
+  const double l_truth = static_cast<double>(u.gain[0]) + static_cast<double>(u.floor[0]);
+  EXPECT_NEAR(projected, l_beside / l_truth, 1e-3 * l_beside / l_truth);
+  EXPECT_LT(projected, 0.1);
+  EXPECT_LT(ratio(ha::Pose2{truth.x_m, truth.y_m, yaw + 0.0524}), 0.1);
+  // Facing away, the board lies behind the particle's camera: it expects none where the frame
+  // shows one, an outlier (the mixture's floor). Turned 40 degrees, the board's centroid falls
+  // beyond the frame's side: a far miss, the floor too.
+  EXPECT_NEAR(ratio(ha::Pose2{truth.x_m, truth.y_m, yaw - 3.0}),
+              static_cast<double>(u.floor[0]) / l_truth, 1e-6);
+  EXPECT_NEAR(ratio(ha::Pose2{truth.x_m, truth.y_m, yaw + 0.7}),
+              static_cast<double>(u.floor[0]) / l_truth, 1e-6);
+  // Without the outline, the cells' bearings are read, at each particle's place.
+  p.points[0] = 0;
+  const double from_cells = ratio(beside);
+  const auto cells_likelihood = [&](const ha::Pose2& pose) {
+    float bearing = 0.0F;
+    EXPECT_TRUE(ha::expected_bearing(*map, ha::locate(*map, pose.x_m, pose.y_m), 0, bearing));
+    const double d =
+        pose.yaw_rad - static_cast<double>(seen.angle_rad[0]) - static_cast<double>(bearing);
+    return static_cast<double>(u.gain[0]) *
+               std::exp(-d * d * static_cast<double>(u.bearing_inv_two_var[0])) +
+           static_cast<double>(u.floor[0]);
+  };
+  const double expected_from_cells = cells_likelihood(beside) / cells_likelihood(truth);
+  EXPECT_NEAR(from_cells, expected_from_cells, 1e-3 * expected_from_cells);
+  EXPECT_GT(std::fabs(from_cells - projected), 0.1);
+}
+
+// Near the estimate, the projected bearings are read from the projection's straight line there
+// (BoardUpdate::linear): 7 projections a board a frame instead of one a particle. The weights of a
+// cloud within the line's reach are those of the projection itself, to the line's tolerance; a
+// board 45 cm from the camera and 25 degrees to the side bends the line too much over the reach
+// and is projected at each particle.
+TEST(ParticleFilterBoards, ProjectedBearingsNearTheEstimateFollowTheProjectionsLine) {
+  const auto map = make_projected_map(1.5F, 2.0F);
+  const ha::Pose2 truth{1.45, 0.75, 1.5};
+  ha::BoardFeatures seen = observe(truth.x_m, truth.y_m);
+  ASSERT_TRUE(projected_angle(*map, truth, seen.angle_rad[0]));
+  seen.angle_rad[0] += 0.004F;  // the truth a little off, as measured
+  seen.angle_mask = 1U;
+  ha::BoardModelParams params;
+  params.route_heading_sigma_deg = 0.0;
+  params.tempering = 1.0;
+  const auto weights = [&](bool linear, ha::BoardUpdate& u) {
+    ha::BoardReliability reliability;
+    reliability.reset(params);
+    reliability.assess(*map, seen, truth, params, u);
+    for (std::size_t k = 0; k < u.boards; ++k) u.use[k] = false;  // the bearing alone
+    if (!linear) u.linear_mask = 0;
+    ha::ParticleFilter pf;
+    pf.configure(200, 7, ha::MotionNoise{});
+    pf.initialize(truth, 0.01, 0.01, false);
+    pf.update_boards(u);
+    std::vector<double> w;
+    for (std::size_t i = 0; i < pf.size(); ++i) w.push_back(pf.weight(i));
+    return w;
+  };
+  ha::BoardUpdate u;
+  const std::vector<double> line = weights(true, u);
+  ASSERT_EQ(u.linear_mask, 1U);
+  // Turning the robot turns the board in the image: by 200 / 320 of the turn under this map's law
+  // (1 rad across the width) for a camera of 200 px focal length.
+  EXPECT_NEAR(u.linear[0][3], 200.0 / 320.0, 0.05);
+  const std::vector<double> exact = weights(false, u);
+  double worst = 0.0;
+  for (std::size_t i = 0; i < exact.size(); ++i)
+    worst = std::max(worst, std::fabs(line[i] - exact[i]) / exact[i]);
+  EXPECT_LT(worst, 0.05);
+  // The same board 45 cm from the camera, 25 degrees to the side: not linearised.
+  place_projected_board(map->projection, 1.65F, 1.2F);
+  ASSERT_TRUE(projected_angle(*map, truth, seen.angle_rad[0]));
+  (void)weights(true, u);
+  EXPECT_EQ(u.linear_mask, 0U);
+}

@@ -126,6 +126,17 @@ struct BoardUpdate {
   std::uint32_t bearing_mask = 0;
   std::array<float, kMaxBoards> angle_rad{};
   std::array<float, kMaxBoards> bearing_inv_two_var{};
+  /// Projected bearings (projected_bearing.hpp) linearised about the estimate: for a pose within
+  /// kLinearReach_m and kLinearReach_rad of linear_at, board b of linear_mask is expected at image
+  /// angle linear[b][0] + linear[b][1] dx + linear[b][2] dy + linear[b][3] dyaw, instead of its
+  /// outline projected at each particle. A board is linearised only where the linear model
+  /// misses the projection at the reach by at most kLinearTolerance of its bearing spread.
+  static constexpr float kLinearReach_m = 0.03F;
+  static constexpr float kLinearReach_rad = 0.035F;  // 2 degrees
+  static constexpr float kLinearTolerance = 0.25F;
+  std::uint32_t linear_mask = 0;
+  Pose2 linear_at{};
+  std::array<std::array<float, 4>, kMaxBoards> linear{};
   double inv_tempering = 1.0;  ///< exponent of the boards' joint likelihood
   float route_free_m = 0.0F;
   float route_inv_two_var = 0.0F;

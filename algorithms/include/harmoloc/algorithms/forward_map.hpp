@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <new>
 
+#include "harmoloc/algorithms/projected_bearing.hpp"
 #include "harmoloc/algorithms/segmentation.hpp"
 
 namespace harmoloc::algorithms {
@@ -161,6 +162,11 @@ struct ForwardMap {
   /// triangulated from the frames, which do not know the axis).
   float visibility_axis_rad = 0.0F;
 
+  /// Projected bearings (map version 15; projected_bearing.hpp): the fitted camera and the
+  /// outlines of the boards whose fit holds. A board with an outline takes its expected bearing
+  /// from the projection at each particle's pose instead of from the cells. Needs bearings.
+  BearingProjection projection;
+
   bool present() const { return columns > 0 && rows > 0; }
   /// Stored cells (whole tiles, including the cells of border tiles beyond the grid).
   std::size_t stored_cells() const { return static_cast<std::size_t>(tile_count) * kTileCells; }
@@ -284,6 +290,13 @@ bool route_heading(const ForwardMap& map, const GridPoint& point, float& heading
 /// at +-pi); false when no corner holds one.
 bool expected_bearing(const ForwardMap& map, const GridPoint& point, std::size_t b,
                       float& bearing_rad);
+
+/// The image angle at which the camera at @p camera (camera_at_pose of @p map's projection) sees
+/// board @p b's centroid, from the board's outline in the projection under @p map's law (radians,
+/// positive to the right; a centroid beyond the frame's side reads as 0.05 of the width past it);
+/// false when the board has no outline or lies behind the camera or beyond the lens's image.
+bool projected_image_angle(const ForwardMap& map, const CameraAtPose& camera, std::size_t b,
+                           float& angle_rad);
 
 /// The lens's half field of view under @p map's bearing law (radians): the angle of a centroid
 /// on the frame's left or right edge.

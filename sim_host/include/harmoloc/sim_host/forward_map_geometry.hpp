@@ -66,4 +66,12 @@ GeometryTablesReport visibility_from_geometry(const SceneGeometryFit& fit,
                                               float area_scale, algorithms::ForwardMap& map,
                                               const GeometryTablesOptions& options = {});
 
+/// Gives @p map projected bearings (map version 15; algorithms/projected_bearing.hpp) for the
+/// boards @p boards marks whose fit in @p fit holds and whose bearings the map models: the fitted
+/// camera on the robot and each such board's outline (a rectangle's corners, eight points round
+/// an ellipse). Returns how many boards it gave an outline; 0 leaves the map without projection.
+std::size_t project_bearings_from_geometry(const SceneGeometryFit& fit,
+                                           const std::vector<char>& boards,
+                                           algorithms::ForwardMap& map);
+
 }  // namespace harmoloc::sim_host

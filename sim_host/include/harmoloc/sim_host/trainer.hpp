@@ -109,6 +109,11 @@ struct TrainOptions {
   /// fitted camera too (GeometryReport::law_from_camera), the forward map trained again with it.
   /// false: the law triangulated from the frames (calibrate_bearings) stays.
   bool law_from_geometry = true;
+  /// Where boards take visibility tables from the geometry: the map also stores the fitted
+  /// camera and those boards' outlines (map version 15), and the filter projects their bearings
+  /// from each particle's pose instead of reading the cells' (projected_bearing.hpp). Off by
+  /// default: on eight random floors it helped some and hurt others (docs/bearings.md).
+  bool projected_bearings = false;
   GeometryTablesOptions geometry_tables;
   /// The camera's optical centre above the floor (metres); 0: the run's (the dataset's
   /// camera.height_m), else unknown.
@@ -181,6 +186,8 @@ struct GeometryReport {
   /// The rows the law was fitted at (column_law_of): the deciles of the rows the training
   /// frames saw the boards at, as fractions of the height; empty: the middle rows.
   std::vector<double> law_rows;
+  /// TrainOptions::projected_bearings: boards whose bearings the map projects (0: none).
+  std::size_t projected_boards = 0;
 };
 
 struct TrainReport {
