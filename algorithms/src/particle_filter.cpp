@@ -212,6 +212,11 @@ inline double likelihood_at(const BoardUpdate& u, const GridPoint& at, const Pos
   // Bearings: the particle sees board b at world bearing yaw - angle; the map says where the
   // training run saw it from here (from the particle's camera place, where the map's bearings
   // are seen from it).
+  // A board's bearing factor at residual r: its Gaussian in the board's mixture.
+  const auto bearing_factor = [&u](std::size_t b, float r) {
+    return static_cast<double>(u.gain[b] * std::exp(-r * r * u.bearing_inv_two_var[b]) +
+                               u.floor[b]);
+  };
   // A board with an outline in the map's projection: its centroid column projected from the
   // particle's own pose, under the same law as the measured one (their difference is the
   // residual). The camera is placed once per particle, when a board first needs it.
@@ -234,8 +239,7 @@ inline double likelihood_at(const BoardUpdate& u, const GridPoint& at, const Pos
     if (((u.linear_mask >> b) & 1U) != 0U && near_linear) {
       const float r = u.linear[b][0] + u.linear[b][1] * dx + u.linear[b][2] * dy +
                       u.linear[b][3] * dyaw - u.angle_rad[b];
-      likelihood *=
-          static_cast<double>(u.gain[b] * std::exp(-r * r * u.bearing_inv_two_var[b]) + u.floor[b]);
+      likelihood *= bearing_factor(b, r);
       continue;
     }
     if (map.projection.points[b] != 0U) {
@@ -253,8 +257,7 @@ inline double likelihood_at(const BoardUpdate& u, const GridPoint& at, const Pos
       }
       const float r = angle - u.angle_rad[b];
       // Both within the lens's half field of view (under pi / 2): no wrap needed.
-      likelihood *=
-          static_cast<double>(u.gain[b] * std::exp(-r * r * u.bearing_inv_two_var[b]) + u.floor[b]);
+      likelihood *= bearing_factor(b, r);
       continue;
     }
     if (map.has_visibility) {
@@ -268,8 +271,7 @@ inline double likelihood_at(const BoardUpdate& u, const GridPoint& at, const Pos
     // at most bring d back (and a value that is not finite stays bounded in work).
     d = wrap_once_rad(wrap_once_rad(d));
     const auto r = static_cast<float>(d);
-    likelihood *=
-        static_cast<double>(u.gain[b] * std::exp(-r * r * u.bearing_inv_two_var[b]) + u.floor[b]);
+    likelihood *= bearing_factor(b, r);
   }
   return likelihood;
 }
