@@ -305,7 +305,7 @@ void linearise_projection(const ForwardMap& map, const Pose2& at, std::uint32_t 
     }
     // At most the tolerance at a corner of the reach too: the misses along the three axes add.
     if (ok && miss <= static_cast<double>(BoardUpdate::kLinearTolerance) *
-                          static_cast<double>(map.bearing_sigma_rad[b]))
+                          static_cast<double>(weighed_bearing_sigma_rad(map, b)))
       update.linear_mask |= 1U << b;
   }
 }
@@ -373,7 +373,8 @@ BoardAssessment BoardReliability::assess(const ForwardMap& map, const BoardFeatu
                      : o > hi[b] ? static_cast<double>(o) - static_cast<double>(hi[b])
                                  : 0.0;
     a.chi2[b] = static_cast<float>(r * r * inv_var[b]);
-    const double bearing_sigma = static_cast<double>(map.bearing_sigma_rad[b]);
+    // The residual is the projection's where the board is projected (fit_bearings).
+    const double bearing_sigma = static_cast<double>(weighed_bearing_sigma_rad(map, b));
     if (std::isfinite(bearing_residual[b]) && bearing_sigma > 0.0) {
       const double bearing_width = params.sigma_scale * bearing_sigma;
       const double variance = bearing_width * bearing_width + std::max(0.0, yaw_variance_rad2);
@@ -416,7 +417,7 @@ BoardAssessment BoardReliability::assess(const ForwardMap& map, const BoardFeatu
     update.gain[b] = static_cast<float>(w);
     update.floor[b] = static_cast<float>(params.robust ? (1.0 - w) * c : 0.0);
     update.inv_two_var[b] = static_cast<float>(0.5 * s * s * inv_var[b]);
-    const double bearing_sigma = static_cast<double>(map.bearing_sigma_rad[b]);
+    const double bearing_sigma = static_cast<double>(weighed_bearing_sigma_rad(map, b));
     if (params.bearings && map.has_bearings && bearing_sigma > 0.0 &&
         ((observed.angle_mask >> b) & 1U) != 0U) {
       const double width = params.sigma_scale * bearing_sigma;

@@ -172,8 +172,9 @@ MapError decode_heading_coverage(Reader& r, ForwardMap& f) {
 
 // The projected bearings (version 15), last in the section: the frame's size, the camera on the
 // robot (origin, then its right, down and forward axes), its intrinsics and lens, then per board
-// its outline's point count (0, or 3 to BearingProjection::kMaxPoints) and points.
-MapError decode_projection(Reader& r, ForwardMap& f) {
+// its outline's point count (0, or 3 to BearingProjection::kMaxPoints) and points, and from
+// version 16 after an outline its bearings' spread (0: the cells').
+MapError decode_projection(Reader& r, std::uint32_t version, ForwardMap& f) {
   BearingProjection p;
   if (!r.need(8U + 12U * 4U + 9U * 4U, "forward map projection"))
     return MapError{"truncated: the forward map's projection is cut short", r.pos()};
@@ -236,6 +237,17 @@ MapError decode_projection(Reader& r, ForwardMap& f) {
       if (!finite_in(x, -1.0e4F, 1.0e4F))
         return MapError{"forward map projection: an outline point not finite and within 10 km",
                         r.pos()};
+    }
+    if (n != 0 && version >= 16) {
+      if (!r.f32(p.sigma_rad[b], "forward map projection"))
+        return MapError{"truncated: the forward map's projection is cut short", r.pos()};
+      // 0: the cells' spread (a version 15 map written again); beyond 45 degrees it is no
+      // bearing.
+      if (!finite_in(p.sigma_rad[b], 0.0F, 0.785F))
+        return MapError{
+            "forward map projection: an outline's bearing spread not finite and within 0 to 45 "
+            "degrees",
+            r.pos()};
     }
     any = any || n != 0;
   }
@@ -393,7 +405,7 @@ MapError decode_forward(Reader& r, std::uint32_t version, std::uint32_t boards, 
     e = decode_heading_coverage(r, f);
     f.has_heading_coverage = !e && ForwardMap::kHeadingTermStorage;
   }
-  if (!e && (flag & 32U) != 0U) e = decode_projection(r, f);
+  if (!e && (flag & 32U) != 0U) e = decode_projection(r, version, f);
   if (e) {
     f.columns = f.rows = 0;
     f.projection = BearingProjection{};

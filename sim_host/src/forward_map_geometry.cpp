@@ -372,4 +372,32 @@ std::size_t project_bearings_from_geometry(const SceneGeometryFit& fit,
   return given;
 }
 
+std::vector<double> projected_bearing_spread(const algorithms::ForwardMap& map,
+                                             const std::vector<algorithms::AreaVector>& areas,
+                                             const std::vector<PlacedFrame>& frames) {
+  const std::size_t boards = map.board_count;
+  std::vector<double> spread(boards, 0.0);
+  if (!map.projection.present()) return spread;
+  std::vector<std::vector<double>> residuals(boards);
+  for (const PlacedFrame& f : frames) {
+    if (f.index >= areas.size()) continue;
+    const algorithms::AreaVector& a = areas[f.index];
+    const algorithms::CameraAtPose camera = algorithms::camera_at_pose(
+        map.projection, static_cast<float>(f.pose.x_m), static_cast<float>(f.pose.y_m),
+        static_cast<float>(std::cos(f.pose.yaw_rad)), static_cast<float>(std::sin(f.pose.yaw_rad)));
+    for (std::size_t b = 0; b < boards; ++b) {
+      float measured = 0.0F, projected = 0.0F;
+      if (map.projection.points[b] == 0U || !algorithms::board_image_angle(map, a, b, measured) ||
+          !algorithms::projected_image_angle(map, camera, b, projected))
+        continue;
+      residuals[b].push_back(
+          std::fabs(static_cast<double>(projected) - static_cast<double>(measured)));
+    }
+  }
+  for (std::size_t b = 0; b < boards; ++b) {
+    if (residuals[b].size() >= 20) spread[b] = 1.4826 * median_of(residuals[b]);
+  }
+  return spread;
+}
+
 }  // namespace harmoloc::sim_host

@@ -73,11 +73,18 @@ void print_geometry_tables(const harmoloc::sim_host::GeometryReport& g,
         t.kernel_bearing_sigma_rad[k] * kDeg,
         t.from_geometry[k] && t.kernel_bearings[k] ? " (the kernel's bearings kept)" : "");
   }
-  if (g.projected_boards > 0)
-    std::printf(
-        "geometry      bearings of the %zu boards from the geometry projected from the fitted "
-        "camera at each pose (map version 15)\n",
-        g.projected_boards);
+  if (g.projected_boards == 0) return;
+  std::printf(
+      "geometry      bearings of the %zu boards from the geometry projected from the fitted "
+      "camera at each pose (map version 16); their spread against the run's frames:",
+      g.projected_boards);
+  constexpr double kDeg = 180.0 / harmoloc::algorithms::kPi;
+  for (std::size_t k = 0; k < g.projected_spread_rad.size(); ++k) {
+    if (!(g.projected_spread_rad[k] > 0.0)) continue;
+    std::printf(" %s %.2f", k < n.names.size() ? n.names[k].c_str() : "?",
+                g.projected_spread_rad[k] * kDeg);
+  }
+  std::printf(" deg\n");
 }
 
 // The --fit-geometry section: the fitted camera, then each board.

@@ -129,6 +129,9 @@ bool same_model(const MapFile& a, const MapFile& b) {
           if (!same_bits(&x, &y, sizeof x)) return false;
         }
       }
+      // Version 16: the outline's bearing spread.
+      if (fp.points[b] != 0U && !same_bits(&fp.sigma_rad[b], &gp.sigma_rad[b], sizeof(float)))
+        return false;
     }
   }
   if (f.has_heading_coverage != g.has_heading_coverage) return false;
@@ -246,6 +249,8 @@ void check_added_projection(const std::vector<std::uint8_t>& input) {
     p.points[b] = static_cast<std::uint8_t>(3 + input[b % input.size()] % 6);
     for (std::size_t i = 0; i < 3U * p.points[b]; ++i)
       p.point_m(b, i / 3, i % 3) = 0.05F * static_cast<float>(input[(b + i) % input.size()]) - 6.0F;
+    // 0 (the cells' spread) or up to about 29 degrees.
+    p.sigma_rad[b] = 0.002F * static_cast<float>(input[(b + 1) % input.size()]);
   }
   check_given_round_trip("projected bearings");
 }
@@ -313,7 +318,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     // no heading terms before version 7, no heading coverage before version 8, no visibility
     // before version 10, no per-sample fix errors before version 11, no centroid columns before
     // version 12, no column gain before version 13, the visibility's gain centred on the centre
-    // column before version 14, no projected bearings before version 15.
+    // column before version 14, no projected bearings before version 15, no projected bearings'
+    // spreads before version 16.
     HARMOLOC_FUZZ_CHECK(input[8] != 1 || g_map.model.max_dissimilarity == 1.0F,
                         "a version 1 map decodes with a dissimilarity bound");
     HARMOLOC_FUZZ_CHECK(input[8] >= 3 || !g_map.forward.present(),
@@ -346,6 +352,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
                         "a map before version 14 decodes with a visibility axis");
     HARMOLOC_FUZZ_CHECK(input[8] >= 15 || !f.projection.present(),
                         "a map before version 15 decodes with projected bearings");
+    bool no_spread = true;
+    for (const float v : f.projection.sigma_rad) no_spread = no_spread && v == 0.0F;
+    HARMOLOC_FUZZ_CHECK(input[8] >= 16 || no_spread,
+                        "a map before version 16 decodes with projected bearings' spreads");
     HARMOLOC_FUZZ_CHECK(!decode_map(encoded.data(), encoded.size(), g_again),
                         "a re-encoded older map does not decode");
     HARMOLOC_FUZZ_CHECK(same_model(g_map, g_again), "decode(encode(older map)) differs");

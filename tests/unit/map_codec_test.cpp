@@ -1636,9 +1636,10 @@ TEST(MapCodec, VisibilityRoundTripAndChecks) {
 
 // Version 15: the projected bearings follow the forward map's other sections, flagged by bit 5:
 // the frame's size, the camera on the robot, its intrinsics and lens, then per board its outline's
-// point count and points; they read back exactly. They need bearings, an outline only for a board
-// whose bearings are modelled, and the map's frame size; a value out of range is refused; before
-// version 15 the bit is unknown.
+// point count and points (version 16: and its bearings' spread); they read back exactly. They
+// need bearings, an outline only for a board whose bearings are modelled, and the map's frame
+// size; a value out of range is refused; before version 15 the bit is unknown, and a version 15
+// map reads without the spreads.
 TEST(MapCodec, ProjectionRoundTripAndChecks) {
   auto map = make_map_with_bearings();
   const std::vector<std::uint8_t> plain = ha::encode_map(*map);
@@ -1661,8 +1662,10 @@ TEST(MapCodec, ProjectionRoundTripAndChecks) {
   for (std::size_t i = 0; i < 3 * 4; ++i) p.point_m(0, i / 3, i % 3) = 0.1F * static_cast<float>(i);
   for (std::size_t i = 0; i < 3 * 8; ++i)
     p.point_m(2, i / 3, i % 3) = -0.2F * static_cast<float>(i);
+  p.sigma_rad[0] = 0.003F;
+  p.sigma_rad[2] = 0.004F;
   const std::vector<std::uint8_t> bytes = ha::encode_map(*map);
-  ASSERT_EQ(bytes.size(), plain.size() + 92 + 4 * kBoards + 12 * (4 + 8));
+  ASSERT_EQ(bytes.size(), plain.size() + 92 + 4 * kBoards + 12 * (4 + 8) + 4 * 2);
   EXPECT_EQ(bytes[kOffFlags], plain[kOffFlags] | 32U);
   auto out = std::make_unique<ha::MapFile>();
   ASSERT_FALSE(ha::decode_map(bytes.data(), bytes.size(), *out)) << decode_error(bytes);
@@ -1670,6 +1673,7 @@ TEST(MapCodec, ProjectionRoundTripAndChecks) {
   EXPECT_TRUE(q.present());
   EXPECT_EQ(q.points, p.points);
   EXPECT_EQ(q.outline_m, p.outline_m);
+  EXPECT_EQ(q.sigma_rad, p.sigma_rad);
   EXPECT_EQ(q.forward, p.forward);
   EXPECT_EQ(q.origin_m, p.origin_m);
   EXPECT_FLOAT_EQ(q.focal_px, 400.0F);
@@ -1710,6 +1714,17 @@ TEST(MapCodec, ProjectionRoundTripAndChecks) {
   refused_u32(boards, 9, "neither 0 nor 3 to 8 points");
   refused(boards + 4, std::numeric_limits<float>::quiet_NaN(), "outline point");
   refused(boards + 4 + 8, 2.0e4F, "outline point");
+  // Board 0's spread, after its 4 points (version 16).
+  for (const float v : {-0.01F, 0.8F, std::numeric_limits<float>::quiet_NaN()})
+    refused(boards + 4 + 48, v, "bearing spread");
+  {  // 0: the cells' spread, as a version 15 map written again has.
+    std::vector<std::uint8_t> b = bytes;
+    put_f32(b, boards + 4 + 48, 0.0F);
+    fix_crc(b);
+    ASSERT_FALSE(ha::decode_map(b.data(), b.size(), *out)) << decode_error(b);
+    EXPECT_EQ(out->forward.projection.sigma_rad[0], 0.0F);
+    EXPECT_FLOAT_EQ(out->forward.projection.sigma_rad[2], 0.004F);
+  }
   for (const std::size_t length : {first + 2, boards + 6, bytes.size() - kAfterCalibration - 6}) {
     std::vector<std::uint8_t> cut(bytes.begin(),
                                   bytes.begin() + static_cast<std::ptrdiff_t>(length));
@@ -1741,12 +1756,25 @@ TEST(MapCodec, ProjectionRoundTripAndChecks) {
   b = bytes;
   put_u32(b, boards, 0);
   b.erase(b.begin() + static_cast<std::ptrdiff_t>(boards + 4),
-          b.begin() + static_cast<std::ptrdiff_t>(boards + 4 + 48));
+          b.begin() + static_cast<std::ptrdiff_t>(boards + 4 + 48 + 4));
   put_u32(b, boards + 4 * 2, 0);
   b.erase(b.begin() + static_cast<std::ptrdiff_t>(boards + 12),
-          b.begin() + static_cast<std::ptrdiff_t>(boards + 12 + 96));
+          b.begin() + static_cast<std::ptrdiff_t>(boards + 12 + 96 + 4));
   fix_crc(b);
   EXPECT_NE(decode_error(b).find("holds no outline"), std::string::npos) << decode_error(b);
+  // A version 15 map: the outlines without their spreads (board 0's after its 4 points at 52,
+  // board 2's after its 8 at 160), read as the cells' spread (0).
+  b = bytes;
+  b.erase(b.begin() + static_cast<std::ptrdiff_t>(boards + 160),
+          b.begin() + static_cast<std::ptrdiff_t>(boards + 164));
+  b.erase(b.begin() + static_cast<std::ptrdiff_t>(boards + 52),
+          b.begin() + static_cast<std::ptrdiff_t>(boards + 56));
+  put_u32(b, kOffVersion, 15);
+  fix_crc(b);
+  ASSERT_FALSE(ha::decode_map(b.data(), b.size(), *out)) << decode_error(b);
+  EXPECT_EQ(out->forward.projection.points, p.points);
+  EXPECT_EQ(out->forward.projection.outline_m, p.outline_m);
+  EXPECT_EQ(out->forward.projection.sigma_rad, (std::array<float, ha::kMaxBoards>{}));
   b = bytes;
   put_u32(b, kOffVersion, 14);
   fix_crc(b);

@@ -1417,6 +1417,20 @@ TEST(ParticleFilterBoards, ProjectedBearingsComeFromTheOutlineAtTheParticlesPose
               static_cast<double>(u.floor[0]) / l_truth, 1e-6);
   EXPECT_NEAR(ratio(ha::Pose2{truth.x_m, truth.y_m, yaw + 0.7}),
               static_cast<double>(u.floor[0]) / l_truth, 1e-6);
+  // With the projection's own spread in the map, the bearing is weighed by it, not the cells'.
+  const double cells_inv_two_var = static_cast<double>(u.bearing_inv_two_var[0]);
+  p.sigma_rad[0] = 2.0F * map->bearing_sigma_rad[0];
+  const double wider = ratio(beside);
+  EXPECT_NEAR(static_cast<double>(u.bearing_inv_two_var[0]), 0.25 * cells_inv_two_var,
+              1e-4 * cells_inv_two_var);
+  const double wider_expected =
+      (static_cast<double>(u.gain[0]) *
+           std::exp(-miss * miss * static_cast<double>(u.bearing_inv_two_var[0])) +
+       static_cast<double>(u.floor[0])) /
+      (static_cast<double>(u.gain[0]) + static_cast<double>(u.floor[0]));
+  EXPECT_NEAR(wider, wider_expected, 1e-3 * wider_expected);
+  EXPECT_GT(wider, 2.0 * projected);
+  p.sigma_rad[0] = 0.0F;
   // Without the outline, the cells' bearings are read, at each particle's place.
   p.points[0] = 0;
   const double from_cells = ratio(beside);

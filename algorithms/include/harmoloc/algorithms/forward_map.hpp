@@ -298,6 +298,13 @@ bool expected_bearing(const ForwardMap& map, const GridPoint& point, std::size_t
 bool projected_image_angle(const ForwardMap& map, const CameraAtPose& camera, std::size_t b,
                            float& angle_rad);
 
+/// The spread the filter weighs board @p b's bearing with (radians): the projection's own where
+/// the board's bearing is projected and the map holds that spread, else the cells'.
+inline float weighed_bearing_sigma_rad(const ForwardMap& map, std::size_t b) {
+  const BearingProjection& p = map.projection;
+  return p.points[b] != 0U && p.sigma_rad[b] > 0.0F ? p.sigma_rad[b] : map.bearing_sigma_rad[b];
+}
+
 /// The lens's half field of view under @p map's bearing law (radians): the angle of a centroid
 /// on the frame's left or right edge.
 inline float half_field_of_view(const ForwardMap& map) {

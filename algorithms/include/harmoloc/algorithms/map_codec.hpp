@@ -20,11 +20,10 @@ namespace harmoloc::algorithms {
 /// the camera's place the bearings are seen from, version 10 the visibility of a floor map,
 /// version 11 the fix error per sample, version 12 the boards' centroid columns, version 13 the
 /// area's gain by column, version 14 the visibility's optical axis, version 15 the projected
-/// bearings (the fitted camera and boards' outlines); versions 1 to 14 are still read (without
-/// what they
-/// lack; a version 3 or 4 forward map as a grid of which every tile is stored, a forward map before
-/// version 6 without bearings).
-constexpr std::uint32_t kMapFormatVersion = 15;
+/// bearings (the fitted camera and boards' outlines), version 16 the projected bearings' spread;
+/// versions 1 to 15 are still read (without what they lack; a version 3 or 4 forward map as a
+/// grid of which every tile is stored, a forward map before version 6 without bearings).
+constexpr std::uint32_t kMapFormatVersion = 16;
 
 /// What the trainer measured on the training run that the firmware derives its scene-dependent
 /// settings from (docs/map-format.md): nothing of it is a constant tuned to one scene.

@@ -53,6 +53,10 @@ struct BearingProjection {
   /// Board b's x of every point, then its y, then its z (kMaxPoints each): a projection runs
   /// over the points in lanes.
   std::array<float, kMaxBoards * 3 * kMaxPoints> outline_m{};
+  /// Per board with an outline: how far its projected bearing misses the measured one at the
+  /// training run's placed poses (radians, map version 16), the spread the filter weighs it
+  /// with; 0: the cells' spread (ForwardMap::bearing_sigma_rad; version 15 maps).
+  std::array<float, kMaxBoards> sigma_rad{};
 
   /// Coordinate @p d (0 x, 1 y, 2 z) of point @p i of board @p b's outline.
   float& point_m(std::size_t b, std::size_t i, std::size_t d) {

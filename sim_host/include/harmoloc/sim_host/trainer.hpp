@@ -186,8 +186,10 @@ struct GeometryReport {
   /// The rows the law was fitted at (column_law_of): the deciles of the rows the training
   /// frames saw the boards at, as fractions of the height; empty: the middle rows.
   std::vector<double> law_rows;
-  /// TrainOptions::projected_bearings: boards whose bearings the map projects (0: none).
+  /// TrainOptions::projected_bearings: boards whose bearings the map projects (0: none), and per
+  /// board how far the projection misses the run's measured angles (projected_bearing_spread).
   std::size_t projected_boards = 0;
+  std::vector<double> projected_spread_rad;
 };
 
 struct TrainReport {
