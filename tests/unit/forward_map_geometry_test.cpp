@@ -251,6 +251,39 @@ TEST(ForwardMapGeometry, KeepsTheKernelsBearingsWhereTheyCameCloser) {
   EXPECT_TRUE(geometry_features);
 }
 
+namespace {
+
+// A geometry fit that found @p scene's true camera and boards.
+hs::SceneGeometryFit true_fit(const hs::Scenario& scene) {
+  hs::SceneGeometryFit fit;
+  fit.ok = true;
+  fit.camera = scene.camera;
+  for (const hs::BoardSpec& b : scene.boards) {
+    hs::BoardFit f;
+    f.ok = true;
+    f.board = b;
+    fit.boards.push_back(f);
+  }
+  return fit;
+}
+
+// The box the boards' centres span on the floor, where the tests draw poses.
+struct BoardBox {
+  double lo_x = 1e9, hi_x = -1e9, lo_y = 1e9, hi_y = -1e9;
+};
+BoardBox board_box(const hs::Scenario& scene) {
+  BoardBox box;
+  for (const hs::BoardSpec& b : scene.boards) {
+    box.lo_x = std::min(box.lo_x, b.centre_x_m);
+    box.hi_x = std::max(box.hi_x, b.centre_x_m);
+    box.lo_y = std::min(box.lo_y, b.centre_y_m);
+    box.hi_y = std::max(box.hi_y, b.centre_y_m);
+  }
+  return box;
+}
+
+}  // namespace
+
 // The projected bearings (map version 15, projected_bearing.hpp) from the true camera and boards
 // of random scenes: the firmware's projection of a board's few outline points must find the
 // centroid column that the 48-point outline gives (board_projection.hpp), for every pose from
@@ -259,15 +292,7 @@ TEST(ForwardMapGeometry, KeepsTheKernelsBearingsWhereTheyCameCloser) {
 TEST(ProjectedBearing, FindsTheOutlinesCentroidColumnFromAnyPose) {
   for (const std::uint64_t seed : {1U, 5U, 8U}) {
     const hs::Scenario scene = hs::random_scenario(seed);
-    hs::SceneGeometryFit fit;
-    fit.ok = true;
-    fit.camera = scene.camera;
-    for (const hs::BoardSpec& b : scene.boards) {
-      hs::BoardFit f;
-      f.ok = true;
-      f.board = b;
-      fit.boards.push_back(f);
-    }
+    const hs::SceneGeometryFit fit = true_fit(scene);
     auto map = std::make_unique<ha::ForwardMap>();
     map->has_bearings = true;
     map->board_count = static_cast<std::uint32_t>(scene.boards.size());
@@ -278,15 +303,10 @@ TEST(ProjectedBearing, FindsTheOutlinesCentroidColumnFromAnyPose) {
     const ha::BearingProjection& p = map->projection;
     EXPECT_EQ(p.points[0], 0U);
     const hs::LensModel lens(scene.camera);
-    double lo_x = 1e9, hi_x = -1e9, lo_y = 1e9, hi_y = -1e9;
-    for (const hs::BoardSpec& b : scene.boards) {
-      lo_x = std::min(lo_x, b.centre_x_m);
-      hi_x = std::max(hi_x, b.centre_x_m);
-      lo_y = std::min(lo_y, b.centre_y_m);
-      hi_y = std::max(hi_y, b.centre_y_m);
-    }
+    const BoardBox box = board_box(scene);
     std::mt19937 rng(static_cast<unsigned>(seed));
-    std::uniform_real_distribution<double> ux(lo_x, hi_x), uy(lo_y, hi_y), uyaw(-kPi, kPi);
+    std::uniform_real_distribution<double> ux(box.lo_x, box.hi_x), uy(box.lo_y, box.hi_y),
+        uyaw(-kPi, kPi);
     std::vector<double> miss_px;
     std::size_t corner_checks = 0;
     for (int i = 0; i < 3000; ++i) {
@@ -344,4 +364,82 @@ TEST(ProjectedBearing, FindsTheOutlinesCentroidColumnFromAnyPose) {
     EXPECT_LT(median, 1.0) << "seed " << seed;
     EXPECT_LT(p90, 3.0) << "seed " << seed;
   }
+}
+
+// The projection's own spread (map version 16, projected_bearing_spread): frames whose measured
+// centroid column is the projected one plus Gaussian noise of 2 px give a spread of that noise
+// through the law (1.4826 times the median absolute miss is the noise's sigma); a board without
+// an outline, and any board with fewer than 20 frames that give its bearing, get none.
+TEST(ProjectedBearing, SpreadIsTheMissAgainstTheFramesAtTheirPoses) {
+  const hs::Scenario scene = hs::random_scenario(5);
+  const hs::SceneGeometryFit fit = true_fit(scene);
+  auto map = std::make_unique<ha::ForwardMap>();
+  map->has_bearings = true;
+  map->board_count = static_cast<std::uint32_t>(scene.boards.size());
+  map->bearing_a1_rad = 1.2F;  // a straight law: a1 / w radians a pixel across the frame
+  for (std::size_t b = 0; b < scene.boards.size(); ++b) map->bearing_sigma_rad[b] = 0.01F;
+  std::vector<char> boards(scene.boards.size(), 1);
+  boards[0] = 0;  // left to the tables
+  ASSERT_GT(hs::project_bearings_from_geometry(fit, boards, *map), 1U);
+  const ha::BearingProjection& p = map->projection;
+  const double w = p.width_px;
+  const BoardBox box = board_box(scene);
+  constexpr double kNoisePx = 2.0;
+  constexpr std::uint32_t kPixels = 4000;
+  std::mt19937 rng(5U);
+  std::uniform_real_distribution<double> ux(box.lo_x, box.hi_x), uy(box.lo_y, box.hi_y),
+      uyaw(-kPi, kPi);
+  std::normal_distribution<double> noise(0.0, kNoisePx);
+  std::vector<ha::AreaVector> areas;
+  std::vector<hs::PlacedFrame> frames;
+  std::vector<std::size_t> seen(scene.boards.size(), 0);
+  for (int i = 0; i < 8000; ++i) {
+    const ha::Pose2 pose{ux(rng), uy(rng), uyaw(rng)};
+    const ha::CameraAtPose at = ha::camera_at_pose(
+        p, static_cast<float>(pose.x_m), static_cast<float>(pose.y_m),
+        static_cast<float>(std::cos(pose.yaw_rad)), static_cast<float>(std::sin(pose.yaw_rad)));
+    ha::AreaVector a;
+    a.width_px = p.width_px;
+    a.height_px = p.height_px;
+    a.count = scene.boards.size();
+    bool any = false;
+    for (std::size_t b = 0; b < scene.boards.size(); ++b) {
+      float column = 0.0F;
+      // Board 0 is measured from where its outline would be, so that only the missing outline
+      // keeps it out.
+      const ha::BearingProjection& from = b == 0 ? ha::BearingProjection{} : p;
+      if (b == 0 || !ha::projected_centroid_column(from, at, b, column)) continue;
+      if (column < 0.1 * w || column > 0.9 * w) continue;
+      const double measured = static_cast<double>(column) + noise(rng);
+      a.pixels[b] = kPixels;
+      a.column_sum[b] = static_cast<std::uint64_t>(std::llround(measured * kPixels));
+      ++seen[b];
+      any = true;
+    }
+    if (!any) continue;
+    hs::PlacedFrame f;
+    f.index = areas.size();
+    f.pose = pose;
+    frames.push_back(f);
+    areas.push_back(a);
+  }
+  const std::vector<double> spread = hs::projected_bearing_spread(*map, areas, frames);
+  ASSERT_EQ(spread.size(), scene.boards.size());
+  EXPECT_EQ(spread[0], 0.0);
+  std::size_t checked = 0;
+  double sum = 0.0;
+  for (std::size_t b = 1; b < scene.boards.size(); ++b) {
+    if (p.points[b] == 0U || seen[b] < 500) continue;
+    // Over a thousand frames or more the estimate's own spread is about 4%: within 15% (the
+    // median absolute miss without its factor would be 33% low).
+    const double expected = kNoisePx * static_cast<double>(map->bearing_a1_rad) / w;
+    EXPECT_NEAR(spread[b], expected, 0.15 * expected) << "board " << b << ", " << seen[b];
+    sum += spread[b] / expected;
+    ++checked;
+  }
+  ASSERT_GE(checked, 2U);
+  EXPECT_NEAR(sum / static_cast<double>(checked), 1.0, 0.06);
+  // Fewer than 20 frames: no spread for any board.
+  const std::vector<hs::PlacedFrame> few(frames.begin(), frames.begin() + 19);
+  for (const double s : hs::projected_bearing_spread(*map, areas, few)) EXPECT_EQ(s, 0.0);
 }
