@@ -158,6 +158,13 @@ double median_of(std::vector<double>& v) {
   return *mid;
 }
 
+// A bearing's spread from its absolute misses (radians): 1.4826 times their median, at least 0.1
+// degree; 0 with fewer than 20 misses.
+double bearing_spread_of(std::vector<double>& abs_misses) {
+  if (abs_misses.size() < 20) return 0.0;
+  return std::max(1.4826 * median_of(abs_misses), 0.1 * algorithms::kPi / 180.0);
+}
+
 }  // namespace
 
 GeometryTablesReport visibility_from_geometry(const SceneGeometryFit& fit,
@@ -261,9 +268,7 @@ GeometryTablesReport visibility_from_geometry(const SceneGeometryFit& fit,
   for (const std::size_t b : candidates) {
     if (n[b] == 0) continue;
     report.geometry_sigma[b] = std::sqrt(sq[b] / static_cast<double>(n[b]));
-    if (bearing_residuals[b].size() >= 20)
-      report.geometry_bearing_sigma_rad[b] =
-          std::max(1.4826 * median_of(bearing_residuals[b]), 0.1 * algorithms::kPi / 180.0);
+    report.geometry_bearing_sigma_rad[b] = bearing_spread_of(bearing_residuals[b]);
     if (report.geometry_sigma[b] <= options.kernel_noise_ratio * report.kernel_sigma[b]) {
       report.from_geometry[b] = 1;
       map.sigma[b] = static_cast<float>(
@@ -394,9 +399,7 @@ std::vector<double> projected_bearing_spread(const algorithms::ForwardMap& map,
           std::fabs(static_cast<double>(projected) - static_cast<double>(measured)));
     }
   }
-  for (std::size_t b = 0; b < boards; ++b) {
-    if (residuals[b].size() >= 20) spread[b] = 1.4826 * median_of(residuals[b]);
-  }
+  for (std::size_t b = 0; b < boards; ++b) spread[b] = bearing_spread_of(residuals[b]);
   return spread;
 }
 

@@ -317,14 +317,11 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<dataset::Sta
               project_bearings_from_geometry(g.fit, g.tables.from_geometry, *forward);
         if (g.projected_boards > 0) {
           // The projection is weighed by its own miss, not the cells' (a board's projection may
-          // hold to a fifth of the cells' spread, or miss by twice it); at least the cells'
-          // floor of 0.1 degrees. A board with too few frames keeps the cells' spread.
+          // hold to a fifth of the cells' spread, or miss by twice it). A board with too few
+          // frames (0) keeps the cells' spread.
           g.projected_spread_rad = projected_bearing_spread(*forward, run.areas, frames);
-          for (std::size_t b = 0; b < g.projected_spread_rad.size(); ++b) {
-            if (g.projected_spread_rad[b] > 0.0 && forward->projection.points[b] != 0U)
-              forward->projection.sigma_rad[b] = static_cast<float>(
-                  std::max(g.projected_spread_rad[b], 0.1 * algorithms::kPi / 180.0));
-          }
+          for (std::size_t b = 0; b < g.projected_spread_rad.size(); ++b)
+            forward->projection.sigma_rad[b] = static_cast<float>(g.projected_spread_rad[b]);
         }
       } else
         g.tables.skipped = "the geometry was not fitted: " + g.skipped;

@@ -77,8 +77,9 @@ std::size_t project_bearings_from_geometry(const SceneGeometryFit& fit,
 /// How far the projected bearings of @p map (project_bearings_from_geometry) miss the angles the
 /// run's frames measured: per board (map.board_count of them), 1.4826 times the median absolute
 /// difference between the projected image angle at each placed frame's pose and the measured
-/// one, over the frames in which the board gives a bearing (radians; 0: not projected, or fewer
-/// than 20 such frames). The placed poses' own error is in it, as in the cells' spread.
+/// one, at least 0.1 degree, over the frames in which the board gives a bearing (radians; 0: not
+/// projected, or fewer than 20 such frames), as the tables' bearing spread is measured. The placed
+/// poses' own error is in it, as in the cells' spread.
 std::vector<double> projected_bearing_spread(const algorithms::ForwardMap& map,
                                              const std::vector<algorithms::AreaVector>& areas,
                                              const std::vector<PlacedFrame>& frames);
