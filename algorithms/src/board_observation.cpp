@@ -361,12 +361,15 @@ BoardAssessment BoardReliability::assess(const ForwardMap& map, const BoardFeatu
   // expects around the estimate, or a bearing off. An occlusion only hides.
   std::array<bool, kMaxBoards> sign_of_a_move{};
   update.bearing_mask = 0;
+  update.area_projection_mask = 0;
   for (std::size_t b = 0; b < update.boards; ++b) {
     update.observed[b] = observed.value[b];
     const double cut = cut_width(observed, params, b);
     update.use[b] = map.sigma[b] > 0.0F && cut > 0.0;
     if (!update.use[b]) continue;
-    const double width = cut * params.sigma_scale * static_cast<double>(map.sigma[b]);
+    if (projects_area(map, b)) update.area_projection_mask |= 1U << b;
+    // The projection's own noise where the board's areas are projected.
+    const double width = cut * params.sigma_scale * static_cast<double>(weighed_area_sigma(map, b));
     inv_var[b] = 1.0 / (width * width);
     const float o = observed.value[b];
     const double r = o < lo[b]   ? static_cast<double>(o) - static_cast<double>(lo[b])

@@ -266,9 +266,29 @@ bool expected_bearing(const ForwardMap& map, const GridPoint& point, std::size_t
 void expected_at_pose(const ForwardMap& map, const GridPoint& point, double x_m, double y_m,
                       const SeenHeading& heading, float* out) {
   expected_features(map, point, heading, out);
-  if (!map.has_visibility) return;
-  apply_visibility(map, bearing_point(map, x_m, y_m, heading.cos_yaw, heading.sin_yaw),
-                   heading.yaw_rad, out);
+  if (map.has_visibility)
+    apply_visibility(map, bearing_point(map, x_m, y_m, heading.cos_yaw, heading.sin_yaw),
+                     heading.yaw_rad, out);
+  if (projects_areas(map))
+    apply_projected_areas(map,
+                          camera_at_pose(map.projection, static_cast<float>(x_m),
+                                         static_cast<float>(y_m), heading.cos_yaw, heading.sin_yaw),
+                          out);
+}
+
+bool projects_areas(const ForwardMap& map) {
+  for (std::size_t b = 0; b < map.board_count && b < kMaxBoards; ++b)
+    if (projects_area(map, b)) return true;
+  return false;
+}
+
+void apply_projected_areas(const ForwardMap& map, const CameraAtPose& camera, float* out) {
+  for (std::size_t b = 0; b < map.board_count && b < kMaxBoards; ++b) {
+    if (!projects_area(map, b)) continue;
+    float area_px = 0.0F;
+    if (projected_area_px(map.projection, camera, b, area_px))
+      out[b] = area_px * map.projection.area_per_px[b];
+  }
 }
 
 void apply_visibility(const ForwardMap& map, const GridPoint& seen_from, float yaw_rad, float* out,

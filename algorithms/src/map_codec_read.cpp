@@ -26,7 +26,7 @@ MapError decode_map(const std::uint8_t* data, std::size_t size, MapFile& map) {
   std::uint32_t version = 0;
   if (!r.u32(version, "version")) return r.error;
   if (version < 1 || version > kMapFormatVersion)
-    return MapError{"unsupported map format version (this firmware reads versions 1 to 15)", 8};
+    return MapError{"unsupported map format version (this firmware reads versions 1 to 17)", 8};
   if (crc32(data, body) != stored) return MapError{"checksum mismatch: the map is corrupt", body};
 
   std::uint32_t boards = 0;

@@ -172,8 +172,9 @@ MapError decode_heading_coverage(Reader& r, ForwardMap& f) {
 
 // The projected bearings (version 15), last in the section: the frame's size, the camera on the
 // robot (origin, then its right, down and forward axes), its intrinsics and lens, then per board
-// its outline's point count (0, or 3 to BearingProjection::kMaxPoints) and points, and from
-// version 16 after an outline its bearings' spread (0: the cells').
+// its outline's point count (0, or 3 to BearingProjection::kMaxPoints) and points, from version
+// 16 after an outline its bearings' spread (0: the cells'), from version 17 its feature per
+// projected pixel (0: the cells' areas) and its projected areas' noise (0: the map's sigma).
 MapError decode_projection(Reader& r, std::uint32_t version, ForwardMap& f) {
   BearingProjection p;
   if (!r.need(8U + 12U * 4U + 9U * 4U, "forward map projection"))
@@ -247,6 +248,22 @@ MapError decode_projection(Reader& r, std::uint32_t version, ForwardMap& f) {
         return MapError{
             "forward map projection: an outline's bearing spread not finite and within 0 to 45 "
             "degrees",
+            r.pos()};
+    }
+    if (n != 0 && version >= 17) {
+      if (!r.f32(p.area_per_px[b], "forward map projection") ||
+          !r.f32(p.area_sigma[b], "forward map projection"))
+        return MapError{"truncated: the forward map's projection is cut short", r.pos()};
+      // 0: the cells' areas; a feature per pixel beyond the largest area scale is no area.
+      if (!finite_in(p.area_per_px[b], 0.0F, 1.0e3F))
+        return MapError{
+            "forward map projection: an outline's feature per pixel not finite and within 0 to "
+            "1000",
+            r.pos()};
+      // 0: the map's sigma; within the bound on the map's sigmas.
+      if (!finite_in(p.area_sigma[b], 0.0F, 1.0e3F))
+        return MapError{
+            "forward map projection: an outline's area noise not finite and within 0 to 1000",
             r.pos()};
     }
     any = any || n != 0;

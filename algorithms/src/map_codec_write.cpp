@@ -140,7 +140,8 @@ std::vector<std::uint8_t> encode_map(const MapFile& map) {
       for (std::size_t c = 0; c < cells; ++c) w.u16(f.heading_cover[c]);
     }
     // Version 15: the frame's size, the camera on the robot, its intrinsics and lens, then per
-    // board its outline's point count and points (version 16: and its bearings' spread).
+    // board its outline's point count and points (version 16: and its bearings' spread; version
+    // 17: and its feature per projected pixel and area noise).
     if (projected) {
       const BearingProjection& p = f.projection;
       w.u32(p.width_px);
@@ -154,7 +155,10 @@ std::vector<std::uint8_t> encode_map(const MapFile& map) {
       for (std::size_t b = 0; b < f.board_count; ++b) {
         w.u32(p.points[b]);
         for (std::size_t i = 0; i < 3U * p.points[b]; ++i) w.f32(p.point_m(b, i / 3, i % 3));
-        if (p.points[b] != 0U) w.f32(p.sigma_rad[b]);  // version 16
+        if (p.points[b] == 0U) continue;
+        w.f32(p.sigma_rad[b]);    // version 16
+        w.f32(p.area_per_px[b]);  // version 17
+        w.f32(p.area_sigma[b]);
       }
     }
   }

@@ -170,7 +170,8 @@ bool projects_bearings(const BoardUpdate& u) {
 // Whether the boards' likelihood needs the pose's heading as a unit vector: the heading terms,
 // or the camera's place.
 bool needs_unit_heading(const BoardUpdate& u) {
-  return u.map->has_heading_terms || camera_bearings_of(u) || projects_bearings(u);
+  return u.map->has_heading_terms || camera_bearings_of(u) || projects_bearings(u) ||
+         u.area_projection_mask != 0U;
 }
 
 // The boards' untempered likelihood at one pose, its cell @p at located and its heading's
@@ -203,6 +204,23 @@ inline double likelihood_at(const BoardUpdate& u, const GridPoint& at, const Pos
   if (map.has_visibility)
     apply_visibility(map, seen_from, static_cast<float>(pose.yaw_rad), expected.data(),
                      seen_bearing.data());
+  // A board with an outline in the map's projection: its centroid column projected from the
+  // particle's own pose, under the same law as the measured one (their difference is the
+  // residual); where the map projects its areas, the outline's area in the frame as well. The
+  // camera is placed once per particle, when a board first needs it.
+  bool placed = false;
+  CameraAtPose camera{};
+  if (u.area_projection_mask != 0U) {
+    camera = camera_at_pose(map.projection, static_cast<float>(pose.x_m),
+                            static_cast<float>(pose.y_m), cos_yaw, sin_yaw);
+    placed = true;
+    for (std::uint32_t mask = u.area_projection_mask; mask != 0U; mask &= mask - 1U) {
+      const auto b = static_cast<std::size_t>(__builtin_ctz(mask));
+      float area_px = 0.0F;
+      if (projected_area_px(map.projection, camera, b, area_px))
+        expected[b] = area_px * map.projection.area_per_px[b];
+    }
+  }
   double likelihood = 1.0;
   for (std::size_t b = 0; b < u.boards; ++b) {
     if (!u.use[b]) continue;
@@ -217,11 +235,6 @@ inline double likelihood_at(const BoardUpdate& u, const GridPoint& at, const Pos
     return static_cast<double>(u.gain[b] * std::exp(-r * r * u.bearing_inv_two_var[b]) +
                                u.floor[b]);
   };
-  // A board with an outline in the map's projection: its centroid column projected from the
-  // particle's own pose, under the same law as the measured one (their difference is the
-  // residual). The camera is placed once per particle, when a board first needs it.
-  bool placed = false;
-  CameraAtPose camera{};
   // Within the reach of the estimate, the projection's straight line there (BoardUpdate).
   float dx = 0.0F, dy = 0.0F, dyaw = 0.0F;
   bool near_linear = false;

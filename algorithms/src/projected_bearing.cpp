@@ -1,5 +1,7 @@
 #include "harmoloc/algorithms/projected_bearing.hpp"
 
+#include <cmath>
+
 namespace harmoloc::algorithms {
 
 CameraAtPose camera_at_pose(const BearingProjection& p, float x_m, float y_m, float cos_yaw,
@@ -69,6 +71,102 @@ bool projected_centroid_column(const BearingProjection& p, const CameraAtPose& c
   }
   if (!(a2 > 1e-3F || a2 < -1e-3F)) return false;
   column_px = u[0] + cu / (3.0F * a2);
+  return true;
+}
+
+namespace {
+
+struct ImagePoint {
+  float u, v;
+};
+
+// Keeps the part of @p in (@p n points) where @p keep(point) >= 0 (linear in the point), into
+// @p out (room for kCapacity points); returns its points (Sutherland-Hodgman).
+template <std::size_t kCapacity, typename Keep>
+std::size_t clip(const ImagePoint* in, std::size_t n, ImagePoint* out, Keep keep) {
+  std::size_t m = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const ImagePoint& cur = in[i];
+    const ImagePoint& prev = in[i == 0 ? n - 1 : i - 1];
+    const float kc = keep(cur), kp = keep(prev);
+    // An outline the lens bends out of convex may cross an edge more than twice: the points
+    // beyond the capacity are dropped (the area then errs, the work stays bounded).
+    if ((kc >= 0.0F) != (kp >= 0.0F) && m < kCapacity) {
+      const float t = kp / (kp - kc);
+      out[m++] = {prev.u + t * (cur.u - prev.u), prev.v + t * (cur.v - prev.v)};
+    }
+    if (kc >= 0.0F && m < kCapacity) out[m++] = cur;
+  }
+  return m;
+}
+
+}  // namespace
+
+bool projected_area_px(const BearingProjection& p, const CameraAtPose& c, std::size_t b,
+                       float& area_px) {
+  if (b >= kMaxBoards) return false;
+  const std::size_t n = p.points[b];
+  if (n < 3 || n > BearingProjection::kMaxPoints) return false;
+  constexpr std::size_t kLanes = BearingProjection::kMaxPoints;
+  // Four clips add at most one point each.
+  constexpr std::size_t kMaxClipped = kLanes + 4;
+  const float* px = p.outline_m.data() + b * 3 * kLanes;
+  const float* py = px + kLanes;
+  const float* pz = py + kLanes;
+  const float k1 = p.k1, k2 = p.k2, k3 = p.k3, t1 = p.p1, t2 = p.p2;
+  const float focal = p.focal_px, cx = p.cx_px, cy = p.cy_px, max_r2 = p.max_radius2;
+  const float u0 = -0.5F, v0 = -0.5F;
+  const float u1 = static_cast<float>(p.width_px) - 0.5F;
+  const float v1 = static_cast<float>(p.height_px) - 0.5F;
+  std::array<ImagePoint, kMaxClipped> a{}, bpoly{};
+  bool ahead = false, unprojected = false, outside = false;
+  for (std::size_t i = 0; i < n; ++i) {
+    const float w0 = px[i] - c.origin[0], w1 = py[i] - c.origin[1], w2 = pz[i] - c.origin[2];
+    const float z = w0 * c.forward[0] + w1 * c.forward[1] + w2 * c.forward[2];
+    ahead = ahead || z > 0.0F;
+    // Behind the camera (or NaN), or beyond the lens's monotonic region.
+    if (!(z > 0.01F)) {
+      unprojected = true;
+      continue;
+    }
+    const float inv_z = 1.0F / z;
+    const float x = (w0 * c.right[0] + w1 * c.right[1] + w2 * c.right[2]) * inv_z;
+    const float y = (w0 * c.down[0] + w1 * c.down[1] + w2 * c.down[2]) * inv_z;
+    const float r2 = x * x + y * y;
+    if (!(r2 < max_r2)) {
+      unprojected = true;
+      continue;
+    }
+    const float radial = 1.0F + r2 * (k1 + r2 * (k2 + k3 * r2));
+    const float xd = x * radial + 2.0F * t1 * x * y + t2 * (r2 + 2.0F * x * x);
+    const float yd = y * radial + t1 * (r2 + 2.0F * y * y) + 2.0F * t2 * x * y;
+    const float u = focal * xd + cx, v = focal * yd + cy;
+    outside = outside || !(u >= u0 && u <= u1 && v >= v0 && v <= v1);
+    a[i] = {u, v};
+  }
+  area_px = 0.0F;
+  if (!ahead) return true;
+  if (unprojected) return false;
+  std::size_t m = n;
+  const ImagePoint* poly = a.data();
+  if (outside) {
+    m = clip<kMaxClipped>(a.data(), m, bpoly.data(),
+                          [u0](const ImagePoint& q) { return q.u - u0; });
+    m = clip<kMaxClipped>(bpoly.data(), m, a.data(),
+                          [u1](const ImagePoint& q) { return u1 - q.u; });
+    m = clip<kMaxClipped>(a.data(), m, bpoly.data(),
+                          [v0](const ImagePoint& q) { return q.v - v0; });
+    m = clip<kMaxClipped>(bpoly.data(), m, a.data(),
+                          [v1](const ImagePoint& q) { return v1 - q.v; });
+  }
+  if (m < 3) return true;
+  // Shoelace, about the first point to keep the products small.
+  float a2 = 0.0F;
+  for (std::size_t i = 1; i + 1 < m; ++i) {
+    a2 += (poly[i].u - poly[0].u) * (poly[i + 1].v - poly[0].v) -
+          (poly[i + 1].u - poly[0].u) * (poly[i].v - poly[0].v);
+  }
+  area_px = 0.5F * (a2 < 0.0F ? -a2 : a2);
   return true;
 }
 

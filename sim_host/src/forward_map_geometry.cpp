@@ -352,16 +352,23 @@ std::size_t project_bearings_from_geometry(const SceneGeometryFit& fit,
     std::array<std::array<double, 2>, BearingProjection::kMaxPoints> outline{};
     std::size_t n = 0;
     if (board.shape == BoardShape::kEllipse) {
+      // An octagon round the ellipse with the ellipse's area (the inscribed one has 2 sqrt(2) /
+      // pi of it): the projected areas need no correction for it.
+      const double grow = std::sqrt(algorithms::kPi / (2.0 * std::sqrt(2.0)));
       for (; n < BearingProjection::kMaxPoints; ++n) {
         const double a = 2.0 * algorithms::kPi * static_cast<double>(n) /
                          static_cast<double>(BearingProjection::kMaxPoints);
-        outline[n] = {hw * std::cos(a), hh * std::sin(a)};
+        outline[n] = {grow * hw * std::cos(a), grow * hh * std::sin(a)};
       }
     } else {
-      outline[n++] = {-hw, -hh};
-      outline[n++] = {hw, -hh};
-      outline[n++] = {hw, hh};
-      outline[n++] = {-hw, hh};
+      // The corners and the middle of each side: the lens bends the sides, and the projected
+      // area follows most of the bend through the middle points.
+      const double corner[5][2] = {{-hw, -hh}, {hw, -hh}, {hw, hh}, {-hw, hh}, {-hw, -hh}};
+      for (int side = 0; side < 4; ++side) {
+        outline[n++] = {corner[side][0], corner[side][1]};
+        outline[n++] = {0.5 * (corner[side][0] + corner[side + 1][0]),
+                        0.5 * (corner[side][1] + corner[side + 1][1])};
+      }
     }
     for (std::size_t i = 0; i < n; ++i) {
       for (int k = 0; k < 3; ++k) {
@@ -401,6 +408,61 @@ std::vector<double> projected_bearing_spread(const algorithms::ForwardMap& map,
   }
   for (std::size_t b = 0; b < boards; ++b) spread[b] = bearing_spread_of(residuals[b]);
   return spread;
+}
+
+std::vector<double> project_areas_from_geometry(const std::vector<algorithms::AreaVector>& areas,
+                                                const std::vector<PlacedFrame>& frames,
+                                                float area_scale, ForwardMap& map) {
+  const std::size_t boards = map.board_count;
+  std::vector<double> noise(boards, 0.0);
+  if (!map.projection.present()) return noise;
+  // Each frame's projected areas at its placed pose (pixels; -1: no outline).
+  std::vector<std::array<float, kMaxBoards>> projected(frames.size());
+  for (std::size_t k = 0; k < frames.size(); ++k) {
+    const PlacedFrame& f = frames[k];
+    const algorithms::CameraAtPose camera = algorithms::camera_at_pose(
+        map.projection, static_cast<float>(f.pose.x_m), static_cast<float>(f.pose.y_m),
+        static_cast<float>(std::cos(f.pose.yaw_rad)), static_cast<float>(std::sin(f.pose.yaw_rad)));
+    projected[k].fill(-1.0F);
+    for (std::size_t b = 0; b < boards; ++b) {
+      float area_px = 0.0F;
+      if (algorithms::projected_area_px(map.projection, camera, b, area_px))
+        projected[k][b] = area_px;
+    }
+  }
+  for (std::size_t b = 0; b < boards; ++b) {
+    if (map.projection.points[b] == 0U || !(map.sigma[b] > 0.0F)) continue;
+    double mp = 0.0, pp = 0.0;
+    std::size_t whole = 0;
+    for (std::size_t k = 0; k < frames.size(); ++k) {
+      const algorithms::AreaVector& a = areas[frames[k].index];
+      const double p = static_cast<double>(projected[k][b]);
+      if (!algorithms::gives_bearing(a, b) || !(p > 0.0)) continue;
+      mp += static_cast<double>(a.pixels[b]) * static_cast<double>(area_scale) * p;
+      pp += p * p;
+      ++whole;
+    }
+    if (whole < 20 || !(pp > 0.0)) continue;
+    const double per_px = mp / pp;
+    double sq = 0.0;
+    std::size_t n = 0;
+    for (std::size_t k = 0; k < frames.size(); ++k) {
+      const algorithms::AreaVector& a = areas[frames[k].index];
+      if (b >= a.count || projected[k][b] < 0.0F) continue;
+      const double r = static_cast<double>(a.pixels[b]) * static_cast<double>(area_scale) -
+                       per_px * static_cast<double>(projected[k][b]);
+      sq += r * r;
+      ++n;
+    }
+    if (n == 0) continue;
+    noise[b] = std::sqrt(sq / static_cast<double>(n));
+    const auto old_sigma = static_cast<double>(map.sigma[b]);
+    if (noise[b] > old_sigma) continue;
+    map.projection.area_per_px[b] = static_cast<float>(per_px);
+    map.projection.area_sigma[b] =
+        static_cast<float>(std::max(noise[b], std::max(1e-2 * old_sigma, 1e-4)));
+  }
+  return noise;
 }
 
 }  // namespace harmoloc::sim_host

@@ -322,6 +322,15 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<dataset::Sta
           g.projected_spread_rad = projected_bearing_spread(*forward, run.areas, frames);
           for (std::size_t b = 0; b < g.projected_spread_rad.size(); ++b)
             forward->projection.sigma_rad[b] = static_cast<float>(g.projected_spread_rad[b]);
+          if (opt.projected_areas) {
+            g.projected_area_sigma =
+                project_areas_from_geometry(run.areas, frames, area_scale, *forward);
+            g.projected_area_taken.assign(g.projected_area_sigma.size(), 0);
+            for (std::size_t b = 0; b < g.projected_area_sigma.size(); ++b) {
+              g.projected_area_taken[b] = algorithms::projects_area(*forward, b) ? 1 : 0;
+              g.projected_area_boards += g.projected_area_taken[b] != 0 ? 1U : 0U;
+            }
+          }
         }
       } else
         g.tables.skipped = "the geometry was not fitted: " + g.skipped;

@@ -85,6 +85,17 @@ void print_geometry_tables(const harmoloc::sim_host::GeometryReport& g,
                 g.projected_spread_rad[k] * kDeg);
   }
   std::printf(" deg\n");
+  if (g.projected_area_sigma.empty()) return;
+  std::printf(
+      "geometry      areas of %zu boards projected as well (map version 17); the projection's "
+      "area noise against the run's frames, and whether it took the board's areas:",
+      g.projected_area_boards);
+  for (std::size_t k = 0; k < g.projected_area_sigma.size(); ++k) {
+    if (!(g.projected_area_sigma[k] > 0.0)) continue;
+    std::printf(" %s %.4g (%s)", k < n.names.size() ? n.names[k].c_str() : "?",
+                g.projected_area_sigma[k], g.projected_area_taken[k] ? "taken" : "tables kept");
+  }
+  std::printf("\n");
 }
 
 // The --fit-geometry section: the fitted camera, then each board.
@@ -269,6 +280,12 @@ int main(int argc, char** argv) {
                "come from the geometry fit, and have the filter project their bearings at each\n"
                "particle's pose instead of reading the map's cells (map version 15,\n"
                "docs/bearings.md; an experiment, off by default)");
+  bool projected_areas = false;
+  app.add_flag("--projected-areas", projected_areas,
+               "with --projected-bearings (implied): also predict those boards' areas from the\n"
+               "projected outline at each particle's pose, where that predicts the run's areas\n"
+               "at least as closely as the map's tables (map version 17, docs/filter.md; an\n"
+               "experiment, off by default)");
   double camera_height = 0.0;
   app.add_option("--camera-height-m", camera_height,
                  "the camera's optical centre above the floor (metres), the geometry fit's\n"
@@ -338,7 +355,8 @@ int main(int argc, char** argv) {
     opt.visibility_from_geometry = !visibility_from_frames;
     opt.geometry_tables_required = visibility_from_geometry;
     opt.law_from_geometry = !law_from_frames;
-    opt.projected_bearings = projected_bearings;
+    opt.projected_bearings = projected_bearings || projected_areas;
+    opt.projected_areas = projected_areas;
     opt.camera_height_m = camera_height;
     opt.label_tolerance_ns = static_cast<std::uint64_t>(std::llround(label_tolerance_ms * 1e6));
     if (label_offset == "auto") {

@@ -48,6 +48,8 @@ struct SweepOptions {
   bool law_from_frames = false;
   /// The floor map projects the geometry's boards' bearings (harmoloc-train --projected-bearings).
   bool projected_bearings = false;
+  /// With projected_bearings: their areas as well (harmoloc-train --projected-areas).
+  bool projected_areas = false;
   int kidnaps = 20;            ///< kidnaps in the kidnap run (each >= 1 m)
   double long_minutes = 10.0;  ///< length of the long nominal run
   std::uint64_t filter_seed = 1;

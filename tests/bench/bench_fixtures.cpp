@@ -115,7 +115,7 @@ void synthetic_map(std::size_t samples, std::uint32_t width_px, std::uint32_t he
   for (std::size_t b = 0; b < f.board_count; ++b) f.bearing_sigma_rad[b] = 0.007F;
 }
 
-void project_every_board(algorithms::ForwardMap& f) {
+void project_every_board(algorithms::ForwardMap& f, bool areas) {
   algorithms::BearingProjection& p = f.projection;
   p.width_px = 320;
   p.height_px = 240;
@@ -132,14 +132,27 @@ void project_every_board(algorithms::ForwardMap& f) {
   p.max_radius2 = 2.0F;
   // The boards of synthetic_map's bearings: 20 cm squares at the camera's height, facing -y.
   for (std::size_t b = 0; b < f.board_count; ++b) {
-    p.points[b] = 4;
     const float cx = 1.2F + 0.3F * static_cast<float>(b);
-    const float corners[4][3] = {{cx + 0.1F, 2.7F, 0.2F},
+    const float corners[5][3] = {{cx + 0.1F, 2.7F, 0.2F},
                                  {cx - 0.1F, 2.7F, 0.2F},
                                  {cx - 0.1F, 2.7F, 0.4F},
-                                 {cx + 0.1F, 2.7F, 0.4F}};
+                                 {cx + 0.1F, 2.7F, 0.4F},
+                                 {cx + 0.1F, 2.7F, 0.2F}};
+    std::size_t n = 0;
     for (std::size_t i = 0; i < 4; ++i) {
-      for (std::size_t d = 0; d < 3; ++d) p.point_m(b, i, d) = corners[i][d];
+      for (std::size_t d = 0; d < 3; ++d) p.point_m(b, n, d) = corners[i][d];
+      ++n;
+      if (!areas) continue;
+      // The middle of the side towards the next corner.
+      for (std::size_t d = 0; d < 3; ++d)
+        p.point_m(b, n, d) = 0.5F * (corners[i][d] + corners[i + 1][d]);
+      ++n;
+    }
+    p.points[b] = static_cast<std::uint8_t>(n);
+    if (areas) {
+      // About 1.4 features for the some 1400 px a board shows from the benchmarks' pose.
+      p.area_per_px[b] = 1.0e-3F;
+      p.area_sigma[b] = 0.02F;
     }
   }
 }

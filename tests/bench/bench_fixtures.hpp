@@ -34,8 +34,10 @@ void synthetic_map(std::size_t samples, std::uint32_t width_px, std::uint32_t he
                    algorithms::MapFile& map, std::size_t boards = 6);
 
 /// Gives synthetic_map's forward map projected bearings (map version 15): a camera and an outline
-/// for every board, where its bearings place it, all seen whole from the benchmarks' pose.
-void project_every_board(algorithms::ForwardMap& map);
+/// for every board, where its bearings place it, all seen whole from the benchmarks' pose. With
+/// @p areas, every board's areas projected too (map version 17), from the eight-point outline the
+/// trainer writes for a rectangle (four corners otherwise).
+void project_every_board(algorithms::ForwardMap& map, bool areas = false);
 
 /// One frame's observation for the filter benchmarks on synthetic_map's forward map: every board
 /// with an area and a bearing (the default update's whole cost).

@@ -224,7 +224,8 @@ int main(int argc, char** argv) {
     if (!(grid.at(g_map.forward, 2.1, 1.0) > 0.0F)) return 1;
   } else if (kernel == "filter_boards" || kernel == "filter_boards_kld" ||
              kernel == "filter_boards_vis" || kernel == "filter_boards_proj" ||
-             kernel == "filter_boards_proj_steady") {
+             kernel == "filter_boards_proj_steady" || kernel == "filter_boards_proj_areas" ||
+             kernel == "filter_boards_proj_areas_steady") {
     // The default measurement update: every board against the forward map, robust weights.
     // _kld: with KLD-sampling on a cloud as tight as in steady tracking (1 cm, 1 degree), n the
     // capacity: the count it settles at decides the cost (the bins' pass included).
@@ -232,8 +233,15 @@ int main(int argc, char** argv) {
     // _proj: the same with every board's bearing projected from its outline (map version 15);
     // _proj_steady: on a cloud as tight as in steady tracking (1 cm, 0.5 degree), most particles
     // within the reach of the projection's straight line about the estimate.
+    // _proj_areas, _proj_areas_steady: the same with every board's area projected as well (map
+    // version 17) from the eight-point outlines.
     bench::synthetic_map(204, 320, 240, g_map);
-    const bool projected = kernel == "filter_boards_proj" || kernel == "filter_boards_proj_steady";
+    const bool areas =
+        kernel == "filter_boards_proj_areas" || kernel == "filter_boards_proj_areas_steady";
+    const bool steady =
+        kernel == "filter_boards_proj_steady" || kernel == "filter_boards_proj_areas_steady";
+    const bool projected =
+        kernel == "filter_boards_proj" || kernel == "filter_boards_proj_steady" || areas;
     if (kernel == "filter_boards_vis" || projected) {
       if constexpr (!algorithms::ForwardMap::kHeadingTermStorage) {
         std::fprintf(stderr, "filter_boards_vis: this build keeps no visibility storage\n");
@@ -248,7 +256,7 @@ int main(int argc, char** argv) {
           t[0] = 1.5F;   // the board's feature seen whole
           t[1] = 0.05F;  // its angular half-width
         }
-      if (projected) bench::project_every_board(f);
+      if (projected) bench::project_every_board(f, areas);
     }
     static algorithms::ParticleFilter filter;
     filter.configure(n, 1, algorithms::MotionNoise{});
@@ -257,7 +265,7 @@ int main(int argc, char** argv) {
       kld.enabled = true;
       filter.set_kld_sampling(kld);
       filter.initialize(algorithms::Pose2{2.1, 1.0, 1.5}, 0.01, 0.02, false);
-    } else if (kernel == "filter_boards_proj_steady") {
+    } else if (steady) {
       filter.initialize(algorithms::Pose2{2.1, 1.0, 1.5}, 0.01, 0.0087, false);
     } else {
       filter.initialize(algorithms::Pose2{2.1, 1.0, 1.5}, 0.05, 0.1, false);

@@ -17,6 +17,7 @@ kernels=(
   "filter 256" "filter 1024" "filter 4096"
   "filter_boards 256" "filter_boards 1024" "filter_boards 4096"
   "filter_boards_kld 1024" "filter_boards_kld 4096" "filter_boards_vis 1024" "filter_boards_proj 1024" "filter_boards_proj_steady 1024"
+  "filter_boards_proj_areas 1024" "filter_boards_proj_areas_steady 1024"
   "kidnap_preference 25" "kidnap_preference_areas 25" "fix_error_grid 4096" "fix_error_grid_build 4096"
   "cycle 320x240" "cycle 640x480" "cycle_yuyv 640x480" "cycle_floor 320x240"
 )
@@ -54,6 +55,7 @@ echo "  segmentation, HSV arithmetic / OpenCV (RGB)        $(ratio 'seg_rgb 640x
 echo "  filter step, per-board update / harmonic-fix update (1024 particles) $(ratio 'filter_boards 1024' 'filter 1024')"
 echo "  filter step, KLD-sampling in steady tracking / fixed count (1024 particles) $(ratio 'filter_boards_kld 1024' 'filter_boards 1024')"
 echo "  filter step, floor map with visibility / without (1024 particles) $(ratio 'filter_boards_vis 1024' 'filter_boards 1024')"
+echo "  filter step, areas projected too / bearings projected (1024 particles) $(ratio 'filter_boards_proj_areas 1024' 'filter_boards_proj 1024')"
 echo "  kidnap preference near a fix, areas and bearings / areas alone (25 cm) $(ratio 'kidnap_preference 25' 'kidnap_preference_areas 25')"
 echo "  whole cycle, floor map (floor search) / route map (320x240) $(ratio 'cycle_floor 320x240' 'cycle 320x240')"
 echo "  whole cycle / OpenCV segmentation alone (RGB)      $(ratio 'cycle 640x480' 'seg_rgb_opencv 640x480')"

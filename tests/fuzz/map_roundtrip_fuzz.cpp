@@ -132,6 +132,11 @@ bool same_model(const MapFile& a, const MapFile& b) {
       // Version 16: the outline's bearing spread.
       if (fp.points[b] != 0U && !same_bits(&fp.sigma_rad[b], &gp.sigma_rad[b], sizeof(float)))
         return false;
+      // Version 17: its feature per projected pixel.
+      if (fp.points[b] != 0U &&
+          (!same_bits(&fp.area_per_px[b], &gp.area_per_px[b], sizeof(float)) ||
+           !same_bits(&fp.area_sigma[b], &gp.area_sigma[b], sizeof(float))))
+        return false;
     }
   }
   if (f.has_heading_coverage != g.has_heading_coverage) return false;
@@ -251,6 +256,9 @@ void check_added_projection(const std::vector<std::uint8_t>& input) {
       p.point_m(b, i / 3, i % 3) = 0.05F * static_cast<float>(input[(b + i) % input.size()]) - 6.0F;
     // 0 (the cells' spread) or up to about 29 degrees.
     p.sigma_rad[b] = 0.002F * static_cast<float>(input[(b + 1) % input.size()]);
+    // 0 (the cells' areas) or up to about 0.26 feature a pixel.
+    p.area_per_px[b] = 1e-3F * static_cast<float>(input[(b + 2) % input.size()]);
+    p.area_sigma[b] = 0.01F * static_cast<float>(input[(b + 3) % input.size()]);
   }
   check_given_round_trip("projected bearings");
 }
@@ -356,6 +364,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     for (const float v : f.projection.sigma_rad) no_spread = no_spread && v == 0.0F;
     HARMOLOC_FUZZ_CHECK(input[8] >= 16 || no_spread,
                         "a map before version 16 decodes with projected bearings' spreads");
+    bool no_area = true;
+    for (const float v : f.projection.area_per_px) no_area = no_area && v == 0.0F;
+    for (const float v : f.projection.area_sigma) no_area = no_area && v == 0.0F;
+    HARMOLOC_FUZZ_CHECK(input[8] >= 17 || no_area,
+                        "a map before version 17 decodes with projected areas");
     HARMOLOC_FUZZ_CHECK(!decode_map(encoded.data(), encoded.size(), g_again),
                         "a re-encoded older map does not decode");
     HARMOLOC_FUZZ_CHECK(same_model(g_map, g_again), "decode(encode(older map)) differs");

@@ -409,7 +409,7 @@ TEST(ProjectedBearing, SpreadIsTheMissAgainstTheFramesAtTheirPoses) {
       // keeps it out.
       const ha::BearingProjection& from = b == 0 ? ha::BearingProjection{} : p;
       if (b == 0 || !ha::projected_centroid_column(from, at, b, column)) continue;
-      if (column < 0.1 * w || column > 0.9 * w) continue;
+      if (static_cast<double>(column) < 0.1 * w || static_cast<double>(column) > 0.9 * w) continue;
       const double measured = static_cast<double>(column) + noise(rng);
       a.pixels[b] = kPixels;
       a.column_sum[b] = static_cast<std::uint64_t>(std::llround(measured * kPixels));
@@ -442,4 +442,134 @@ TEST(ProjectedBearing, SpreadIsTheMissAgainstTheFramesAtTheirPoses) {
   // Fewer than 20 frames: no spread for any board.
   const std::vector<hs::PlacedFrame> few(frames.begin(), frames.begin() + 19);
   for (const double s : hs::projected_bearing_spread(*map, areas, few)) EXPECT_EQ(s, 0.0);
+}
+
+namespace {
+
+// The relative misses of the firmware's projected area (projected_area_px) against the renderer's
+// closed form (project_board, 48 outline points) for @p scene's boards 1.. from random poses:
+// views the frame shows whole in @p whole, views its border cuts in @p cut (both at least 100 px
+// by the renderer); in @p unprojected the views it gives no area for.
+void area_misses(const hs::Scenario& scene, std::uint64_t seed, std::vector<double>& whole,
+                 std::vector<double>& cut, std::size_t& unprojected) {
+  const hs::SceneGeometryFit fit = true_fit(scene);
+  auto map = std::make_unique<ha::ForwardMap>();
+  map->has_bearings = true;
+  map->board_count = static_cast<std::uint32_t>(scene.boards.size());
+  for (std::size_t b = 0; b < scene.boards.size(); ++b) map->bearing_sigma_rad[b] = 0.01F;
+  std::vector<char> boards(scene.boards.size(), 1);
+  boards[0] = 0;
+  ASSERT_EQ(hs::project_bearings_from_geometry(fit, boards, *map), scene.boards.size() - 1);
+  const ha::BearingProjection& p = map->projection;
+  float none = 1.0F;
+  EXPECT_FALSE(ha::projected_area_px(p, ha::camera_at_pose(p, 0.0F, 0.0F, 1.0F, 0.0F), 0, none));
+  const hs::LensModel lens(scene.camera);
+  const BoardBox box = board_box(scene);
+  std::mt19937 rng(static_cast<unsigned>(seed));
+  std::uniform_real_distribution<double> ux(box.lo_x, box.hi_x), uy(box.lo_y, box.hi_y),
+      uyaw(-kPi, kPi);
+  for (int i = 0; i < 3000; ++i) {
+    const ha::Pose2 pose{ux(rng), uy(rng), uyaw(rng)};
+    const ha::CameraAtPose at = ha::camera_at_pose(
+        p, static_cast<float>(pose.x_m), static_cast<float>(pose.y_m),
+        static_cast<float>(std::cos(pose.yaw_rad)), static_cast<float>(std::sin(pose.yaw_rad)));
+    for (std::size_t b = 1; b < scene.boards.size(); ++b) {
+      const hs::BoardImage image = hs::project_board(scene.camera, lens, scene.boards[b], pose);
+      float area = -1.0F;
+      if (!ha::projected_area_px(p, at, b, area)) {
+        // Partly behind the camera or beyond the lens's image: the renderer's view is cut.
+        EXPECT_TRUE(image.cut || image.area_px == 0.0) << "seed " << seed << " board " << b;
+        ++unprojected;
+        continue;
+      }
+      ASSERT_TRUE(area >= 0.0F && std::isfinite(area));
+      if (!(image.area_px > 100.0)) continue;
+      (image.cut ? cut : whole)
+          .push_back(std::fabs(static_cast<double>(area) - image.area_px) / image.area_px);
+    }
+  }
+}
+
+double quantile(std::vector<double> v, double q) {
+  std::sort(v.begin(), v.end());
+  return v[static_cast<std::size_t>(q * static_cast<double>(v.size() - 1))];
+}
+
+}  // namespace
+
+// The projected areas (map version 17): the firmware's eight outline points, projected and
+// clipped to the frame, give the area the renderer's 48-point outline gives, from any pose: the
+// whole views of random scenes within about 1% (the lens bends the sides between the points),
+// the views the frame's border cuts within a few percent.
+TEST(ProjectedArea, IsTheRenderersAreaFromAnyPose) {
+  std::size_t unprojected_views = 0;
+  for (const std::uint64_t seed : {1U, 5U, 8U}) {
+    const hs::Scenario scene = hs::random_scenario(seed);
+    std::vector<double> whole, cut;
+    std::size_t unprojected = 0;
+    area_misses(scene, seed, whole, cut, unprojected);
+    ASSERT_GT(whole.size(), 200U) << "seed " << seed;
+    ASSERT_GT(cut.size(), 50U) << "seed " << seed;
+    std::printf(
+        "seed %llu: %zu whole views missed by %.3f%% median, %.3f%% p90; %zu cut by the frame "
+        "%.3f%% median, %.3f%% p90; %zu views partly unprojected\n",
+        static_cast<unsigned long long>(seed), whole.size(), 100.0 * quantile(whole, 0.5),
+        100.0 * quantile(whole, 0.9), cut.size(), 100.0 * quantile(cut, 0.5),
+        100.0 * quantile(cut, 0.9), unprojected);
+    EXPECT_LT(quantile(whole, 0.5), 0.01) << "seed " << seed;
+    EXPECT_LT(quantile(whole, 0.9), 0.02) << "seed " << seed;
+    EXPECT_LT(quantile(cut, 0.5), 0.02) << "seed " << seed;
+    EXPECT_LT(quantile(cut, 0.9), 0.10) << "seed " << seed;
+    unprojected_views += unprojected;
+  }
+  // Views the outline cannot follow occur (and gave the renderer's cut or empty view).
+  EXPECT_GT(unprojected_views, 0U);
+}
+
+// Through a lens without distortion a rectangle's sides stay straight, so its outline's points
+// give the renderer's area exactly (float's rounding aside), whole or cut by the frame.
+TEST(ProjectedArea, IsExactForAPinholeAndRectangles) {
+  hs::Scenario scene = hs::random_scenario(5);
+  scene.camera.k1 = scene.camera.k2 = scene.camera.k3 = 0.0;
+  scene.camera.p1 = scene.camera.p2 = 0.0;
+  for (hs::BoardSpec& b : scene.boards) b.shape = hs::BoardShape::kRectangle;
+  std::vector<double> whole, cut;
+  std::size_t unprojected = 0;
+  area_misses(scene, 5, whole, cut, unprojected);
+  ASSERT_GT(whole.size(), 200U);
+  ASSERT_GT(cut.size(), 50U);
+  EXPECT_LT(quantile(whole, 1.0), 1e-3);
+  EXPECT_LT(quantile(cut, 0.99), 1e-3);
+}
+
+// A board wholly behind the camera shows nothing; a view of it that the outline cannot follow
+// gives no area.
+TEST(ProjectedArea, NothingBehindTheCamera) {
+  const hs::Scenario scene = hs::random_scenario(5);
+  auto map = std::make_unique<ha::ForwardMap>();
+  map->has_bearings = true;
+  map->board_count = static_cast<std::uint32_t>(scene.boards.size());
+  for (std::size_t b = 0; b < scene.boards.size(); ++b) map->bearing_sigma_rad[b] = 0.01F;
+  ASSERT_GT(hs::project_bearings_from_geometry(true_fit(scene),
+                                               std::vector<char>(scene.boards.size(), 1), *map),
+            0U);
+  const ha::BearingProjection& p = map->projection;
+  const hs::BoardSpec& board = scene.boards[1];
+  // Two metres in front of the board's face, facing away from it.
+  const double nx = std::cos(board.facing_yaw_rad), ny = std::sin(board.facing_yaw_rad);
+  const ha::Pose2 pose{board.centre_x_m + 2.0 * nx, board.centre_y_m + 2.0 * ny,
+                       board.facing_yaw_rad};
+  const ha::CameraAtPose away = ha::camera_at_pose(
+      p, static_cast<float>(pose.x_m), static_cast<float>(pose.y_m),
+      static_cast<float>(std::cos(pose.yaw_rad)), static_cast<float>(std::sin(pose.yaw_rad)));
+  float area = -1.0F;
+  ASSERT_TRUE(ha::projected_area_px(p, away, 1, area));
+  EXPECT_EQ(area, 0.0F);
+  // Turned round to face it, the board shows.
+  const ha::CameraAtPose facing =
+      ha::camera_at_pose(p, static_cast<float>(pose.x_m), static_cast<float>(pose.y_m),
+                         static_cast<float>(std::cos(pose.yaw_rad + kPi)),
+                         static_cast<float>(std::sin(pose.yaw_rad + kPi)));
+  ASSERT_TRUE(ha::projected_area_px(p, facing, 1, area));
+  EXPECT_GT(area, 100.0F);
 }

@@ -833,6 +833,19 @@ TEST(MapCodec, LargestMapFitsTheSizeCap) {
   // Version 10: the visibility, the heading terms' (version 7) size and its angle gain.
   f.has_visibility = true;
   f.has_heading_coverage = true;  // version 8
+  // Version 15: the projection, every board with the most outline points (version 16 their
+  // spread, version 17 their feature per pixel and area noise).
+  ha::BearingProjection& p = f.projection;
+  p.width_px = map->image_width_px;
+  p.height_px = map->image_height_px;
+  p.right = {0.0F, -1.0F, 0.0F};
+  p.down = {0.0F, 0.0F, -1.0F};
+  p.forward = {1.0F, 0.0F, 0.0F};
+  p.focal_px = 400.0F;
+  p.cx_px = 0.5F * static_cast<float>(p.width_px);
+  p.cy_px = 0.5F * static_cast<float>(p.height_px);
+  p.max_radius2 = 2.0F;
+  p.points.fill(static_cast<std::uint8_t>(ha::BearingProjection::kMaxPoints));
   const std::vector<std::uint8_t> b = ha::encode_map(*map);
   // Every count at its capacity but the calibration's (the trainer writes 3 of the 64 allowed).
   EXPECT_EQ(b.size() + ha::kMaxCalibrationEntries * 8U, ha::kMaxMapFileBytes);
@@ -1664,8 +1677,10 @@ TEST(MapCodec, ProjectionRoundTripAndChecks) {
     p.point_m(2, i / 3, i % 3) = -0.2F * static_cast<float>(i);
   p.sigma_rad[0] = 0.003F;
   p.sigma_rad[2] = 0.004F;
+  p.area_per_px[2] = 3.25e-4F;  // board 0's areas from the cells
+  p.area_sigma[2] = 0.0125F;
   const std::vector<std::uint8_t> bytes = ha::encode_map(*map);
-  ASSERT_EQ(bytes.size(), plain.size() + 92 + 4 * kBoards + 12 * (4 + 8) + 4 * 2);
+  ASSERT_EQ(bytes.size(), plain.size() + 92 + 4 * kBoards + 12 * (4 + 8) + 12 * 2);
   EXPECT_EQ(bytes[kOffFlags], plain[kOffFlags] | 32U);
   auto out = std::make_unique<ha::MapFile>();
   ASSERT_FALSE(ha::decode_map(bytes.data(), bytes.size(), *out)) << decode_error(bytes);
@@ -1674,6 +1689,8 @@ TEST(MapCodec, ProjectionRoundTripAndChecks) {
   EXPECT_EQ(q.points, p.points);
   EXPECT_EQ(q.outline_m, p.outline_m);
   EXPECT_EQ(q.sigma_rad, p.sigma_rad);
+  EXPECT_EQ(q.area_per_px, p.area_per_px);
+  EXPECT_EQ(q.area_sigma, p.area_sigma);
   EXPECT_EQ(q.forward, p.forward);
   EXPECT_EQ(q.origin_m, p.origin_m);
   EXPECT_FLOAT_EQ(q.focal_px, 400.0F);
@@ -1725,6 +1742,24 @@ TEST(MapCodec, ProjectionRoundTripAndChecks) {
     EXPECT_EQ(out->forward.projection.sigma_rad[0], 0.0F);
     EXPECT_FLOAT_EQ(out->forward.projection.sigma_rad[2], 0.004F);
   }
+  // Board 0's feature per pixel, after its spread (version 17): 0 (the cells' areas) or up to
+  // 1000.
+  for (const float v : {-1e-6F, 1.5e3F, std::numeric_limits<float>::infinity()})
+    refused(boards + 4 + 52, v, "feature per pixel");
+  // Then its area noise: 0 (the map's sigma) or up to 1000.
+  for (const float v : {-1e-6F, 1.5e3F, std::numeric_limits<float>::quiet_NaN()})
+    refused(boards + 4 + 56, v, "area noise");
+  {
+    std::vector<std::uint8_t> b = bytes;
+    put_f32(b, boards + 4 + 52, 2.0e-4F);
+    put_f32(b, boards + 4 + 56, 0.5F);
+    fix_crc(b);
+    ASSERT_FALSE(ha::decode_map(b.data(), b.size(), *out)) << decode_error(b);
+    EXPECT_FLOAT_EQ(out->forward.projection.area_per_px[0], 2.0e-4F);
+    EXPECT_FLOAT_EQ(out->forward.projection.area_sigma[0], 0.5F);
+    EXPECT_FLOAT_EQ(out->forward.projection.area_per_px[2], 3.25e-4F);
+    EXPECT_FLOAT_EQ(out->forward.projection.area_sigma[2], 0.0125F);
+  }
   for (const std::size_t length : {first + 2, boards + 6, bytes.size() - kAfterCalibration - 6}) {
     std::vector<std::uint8_t> cut(bytes.begin(),
                                   bytes.begin() + static_cast<std::ptrdiff_t>(length));
@@ -1756,15 +1791,28 @@ TEST(MapCodec, ProjectionRoundTripAndChecks) {
   b = bytes;
   put_u32(b, boards, 0);
   b.erase(b.begin() + static_cast<std::ptrdiff_t>(boards + 4),
-          b.begin() + static_cast<std::ptrdiff_t>(boards + 4 + 48 + 4));
+          b.begin() + static_cast<std::ptrdiff_t>(boards + 4 + 48 + 12));
   put_u32(b, boards + 4 * 2, 0);
   b.erase(b.begin() + static_cast<std::ptrdiff_t>(boards + 12),
-          b.begin() + static_cast<std::ptrdiff_t>(boards + 12 + 96 + 4));
+          b.begin() + static_cast<std::ptrdiff_t>(boards + 12 + 96 + 12));
   fix_crc(b);
   EXPECT_NE(decode_error(b).find("holds no outline"), std::string::npos) << decode_error(b);
-  // A version 15 map: the outlines without their spreads (board 0's after its 4 points at 52,
-  // board 2's after its 8 at 160), read as the cells' spread (0).
+  // A version 16 map: the outlines without their features per pixel and area noise (board 0's
+  // after its 4 points and spread at 56, board 2's after its 8 and spread at 172), read as the
+  // cells' areas (0).
   b = bytes;
+  b.erase(b.begin() + static_cast<std::ptrdiff_t>(boards + 172),
+          b.begin() + static_cast<std::ptrdiff_t>(boards + 180));
+  b.erase(b.begin() + static_cast<std::ptrdiff_t>(boards + 56),
+          b.begin() + static_cast<std::ptrdiff_t>(boards + 64));
+  put_u32(b, kOffVersion, 16);
+  fix_crc(b);
+  ASSERT_FALSE(ha::decode_map(b.data(), b.size(), *out)) << decode_error(b);
+  EXPECT_EQ(out->forward.projection.sigma_rad, p.sigma_rad);
+  EXPECT_EQ(out->forward.projection.area_per_px, (std::array<float, ha::kMaxBoards>{}));
+  EXPECT_EQ(out->forward.projection.area_sigma, (std::array<float, ha::kMaxBoards>{}));
+  // A version 15 map: without the spreads too (board 0's at 52, board 2's at 160 in the version
+  // 16 layout), read as the cells' spread (0).
   b.erase(b.begin() + static_cast<std::ptrdiff_t>(boards + 160),
           b.begin() + static_cast<std::ptrdiff_t>(boards + 164));
   b.erase(b.begin() + static_cast<std::ptrdiff_t>(boards + 52),
@@ -1775,6 +1823,7 @@ TEST(MapCodec, ProjectionRoundTripAndChecks) {
   EXPECT_EQ(out->forward.projection.points, p.points);
   EXPECT_EQ(out->forward.projection.outline_m, p.outline_m);
   EXPECT_EQ(out->forward.projection.sigma_rad, (std::array<float, ha::kMaxBoards>{}));
+  EXPECT_EQ(out->forward.projection.area_per_px, (std::array<float, ha::kMaxBoards>{}));
   b = bytes;
   put_u32(b, kOffVersion, 14);
   fix_crc(b);

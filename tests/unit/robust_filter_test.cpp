@@ -1448,6 +1448,98 @@ TEST(ParticleFilterBoards, ProjectedBearingsComeFromTheOutlineAtTheParticlesPose
   EXPECT_GT(std::fabs(from_cells - projected), 0.1);
 }
 
+// Projected areas (map version 17): a board whose outline the map projects and which has a
+// feature per pixel takes its expected area from the outline projected at each particle's own
+// pose (clipped to the frame), in the particle filter and at the estimate alike
+// (expected_at_pose); without the feature per pixel, from the cells. Board 0 is the 20 cm square
+// at (1.5, 2.0, 0.3); its measured area is the projection's at the truth. A place about 10 cm
+// nearer the board expects more and loses as the mixture at the projected residual says; a particle
+// facing away expects nothing.
+TEST(ParticleFilterBoards, ProjectedAreasComeFromTheOutlineAtTheParticlesPose) {
+  const auto map = make_projected_map(1.5F, 2.0F);
+  ha::BearingProjection& p = map->projection;
+  p.area_per_px[0] = 1.0e-3F;
+  const double yaw = 1.5;
+  const ha::Pose2 truth{1.45, 0.75, yaw};
+  const auto projected_feature = [&](const ha::Pose2& pose) {
+    const ha::CameraAtPose camera = ha::camera_at_pose(
+        p, static_cast<float>(pose.x_m), static_cast<float>(pose.y_m),
+        static_cast<float>(std::cos(pose.yaw_rad)), static_cast<float>(std::sin(pose.yaw_rad)));
+    float area_px = -1.0F;
+    EXPECT_TRUE(ha::projected_area_px(p, camera, 0, area_px));
+    return static_cast<double>(area_px) * 1.0e-3;
+  };
+  const double at_truth = projected_feature(truth);
+  // A 20 cm square about 1.25 m ahead through a 200 px focal length: some 1000 px.
+  ASSERT_GT(at_truth, 0.5);
+  ASSERT_LT(at_truth, 2.0);
+  ha::BoardFeatures seen = observe(truth.x_m, truth.y_m);
+  ASSERT_GT(std::fabs(static_cast<double>(seen.value[0]) - at_truth), 0.1);  // the cells' differ
+  seen.value[0] = static_cast<float>(at_truth);
+  // What the map expects at a pose: the projection's feature for board 0, the cells' for board 1.
+  std::array<float, ha::kMaxBoards> expected{};
+  ha::expected_at_pose(*map, ha::locate(*map, truth.x_m, truth.y_m), truth.x_m, truth.y_m,
+                       ha::seen_heading(yaw), expected.data());
+  EXPECT_NEAR(static_cast<double>(expected[0]), at_truth, 1e-6);
+  EXPECT_NEAR(static_cast<double>(expected[1]), field(1, truth.x_m, truth.y_m), 1e-3);
+  ha::BoardModelParams params;
+  params.route_heading_sigma_deg = 0.0;
+  params.route_sigma_m = 0.0;  // a place off the grid's route counts by its area alone
+  params.tempering = 1.0;
+  ha::BoardUpdate u;
+  const auto ratio = [&](const ha::Pose2& other) {
+    ha::BoardReliability reliability;
+    reliability.reset(params);
+    reliability.assess(*map, seen, truth, params, u);
+    for (std::size_t k = 1; k < u.boards; ++k) u.use[k] = false;  // board 0's area alone
+    ha::ParticleFilter pf;
+    pf.configure(100, 3, ha::MotionNoise{});
+    pf.initialize_between(truth, other, 0.0, 0.0, false);
+    pf.update_boards(u);
+    double w_truth = 0.0, w_other = 0.0;
+    for (std::size_t i = 0; i < pf.size(); ++i)
+      (std::fabs(pf.particle(i).x_m - truth.x_m) + std::fabs(pf.particle(i).y_m - truth.y_m) +
+                   std::fabs(pf.particle(i).yaw_rad - yaw) <
+               1e-9
+           ? w_truth
+           : w_other) += pf.weight(i);
+    return w_other / w_truth;
+  };
+  const auto mixture = [&](double e) {
+    const double r = static_cast<double>(seen.value[0]) - e;
+    return static_cast<double>(u.gain[0]) *
+               std::exp(-r * r * static_cast<double>(u.inv_two_var[0])) +
+           static_cast<double>(u.floor[0]);
+  };
+  const ha::Pose2 nearer{1.52, 0.85, yaw};
+  const double projected = ratio(nearer);
+  EXPECT_EQ(u.area_projection_mask, 1U);
+  EXPECT_EQ(u.bearing_mask, 0U);
+  const double expected_ratio = mixture(projected_feature(nearer)) / mixture(at_truth);
+  EXPECT_NEAR(projected, expected_ratio, 1e-3 * expected_ratio);
+  EXPECT_LT(projected, 0.5);
+  // Facing away, the board is behind the camera: 0 expected where the frame shows it.
+  const ha::Pose2 away{truth.x_m, truth.y_m, yaw - 3.0};
+  EXPECT_EQ(projected_feature(away), 0.0);
+  const double facing_away = ratio(away);
+  EXPECT_NEAR(facing_away, mixture(0.0) / mixture(at_truth),
+              1e-3 * mixture(0.0) / mixture(at_truth));
+  // Without the feature per pixel the cells' areas are read, at each particle's place.
+  p.area_per_px[0] = 0.0F;
+  const double from_cells = ratio(nearer);
+  EXPECT_EQ(u.area_projection_mask, 0U);
+  const auto cells_feature = [&](const ha::Pose2& pose) {
+    std::array<float, ha::kMaxBoards> e{};
+    ha::expected_at_pose(*map, ha::locate(*map, pose.x_m, pose.y_m), pose.x_m, pose.y_m,
+                         ha::seen_heading(pose.yaw_rad), e.data());
+    return static_cast<double>(e[0]);
+  };
+  EXPECT_NEAR(cells_feature(truth), field(0, truth.x_m, truth.y_m), 1e-3);
+  const double expected_from_cells = mixture(cells_feature(nearer)) / mixture(cells_feature(truth));
+  EXPECT_NEAR(from_cells, expected_from_cells, 1e-3 * expected_from_cells);
+  EXPECT_GT(std::fabs(from_cells - projected), 0.1 * std::max(from_cells, projected));
+}
+
 // Near the estimate, the projected bearings are read from the projection's straight line there
 // (BoardUpdate::linear): 7 projections a board a frame instead of one a particle. The weights of a
 // cloud within the line's reach are those of the projection itself, to the line's tolerance; a

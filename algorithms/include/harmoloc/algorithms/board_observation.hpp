@@ -121,6 +121,8 @@ struct BoardUpdate {
   std::array<float, kMaxBoards> gain{};         ///< w_b
   std::array<float, kMaxBoards> floor{};        ///< (1 - w_b) c
   std::array<float, kMaxBoards> inv_two_var{};  ///< s_b^2 / (2 k^2 sigma_b^2)
+  /// Boards taking part whose areas come from the map's projection (bit b; projects_area).
+  std::uint32_t area_projection_mask = 0;
   /// Boards whose bearing takes part this frame (bit b), their image angle and
   /// s_b^2 / (2 k^2 sigma_bearing_b^2).
   std::uint32_t bearing_mask = 0;

@@ -298,6 +298,27 @@ bool expected_bearing(const ForwardMap& map, const GridPoint& point, std::size_t
 bool projected_image_angle(const ForwardMap& map, const CameraAtPose& camera, std::size_t b,
                            float& angle_rad);
 
+/// Whether board @p b's areas come from @p map's projection (an outline and its feature per
+/// pixel).
+inline bool projects_area(const ForwardMap& map, std::size_t b) {
+  return b < kMaxBoards && map.projection.points[b] != 0U && map.projection.area_per_px[b] > 0.0F;
+}
+
+/// The noise the filter weighs board @p b's area with (feature units): the projection's own
+/// where the board's areas are projected and the map holds that noise, else the map's sigma.
+inline float weighed_area_sigma(const ForwardMap& map, std::size_t b) {
+  return projects_area(map, b) && map.projection.area_sigma[b] > 0.0F ? map.projection.area_sigma[b]
+                                                                      : map.sigma[b];
+}
+
+/// Whether any board's areas come from @p map's projection.
+bool projects_areas(const ForwardMap& map);
+
+/// For every board whose areas come from @p map's projection (projects_area), its feature seen
+/// by the camera at @p camera (camera_at_pose of the projection), written to @p out[b]; the
+/// other boards keep @p out's value.
+void apply_projected_areas(const ForwardMap& map, const CameraAtPose& camera, float* out);
+
 /// The spread the filter weighs board @p b's bearing with (radians): the projection's own where
 /// the board's bearing is projected and the map holds that spread, else the cells'.
 inline float weighed_bearing_sigma_rad(const ForwardMap& map, std::size_t b) {
@@ -314,7 +335,7 @@ inline float half_field_of_view(const ForwardMap& map) {
 
 /// What a robot at (@p x_m, @p y_m) (@p point: that place on the grid, locate) facing @p heading
 /// expects: expected_features at its place and, where the map has visibility, apply_visibility
-/// at its camera's place.
+/// at its camera's place; the boards whose areas the map projects, apply_projected_areas.
 void expected_at_pose(const ForwardMap& map, const GridPoint& point, double x_m, double y_m,
                       const SeenHeading& heading, float* out);
 

@@ -20,10 +20,11 @@ namespace harmoloc::algorithms {
 /// the camera's place the bearings are seen from, version 10 the visibility of a floor map,
 /// version 11 the fix error per sample, version 12 the boards' centroid columns, version 13 the
 /// area's gain by column, version 14 the visibility's optical axis, version 15 the projected
-/// bearings (the fitted camera and boards' outlines), version 16 the projected bearings' spread;
-/// versions 1 to 15 are still read (without what they lack; a version 3 or 4 forward map as a
-/// grid of which every tile is stored, a forward map before version 6 without bearings).
-constexpr std::uint32_t kMapFormatVersion = 16;
+/// bearings (the fitted camera and boards' outlines), version 16 the projected bearings' spread,
+/// version 17 the projected areas' feature per pixel and noise; versions 1 to 16 are still read
+/// (without what they lack; a version 3 or 4 forward map as a grid of which every tile is stored, a
+/// forward map before version 6 without bearings).
+constexpr std::uint32_t kMapFormatVersion = 17;
 
 /// What the trainer measured on the training run that the firmware derives its scene-dependent
 /// settings from (docs/map-format.md): nothing of it is a constant tuned to one scene.
@@ -79,6 +80,9 @@ constexpr std::size_t kMaxMapFileBytes =
     ForwardMap::kMaxCells * 2U + 4U + kMaxCalibrationEntries * 8U +
     // Version 11: the per-sample fix errors.
     4U + HarmonicModel::kMaxSamples * 4U +
+    // Version 15: the projection (frame size, camera, intrinsics and lens, every board's
+    // outline; version 16 its bearing spread, version 17 its feature per pixel and area noise).
+    8U + 12U * 4U + 9U * 4U + kMaxBoards * (4U + 12U * BearingProjection::kMaxPoints + 12U) +
     // Version 13: the column gain. Version 12: the column weight and every sample's column
     // features (when this build holds them); the CRC.
     8U + 4U +

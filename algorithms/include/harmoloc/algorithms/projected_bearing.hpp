@@ -9,8 +9,11 @@
 /// outline from each particle's own pose: the board's predicted centroid column, put through the
 /// map's column-to-angle law, is the image angle the particle expects.
 ///
-/// The outline is a few points of the board's edge in the map frame (a rectangle's four
-/// corners; eight points round an ellipse). The centroid of the projected polygon stands for the
+/// The outline is a few points of the board's edge in the map frame (a rectangle's corners and
+/// the middle of each side, which follow most of the lens's bend; an octagon of the ellipse's
+/// area round an ellipse). Where the map projects a board's areas too (map version 17), the
+/// outline's projected area inside the frame, times a factor fitted to the training run, is the
+/// area the particle expects. The centroid of the projected polygon stands for the
 /// centroid of the board's pixels: over twelve random scenes within 0.02-0.3 degrees at the 90th
 /// percentile (docs/sweep.md). Only a board the frame shows whole gives a bearing, so the
 /// polygon is not clipped: a particle from which the board's centroid falls outside the frame
@@ -57,6 +60,17 @@ struct BearingProjection {
   /// training run's placed poses (radians, map version 16), the spread the filter weighs it
   /// with; 0: the cells' spread (ForwardMap::bearing_sigma_rad; version 15 maps).
   std::array<float, kMaxBoards> sigma_rad{};
+  /// Per board with an outline: its feature per pixel of the projected outline's area inside
+  /// the frame (the features' area scale times how many pixels the segmentation counts per
+  /// projected pixel, fitted to the training run; map version 17); 0: the board's areas come
+  /// from the cells.
+  std::array<float, kMaxBoards> area_per_px{};
+  /// Per board whose areas are projected: how far the projected area misses the measured one at
+  /// the training run's placed poses (feature units, root mean square; map version 17), the
+  /// noise the filter weighs the area with. The floor search and the place comparisons keep the
+  /// map's sigma: they compare places on a grid a few centimetres apart, where a projection this
+  /// sharp would tell the places near the truth no better than any other.
+  std::array<float, kMaxBoards> area_sigma{};
 
   /// Coordinate @p d (0 x, 1 y, 2 z) of point @p i of board @p b's outline.
   float& point_m(std::size_t b, std::size_t i, std::size_t d) {
@@ -84,6 +98,15 @@ struct CameraAtPose {
 
 CameraAtPose camera_at_pose(const BearingProjection& p, float x_m, float y_m, float cos_yaw,
                             float sin_yaw);
+
+/// The area of board @p b's outline projected from @p camera and clipped to the frame (pixels),
+/// as the simulator's renderer counts a board's pixels (sim_host/board_projection.hpp). 0 for a
+/// board wholly behind the camera. False when the board has no outline, or some of its points
+/// lie behind the camera or beyond the lens's monotonic region while others do not: a few
+/// points cannot follow such an image (its sides run far out of the frame), and the caller
+/// keeps its other model.
+bool projected_area_px(const BearingProjection& p, const CameraAtPose& camera, std::size_t b,
+                       float& area_px);
 
 /// Board @p b's outline projected from @p camera: the centroid column of the projected polygon
 /// (pixels; not clipped to the frame). False when the board has no outline, a point lies behind

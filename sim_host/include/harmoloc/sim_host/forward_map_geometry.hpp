@@ -68,8 +68,9 @@ GeometryTablesReport visibility_from_geometry(const SceneGeometryFit& fit,
 
 /// Gives @p map projected bearings (map version 15; algorithms/projected_bearing.hpp) for the
 /// boards @p boards marks whose fit in @p fit holds and whose bearings the map models: the fitted
-/// camera on the robot and each such board's outline (a rectangle's corners, eight points round
-/// an ellipse). Returns how many boards it gave an outline; 0 leaves the map without projection.
+/// camera on the robot and each such board's outline (a rectangle's corners and the middle of
+/// each side; round an ellipse, an octagon of its area). Returns how many boards it gave an
+/// outline; 0 leaves the map without projection.
 std::size_t project_bearings_from_geometry(const SceneGeometryFit& fit,
                                            const std::vector<char>& boards,
                                            algorithms::ForwardMap& map);
@@ -84,4 +85,14 @@ std::vector<double> projected_bearing_spread(const algorithms::ForwardMap& map,
                                              const std::vector<algorithms::AreaVector>& areas,
                                              const std::vector<PlacedFrame>& frames);
 
+/// The areas of @p map's projected boards from the projection (map version 17): per board with
+/// an outline, the feature per projected pixel (least squares through 0 over the placed frames
+/// that see the board whole) and the noise of the projected areas (root mean square over every
+/// placed frame, as the tables' noise is measured). A board takes the projection's areas, and
+/// the filter weighs them by that noise (BearingProjection::area_sigma), when it is at most the
+/// map's sigma for the board (its tables' noise). Returns the projection's noise per board
+/// (map.board_count of them; 0: no outline, or fewer than 20 frames see the board whole).
+std::vector<double> project_areas_from_geometry(const std::vector<algorithms::AreaVector>& areas,
+                                                const std::vector<PlacedFrame>& frames,
+                                                float area_scale, algorithms::ForwardMap& map);
 }  // namespace harmoloc::sim_host

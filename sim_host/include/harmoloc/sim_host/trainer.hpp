@@ -114,6 +114,9 @@ struct TrainOptions {
   /// from each particle's pose instead of reading the cells' (projected_bearing.hpp). Off by
   /// default: on eight random floors it helped some and hurt others (docs/bearings.md).
   bool projected_bearings = false;
+  /// With projected_bearings: the projected boards' areas from the projection too, where it
+  /// predicts the run's areas at least as closely as their tables (map version 17).
+  bool projected_areas = false;
   GeometryTablesOptions geometry_tables;
   /// The camera's optical centre above the floor (metres); 0: the run's (the dataset's
   /// camera.height_m), else unknown.
@@ -190,6 +193,11 @@ struct GeometryReport {
   /// board how far the projection misses the run's measured angles (projected_bearing_spread).
   std::size_t projected_boards = 0;
   std::vector<double> projected_spread_rad;
+  /// TrainOptions::projected_areas: per board the projected areas' noise
+  /// (project_areas_from_geometry; 0: not fitted), and how many boards took them.
+  std::vector<double> projected_area_sigma;
+  std::vector<char> projected_area_taken;
+  std::size_t projected_area_boards = 0;
 };
 
 struct TrainReport {
