@@ -1,7 +1,5 @@
 #include "harmoloc/algorithms/projected_bearing.hpp"
 
-#include <cmath>
-
 namespace harmoloc::algorithms {
 
 CameraAtPose camera_at_pose(const BearingProjection& p, float x_m, float y_m, float cos_yaw,
