@@ -319,7 +319,8 @@ void BoardReliability::reset(const BoardModelParams& params) {
 
 BoardAssessment BoardReliability::assess(const ForwardMap& map, const BoardFeatures& observed,
                                          const Pose2& estimate, const BoardModelParams& params,
-                                         BoardUpdate& update, double yaw_variance_rad2) {
+                                         BoardUpdate& update, double yaw_variance_rad2,
+                                         double position_sigma_m) {
   BoardAssessment a;
   update.map = &map;
   update.boards = std::min<std::size_t>(map.board_count, observed.count);
@@ -356,6 +357,21 @@ BoardAssessment BoardReliability::assess(const ForwardMap& map, const BoardFeatu
     }
   }
 
+  // How far the projected areas change across the cloud's spread (assess's comment).
+  std::array<float, kMaxBoards> cloud_lo = expected, cloud_hi = expected;
+  if (position_sigma_m > 0.0 && projects_areas(map)) {
+    const double d = std::min(position_sigma_m, 0.5);
+    const double offsets[4][2] = {{d, 0.0}, {-d, 0.0}, {0.0, d}, {0.0, -d}};
+    std::array<float, kMaxBoards> e{};
+    for (const auto& o : offsets) {
+      const GridPoint p = locate(map, estimate.x_m + o[0], estimate.y_m + o[1]);
+      expected_at_pose(map, p, estimate.x_m + o[0], estimate.y_m + o[1], heading, e.data());
+      for (std::size_t b = 0; b < kMaxBoards; ++b) {
+        cloud_lo[b] = std::min(cloud_lo[b], e[b]);
+        cloud_hi[b] = std::max(cloud_hi[b], e[b]);
+      }
+    }
+  }
   std::array<double, kMaxBoards> inv_var{};
   // A sign of a move in this frame: the board disagrees by showing more area than the map
   // expects around the estimate, or a bearing off. An occlusion only hides.
@@ -370,7 +386,9 @@ BoardAssessment BoardReliability::assess(const ForwardMap& map, const BoardFeatu
     if (projects_area(map, b)) update.area_projection_mask |= 1U << b;
     // The projection's own noise where the board's areas are projected.
     const double width = cut * params.sigma_scale * static_cast<double>(weighed_area_sigma(map, b));
-    inv_var[b] = 1.0 / (width * width);
+    const double across =
+        projects_area(map, b) ? 0.5 * static_cast<double>(cloud_hi[b] - cloud_lo[b]) : 0.0;
+    inv_var[b] = 1.0 / (width * width + across * across);
     const float o = observed.value[b];
     const double r = o < lo[b]   ? static_cast<double>(o) - static_cast<double>(lo[b])
                      : o > hi[b] ? static_cast<double>(o) - static_cast<double>(hi[b])

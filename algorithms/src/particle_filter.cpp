@@ -424,7 +424,7 @@ bool ParticleFilter::resample_if_needed(double threshold_fraction) {
   return true;
 }
 
-Pose2 ParticleFilter::mean_pose(double* yaw_variance_rad2) const {
+Pose2 ParticleFilter::mean_pose(double* yaw_variance_rad2, double* position_variance_m2) const {
   if (count_ == 0) return Pose2{};
   const double reference = particles_[0].yaw_rad;
   double sx = 0.0, sy = 0.0, syaw = 0.0, syaw2 = 0.0;
@@ -438,6 +438,15 @@ Pose2 ParticleFilter::mean_pose(double* yaw_variance_rad2) const {
     syaw2 += weights_[i] * d * d;
   }
   if (yaw_variance_rad2 != nullptr) *yaw_variance_rad2 = std::max(0.0, syaw2 - syaw * syaw);
+  if (position_variance_m2 != nullptr) {
+    // A second pass, about the mean: only the callers that ask pay for it.
+    double s2 = 0.0;
+    for (std::size_t i = 0; i < count_; ++i) {
+      const double dx = particles_[i].x_m - sx, dy = particles_[i].y_m - sy;
+      s2 += weights_[i] * (dx * dx + dy * dy);
+    }
+    *position_variance_m2 = 0.5 * s2;
+  }
   return Pose2{sx, sy, wrap_angle_rad(reference + syaw)};
 }
 

@@ -87,13 +87,16 @@ bool LocalizationCycle::update_with_boards(
     const algorithms::AreaVector& areas,
     const std::array<float, algorithms::HarmonicModel::kMaxFeatures>& features) {
   const algorithms::BoardModelParams& params = board_params_;
-  double yaw_variance_rad2 = 0.0;
-  const algorithms::Pose2 estimate = filter_.mean_pose(&yaw_variance_rad2);
+  double yaw_variance_rad2 = 0.0, position_variance_m2 = 0.0;
+  // The cloud's spread in position only where the map projects areas (BoardReliability::assess).
+  const bool projected_areas = algorithms::projects_areas(map_.forward);
+  const algorithms::Pose2 estimate =
+      filter_.mean_pose(&yaw_variance_rad2, projected_areas ? &position_variance_m2 : nullptr);
   observed_ = algorithms::board_features(map_.forward, map_.model.area_scale, areas);
   ++observations_;
   const algorithms::BoardFeatures& observed = observed_;
   assessment_ = reliability_.assess(map_.forward, observed, estimate, params, board_update_,
-                                    yaw_variance_rad2);
+                                    yaw_variance_rad2, std::sqrt(position_variance_m2));
   if (!assessment_.consensus) ++counters_.no_consensus;
 
   // The global fix without the boards that are not to be trusted now: those the motion index

@@ -1540,6 +1540,69 @@ TEST(ParticleFilterBoards, ProjectedAreasComeFromTheOutlineAtTheParticlesPose) {
   EXPECT_GT(std::fabs(from_cells - projected), 0.1 * std::max(from_cells, projected));
 }
 
+// While the cloud is wide, a projected area is weighed by its noise widened by how much it
+// changes across the cloud: half the range of the projected area over the estimate moved by the
+// cloud's spread along x and y (at most 0.5 m). A board read from the cells keeps its width, and
+// a tight cloud (spread 0) the projection's own noise.
+TEST(ParticleFilterBoards, ProjectedAreasWidenWithTheCloudsSpread) {
+  const auto map = make_projected_map(1.5F, 2.0F);
+  ha::BearingProjection& p = map->projection;
+  p.area_per_px[0] = 1.0e-3F;
+  p.area_sigma[0] = 0.01F;
+  const ha::Pose2 estimate{1.45, 0.75, 1.5};
+  ha::BoardModelParams params;
+  const auto feature = [&](double x, double y) {
+    std::array<float, ha::kMaxBoards> e{};
+    ha::expected_at_pose(*map, ha::locate(*map, x, y), x, y, ha::seen_heading(estimate.yaw_rad),
+                         e.data());
+    return static_cast<double>(e[0]);
+  };
+  // Seen as expected at the estimate: no board is scaled down for its residual.
+  ha::BoardFeatures seen = observe(estimate.x_m, estimate.y_m);
+  seen.value[0] = static_cast<float>(feature(estimate.x_m, estimate.y_m));
+  const auto inv_two_var = [&](double spread_m, std::size_t b) {
+    ha::BoardReliability reliability;
+    reliability.reset(params);
+    ha::BoardUpdate u;
+    reliability.assess(*map, seen, estimate, params, u, 0.0, spread_m);
+    return static_cast<double>(u.inv_two_var[b]);
+  };
+  const double k = params.sigma_scale;
+  EXPECT_NEAR(inv_two_var(0.0, 0), 0.5 / (k * k * 0.01 * 0.01), 1e-3 * 0.5 / (k * k * 1e-4));
+  for (const double spread : {0.1, 2.0}) {
+    const double d = std::min(spread, 0.5);
+    double lo = feature(estimate.x_m, estimate.y_m), hi = lo;
+    for (const auto& o : {std::array<double, 2>{d, 0.0}, {-d, 0.0}, {0.0, d}, {0.0, -d}}) {
+      lo = std::min(lo, feature(estimate.x_m + o[0], estimate.y_m + o[1]));
+      hi = std::max(hi, feature(estimate.x_m + o[0], estimate.y_m + o[1]));
+    }
+    const double across = 0.5 * (hi - lo);
+    ASSERT_GT(across, 0.01) << spread;  // the board's area changes over the cloud
+    const double expected = 0.5 / (k * k * 0.01 * 0.01 + across * across);
+    EXPECT_NEAR(inv_two_var(spread, 0), expected, 1e-3 * expected) << spread;
+    // Board 1 reads the cells: its width does not change.
+    EXPECT_EQ(inv_two_var(spread, 1), inv_two_var(0.0, 1)) << spread;
+  }
+  EXPECT_LT(inv_two_var(0.1, 0), 0.5 * inv_two_var(0.0, 0));
+}
+
+// The cloud's spread in position that mean_pose gives on request: half the particles at each of
+// two places 0.2 m apart along x spread 0.1 m each way along x, none along y; the mean of the two
+// axes' variances is 0.005 m^2. The mean itself is the same with or without it.
+TEST(ParticleFilter, MeanPoseGivesThePositionsSpread) {
+  ha::ParticleFilter pf;
+  pf.configure(100, 3, ha::MotionNoise{});
+  pf.initialize_between(ha::Pose2{1.0, 2.0, 0.3}, ha::Pose2{1.2, 2.0, 0.3}, 0.0, 0.0, false);
+  double yaw_var = -1.0, position_var = -1.0;
+  const ha::Pose2 with = pf.mean_pose(&yaw_var, &position_var);
+  const ha::Pose2 without = pf.mean_pose();
+  EXPECT_NEAR(position_var, 0.005, 1e-9);
+  EXPECT_NEAR(yaw_var, 0.0, 1e-12);
+  EXPECT_EQ(with.x_m, without.x_m);
+  EXPECT_EQ(with.y_m, without.y_m);
+  EXPECT_NEAR(with.x_m, 1.1, 1e-9);
+}
+
 // Near the estimate, the projected bearings are read from the projection's straight line there
 // (BoardUpdate::linear): 7 projections a board a frame instead of one a particle. The weights of a
 // cloud within the line's reach are those of the projection itself, to the line's tolerance; a

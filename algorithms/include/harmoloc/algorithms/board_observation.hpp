@@ -217,9 +217,15 @@ class BoardReliability {
   /// uncertainty (the cloud's spread): a bearing is judged against it as well as against the
   /// board's widened spread, so that right after a re-seed, when the cloud's headings are
   /// still spread, the boards that give a bearing are not taken for moved ones.
+  /// @p position_sigma_m is the cloud's spread in position (metres): where the map projects a
+  /// board's areas, their noise is widened by half the range of the projected area over the
+  /// estimate moved that far (at most 0.5 m) along x and y, for the weights and the board's chi2
+  /// alike. A projection is sharp (0.2-1% of the area): against a cloud tens of centimetres wide
+  /// the board that fits one line of places best outweighs the others, which all read as
+  /// outliers, and the cloud follows that line (random floor 6, docs/filter.md).
   BoardAssessment assess(const ForwardMap& map, const BoardFeatures& observed,
                          const Pose2& estimate, const BoardModelParams& params, BoardUpdate& update,
-                         double yaw_variance_rad2 = 0.0);
+                         double yaw_variance_rad2 = 0.0, double position_sigma_m = 0.0);
 
   /// Motion index of board @p b: probability that it is static and visible.
   double static_probability(std::size_t b) const { return static_probability_[b]; }

@@ -126,8 +126,10 @@ class ParticleFilter {
   /// The weighted mean pose without covariance and without trigonometry: the heading is the
   /// mean of every particle's heading relative to the first particle's, which is the circular
   /// mean for any cloud narrower than a half turn (a wider one has no meaningful heading).
-  /// @p yaw_variance_rad2, when given, receives the weighted variance of the headings about it.
-  Pose2 mean_pose(double* yaw_variance_rad2 = nullptr) const;
+  /// @p yaw_variance_rad2, when given, receives the weighted variance of the headings about it;
+  /// @p position_variance_m2 the mean of the positions' variances along x and y.
+  Pose2 mean_pose(double* yaw_variance_rad2 = nullptr,
+                  double* position_variance_m2 = nullptr) const;
   std::size_t size() const { return count_; }
   std::size_t capacity() const { return capacity_; }
 
