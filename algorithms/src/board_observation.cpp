@@ -341,37 +341,32 @@ BoardAssessment BoardReliability::assess(const ForwardMap& map, const BoardFeatu
   fit_bearings(map, estimate.x_m, estimate.y_m, estimate.yaw_rad, cos_yaw, sin_yaw, observed,
                bearing_boards, bearing_residual);
   linearise_projection(map, estimate, bearing_boards, update);
-  if (params.position_spread_m > 0.0) {
-    const double d = params.position_spread_m;
+  // What the map expects at the estimate moved by @p d along +-x and +-y, folded into [lo, hi]
+  // per board; @p at_point(x, y) at each of the four places as well.
+  const auto over_cross = [&](double d, std::array<float, kMaxBoards>& range_lo,
+                              std::array<float, kMaxBoards>& range_hi, const auto& at_point) {
     const double offsets[4][2] = {{d, 0.0}, {-d, 0.0}, {0.0, d}, {0.0, -d}};
     std::array<float, kMaxBoards> e{};
     for (const auto& o : offsets) {
-      const GridPoint p = locate(map, estimate.x_m + o[0], estimate.y_m + o[1]);
-      expected_at_pose(map, p, estimate.x_m + o[0], estimate.y_m + o[1], heading, e.data());
+      const double x = estimate.x_m + o[0], y = estimate.y_m + o[1];
+      expected_at_pose(map, locate(map, x, y), x, y, heading, e.data());
       for (std::size_t b = 0; b < kMaxBoards; ++b) {
-        lo[b] = std::min(lo[b], e[b]);
-        hi[b] = std::max(hi[b], e[b]);
+        range_lo[b] = std::min(range_lo[b], e[b]);
+        range_hi[b] = std::max(range_hi[b], e[b]);
       }
-      fit_bearings(map, estimate.x_m + o[0], estimate.y_m + o[1], estimate.yaw_rad, cos_yaw,
-                   sin_yaw, observed, bearing_boards, bearing_residual);
+      at_point(x, y);
     }
+  };
+  if (params.position_spread_m > 0.0) {
+    over_cross(params.position_spread_m, lo, hi, [&](double x, double y) {
+      fit_bearings(map, x, y, estimate.yaw_rad, cos_yaw, sin_yaw, observed, bearing_boards,
+                   bearing_residual);
+    });
   }
-
   // How far the projected areas change across the cloud's spread (assess's comment).
   std::array<float, kMaxBoards> cloud_lo = expected, cloud_hi = expected;
-  if (position_sigma_m > 0.0 && projects_areas(map)) {
-    const double d = std::min(position_sigma_m, 0.5);
-    const double offsets[4][2] = {{d, 0.0}, {-d, 0.0}, {0.0, d}, {0.0, -d}};
-    std::array<float, kMaxBoards> e{};
-    for (const auto& o : offsets) {
-      const GridPoint p = locate(map, estimate.x_m + o[0], estimate.y_m + o[1]);
-      expected_at_pose(map, p, estimate.x_m + o[0], estimate.y_m + o[1], heading, e.data());
-      for (std::size_t b = 0; b < kMaxBoards; ++b) {
-        cloud_lo[b] = std::min(cloud_lo[b], e[b]);
-        cloud_hi[b] = std::max(cloud_hi[b], e[b]);
-      }
-    }
-  }
+  if (position_sigma_m > 0.0 && projects_areas(map))
+    over_cross(std::min(position_sigma_m, 0.5), cloud_lo, cloud_hi, [](double, double) {});
   std::array<double, kMaxBoards> inv_var{};
   // A sign of a move in this frame: the board disagrees by showing more area than the map
   // expects around the estimate, or a bearing off. An occlusion only hides.
