@@ -282,9 +282,10 @@ bool projects_areas(const ForwardMap& map) {
   return false;
 }
 
-void apply_projected_areas(const ForwardMap& map, const CameraAtPose& camera, float* out) {
+void apply_projected_areas(const ForwardMap& map, const CameraAtPose& camera, float* out,
+                           std::uint32_t boards) {
   for (std::size_t b = 0; b < map.board_count && b < kMaxBoards; ++b) {
-    if (!projects_area(map, b)) continue;
+    if (((boards >> b) & 1U) == 0U || !projects_area(map, b)) continue;
     float area_px = 0.0F;
     if (projected_area_px(map.projection, camera, b, area_px))
       out[b] = area_px * map.projection.area_per_px[b];

@@ -214,12 +214,7 @@ inline double likelihood_at(const BoardUpdate& u, const GridPoint& at, const Pos
     camera = camera_at_pose(map.projection, static_cast<float>(pose.x_m),
                             static_cast<float>(pose.y_m), cos_yaw, sin_yaw);
     placed = true;
-    for (std::uint32_t mask = u.area_projection_mask; mask != 0U; mask &= mask - 1U) {
-      const auto b = static_cast<std::size_t>(__builtin_ctz(mask));
-      float area_px = 0.0F;
-      if (projected_area_px(map.projection, camera, b, area_px))
-        expected[b] = area_px * map.projection.area_per_px[b];
-    }
+    apply_projected_areas(map, camera, expected.data(), u.area_projection_mask);
   }
   double likelihood = 1.0;
   for (std::size_t b = 0; b < u.boards; ++b) {

@@ -316,8 +316,9 @@ bool projects_areas(const ForwardMap& map);
 
 /// For every board whose areas come from @p map's projection (projects_area), its feature seen
 /// by the camera at @p camera (camera_at_pose of the projection), written to @p out[b]; the
-/// other boards keep @p out's value.
-void apply_projected_areas(const ForwardMap& map, const CameraAtPose& camera, float* out);
+/// other boards keep @p out's value. Only the boards of @p boards (bit b) when given.
+void apply_projected_areas(const ForwardMap& map, const CameraAtPose& camera, float* out,
+                           std::uint32_t boards = ~0U);
 
 /// The spread the filter weighs board @p b's bearing with (radians): the projection's own where
 /// the board's bearing is projected and the map holds that spread, else the cells'.
