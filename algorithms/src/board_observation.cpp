@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 namespace harmoloc::algorithms {
 
@@ -263,50 +264,157 @@ void fit_bearings(const ForwardMap& map, double x_m, double y_m, double yaw_rad,
   }
 }
 
-/// The projected image angle of board @p b for a robot at @p pose; false where the projection
-/// gives none.
-bool projected_angle_at(const ForwardMap& map, double x_m, double y_m, double yaw_rad,
-                        std::size_t b, float& angle_rad) {
-  const CameraAtPose camera =
-      camera_at_pose(map.projection, static_cast<float>(x_m), static_cast<float>(y_m),
-                     static_cast<float>(std::cos(yaw_rad)), static_cast<float>(std::sin(yaw_rad)));
-  return projected_image_angle(map, camera, b, angle_rad);
+/// How many poses near the estimate fit_near_quadratics projects from (near_poses).
+constexpr std::size_t kNearPoses = 18;
+
+/// NearQuadratic's value at offset @p d (dx, dy, dyaw), in double for the fit.
+double quadratic_at(const std::array<double, 10>& q, const double (&d)[3]) {
+  return q[0] + d[0] * (q[1] + q[4] * d[0] + q[7] * d[1] + q[8] * d[2]) +
+         d[1] * (q[2] + q[5] * d[1] + q[9] * d[2]) + d[2] * (q[3] + q[6] * d[2]);
 }
 
-/// BoardUpdate's linearised projection about @p at for the projected boards of @p boards: the
-/// angle there, its central differences over the reach along x, y and the heading, and how far
-/// the straight line misses at the reach (half the second difference) against the tolerance.
-/// Seven projections a board a frame, where the particles would take one each.
-void linearise_projection(const ForwardMap& map, const Pose2& at, std::uint32_t boards,
-                          BoardUpdate& update) {
-  update.linear_mask = 0;
-  update.linear_at = at;
-  const double reach[3] = {BoardUpdate::kLinearReach_m, BoardUpdate::kLinearReach_m,
-                           BoardUpdate::kLinearReach_rad};
-  for (std::uint32_t mask = boards; mask != 0U; mask &= mask - 1U) {
-    const auto b = static_cast<std::size_t>(__builtin_ctz(mask));
-    if (map.projection.points[b] == 0U) continue;
-    float centre = 0.0F;
-    if (!projected_angle_at(map, at.x_m, at.y_m, at.yaw_rad, b, centre)) continue;
-    std::array<float, 4>& line = update.linear[b];
-    line[0] = centre;
-    double miss = 0.0;
-    bool ok = true;
-    for (int k = 0; k < 3 && ok; ++k) {
-      float lo = 0.0F, hi = 0.0F;
-      const double h = reach[k];
-      const double dx = k == 0 ? h : 0.0, dy = k == 1 ? h : 0.0, dyaw = k == 2 ? h : 0.0;
-      ok = projected_angle_at(map, at.x_m - dx, at.y_m - dy, at.yaw_rad - dyaw, b, lo) &&
-           projected_angle_at(map, at.x_m + dx, at.y_m + dy, at.yaw_rad + dyaw, b, hi);
-      line[static_cast<std::size_t>(k) + 1] =
-          static_cast<float>((static_cast<double>(hi) - static_cast<double>(lo)) / (2.0 * h));
-      miss += 0.5 * std::fabs(static_cast<double>(hi) + static_cast<double>(lo) -
-                              2.0 * static_cast<double>(centre));
+/// One board's quadratic about the estimate (NearQuadratic::q) from its values at
+/// near_poses's offsets: the gradient and the curvatures along the axes from the centre and
+/// the six moves along them, the cross terms from the three corners (+, +); whether it misses
+/// the values at the other eight corners by at most @p tolerance.
+bool fit_quadratic(const std::array<float, kNearPoses>& at,
+                   const std::array<std::array<double, 3>, kNearPoses>& offsets, double tolerance,
+                   std::array<float, 10>& quadratic) {
+  std::array<double, 10> q{};
+  q[0] = static_cast<double>(at[0]);
+  for (std::size_t k = 0; k < 3; ++k) {
+    const double h = offsets[2 + 2 * k][k];
+    const auto lo = static_cast<double>(at[1 + 2 * k]), hi = static_cast<double>(at[2 + 2 * k]);
+    q[1 + k] = (hi - lo) / (2.0 * h);
+    q[4 + k] = (hi + lo - 2.0 * q[0]) / (2.0 * h * h);
+  }
+  // The cross terms: what the corner adds beyond the axes' terms.
+  constexpr std::size_t kPairs[3][2] = {{0, 1}, {0, 2}, {1, 2}};
+  for (std::size_t p = 0; p < 3; ++p) {
+    const std::size_t i = kPairs[p][0], j = kPairs[p][1];
+    const std::array<double, 3>& d = offsets[7 + p];
+    const double without = quadratic_at(q, {d[0], d[1], d[2]});
+    q[7 + p] = (static_cast<double>(at[7 + p]) - without) / (d[i] * d[j]);
+  }
+  bool fits = true;
+  for (std::size_t k = 10; k < kNearPoses; ++k) {
+    const std::array<double, 3>& d = offsets[k];
+    fits = fits &&
+           std::fabs(quadratic_at(q, {d[0], d[1], d[2]}) - static_cast<double>(at[k])) <= tolerance;
+  }
+  for (std::size_t k = 0; k < 10; ++k) quadratic[k] = static_cast<float>(q[k]);
+  return fits;
+}
+
+/// The offsets from the estimate the projections are taken at, for a reach of @p reach_m along
+/// x and y and @p reach_rad along the heading: the estimate; minus and plus the reach along x,
+/// y and the heading; the corners (+, +) of the pairs (x, y), (x, yaw), (y, yaw); their
+/// corners (-, -) and (+, -); and the two corners (+, +, +) and (-, -, -).
+std::array<std::array<double, 3>, kNearPoses> near_poses(double reach_m, double reach_rad) {
+  const double h[3] = {reach_m, reach_m, reach_rad};
+  std::array<std::array<double, 3>, kNearPoses> o{};
+  for (std::size_t k = 0; k < 3; ++k) {
+    o[1 + 2 * k][k] = -h[k];
+    o[2 + 2 * k][k] = h[k];
+  }
+  constexpr std::size_t kPairs[3][2] = {{0, 1}, {0, 2}, {1, 2}};
+  for (std::size_t p = 0; p < 3; ++p) {
+    const std::size_t i = kPairs[p][0], j = kPairs[p][1];
+    o[7 + p][i] = h[i];
+    o[7 + p][j] = h[j];
+    o[10 + p][i] = -h[i];
+    o[10 + p][j] = -h[j];
+    o[13 + p][i] = h[i];
+    o[13 + p][j] = -h[j];
+  }
+  o[16] = {h[0], h[1], h[2]};
+  o[17] = {-h[0], -h[1], -h[2]};
+  return o;
+}
+
+/// The projections near the estimate @p at for one reach: the poses' offsets and cameras.
+struct NearViews {
+  std::array<std::array<double, 3>, kNearPoses> offsets{};
+  std::array<CameraAtPose, kNearPoses> cameras{};
+
+  NearViews(const ForwardMap& map, const Pose2& at, double reach_m, double reach_rad)
+      : offsets(near_poses(reach_m, reach_rad)) {
+    for (std::size_t k = 0; k < kNearPoses; ++k) {
+      const double x = at.x_m + offsets[k][0], y = at.y_m + offsets[k][1];
+      const double yaw = at.yaw_rad + offsets[k][2];
+      cameras[k] =
+          camera_at_pose(map.projection, static_cast<float>(x), static_cast<float>(y),
+                         static_cast<float>(std::cos(yaw)), static_cast<float>(std::sin(yaw)));
     }
-    // At most the tolerance at a corner of the reach too: the misses along the three axes add.
-    if (ok && miss <= static_cast<double>(BoardUpdate::kLinearTolerance) *
-                          static_cast<double>(weighed_bearing_sigma_rad(map, b)))
-      update.linear_mask |= 1U << b;
+  }
+};
+
+/// BoardUpdate's quadratics near the estimate @p at (BoardUpdate::near_bearing, near_area): the
+/// bearings of the projected boards of @p bearing_boards, each to a tolerance of its spread, the
+/// areas of @p area_boards (bit b), each to a tolerance of @p area_noise[b] (the projection's
+/// noise widened by the cloud's spread, as the particles are weighed with it); the reach from
+/// the cloud's spread (@p position_sigma_m, @p yaw_sigma_rad). A few dozen projections a board a
+/// frame, where the particles would take one each.
+void fit_near_quadratics(const ForwardMap& map, const Pose2& at, std::uint32_t bearing_boards,
+                         std::uint32_t area_boards, const std::array<float, kMaxBoards>& area_noise,
+                         double position_sigma_m, double yaw_sigma_rad, BoardUpdate& update) {
+  update.near_bearing_mask = 0;
+  update.near_area_mask = 0;
+  update.near_at = at;
+  std::uint32_t outlines = 0;
+  for (std::uint32_t mask = bearing_boards; mask != 0U; mask &= mask - 1U) {
+    const auto b = static_cast<std::size_t>(__builtin_ctz(mask));
+    if (b < kMaxBoards && map.projection.points[b] != 0U) outlines |= 1U << b;
+  }
+  bearing_boards = outlines;
+  if ((bearing_boards | area_boards) == 0U) return;
+  // The reaches, widest first: two sigma of the cloud's, half of it, the narrowest; each's
+  // projections taken when a board first needs them.
+  const double narrow_m = BoardUpdate::kNearReach_m, narrow_rad = BoardUpdate::kNearReach_rad;
+  const double wide_m = std::clamp(2.0 * position_sigma_m, narrow_m, 0.15);
+  const double wide_rad = std::clamp(2.0 * yaw_sigma_rad, narrow_rad, 10.0 * kPi / 180.0);
+  const double reaches[3][2] = {
+      {wide_m, wide_rad},
+      {std::max(narrow_m, 0.5 * wide_m), std::max(narrow_rad, 0.5 * wide_rad)},
+      {narrow_m, narrow_rad}};
+  std::array<std::optional<NearViews>, 3> views;
+  for (std::uint32_t mask = bearing_boards | area_boards; mask != 0U; mask &= mask - 1U) {
+    const auto b = static_cast<std::size_t>(__builtin_ctz(mask));
+    bool bearing = ((bearing_boards >> b) & 1U) != 0U, area = ((area_boards >> b) & 1U) != 0U;
+    const double bearing_tolerance = static_cast<double>(BoardUpdate::kNearTolerance) *
+                                     static_cast<double>(weighed_bearing_sigma_rad(map, b));
+    const double area_tolerance =
+        static_cast<double>(BoardUpdate::kNearTolerance) * static_cast<double>(area_noise[b]);
+    for (std::size_t t = 0; t < 3 && (bearing || area); ++t) {
+      // A reach no wider than the next one's is tried there.
+      if (t < 2 && !(reaches[t][0] > reaches[t + 1][0] || reaches[t][1] > reaches[t + 1][1]))
+        continue;
+      if (!views[t]) views[t].emplace(map, at, reaches[t][0], reaches[t][1]);
+      std::array<float, kNearPoses> angle{}, feature{};
+      bool angles = bearing, areas = area;
+      for (std::size_t k = 0; k < kNearPoses && (angles || areas); ++k) {
+        const ProjectedOutline o = project_outline(map.projection, views[t]->cameras[k], b, areas);
+        angles = angles && o.has_column;
+        areas = areas && o.has_area;
+        if (angles) angle[k] = image_angle_of_column(map, o.column_px);
+        if (areas) feature[k] = o.area_px * map.projection.area_per_px[b];
+      }
+      const auto take = [&](const std::array<float, kNearPoses>& values, double tolerance,
+                            NearQuadratic& near) {
+        if (!fit_quadratic(values, views[t]->offsets, tolerance, near.q)) return false;
+        near.reach_m = static_cast<float>(reaches[t][0]);
+        near.reach_rad = static_cast<float>(reaches[t][1]);
+        return true;
+      };
+      if (angles && take(angle, bearing_tolerance, update.near_bearing[b])) {
+        update.near_bearing_mask |= 1U << b;
+        bearing = false;
+      }
+      if (areas && take(feature, area_tolerance, update.near_area[b])) {
+        update.near_area_mask |= 1U << b;
+        area = false;
+      }
+    }
   }
 }
 
@@ -340,7 +448,6 @@ BoardAssessment BoardReliability::assess(const ForwardMap& map, const BoardFeatu
   const double cos_yaw = std::cos(estimate.yaw_rad), sin_yaw = std::sin(estimate.yaw_rad);
   fit_bearings(map, estimate.x_m, estimate.y_m, estimate.yaw_rad, cos_yaw, sin_yaw, observed,
                bearing_boards, bearing_residual);
-  linearise_projection(map, estimate, bearing_boards, update);
   // What the map expects at the estimate moved by @p d along +-x and +-y, folded into [lo, hi]
   // per board; @p at_point(x, y) at each of the four places as well.
   const auto over_cross = [&](double d, std::array<float, kMaxBoards>& range_lo,
@@ -368,6 +475,9 @@ BoardAssessment BoardReliability::assess(const ForwardMap& map, const BoardFeatu
   if (position_sigma_m > 0.0 && projects_areas(map))
     over_cross(std::min(position_sigma_m, 0.5), cloud_lo, cloud_hi, [](double, double) {});
   std::array<double, kMaxBoards> inv_var{};
+  // A projected area's noise widened by the cloud's spread (not scaled): the yardstick of its
+  // quadratic near the estimate.
+  std::array<float, kMaxBoards> area_noise{};
   // A sign of a move in this frame: the board disagrees by showing more area than the map
   // expects around the estimate, or a bearing off. An occlusion only hides.
   std::array<bool, kMaxBoards> sign_of_a_move{};
@@ -384,6 +494,8 @@ BoardAssessment BoardReliability::assess(const ForwardMap& map, const BoardFeatu
     const double across =
         projects_area(map, b) ? 0.5 * static_cast<double>(cloud_hi[b] - cloud_lo[b]) : 0.0;
     inv_var[b] = 1.0 / (width * width + across * across);
+    const double noise = static_cast<double>(weighed_area_sigma(map, b));
+    area_noise[b] = static_cast<float>(std::sqrt(noise * noise + across * across));
     const float o = observed.value[b];
     const double r = o < lo[b]   ? static_cast<double>(o) - static_cast<double>(lo[b])
                      : o > hi[b] ? static_cast<double>(o) - static_cast<double>(hi[b])
@@ -408,6 +520,8 @@ BoardAssessment BoardReliability::assess(const ForwardMap& map, const BoardFeatu
   }
   a.consensus = a.modelled > 0 && static_cast<double>(a.agreeing) >
                                       params.consensus_fraction * static_cast<double>(a.modelled);
+  fit_near_quadratics(map, estimate, bearing_boards, update.area_projection_mask, area_noise,
+                      position_sigma_m, std::sqrt(std::max(0.0, yaw_variance_rad2)), update);
 
   const double c = params.outlier_floor;
   for (std::size_t b = 0; b < update.boards; ++b) {

@@ -231,14 +231,18 @@ bool projected_image_angle(const ForwardMap& map, const CameraAtPose& camera, st
                            float& angle_rad) {
   float column_px = 0.0F;
   if (!projected_centroid_column(map.projection, camera, b, column_px)) return false;
+  angle_rad = image_angle_of_column(map, column_px);
+  return true;
+}
+
+float image_angle_of_column(const ForwardMap& map, float column_px) {
   const auto w = static_cast<float>(map.projection.width_px);
   // Beyond the frame's side the law is not known, and a law with a3 < 0 turns back within
   // |t| < 0.58 at the least: a column past the side reads as just past it, which any angle
   // measured inside the frame misses by a few degrees.
   float t = (column_px - 0.5F * (w - 1.0F)) / w;
   t = t > 0.55F ? 0.55F : (t < -0.55F ? -0.55F : t);
-  angle_rad = t * (map.bearing_a1_rad + map.bearing_a3_rad * t * t);
-  return true;
+  return t * (map.bearing_a1_rad + map.bearing_a3_rad * t * t);
 }
 
 bool expected_bearing(const ForwardMap& map, const GridPoint& point, std::size_t b,

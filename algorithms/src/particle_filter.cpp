@@ -159,27 +159,84 @@ bool camera_bearings_of(const BoardUpdate& u) {
   return (u.bearing_mask != 0U || map.has_visibility) && map.bearing_camera_forward_m != 0.0F;
 }
 
-// Whether a board measured this frame takes its bearing from the map's projection.
-bool projects_bearings(const BoardUpdate& u) {
+// The boards measured this frame that take their bearing from the map's projection (bit b).
+std::uint32_t projected_bearing_boards(const BoardUpdate& u) {
+  std::uint32_t boards = 0;
   for (std::uint32_t mask = u.bearing_mask; mask != 0U; mask &= mask - 1U) {
-    if (u.map->projection.points[static_cast<std::size_t>(__builtin_ctz(mask))] != 0U) return true;
+    const auto b = static_cast<std::size_t>(__builtin_ctz(mask));
+    if (b < kMaxBoards && u.map->projection.points[b] != 0U) boards |= 1U << b;
   }
-  return false;
+  return boards;
 }
 
 // Whether the boards' likelihood needs the pose's heading as a unit vector: the heading terms,
 // or the camera's place.
 bool needs_unit_heading(const BoardUpdate& u) {
-  return u.map->has_heading_terms || camera_bearings_of(u) || projects_bearings(u) ||
+  return u.map->has_heading_terms || camera_bearings_of(u) || projected_bearing_boards(u) != 0U ||
          u.area_projection_mask != 0U;
+}
+
+// What the map's projection says at one particle: its offset from the estimate, the boards
+// whose bearing the quadratics there give (BoardUpdate::near_at), and the image angles of those
+// whose outline was projected from the particle itself.
+struct ProjectedAtPose {
+  float dx = 0.0F, dy = 0.0F, dyaw = 0.0F;
+  std::uint32_t near_bearings = 0;
+  std::uint32_t has_angle = 0;              ///< boards of angle_rad (bit b)
+  std::array<float, kMaxBoards> angle_rad;  // read only where has_angle says
+};
+
+// The projected boards at @p pose: within a quadratic's reach of the estimate its value, else
+// the outline projected from the pose, once for both its centroid column (under the same law as
+// the measured one: their difference is the residual) and, where the map projects its areas,
+// its area in the frame, written to @p expected (a view the outline cannot follow keeps the
+// cells' area). Only for a map that projects something: the default map pays nothing.
+inline void project_at_pose(const BoardUpdate& u, const Pose2& pose, float cos_yaw, float sin_yaw,
+                            std::uint32_t outlines, float* expected, ProjectedAtPose& view) {
+  const ForwardMap& map = *u.map;
+  if ((u.near_bearing_mask | u.near_area_mask) != 0U) {
+    view.dx = static_cast<float>(pose.x_m - u.near_at.x_m);
+    view.dy = static_cast<float>(pose.y_m - u.near_at.y_m);
+    view.dyaw = static_cast<float>(wrap_once_rad(pose.yaw_rad - u.near_at.yaw_rad));
+  }
+  const float off_m = std::max(std::fabs(view.dx), std::fabs(view.dy));
+  const float off_rad = std::fabs(view.dyaw);
+  for (std::uint32_t mask = u.near_bearing_mask; mask != 0U; mask &= mask - 1U) {
+    const auto b = static_cast<std::size_t>(__builtin_ctz(mask));
+    if (u.near_bearing[b].covers(off_m, off_rad)) view.near_bearings |= 1U << b;
+  }
+  std::uint32_t near_areas = 0;
+  for (std::uint32_t mask = u.near_area_mask; mask != 0U; mask &= mask - 1U) {
+    const auto b = static_cast<std::size_t>(__builtin_ctz(mask));
+    if (!u.near_area[b].covers(off_m, off_rad)) continue;
+    expected[b] = u.near_area[b].at(view.dx, view.dy, view.dyaw);
+    near_areas |= 1U << b;
+  }
+  const std::uint32_t areas = u.area_projection_mask & ~near_areas;
+  const std::uint32_t projected = areas | (outlines & ~view.near_bearings);
+  if (projected == 0U) return;
+  // The camera is placed once per particle.
+  const CameraAtPose camera = camera_at_pose(map.projection, static_cast<float>(pose.x_m),
+                                             static_cast<float>(pose.y_m), cos_yaw, sin_yaw);
+  for (std::uint32_t mask = projected; mask != 0U; mask &= mask - 1U) {
+    const auto b = static_cast<std::size_t>(__builtin_ctz(mask));
+    const bool area = ((areas >> b) & 1U) != 0U;
+    const ProjectedOutline o = project_outline(map.projection, camera, b, area);
+    if (area && o.has_area) expected[b] = o.area_px * map.projection.area_per_px[b];
+    if (o.has_column) {
+      view.angle_rad[b] = image_angle_of_column(map, o.column_px);
+      view.has_angle |= 1U << b;
+    }
+  }
 }
 
 // The boards' untempered likelihood at one pose, its cell @p at located and its heading's
 // cosine and sine given (in float, as both uses are: sinf and cosf cost fewer instructions than
 // sin and cos; 1 and 0 where needs_unit_heading is false); @p camera_bearings as
-// camera_bearings_of says, taken once per update.
+// camera_bearings_of says and @p outlines as projected_bearing_boards, taken once per update.
 inline double likelihood_at(const BoardUpdate& u, const GridPoint& at, const Pose2& pose,
-                            float cos_yaw, float sin_yaw, bool camera_bearings) {
+                            float cos_yaw, float sin_yaw, bool camera_bearings,
+                            std::uint32_t outlines) {
   const ForwardMap& map = *u.map;
   std::array<float, kMaxBoards> expected{};
   if (map.has_heading_terms) {
@@ -204,18 +261,9 @@ inline double likelihood_at(const BoardUpdate& u, const GridPoint& at, const Pos
   if (map.has_visibility)
     apply_visibility(map, seen_from, static_cast<float>(pose.yaw_rad), expected.data(),
                      seen_bearing.data());
-  // A board with an outline in the map's projection: its centroid column projected from the
-  // particle's own pose, under the same law as the measured one (their difference is the
-  // residual); where the map projects its areas, the outline's area in the frame as well. The
-  // camera is placed once per particle, when a board first needs it.
-  bool placed = false;
-  CameraAtPose camera{};
-  if (u.area_projection_mask != 0U) {
-    camera = camera_at_pose(map.projection, static_cast<float>(pose.x_m),
-                            static_cast<float>(pose.y_m), cos_yaw, sin_yaw);
-    placed = true;
-    apply_projected_areas(map, camera, expected.data(), u.area_projection_mask);
-  }
+  ProjectedAtPose view;
+  if ((outlines | u.area_projection_mask) != 0U)
+    project_at_pose(u, pose, cos_yaw, sin_yaw, outlines, expected.data(), view);
   double likelihood = 1.0;
   for (std::size_t b = 0; b < u.boards; ++b) {
     if (!u.use[b]) continue;
@@ -230,42 +278,23 @@ inline double likelihood_at(const BoardUpdate& u, const GridPoint& at, const Pos
     return static_cast<double>(u.gain[b] * std::exp(-r * r * u.bearing_inv_two_var[b]) +
                                u.floor[b]);
   };
-  // Within the reach of the estimate, the projection's straight line there (BoardUpdate).
-  float dx = 0.0F, dy = 0.0F, dyaw = 0.0F;
-  bool near_linear = false;
-  if (u.linear_mask != 0U) {
-    dx = static_cast<float>(pose.x_m - u.linear_at.x_m);
-    dy = static_cast<float>(pose.y_m - u.linear_at.y_m);
-    dyaw = static_cast<float>(wrap_once_rad(pose.yaw_rad - u.linear_at.yaw_rad));
-    near_linear = std::fabs(dx) <= BoardUpdate::kLinearReach_m &&
-                  std::fabs(dy) <= BoardUpdate::kLinearReach_m &&
-                  std::fabs(dyaw) <= BoardUpdate::kLinearReach_rad;
-  }
   for (std::uint32_t mask = u.bearing_mask; mask != 0U; mask &= mask - 1U) {
     const auto b = static_cast<std::size_t>(__builtin_ctz(mask));
     float bearing = 0.0F;
-    if (((u.linear_mask >> b) & 1U) != 0U && near_linear) {
-      const float r = u.linear[b][0] + u.linear[b][1] * dx + u.linear[b][2] * dy +
-                      u.linear[b][3] * dyaw - u.angle_rad[b];
-      likelihood *= bearing_factor(b, r);
+    if (((view.near_bearings >> b) & 1U) != 0U) {
+      likelihood *=
+          bearing_factor(b, u.near_bearing[b].at(view.dx, view.dy, view.dyaw) - u.angle_rad[b]);
       continue;
     }
-    if (map.projection.points[b] != 0U) {
-      if (!placed) {
-        camera = camera_at_pose(map.projection, static_cast<float>(pose.x_m),
-                                static_cast<float>(pose.y_m), cos_yaw, sin_yaw);
-        placed = true;
-      }
+    if (((outlines >> b) & 1U) != 0U) {
       // A particle from which the board lies behind the camera (or beyond the lens's image)
       // expects no board where the frame shows one whole: an outlier, as a far miss is.
-      float angle = 0.0F;
-      if (!projected_image_angle(map, camera, b, angle)) {
+      if (((view.has_angle >> b) & 1U) == 0U) {
         likelihood *= static_cast<double>(u.floor[b]);
         continue;
       }
-      const float r = angle - u.angle_rad[b];
       // Both within the lens's half field of view (under pi / 2): no wrap needed.
-      likelihood *= bearing_factor(b, r);
+      likelihood *= bearing_factor(b, view.angle_rad[b] - u.angle_rad[b]);
       continue;
     }
     if (map.has_visibility) {
@@ -296,7 +325,8 @@ double ParticleFilter::board_likelihood(const BoardUpdate& u, const Pose2& pose)
     cos_yaw = std::cos(yaw);
     sin_yaw = std::sin(yaw);
   }
-  return likelihood_at(u, locate(*u.map, p.x_m, p.y_m), p, cos_yaw, sin_yaw, camera_bearings_of(u));
+  return likelihood_at(u, locate(*u.map, p.x_m, p.y_m), p, cos_yaw, sin_yaw, camera_bearings_of(u),
+                       projected_bearing_boards(u));
 }
 
 double ParticleFilter::update_boards(const BoardUpdate& u) {
@@ -304,6 +334,7 @@ double ParticleFilter::update_boards(const BoardUpdate& u) {
   double sum = 0.0, match = 0.0;
   const bool unit_heading = needs_unit_heading(u);
   const bool camera_bearings = camera_bearings_of(u);
+  const std::uint32_t outlines = projected_bearing_boards(u);
   for (std::size_t i = 0; i < count_; ++i) {
     const GridPoint at = locate(map, particles_[i].x_m, particles_[i].y_m);
     float cos_yaw = 1.0F, sin_yaw = 0.0F;
@@ -313,7 +344,7 @@ double ParticleFilter::update_boards(const BoardUpdate& u) {
       sin_yaw = std::sin(yaw);
     }
     const Pose2 pose{particles_[i].x_m, particles_[i].y_m, particles_[i].yaw_rad};
-    double likelihood = likelihood_at(u, at, pose, cos_yaw, sin_yaw, camera_bearings);
+    double likelihood = likelihood_at(u, at, pose, cos_yaw, sin_yaw, camera_bearings, outlines);
     // The match is the observation model's own (untempered): tempering compresses exactly the
     // change the kidnap test looks for.
     match += weights_[i] * likelihood;

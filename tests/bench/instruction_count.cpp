@@ -232,16 +232,16 @@ int main(int argc, char** argv) {
     // _vis: on a floor map with visibility in every cell (harmoloc-train --visibility).
     // _proj: the same with every board's bearing projected from its outline (map version 15);
     // _proj_steady: on a cloud as tight as in steady tracking (1 cm, 0.5 degree), most particles
-    // within the reach of the projection's straight line about the estimate.
+    // within the reach of the projection's quadratic about the estimate.
     // _proj_areas, _proj_areas_steady: the same with every board's area projected as well (map
-    // version 17) from the eight-point outlines.
+    // version 17) from the eight-point outlines, the cloud's spreads given as the firmware does.
     bench::synthetic_map(204, 320, 240, g_map);
-    const bool areas =
+    const bool projected_areas =
         kernel == "filter_boards_proj_areas" || kernel == "filter_boards_proj_areas_steady";
     const bool steady =
         kernel == "filter_boards_proj_steady" || kernel == "filter_boards_proj_areas_steady";
     const bool projected =
-        kernel == "filter_boards_proj" || kernel == "filter_boards_proj_steady" || areas;
+        kernel == "filter_boards_proj" || kernel == "filter_boards_proj_steady" || projected_areas;
     if (kernel == "filter_boards_vis" || projected) {
       if constexpr (!algorithms::ForwardMap::kHeadingTermStorage) {
         std::fprintf(stderr, "filter_boards_vis: this build keeps no visibility storage\n");
@@ -256,7 +256,7 @@ int main(int argc, char** argv) {
           t[0] = 1.5F;   // the board's feature seen whole
           t[1] = 0.05F;  // its angular half-width
         }
-      if (projected) bench::project_every_board(f, areas);
+      if (projected) bench::project_every_board(f, projected_areas);
     }
     static algorithms::ParticleFilter filter;
     filter.configure(n, 1, algorithms::MotionNoise{});
@@ -278,7 +278,16 @@ int main(int argc, char** argv) {
     static algorithms::BoardUpdate update;
     measure([&] {
       filter.predict(algorithms::OdometryDelta{0.0033, 0.001});
-      reliability.assess(g_map.forward, observed, filter.mean_pose(), params, update);
+      if (projected_areas) {
+        // As the firmware does where the map projects areas: the cloud's spreads widen the
+        // areas' noise and set the reach of the quadratics (BoardUpdate::near_at).
+        double yaw_var = 0.0, position_var = 0.0;
+        const algorithms::Pose2 mean = filter.mean_pose(&yaw_var, &position_var);
+        reliability.assess(g_map.forward, observed, mean, params, update, yaw_var,
+                           std::sqrt(position_var));
+      } else {
+        reliability.assess(g_map.forward, observed, filter.mean_pose(), params, update);
+      }
       (void)filter.update_boards(update);
       filter.resample_if_needed(1.1);
       (void)filter.estimate();

@@ -1540,6 +1540,84 @@ TEST(ParticleFilterBoards, ProjectedAreasComeFromTheOutlineAtTheParticlesPose) {
   EXPECT_GT(std::fabs(from_cells - projected), 0.1 * std::max(from_cells, projected));
 }
 
+namespace {
+
+enum class NearTerm { kArea, kBearing };
+
+// The weights of 200 particles (1 cm and 0.01 rad round @p at) after one update from @p seen
+// with board 0's area alone (kArea) or its bearing alone, the update's quadratics near the
+// estimate for that term kept or (@p near false) dropped; @p u is the update.
+std::vector<double> near_weights(const ha::ForwardMap& map, const ha::BoardFeatures& seen,
+                                 const ha::Pose2& at, const ha::BoardModelParams& params,
+                                 NearTerm term, bool near, ha::BoardUpdate& u) {
+  ha::BoardReliability reliability;
+  reliability.reset(params);
+  reliability.assess(map, seen, at, params, u);
+  for (std::size_t k = term == NearTerm::kArea ? 1 : 0; k < u.boards; ++k) u.use[k] = false;
+  if (!near) (term == NearTerm::kArea ? u.near_area_mask : u.near_bearing_mask) = 0;
+  ha::ParticleFilter pf;
+  pf.configure(200, 7, ha::MotionNoise{});
+  pf.initialize(at, 0.01, 0.01, false);
+  pf.update_boards(u);
+  std::vector<double> w;
+  for (std::size_t i = 0; i < pf.size(); ++i) w.push_back(pf.weight(i));
+  return w;
+}
+
+// The largest |a_i - b_i| / b_i.
+double worst_relative_miss(const std::vector<double>& a, const std::vector<double>& b) {
+  double worst = 0.0;
+  for (std::size_t i = 0; i < b.size(); ++i) worst = std::max(worst, std::fabs(a[i] - b[i]) / b[i]);
+  return worst;
+}
+
+}  // namespace
+
+// Near the estimate, the projected areas too are read from the projection's quadratic there
+// (BoardUpdate::near_area). The weights of a cloud within its reach are those of the projection
+// itself, to its tolerance; its slope says the board grows as the robot nears it. A board 45 cm
+// from the camera changes its area too unevenly over the reach and is projected at each particle.
+TEST(ParticleFilterBoards, ProjectedAreasNearTheEstimateFollowTheProjectionsQuadratic) {
+  const auto map = make_projected_map(1.5F, 2.0F);
+  ha::BearingProjection& p = map->projection;
+  p.area_per_px[0] = 1.0e-3F;
+  p.area_sigma[0] = 0.01F;
+  const ha::Pose2 truth{1.45, 0.75, 1.5};
+  ha::BoardFeatures seen = observe(truth.x_m, truth.y_m);
+  const auto feature_at = [&](const ha::Pose2& pose) {
+    std::array<float, ha::kMaxBoards> e{};
+    ha::expected_at_pose(*map, ha::locate(*map, pose.x_m, pose.y_m), pose.x_m, pose.y_m,
+                         ha::seen_heading(pose.yaw_rad), e.data());
+    return e[0];
+  };
+  seen.value[0] = feature_at(truth) + 0.005F;  // the truth a little off, as measured
+  seen.angle_mask = 0U;
+  ha::BoardModelParams params;
+  params.route_heading_sigma_deg = 0.0;
+  params.route_sigma_m = 0.0;
+  params.tempering = 1.0;
+  const auto weights = [&](bool near, ha::BoardUpdate& u) {
+    return near_weights(*map, seen, truth, params, NearTerm::kArea, near, u);
+  };
+  ha::BoardUpdate u;
+  const std::vector<double> quadratic = weights(true, u);
+  ASSERT_EQ(u.area_projection_mask, 1U);
+  ASSERT_EQ(u.near_area_mask, 1U);
+  EXPECT_NEAR(u.near_area[0].q[0], feature_at(truth), 1e-6);
+  EXPECT_GT(u.near_area[0].q[2], 0.5F);  // nearer the board (+y), more area: about 2 A / d
+  const std::vector<double> exact = weights(false, u);
+  double spread = 0.0;
+  for (const double w : exact) spread = std::max(spread, std::fabs(w / exact[0] - 1.0));
+  EXPECT_LT(worst_relative_miss(quadratic, exact), 0.05);
+  EXPECT_GT(spread, 0.2);  // the area does tell the particles apart
+  // The same board 45 cm from the camera, 25 degrees to the side: not linearised.
+  place_projected_board(p, 1.65F, 1.2F);
+  seen.value[0] = feature_at(truth);
+  (void)weights(true, u);
+  EXPECT_EQ(u.area_projection_mask, 1U);
+  EXPECT_EQ(u.near_area_mask, 0U);
+}
+
 // While the cloud is wide, a projected area is weighed by its noise widened by how much it
 // changes across the cloud: half the range of the projected area over the estimate moved by the
 // cloud's spread along x and y (at most 0.5 m). A board read from the cells keeps its width, and
@@ -1603,12 +1681,13 @@ TEST(ParticleFilter, MeanPoseGivesThePositionsSpread) {
   EXPECT_NEAR(with.x_m, 1.1, 1e-9);
 }
 
-// Near the estimate, the projected bearings are read from the projection's straight line there
-// (BoardUpdate::linear): 7 projections a board a frame instead of one a particle. The weights of a
-// cloud within the line's reach are those of the projection itself, to the line's tolerance; a
-// board 45 cm from the camera and 25 degrees to the side bends the line too much over the reach
-// and is projected at each particle.
-TEST(ParticleFilterBoards, ProjectedBearingsNearTheEstimateFollowTheProjectionsLine) {
+// Near the estimate, the projected bearings are read from the projection's quadratic there
+// (BoardUpdate::near_bearing): a few dozen projections a board a frame instead of one a particle.
+// The weights of a cloud within the quadratic's reach are those of the projection itself, to
+// its tolerance, for a board 1.25 m ahead and for one 45 cm from the camera and 25 degrees to
+// the side (a straight line bent too much there); a board whose bearing spread no quadratic can
+// meet is projected at each particle.
+TEST(ParticleFilterBoards, ProjectedBearingsNearTheEstimateFollowTheProjectionsQuadratic) {
   const auto map = make_projected_map(1.5F, 2.0F);
   const ha::Pose2 truth{1.45, 0.75, 1.5};
   ha::BoardFeatures seen = observe(truth.x_m, truth.y_m);
@@ -1618,34 +1697,27 @@ TEST(ParticleFilterBoards, ProjectedBearingsNearTheEstimateFollowTheProjectionsL
   ha::BoardModelParams params;
   params.route_heading_sigma_deg = 0.0;
   params.tempering = 1.0;
-  const auto weights = [&](bool linear, ha::BoardUpdate& u) {
-    ha::BoardReliability reliability;
-    reliability.reset(params);
-    reliability.assess(*map, seen, truth, params, u);
-    for (std::size_t k = 0; k < u.boards; ++k) u.use[k] = false;  // the bearing alone
-    if (!linear) u.linear_mask = 0;
-    ha::ParticleFilter pf;
-    pf.configure(200, 7, ha::MotionNoise{});
-    pf.initialize(truth, 0.01, 0.01, false);
-    pf.update_boards(u);
-    std::vector<double> w;
-    for (std::size_t i = 0; i < pf.size(); ++i) w.push_back(pf.weight(i));
-    return w;
+  const auto weights = [&](bool near, ha::BoardUpdate& u) {
+    return near_weights(*map, seen, truth, params, NearTerm::kBearing, near, u);
   };
   ha::BoardUpdate u;
-  const std::vector<double> line = weights(true, u);
-  ASSERT_EQ(u.linear_mask, 1U);
+  const std::vector<double> quadratic = weights(true, u);
+  ASSERT_EQ(u.near_bearing_mask, 1U);
   // Turning the robot turns the board in the image: by 200 / 320 of the turn under this map's law
   // (1 rad across the width) for a camera of 200 px focal length.
-  EXPECT_NEAR(u.linear[0][3], 200.0 / 320.0, 0.05);
-  const std::vector<double> exact = weights(false, u);
-  double worst = 0.0;
-  for (std::size_t i = 0; i < exact.size(); ++i)
-    worst = std::max(worst, std::fabs(line[i] - exact[i]) / exact[i]);
-  EXPECT_LT(worst, 0.05);
-  // The same board 45 cm from the camera, 25 degrees to the side: not linearised.
+  EXPECT_NEAR(u.near_bearing[0].q[3], 200.0 / 320.0, 0.05);
+  const auto worst_miss = [&](const std::vector<double>& near) {
+    return worst_relative_miss(near, weights(false, u));
+  };
+  EXPECT_LT(worst_miss(quadratic), 0.05);
+  // The same board 45 cm from the camera, 25 degrees to the side.
   place_projected_board(map->projection, 1.65F, 1.2F);
   ASSERT_TRUE(projected_angle(*map, truth, seen.angle_rad[0]));
+  const std::vector<double> close = weights(true, u);
+  ASSERT_EQ(u.near_bearing_mask, 1U);
+  EXPECT_LT(worst_miss(close), 0.05);
+  // A spread of a millionth of a radian: no quadratic in float meets a quarter of it.
+  map->projection.sigma_rad[0] = 1e-6F;
   (void)weights(true, u);
-  EXPECT_EQ(u.linear_mask, 0U);
+  EXPECT_EQ(u.near_bearing_mask, 0U);
 }

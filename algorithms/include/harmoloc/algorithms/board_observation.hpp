@@ -111,6 +111,25 @@ inline double cut_width(const BoardFeatures& observed, const BoardModelParams& p
   return ((observed.cut_mask >> b) & 1U) != 0U ? params.cut_board_width : 1.0;
 }
 
+/// A projected quantity (a board's image angle or feature) as a quadratic of the pose's offset
+/// from the estimate (dx, dy in metres, dyaw in radians), within reach_m along x and y and
+/// reach_rad along the heading (BoardUpdate::near_at).
+struct NearQuadratic {
+  /// q[0] + dx (q[1] + q[4] dx + q[7] dy + q[8] dyaw) + dy (q[2] + q[5] dy + q[9] dyaw)
+  ///      + dyaw (q[3] + q[6] dyaw)
+  std::array<float, 10> q{};
+  float reach_m = 0.0F;
+  float reach_rad = 0.0F;
+
+  /// Whether an offset of at most @p off_m along x and y and @p off_rad along the heading is
+  /// within the reach.
+  bool covers(float off_m, float off_rad) const { return off_m <= reach_m && off_rad <= reach_rad; }
+  float at(float dx, float dy, float dyaw) const {
+    return q[0] + dx * (q[1] + q[4] * dx + q[7] * dy + q[8] * dyaw) +
+           dy * (q[2] + q[5] * dy + q[9] * dyaw) + dyaw * (q[3] + q[6] * dyaw);
+  }
+};
+
 /// What the particle filter needs for one update: per board, the mixture's weights and the
 /// (scaled) Gaussian width; the route term.
 struct BoardUpdate {
@@ -128,17 +147,26 @@ struct BoardUpdate {
   std::uint32_t bearing_mask = 0;
   std::array<float, kMaxBoards> angle_rad{};
   std::array<float, kMaxBoards> bearing_inv_two_var{};
-  /// Projected bearings (projected_bearing.hpp) linearised about the estimate: for a pose within
-  /// kLinearReach_m and kLinearReach_rad of linear_at, board b of linear_mask is expected at image
-  /// angle linear[b][0] + linear[b][1] dx + linear[b][2] dy + linear[b][3] dyaw, instead of its
-  /// outline projected at each particle. A board is linearised only where the linear model
-  /// misses the projection at the reach by at most kLinearTolerance of its bearing spread.
-  static constexpr float kLinearReach_m = 0.03F;
-  static constexpr float kLinearReach_rad = 0.035F;  // 2 degrees
-  static constexpr float kLinearTolerance = 0.25F;
-  std::uint32_t linear_mask = 0;
-  Pose2 linear_at{};
-  std::array<std::array<float, 4>, kMaxBoards> linear{};
+  /// Projected bearings and areas (projected_bearing.hpp) near the estimate (near_at), read from
+  /// a quadratic there instead of the outline projected at each particle (NearQuadratic): board
+  /// b of near_bearing_mask is expected at image angle near_bearing[b].at(dx, dy, dyaw) within
+  /// its reach, board b of near_area_mask to show feature near_area[b].at(...). The reach
+  /// follows the cloud's spread: two sigma, from kNearReach_m and kNearReach_rad up to 15 cm and
+  /// 10 degrees, so that a wide cloud too is mostly read from the quadratic. A quadratic is
+  /// taken only where it misses the projection at the reach's corners by at most kNearTolerance
+  /// of the noise the particles are weighed with (the bearing's spread; the area's noise
+  /// widened by the cloud's spread), else over half that reach, else over the narrowest: a board
+  /// the frame's side cuts within the reach usually does not fit, and is projected at each
+  /// particle. A quadratic, not a straight line: an area changes as the inverse square of the
+  /// distance, and a line over 3 cm misses a board 1.25 m away by a third of its noise.
+  static constexpr float kNearReach_m = 0.03F;
+  static constexpr float kNearReach_rad = 0.035F;  // 2 degrees
+  static constexpr float kNearTolerance = 0.25F;
+  Pose2 near_at{};
+  std::uint32_t near_bearing_mask = 0;
+  std::array<NearQuadratic, kMaxBoards> near_bearing{};
+  std::uint32_t near_area_mask = 0;
+  std::array<NearQuadratic, kMaxBoards> near_area{};
   double inv_tempering = 1.0;  ///< exponent of the boards' joint likelihood
   float route_free_m = 0.0F;
   float route_inv_two_var = 0.0F;

@@ -298,6 +298,10 @@ bool expected_bearing(const ForwardMap& map, const GridPoint& point, std::size_t
 bool projected_image_angle(const ForwardMap& map, const CameraAtPose& camera, std::size_t b,
                            float& angle_rad);
 
+/// The image angle of a centroid at column @p column_px of @p map's projection, under @p map's
+/// law: projected_image_angle for a column already projected (project_outline).
+float image_angle_of_column(const ForwardMap& map, float column_px);
+
 /// Whether board @p b's areas come from @p map's projection (an outline and its feature per
 /// pixel).
 inline bool projects_area(const ForwardMap& map, std::size_t b) {

@@ -99,6 +99,19 @@ struct CameraAtPose {
 CameraAtPose camera_at_pose(const BearingProjection& p, float x_m, float y_m, float cos_yaw,
                             float sin_yaw);
 
+/// Board @p b's outline projected once from @p camera: its centroid column
+/// (projected_centroid_column) and, when @p area, its area in the frame (projected_area_px).
+/// The filter needs both at a particle; projecting the points twice would double its cost.
+struct ProjectedOutline {
+  bool has_column = false;  ///< projected_centroid_column's answer
+  bool has_area = false;    ///< projected_area_px's answer (false without @p area)
+  float column_px = 0.0F;
+  float area_px = 0.0F;
+};
+
+ProjectedOutline project_outline(const BearingProjection& p, const CameraAtPose& camera,
+                                 std::size_t b, bool area);
+
 /// The area of board @p b's outline projected from @p camera and clipped to the frame (pixels),
 /// as the simulator's renderer counts a board's pixels (sim_host/board_projection.hpp). 0 for a
 /// board wholly behind the camera. False when the board has no outline, or some of its points
