@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <optional>
 
 namespace harmoloc::algorithms {
 
@@ -368,8 +367,7 @@ void fit_near_quadratics(const ForwardMap& map, const Pose2& at, std::uint32_t b
   }
   bearing_boards = outlines;
   if ((bearing_boards | area_boards) == 0U) return;
-  // The reaches, widest first: two sigma of the cloud's, half of it, the narrowest; each's
-  // projections taken when a board first needs them.
+  // The reaches, widest first: two sigma of the cloud's, half of it, the narrowest.
   const double narrow_m = BoardUpdate::kNearReach_m, narrow_rad = BoardUpdate::kNearReach_rad;
   const double wide_m = std::clamp(2.0 * position_sigma_m, narrow_m, 0.15);
   const double wide_rad = std::clamp(2.0 * yaw_sigma_rad, narrow_rad, 10.0 * kPi / 180.0);
@@ -377,42 +375,45 @@ void fit_near_quadratics(const ForwardMap& map, const Pose2& at, std::uint32_t b
       {wide_m, wide_rad},
       {std::max(narrow_m, 0.5 * wide_m), std::max(narrow_rad, 0.5 * wide_rad)},
       {narrow_m, narrow_rad}};
-  std::array<std::optional<NearViews>, 3> views;
-  for (std::uint32_t mask = bearing_boards | area_boards; mask != 0U; mask &= mask - 1U) {
-    const auto b = static_cast<std::size_t>(__builtin_ctz(mask));
-    bool bearing = ((bearing_boards >> b) & 1U) != 0U, area = ((area_boards >> b) & 1U) != 0U;
-    const double bearing_tolerance = static_cast<double>(BoardUpdate::kNearTolerance) *
-                                     static_cast<double>(weighed_bearing_sigma_rad(map, b));
-    const double area_tolerance =
-        static_cast<double>(BoardUpdate::kNearTolerance) * static_cast<double>(area_noise[b]);
-    for (std::size_t t = 0; t < 3 && (bearing || area); ++t) {
-      // A reach no wider than the next one's is tried there.
-      if (t < 2 && !(reaches[t][0] > reaches[t + 1][0] || reaches[t][1] > reaches[t + 1][1]))
-        continue;
-      if (!views[t]) views[t].emplace(map, at, reaches[t][0], reaches[t][1]);
+  // One reach's projections at a time (1.3 KB on the stack), each board trying the reaches in
+  // turn until one fits.
+  std::uint32_t bearings_left = bearing_boards, areas_left = area_boards;
+  for (std::size_t t = 0; t < 3 && (bearings_left | areas_left) != 0U; ++t) {
+    // A reach no wider than the next one's is tried there.
+    if (t < 2 && !(reaches[t][0] > reaches[t + 1][0] || reaches[t][1] > reaches[t + 1][1]))
+      continue;
+    const NearViews views(map, at, reaches[t][0], reaches[t][1]);
+    const auto take = [&](const std::array<float, kNearPoses>& values, double tolerance,
+                          NearQuadratic& near) {
+      if (!fit_quadratic(values, views.offsets, tolerance, near.q)) return false;
+      near.reach_m = static_cast<float>(reaches[t][0]);
+      near.reach_rad = static_cast<float>(reaches[t][1]);
+      return true;
+    };
+    for (std::uint32_t mask = bearings_left | areas_left; mask != 0U; mask &= mask - 1U) {
+      const auto b = static_cast<std::size_t>(__builtin_ctz(mask));
+      bool angles = ((bearings_left >> b) & 1U) != 0U, areas = ((areas_left >> b) & 1U) != 0U;
       std::array<float, kNearPoses> angle{}, feature{};
-      bool angles = bearing, areas = area;
       for (std::size_t k = 0; k < kNearPoses && (angles || areas); ++k) {
-        const ProjectedOutline o = project_outline(map.projection, views[t]->cameras[k], b, areas);
+        const ProjectedOutline o = project_outline(map.projection, views.cameras[k], b, areas);
         angles = angles && o.has_column;
         areas = areas && o.has_area;
         if (angles) angle[k] = image_angle_of_column(map, o.column_px);
         if (areas) feature[k] = o.area_px * map.projection.area_per_px[b];
       }
-      const auto take = [&](const std::array<float, kNearPoses>& values, double tolerance,
-                            NearQuadratic& near) {
-        if (!fit_quadratic(values, views[t]->offsets, tolerance, near.q)) return false;
-        near.reach_m = static_cast<float>(reaches[t][0]);
-        near.reach_rad = static_cast<float>(reaches[t][1]);
-        return true;
-      };
-      if (angles && take(angle, bearing_tolerance, update.near_bearing[b])) {
+      if (angles && take(angle,
+                         static_cast<double>(BoardUpdate::kNearTolerance) *
+                             static_cast<double>(weighed_bearing_sigma_rad(map, b)),
+                         update.near_bearing[b])) {
         update.near_bearing_mask |= 1U << b;
-        bearing = false;
+        bearings_left &= ~(1U << b);
       }
-      if (areas && take(feature, area_tolerance, update.near_area[b])) {
+      if (areas && take(feature,
+                        static_cast<double>(BoardUpdate::kNearTolerance) *
+                            static_cast<double>(area_noise[b]),
+                        update.near_area[b])) {
         update.near_area_mask |= 1U << b;
-        area = false;
+        areas_left &= ~(1U << b);
       }
     }
   }
