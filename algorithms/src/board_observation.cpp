@@ -268,9 +268,11 @@ constexpr std::size_t kNearPoses = 18;
 
 /// NearQuadratic's value at offset @p d (dx, dy, dyaw), in double for the fit.
 double quadratic_at(const std::array<double, 10>& q, const double (&d)[3]) {
-  return q[0] + d[0] * (q[1] + q[4] * d[0] + q[7] * d[1] + q[8] * d[2]) +
-         d[1] * (q[2] + q[5] * d[1] + q[9] * d[2]) + d[2] * (q[3] + q[6] * d[2]);
+  return NearQuadratic::value(q, d[0], d[1], d[2]);
 }
+
+/// The pairs of axes whose corners give the quadratic's cross terms: (x, y), (x, yaw), (y, yaw).
+constexpr std::size_t kPairs[3][2] = {{0, 1}, {0, 2}, {1, 2}};
 
 /// One board's quadratic about the estimate (NearQuadratic::q) from its values at
 /// near_poses's offsets: the gradient and the curvatures along the axes from the centre and
@@ -288,7 +290,6 @@ bool fit_quadratic(const std::array<float, kNearPoses>& at,
     q[4 + k] = (hi + lo - 2.0 * q[0]) / (2.0 * h * h);
   }
   // The cross terms: what the corner adds beyond the axes' terms.
-  constexpr std::size_t kPairs[3][2] = {{0, 1}, {0, 2}, {1, 2}};
   for (std::size_t p = 0; p < 3; ++p) {
     const std::size_t i = kPairs[p][0], j = kPairs[p][1];
     const std::array<double, 3>& d = offsets[7 + p];
@@ -316,7 +317,6 @@ std::array<std::array<double, 3>, kNearPoses> near_poses(double reach_m, double 
     o[1 + 2 * k][k] = -h[k];
     o[2 + 2 * k][k] = h[k];
   }
-  constexpr std::size_t kPairs[3][2] = {{0, 1}, {0, 2}, {1, 2}};
   for (std::size_t p = 0; p < 3; ++p) {
     const std::size_t i = kPairs[p][0], j = kPairs[p][1];
     o[7 + p][i] = h[i];

@@ -124,9 +124,12 @@ struct NearQuadratic {
   /// Whether an offset of at most @p off_m along x and y and @p off_rad along the heading is
   /// within the reach.
   bool covers(float off_m, float off_rad) const { return off_m <= reach_m && off_rad <= reach_rad; }
-  float at(float dx, float dy, float dyaw) const {
-    return q[0] + dx * (q[1] + q[4] * dx + q[7] * dy + q[8] * dyaw) +
-           dy * (q[2] + q[5] * dy + q[9] * dyaw) + dyaw * (q[3] + q[6] * dyaw);
+  float at(float dx, float dy, float dyaw) const { return value(q, dx, dy, dyaw); }
+  /// The quadratic with coefficients @p c at an offset, in @p T (the fit checks it in double).
+  template <typename T>
+  static T value(const std::array<T, 10>& c, T dx, T dy, T dyaw) {
+    return c[0] + dx * (c[1] + c[4] * dx + c[7] * dy + c[8] * dyaw) +
+           dy * (c[2] + c[5] * dy + c[9] * dyaw) + dyaw * (c[3] + c[6] * dyaw);
   }
 };
 
