@@ -35,4 +35,6 @@ set(HARMOLOC_TRAINING_SOURCES
   src/odometry_calibration.cpp
   src/kernel_selection.cpp
   src/local_fix_error.cpp
-  src/bearing_calibration.cpp)
+  src/bearing_calibration.cpp
+  # The information a frame holds about the pose: the sweep's traces write it (not the cycle).
+  src/frame_information.cpp)

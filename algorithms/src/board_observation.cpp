@@ -236,19 +236,13 @@ void fit_bearings(const ForwardMap& map, double x_m, double y_m, double yaw_rad,
                   std::array<double, kMaxBoards>& residual) {
   if (boards == 0U) return;
   const GridPoint at = bearing_point(map, x_m, y_m, cos_yaw, sin_yaw);
-  bool placed = false;
-  CameraAtPose camera{};
+  CameraOnce camera(map.projection, x_m, y_m, cos_yaw, sin_yaw);
   for (std::uint32_t mask = boards; mask != 0U; mask &= mask - 1U) {
     const auto b = static_cast<std::size_t>(__builtin_ctz(mask));
     if (b >= observed.count) continue;
     if (map.projection.points[b] != 0U) {
-      if (!placed) {
-        camera = camera_at_pose(map.projection, static_cast<float>(x_m), static_cast<float>(y_m),
-                                static_cast<float>(cos_yaw), static_cast<float>(sin_yaw));
-        placed = true;
-      }
       float angle = 0.0F;
-      if (!projected_image_angle(map, camera, b, angle)) continue;
+      if (!projected_image_angle(map, camera.get(), b, angle)) continue;
       residual[b] = std::min(residual[b], std::fabs(static_cast<double>(angle) -
                                                     static_cast<double>(observed.angle_rad[b])));
       continue;

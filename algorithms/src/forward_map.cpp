@@ -297,12 +297,13 @@ void apply_projected_areas(const ForwardMap& map, const CameraAtPose& camera, fl
 }
 
 void apply_visibility(const ForwardMap& map, const GridPoint& seen_from, float yaw_rad, float* out,
-                      float* bearing_rad) {
+                      float* bearing_rad, std::uint32_t boards) {
   if (!ForwardMap::kHeadingTermStorage || !ForwardMap::kBearingStorage || !map.has_visibility)
     return;
   const float half_fov = half_field_of_view(map);
-  const std::size_t n = map.board_count;
+  const std::size_t n = std::min<std::size_t>(map.board_count, kMaxBoards);
   for (std::size_t b = 0; b < n; ++b) {
+    if (((boards >> b) & 1U) == 0U) continue;
     float reference = 0.0F, turn = 0.0F, weight = 0.0F, area = 0.0F, half_width = 0.0F;
     bool any = false;
     for (int k = 0; k < 4; ++k) {

@@ -169,6 +169,16 @@ std::uint32_t projected_bearing_boards(const BoardUpdate& u) {
   return boards;
 }
 
+// The boards that read the cells' view where the map has visibility (bit b): those taking part
+// whose area is not projected, and those whose bearing is read from the cells. A projected area
+// the outline cannot follow at a particle falls back to the cells' view there (project_at_pose).
+std::uint32_t table_boards_of(const BoardUpdate& u, std::uint32_t outlines) {
+  std::uint32_t used = 0;
+  for (std::size_t b = 0; b < u.boards && b < kMaxBoards; ++b)
+    if (u.use[b]) used |= 1U << b;
+  return (used & ~u.area_projection_mask) | (u.bearing_mask & ~outlines);
+}
+
 // Whether the boards' likelihood needs the pose's heading as a unit vector: the heading terms,
 // or the camera's place.
 bool needs_unit_heading(const BoardUpdate& u) {
@@ -189,10 +199,12 @@ struct ProjectedAtPose {
 // The projected boards at @p pose: within a quadratic's reach of the estimate its value, else
 // the outline projected from the pose, once for both its centroid column (under the same law as
 // the measured one: their difference is the residual) and, where the map projects its areas,
-// its area in the frame, written to @p expected (a view the outline cannot follow keeps the
-// cells' area). Only for a map that projects something: the default map pays nothing.
-inline void project_at_pose(const BoardUpdate& u, const Pose2& pose, float cos_yaw, float sin_yaw,
-                            std::uint32_t outlines, float* expected, ProjectedAtPose& view) {
+// its area in the frame, written to @p expected. Returns the boards whose projected area the
+// outline cannot follow from this pose (bit b): they keep the cells' area. Only for a map that
+// projects something: the default map pays nothing.
+inline std::uint32_t project_at_pose(const BoardUpdate& u, const Pose2& pose, float cos_yaw,
+                                     float sin_yaw, std::uint32_t outlines, float* expected,
+                                     ProjectedAtPose& view) {
   const ForwardMap& map = *u.map;
   if ((u.near_bearing_mask | u.near_area_mask) != 0U) {
     view.dx = static_cast<float>(pose.x_m - u.near_at.x_m);
@@ -214,7 +226,8 @@ inline void project_at_pose(const BoardUpdate& u, const Pose2& pose, float cos_y
   }
   const std::uint32_t areas = u.area_projection_mask & ~near_areas;
   const std::uint32_t projected = areas | (outlines & ~view.near_bearings);
-  if (projected == 0U) return;
+  std::uint32_t unfollowed = 0;
+  if (projected == 0U) return unfollowed;
   // The camera is placed once per particle.
   const CameraAtPose camera = camera_at_pose(map.projection, static_cast<float>(pose.x_m),
                                              static_cast<float>(pose.y_m), cos_yaw, sin_yaw);
@@ -223,20 +236,23 @@ inline void project_at_pose(const BoardUpdate& u, const Pose2& pose, float cos_y
     const bool area = ((areas >> b) & 1U) != 0U;
     const ProjectedOutline o = project_outline(map.projection, camera, b, area);
     if (area && o.has_area) expected[b] = o.area_px * map.projection.area_per_px[b];
+    if (area && !o.has_area) unfollowed |= 1U << b;
     if (o.has_column) {
       view.angle_rad[b] = image_angle_of_column(map, o.column_px);
       view.has_angle |= 1U << b;
     }
   }
+  return unfollowed;
 }
 
 // The boards' untempered likelihood at one pose, its cell @p at located and its heading's
 // cosine and sine given (in float, as both uses are: sinf and cosf cost fewer instructions than
 // sin and cos; 1 and 0 where needs_unit_heading is false); @p camera_bearings as
-// camera_bearings_of says and @p outlines as projected_bearing_boards, taken once per update.
+// camera_bearings_of says, @p outlines as projected_bearing_boards and @p table_boards as
+// table_boards_of, taken once per update.
 inline double likelihood_at(const BoardUpdate& u, const GridPoint& at, const Pose2& pose,
                             float cos_yaw, float sin_yaw, bool camera_bearings,
-                            std::uint32_t outlines) {
+                            std::uint32_t outlines, std::uint32_t table_boards) {
   const ForwardMap& map = *u.map;
   std::array<float, kMaxBoards> expected{};
   if (map.has_heading_terms) {
@@ -258,12 +274,16 @@ inline double likelihood_at(const BoardUpdate& u, const GridPoint& at, const Pos
       camera_bearings ? bearing_point(map, pose.x_m, pose.y_m, cos_yaw, sin_yaw) : at;
   // With visibility the bearings are read there already: the bearing term below takes them.
   std::array<float, kMaxBoards> seen_bearing{};
-  if (map.has_visibility)
-    apply_visibility(map, seen_from, static_cast<float>(pose.yaw_rad), expected.data(),
-                     seen_bearing.data());
+  const auto yaw = static_cast<float>(pose.yaw_rad);
+  if (map.has_visibility && table_boards != 0U)
+    apply_visibility(map, seen_from, yaw, expected.data(), seen_bearing.data(), table_boards);
   ProjectedAtPose view;
-  if ((outlines | u.area_projection_mask) != 0U)
-    project_at_pose(u, pose, cos_yaw, sin_yaw, outlines, expected.data(), view);
+  if ((outlines | u.area_projection_mask) != 0U) {
+    const std::uint32_t unfollowed =
+        project_at_pose(u, pose, cos_yaw, sin_yaw, outlines, expected.data(), view);
+    if (map.has_visibility && unfollowed != 0U)
+      apply_visibility(map, seen_from, yaw, expected.data(), nullptr, unfollowed);
+  }
   double likelihood = 1.0;
   for (std::size_t b = 0; b < u.boards; ++b) {
     if (!u.use[b]) continue;
@@ -325,8 +345,9 @@ double ParticleFilter::board_likelihood(const BoardUpdate& u, const Pose2& pose)
     cos_yaw = std::cos(yaw);
     sin_yaw = std::sin(yaw);
   }
+  const std::uint32_t outlines = projected_bearing_boards(u);
   return likelihood_at(u, locate(*u.map, p.x_m, p.y_m), p, cos_yaw, sin_yaw, camera_bearings_of(u),
-                       projected_bearing_boards(u));
+                       outlines, table_boards_of(u, outlines));
 }
 
 double ParticleFilter::update_boards(const BoardUpdate& u) {
@@ -335,6 +356,7 @@ double ParticleFilter::update_boards(const BoardUpdate& u) {
   const bool unit_heading = needs_unit_heading(u);
   const bool camera_bearings = camera_bearings_of(u);
   const std::uint32_t outlines = projected_bearing_boards(u);
+  const std::uint32_t table_boards = table_boards_of(u, outlines);
   for (std::size_t i = 0; i < count_; ++i) {
     const GridPoint at = locate(map, particles_[i].x_m, particles_[i].y_m);
     float cos_yaw = 1.0F, sin_yaw = 0.0F;
@@ -344,7 +366,8 @@ double ParticleFilter::update_boards(const BoardUpdate& u) {
       sin_yaw = std::sin(yaw);
     }
     const Pose2 pose{particles_[i].x_m, particles_[i].y_m, particles_[i].yaw_rad};
-    double likelihood = likelihood_at(u, at, pose, cos_yaw, sin_yaw, camera_bearings, outlines);
+    double likelihood =
+        likelihood_at(u, at, pose, cos_yaw, sin_yaw, camera_bearings, outlines, table_boards);
     // The match is the observation model's own (untempered): tempering compresses exactly the
     // change the kidnap test looks for.
     match += weights_[i] * likelihood;

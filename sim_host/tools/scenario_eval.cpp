@@ -7,6 +7,7 @@
 
 #include "harmoloc/algorithms/floor_search.hpp"
 #include "harmoloc/algorithms/forward_map.hpp"
+#include "harmoloc/algorithms/frame_information.hpp"
 #include "harmoloc/algorithms/geometry.hpp"
 #include "harmoloc/algorithms/segmentation.hpp"
 #include "harmoloc/host/log_encoders.hpp"
@@ -88,7 +89,9 @@ TrainedMap train_on_scenario(const Scenario& scenario, std::uint64_t seed, const
       if (!pl.placed[k]) continue;
       const algorithms::Pose2& a = pl.poses[k];
       const algorithms::Pose2& b = run.truth(k);
-      se += (a.x_m - b.x_m) * (a.x_m - b.x_m) + (a.y_m - b.y_m) * (a.y_m - b.y_m);
+      const double e2 = (a.x_m - b.x_m) * (a.x_m - b.x_m) + (a.y_m - b.y_m) * (a.y_m - b.y_m);
+      se += e2;
+      t.placement_max_m = std::max(t.placement_max_m, std::sqrt(e2));
       const double h = algorithms::wrap_angle_rad(a.yaw_rad - b.yaw_rad);
       sh += h * h;
       ++n;
@@ -165,6 +168,10 @@ RunRecord replay_scenario(const Scenario& scenario, std::uint64_t seed,
                                            f.truth.yaw_rad, params, 0U);
       f.estimate_nats = algorithms::floor_fit(map.forward, seen, out.pose.x_m, out.pose.y_m,
                                               out.pose.yaw_rad, params, 0U);
+      const algorithms::FrameInformation info =
+          algorithms::frame_information(map.forward, seen, out.pose, params, f.distrusted);
+      f.frame_sigma_m = info.weak_sigma_m;
+      f.frame_axis_rad = info.weak_axis_rad;
     }
     if (map.forward.present())
       f.truth_lane_m = static_cast<double>(algorithms::route_distance(
@@ -204,25 +211,25 @@ void write_trace(const RunRecord& run, const std::string& path) {
                "fix_present,fix_known,fix_x_m,fix_y_m,verdict,distrusted,consensus,robust_fix_x_m,"
                "robust_fix_y_m,preference,sigma_m,sigma_yaw_rad,match,covered,evidence_known,"
                "evidence_x_m,evidence_y_m,evidence_distance_m,truth_nats,estimate_nats,board_seen,"
-               "cut_board,fix_suspects,truth_lane_m");
+               "cut_board,fix_suspects,truth_lane_m,frame_sigma_m,frame_axis_rad");
   const std::size_t boards = run.frames.empty() ? 0 : run.frames.front().boards;
   for (std::size_t b = 0; b < boards; ++b) std::fprintf(f, ",chi2_%zu", b + 1);
   for (std::size_t b = 0; b < boards; ++b) std::fprintf(f, ",static_%zu", b + 1);
   std::fprintf(f, "\n");
   for (const FrameRecord& r : run.frames) {
-    std::fprintf(f,
-                 "%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%d,%s,%d,%d,%.4f,%.4f,%d,%u,%d,%.4f,%.4f,"
-                 "%.3f,%.4f,"
-                 "%.4f,%.4g,%d,%d,%.4f,%.4f,%.4f,%.3f,%.3f,%d,%d,%u,%.3f",
-                 r.t_s, r.truth.x_m, r.truth.y_m, r.truth.yaw_rad, r.estimate.x_m, r.estimate.y_m,
-                 r.estimate.yaw_rad, r.position_error_m(), r.valid ? 1 : 0,
-                 firmware::health_name(r.health), r.fix_present ? 1 : 0, r.fix_known ? 1 : 0,
-                 r.fix.x_m, r.fix.y_m, static_cast<int>(r.verdict),
-                 static_cast<unsigned>(r.distrusted), r.consensus ? 1 : 0, r.robust_fix.x_m,
-                 r.robust_fix.y_m, r.preference, r.sigma_m, r.sigma_yaw_rad, r.match, r.covered,
-                 r.evidence_known ? 1 : 0, r.evidence.x_m, r.evidence.y_m, r.evidence_distance_m,
-                 r.truth_nats, r.estimate_nats, r.board_seen ? 1 : 0, r.cut_board ? 1 : 0,
-                 static_cast<unsigned>(r.fix_suspects), r.truth_lane_m);
+    std::fprintf(
+        f,
+        "%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%d,%s,%d,%d,%.4f,%.4f,%d,%u,%d,%.4f,%.4f,"
+        "%.3f,%.4f,"
+        "%.4f,%.4g,%d,%d,%.4f,%.4f,%.4f,%.3f,%.3f,%d,%d,%u,%.3f,%.4g,%.3f",
+        r.t_s, r.truth.x_m, r.truth.y_m, r.truth.yaw_rad, r.estimate.x_m, r.estimate.y_m,
+        r.estimate.yaw_rad, r.position_error_m(), r.valid ? 1 : 0, firmware::health_name(r.health),
+        r.fix_present ? 1 : 0, r.fix_known ? 1 : 0, r.fix.x_m, r.fix.y_m,
+        static_cast<int>(r.verdict), static_cast<unsigned>(r.distrusted), r.consensus ? 1 : 0,
+        r.robust_fix.x_m, r.robust_fix.y_m, r.preference, r.sigma_m, r.sigma_yaw_rad, r.match,
+        r.covered, r.evidence_known ? 1 : 0, r.evidence.x_m, r.evidence.y_m, r.evidence_distance_m,
+        r.truth_nats, r.estimate_nats, r.board_seen ? 1 : 0, r.cut_board ? 1 : 0,
+        static_cast<unsigned>(r.fix_suspects), r.truth_lane_m, r.frame_sigma_m, r.frame_axis_rad);
     for (std::size_t b = 0; b < boards; ++b)
       std::fprintf(f, ",%.3g", static_cast<double>(r.chi2[b]));
     for (std::size_t b = 0; b < boards; ++b)

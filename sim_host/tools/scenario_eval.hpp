@@ -35,6 +35,7 @@ struct TrainedMap {
   /// the frames were not placed by odometry).
   double placement_rmse_m = 0.0;
   double placement_heading_rmse_deg = 0.0;
+  double placement_max_m = 0.0;  ///< the largest position error of a placed frame
   std::size_t frames = 0;
 };
 TrainedMap train_on_scenario(const Scenario& scenario, std::uint64_t seed,
@@ -79,6 +80,11 @@ struct FrameRecord {
   /// fit that the boards cannot tell the two apart.
   double truth_nats = std::numeric_limits<double>::quiet_NaN();
   double estimate_nats = std::numeric_limits<double>::quiet_NaN();
+  /// How far the frame leaves the position open at the estimate (algorithms::frame_information:
+  /// the weakest direction's sigma, metres, and that direction, radians). NaN where no board
+  /// fits were computed.
+  double frame_sigma_m = std::numeric_limits<double>::quiet_NaN();
+  double frame_axis_rad = std::numeric_limits<double>::quiet_NaN();
   /// The forward map's distance from the true pose to the training run (route_distance, metres):
   /// on a floor, how far the true place lies from the coverage run's lanes. NaN without a
   /// forward map.

@@ -198,6 +198,11 @@ void floor_part(const Scenario& scene, const algorithms::ThresholdSet& threshold
     const TrainedMap trained =
         train_on_scenario(coverage, kCoverageSeed, nullptr, &thresholds, &train);
     r.floor_train_frames = trained.frames;
+    if (trained.report.placement.used) {
+      r.floor_placement_rmse_m = trained.placement_rmse_m;
+      r.floor_placement_max_m = trained.placement_max_m;
+      r.floor_placement_heading_rmse_deg = trained.placement_heading_rmse_deg;
+    }
     r.floor_train_ms = trained.report.train_ms + trained.report.forward_ms;
     r.floor_cv_rmse_x_m = trained.report.x.cv_rmse_m;
     r.floor_pass_heading_spread_rad = trained.report.forward.pass_heading_spread_rad;

@@ -72,6 +72,10 @@ struct SceneResult {
   std::size_t train_frames = 0;
   double placement_rmse_m = -1.0;
   double placement_heading_rmse_deg = -1.0;
+  /// The same for the floor's coverage run: how far the trainer placed its frames from the truth.
+  double floor_placement_rmse_m = -1.0;
+  double floor_placement_max_m = -1.0;
+  double floor_placement_heading_rmse_deg = -1.0;
   double cv_rmse_x_m = -1.0, cv_rmse_y_m = -1.0;
   /// The map's centroid-column weight (0: areas only, docs/training.md).
   double column_weight = 0.0;

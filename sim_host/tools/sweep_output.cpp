@@ -22,6 +22,9 @@ nlohmann::json to_json(const SceneResult& r) {
   j["train_frames"] = r.train_frames;
   j["placement_rmse_m"] = r.placement_rmse_m;
   j["placement_heading_rmse_deg"] = r.placement_heading_rmse_deg;
+  j["floor_placement_rmse_m"] = r.floor_placement_rmse_m;
+  j["floor_placement_max_m"] = r.floor_placement_max_m;
+  j["floor_placement_heading_rmse_deg"] = r.floor_placement_heading_rmse_deg;
   j["cv_rmse_x_m"] = r.cv_rmse_x_m;
   j["pass_heading_spread_rad"] = r.pass_heading_spread_rad;
   j["cv_rmse_y_m"] = r.cv_rmse_y_m;

@@ -23,6 +23,7 @@ add_executable(algorithms_test
   ${HARMOLOC_UNIT_DIR}/robust_filter_test.cpp
   ${HARMOLOC_UNIT_DIR}/visibility_test.cpp
   ${HARMOLOC_UNIT_DIR}/floor_search_test.cpp
+  ${HARMOLOC_UNIT_DIR}/frame_information_test.cpp
   ${HARMOLOC_UNIT_DIR}/nearby_pose_test_test.cpp
   ${HARMOLOC_UNIT_DIR}/can_layout_test.cpp
   ${HARMOLOC_UNIT_DIR}/map_codec_test.cpp)

@@ -298,6 +298,29 @@ bool expected_bearing(const ForwardMap& map, const GridPoint& point, std::size_t
 bool projected_image_angle(const ForwardMap& map, const CameraAtPose& camera, std::size_t b,
                            float& angle_rad);
 
+/// The camera of a robot at one pose for projected_image_angle, placed (camera_at_pose) on first
+/// use only: a pose whose boards are all read from the cells never places it.
+class CameraOnce {
+ public:
+  CameraOnce(const BearingProjection& projection, double x_m, double y_m, double cos_yaw,
+             double sin_yaw)
+      : projection_(projection), x_m_(x_m), y_m_(y_m), cos_yaw_(cos_yaw), sin_yaw_(sin_yaw) {}
+  const CameraAtPose& get() {
+    if (!placed_) {
+      camera_ = camera_at_pose(projection_, static_cast<float>(x_m_), static_cast<float>(y_m_),
+                               static_cast<float>(cos_yaw_), static_cast<float>(sin_yaw_));
+      placed_ = true;
+    }
+    return camera_;
+  }
+
+ private:
+  const BearingProjection& projection_;
+  double x_m_, y_m_, cos_yaw_, sin_yaw_;
+  bool placed_ = false;
+  CameraAtPose camera_{};
+};
+
 /// The image angle of a centroid at column @p column_px of @p map's projection, under @p map's
 /// law: projected_image_angle for a column already projected (project_outline).
 float image_angle_of_column(const ForwardMap& map, float column_px);
@@ -370,9 +393,10 @@ inline float visibility_gain(const ForwardMap& map, float angle_rad) {
 /// bearing_point) facing @p yaw_rad sees it (the cell's feature on the axis, times visibility_gain
 /// and visible_share at its image angle), written to @p out[b] for the boards whose bearing the
 /// corners of @p seen_from hold (the others keep @p out's value). With @p bearing_rad, each board's
-/// expected_bearing there as well (ForwardMap::kNoBearing where none), read on the way.
+/// expected_bearing there as well (ForwardMap::kNoBearing where none), read on the way. Only the
+/// boards of @p boards (bit b); the others' entries are left as they are.
 void apply_visibility(const ForwardMap& map, const GridPoint& seen_from, float yaw_rad, float* out,
-                      float* bearing_rad = nullptr);
+                      float* bearing_rad = nullptr, std::uint32_t boards = ~0U);
 
 /// Where @p map's bearings are read for a robot at (@p x_m, @p y_m) facing (@p cos_yaw,
 /// @p sin_yaw): the camera's place when the map's bearings are seen from it, else the axle's.
