@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <limits>
 
 namespace harmoloc::algorithms {
 
@@ -49,7 +48,6 @@ FrameInformation frame_information(const ForwardMap& map, const BoardFeatures& o
                                    const Pose2& at, const BoardModelParams& params,
                                    std::uint32_t leave_out) {
   FrameInformation out;
-  out.weak_sigma_m = std::numeric_limits<double>::infinity();
   if (!map.present()) return out;
   const std::size_t boards = std::min<std::size_t>({map.board_count, observed.count, kMaxBoards});
   std::uint32_t area_boards = 0, bearing_boards = 0;

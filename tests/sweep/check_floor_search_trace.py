@@ -4,7 +4,8 @@ docs/filter.md, "The floor search"): the search gave the kidnap test its evidenc
 robot within 10 cm of its new place after a kidnap, and a kidnap was confirmed from it; and the
 boards' fit columns (truth_nats, estimate_nats) hold fits, the truth's the better just after a
 kidnap; every row has the header's columns, and the distance off the lanes (truth_lane_m) is
-known. The figures themselves are the sweep's (docs/sweep.md); this only shows the path works
+known, and how far each weighed frame leaves the position open (frame_sigma_m) is written with
+the fits. The figures themselves are the sweep's (docs/sweep.md); this only shows the path works
 end to end.
 
 With --sweep and --min-recovered it also asks that many of the roam's kidnaps to have come back
@@ -101,6 +102,16 @@ def main():
             problems.append("a truth_lane_m entry that is negative or not a number")
         elif max(lanes) <= 0.0:
             problems.append("truth_lane_m is 0 throughout the roam")
+    # How far each weighed frame leaves the position open (frame_information): written with the
+    # fits, a spread above 0 (inf where some direction is not fixed) and nan on the others.
+    if rows and "frame_sigma_m" not in rows[0]:
+        problems.append("no frame_sigma_m column")
+    elif rows:
+        spreads = [float(r["frame_sigma_m"]) for r in rows if not math.isnan(float(r["truth_nats"]))]
+        if not spreads or any(not (s > 0.0) for s in spreads):
+            problems.append("a frame with fits but no frame_sigma_m above 0")
+        elif not any(math.isfinite(s) for s in spreads):
+            problems.append("frame_sigma_m is infinite on every frame")
     confirmed = sum(1 for r in rows if r["verdict"] == "2")
     if confirmed == 0:
         problems.append("no kidnap confirmed")

@@ -69,6 +69,15 @@ def main():
                     problems.append(f"seed {seed}: the law did not come from the fitted camera")
                 elif not isinstance(axis, (int, float)) or not abs(axis) < 10.0:
                     problems.append(f"seed {seed}: the fitted camera's axis at {axis} deg")
+        # Where the trainer placed the coverage run's frames, against the truth: recorded, the
+        # RMSE no more than the largest, and within centimetres (labels and odometry place them
+        # to millimetres on random floors; a frame matched to the wrong label lands far off).
+        rmse, worst = r.get("floor_placement_rmse_m"), r.get("floor_placement_max_m")
+        if not isinstance(rmse, (int, float)) or not isinstance(worst, (int, float)) or \
+                not 0.0 <= rmse <= worst < 0.1 or \
+                not r.get("floor_placement_heading_rmse_deg", -1.0) >= 0.0:
+            problems.append(f"seed {seed}: the coverage run's placement {rmse} m RMSE, {worst} m "
+                            "at most (not recorded, or 10 cm or more off)")
         if r.get("fused_rmse_m", -1.0) >= 0.0:
             problems.append(f"seed {seed}: a route part ran although only the floor was asked for")
     # The nearby pose test (filter.nearby_test, on by default) runs on every floor map with

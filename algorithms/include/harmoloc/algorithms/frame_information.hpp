@@ -12,6 +12,7 @@
 /// 15 cm off. Host only for now (algorithms/sources.cmake).
 
 #include <cstdint>
+#include <limits>
 
 #include "harmoloc/algorithms/board_observation.hpp"
 #include "harmoloc/algorithms/forward_map.hpp"
@@ -28,7 +29,7 @@ struct FrameInformation {
   /// (the square root of the largest eigenvalue of the position's marginal covariance, the
   /// inverse of the Schur complement of the heading's information); infinite where the frame
   /// fixes no position along some direction.
-  double weak_sigma_m = 0.0;
+  double weak_sigma_m = std::numeric_limits<double>::infinity();
   /// That direction in the map frame (radians, modulo pi).
   double weak_axis_rad = 0.0;
   /// The boards whose area or bearing took part (bit b).
