@@ -123,13 +123,14 @@ int main(int argc, char** argv) {
   app.add_flag("--law-from-frames", opt.law_from_frames,
                "floor: keep the column-to-angle law triangulated from the frames, not the fitted\n"
                "camera's (harmoloc-train --law-from-frames), for comparison");
-  app.add_flag("--projected-bearings", opt.projected_bearings,
+  app.add_flag("--projected-bearings,!--no-projected-bearings", opt.projected_bearings,
                "floor: project the bearings of the geometry's boards from the fitted camera at\n"
-               "each particle's pose (harmoloc-train --projected-bearings)");
-  app.add_flag("--projected-areas", opt.projected_areas,
+               "each particle's pose (harmoloc-train --projected-bearings; on by default,\n"
+               "--no-projected-bearings turns it and the projected areas off)");
+  app.add_flag("--projected-areas,!--no-projected-areas", opt.projected_areas,
                "floor: project the areas of the geometry's boards as well, where the projection\n"
-               "predicts the coverage run's areas at least as closely as the tables (implies\n"
-               "--projected-bearings; harmoloc-train --projected-areas)");
+               "predicts the coverage run's areas at least as closely as the tables\n"
+               "(harmoloc-train --projected-areas; on by default)");
   app.add_flag("--axle-bearings", opt.axle_bearings,
                "keep the maps' bearings over the axle's place, as when the camera's offset is\n"
                "not given (harmoloc-train --camera-forward-m 0), for comparison");
@@ -215,7 +216,7 @@ int main(int argc, char** argv) {
                     {"geometry_noise_ratio", opt.geometry_noise_ratio},
                     {"law_from_frames", opt.law_from_frames},
                     {"projected_bearings", opt.projected_bearings},
-                    {"projected_areas", opt.projected_areas},
+                    {"projected_areas", opt.projected_bearings && opt.projected_areas},
                     {"roams", opt.roams}};
     j["results"] = nlohmann::json::array();
     for (const SceneResult& r : finished) j["results"].push_back(to_json(r));

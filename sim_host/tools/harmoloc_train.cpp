@@ -274,18 +274,19 @@ int main(int argc, char** argv) {
                "keep the column-to-angle law triangulated from the frames' centroid columns; by\n"
                "default a map whose visibility tables the geometry fit serves takes the fitted\n"
                "camera's law, and its forward map is trained again with it (docs/training.md)");
-  bool projected_bearings = false;
-  app.add_flag("--projected-bearings", projected_bearings,
+  bool projected_bearings = true;
+  app.add_flag("--projected-bearings,!--no-projected-bearings", projected_bearings,
                "store the fitted camera and the outlines of the boards whose visibility tables\n"
                "come from the geometry fit, and have the filter project their bearings at each\n"
                "particle's pose instead of reading the map's cells (map version 15,\n"
-               "docs/bearings.md; an experiment, off by default)");
-  bool projected_areas = false;
-  app.add_flag("--projected-areas", projected_areas,
-               "with --projected-bearings (implied): also predict those boards' areas from the\n"
+               "docs/bearings.md; on by default, --no-projected-bearings turns it and the\n"
+               "projected areas off)");
+  bool projected_areas = true;
+  app.add_flag("--projected-areas,!--no-projected-areas", projected_areas,
+               "with the projected bearings: also predict those boards' areas from the\n"
                "projected outline at each particle's pose, where that predicts the run's areas\n"
-               "at least as closely as the map's tables (map version 17, docs/filter.md; an\n"
-               "experiment, off by default)");
+               "at least as closely as the map's tables (map version 17, docs/filter.md; on by\n"
+               "default)");
   double camera_height = 0.0;
   app.add_option("--camera-height-m", camera_height,
                  "the camera's optical centre above the floor (metres), the geometry fit's\n"
@@ -355,8 +356,8 @@ int main(int argc, char** argv) {
     opt.visibility_from_geometry = !visibility_from_frames;
     opt.geometry_tables_required = visibility_from_geometry;
     opt.law_from_geometry = !law_from_frames;
-    opt.projected_bearings = projected_bearings || projected_areas;
-    opt.projected_areas = projected_areas;
+    opt.projected_bearings = projected_bearings;
+    opt.projected_areas = projected_bearings && projected_areas;
     opt.camera_height_m = camera_height;
     opt.label_tolerance_ns = static_cast<std::uint64_t>(std::llround(label_tolerance_ms * 1e6));
     if (label_offset == "auto") {

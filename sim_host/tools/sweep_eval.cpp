@@ -192,8 +192,8 @@ void floor_part(const Scenario& scene, const algorithms::ThresholdSet& threshold
     train.visibility_from_geometry = opt.visibility_from_geometry;
     train.geometry_tables.kernel_noise_ratio = opt.geometry_noise_ratio;
     train.law_from_geometry = !opt.law_from_frames;
-    train.projected_bearings = opt.projected_bearings || opt.projected_areas;
-    train.projected_areas = opt.projected_areas;
+    train.projected_bearings = opt.projected_bearings;
+    train.projected_areas = opt.projected_bearings && opt.projected_areas;
     train.camera_height_m = coverage.camera.height_m;  // a tape measure gives it
     const TrainedMap trained =
         train_on_scenario(coverage, kCoverageSeed, nullptr, &thresholds, &train);

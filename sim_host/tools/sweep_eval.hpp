@@ -47,9 +47,9 @@ struct SweepOptions {
   /// (TrainOptions::law_from_geometry off).
   bool law_from_frames = false;
   /// The floor map projects the geometry's boards' bearings (harmoloc-train --projected-bearings).
-  bool projected_bearings = false;
+  bool projected_bearings = true;
   /// With projected_bearings: their areas as well (harmoloc-train --projected-areas).
-  bool projected_areas = false;
+  bool projected_areas = true;
   int kidnaps = 20;            ///< kidnaps in the kidnap run (each >= 1 m)
   double long_minutes = 10.0;  ///< length of the long nominal run
   std::uint64_t filter_seed = 1;
