@@ -465,4 +465,21 @@ std::vector<double> project_areas_from_geometry(const std::vector<algorithms::Ar
   return noise;
 }
 
+std::size_t drop_untaken_outlines(const std::vector<char>& served, ForwardMap& map) {
+  algorithms::BearingProjection& p = map.projection;
+  std::size_t dropped = 0;
+  for (std::size_t b = 0; b < map.board_count; ++b) {
+    if ((b < served.size() && served[b] != 0) || p.points[b] == 0U || p.area_per_px[b] > 0.0F)
+      continue;
+    p.points[b] = 0;
+    p.sigma_rad[b] = 0.0F;
+    p.area_sigma[b] = 0.0F;
+    for (std::size_t i = 0; i < algorithms::BearingProjection::kMaxPoints; ++i)
+      for (std::size_t d = 0; d < 3; ++d) p.point_m(b, i, d) = 0.0F;
+    ++dropped;
+  }
+  if (!p.present()) p = algorithms::BearingProjection{};
+  return dropped;
+}
+
 }  // namespace harmoloc::sim_host

@@ -573,3 +573,43 @@ TEST(ProjectedArea, NothingBehindTheCamera) {
   ASSERT_TRUE(ha::projected_area_px(p, facing, 1, area));
   EXPECT_GT(area, 100.0F);
 }
+
+// A board offered an outline for its areas alone (its tables stayed the kernel's) keeps it only
+// where the projection took its areas; the boards whose tables the geometry serves keep theirs.
+TEST(ProjectedArea, OutlinesOfferedForTheAreasAloneGoWhereTheAreasWereNotTaken) {
+  const hs::Scenario scene = hs::random_scenario(5);
+  ASSERT_GE(scene.boards.size(), 4U);
+  auto map = std::make_unique<ha::ForwardMap>();
+  map->has_bearings = true;
+  map->board_count = static_cast<std::uint32_t>(scene.boards.size());
+  for (std::size_t b = 0; b < scene.boards.size(); ++b) map->bearing_sigma_rad[b] = 0.01F;
+  const std::vector<char> all(scene.boards.size(), 1);
+  ASSERT_EQ(hs::project_bearings_from_geometry(true_fit(scene), all, *map), scene.boards.size());
+  ha::BearingProjection& p = map->projection;
+  for (std::size_t b = 0; b < scene.boards.size(); ++b) p.sigma_rad[b] = 0.002F;
+  p.area_per_px[1] = p.area_per_px[3] = 1e-4F;  // taken
+  p.area_sigma[1] = p.area_sigma[3] = 0.01F;
+  std::vector<char> served(scene.boards.size(), 0);
+  served[0] = 1;  // its tables from the geometry: keeps its outline for its bearings
+  const ha::BearingProjection before = p;
+  EXPECT_EQ(hs::drop_untaken_outlines(served, *map), scene.boards.size() - 3);
+  for (const std::size_t b : {0U, 1U, 3U}) {
+    EXPECT_EQ(p.points[b], before.points[b]) << b;
+    EXPECT_EQ(p.sigma_rad[b], before.sigma_rad[b]) << b;
+    EXPECT_EQ(p.point_m(b, 0, 0), before.point_m(b, 0, 0)) << b;
+  }
+  EXPECT_EQ(p.area_per_px[1], 1e-4F);
+  for (std::size_t b = 4; b < scene.boards.size(); ++b) EXPECT_EQ(p.points[b], 0U) << b;
+  EXPECT_EQ(p.points[2], 0U);
+  EXPECT_EQ(p.sigma_rad[2], 0.0F);
+  for (std::size_t i = 0; i < ha::BearingProjection::kMaxPoints; ++i)
+    EXPECT_EQ(p.point_m(2, i, 2), 0.0F) << i;
+  EXPECT_TRUE(p.present());
+  EXPECT_EQ(p.focal_px, before.focal_px);
+
+  // None served and none taken: no projection at all.
+  p.area_per_px[1] = p.area_per_px[3] = 0.0F;
+  EXPECT_EQ(hs::drop_untaken_outlines(std::vector<char>(scene.boards.size(), 0), *map), 3U);
+  EXPECT_FALSE(p.present());
+  EXPECT_EQ(p.focal_px, 0.0F);
+}

@@ -95,4 +95,10 @@ std::vector<double> projected_bearing_spread(const algorithms::ForwardMap& map,
 std::vector<double> project_areas_from_geometry(const std::vector<algorithms::AreaVector>& areas,
                                                 const std::vector<PlacedFrame>& frames,
                                                 float area_scale, algorithms::ForwardMap& map);
+/// Takes the outline away from each board of @p map outside @p served (whose visibility tables
+/// the geometry does not serve) whose areas the projection did not take
+/// (project_areas_from_geometry): such a board was offered an outline for its areas alone, and
+/// its bearing stays the cells'. Returns how many outlines it took away; a map left with none
+/// has no projection.
+std::size_t drop_untaken_outlines(const std::vector<char>& served, algorithms::ForwardMap& map);
 }  // namespace harmoloc::sim_host
