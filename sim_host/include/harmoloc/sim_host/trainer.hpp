@@ -116,7 +116,7 @@ struct TrainOptions {
   /// With projected_bearings: the projected boards' areas from the projection too, where it
   /// predicts the run's areas at least as closely as their tables (map version 17). On by
   /// default with the bearings: on the 30 random floors 4.7 / 18.2 cm RMSE median / worst
-  /// against 7.0 / 22.7 without (docs/sweep.md).
+  /// against 7.0 / 22.7 without (docs/sweep.md, 2026-12-06 late).
   bool projected_areas = true;
   GeometryTablesOptions geometry_tables;
   /// The camera's optical centre above the floor (metres); 0: the run's (the dataset's
