@@ -47,8 +47,8 @@ bool NearbyPoseTest::step(const ForwardMap& map, const BoardFeatures& observed,
              std::hypot(p.x_m - estimate.x_m, p.y_m - estimate.y_m) >= test.min_distance_m;
     };
     const FloorPose around{estimate.x_m, estimate.y_m, estimate.yaw_rad, 0.0, true};
-    const FloorPose found =
-        FloorSearch::refine(map, observed, around, test.search_radius_m, params, leave_out);
+    const FloorPose found = FloorSearch::refine(map, observed, around, test.search_radius_m, params,
+                                                leave_out, test.search_levels);
     const bool have_found = apart(found), have_hint = apart(hint);
     if (!have_found && !have_hint) return false;
     alternative = have_found ? Pose2{found.x_m, found.y_m, found.yaw_rad}

@@ -127,12 +127,27 @@ void read_can(const Checker& check, const toml::table& root, FirmwareConfig& c) 
 // [filter]: the particle filter.
 void read_filter(const Checker& check, const toml::table& root, FirmwareConfig& c) {
   if (const toml::table* t = check.section(root, "filter")) {
-    check.only(
-        *t, "filter.",
-        {"particles", "seed", "alpha", "fix_sigma_m", "outlier_probability", "resample_threshold",
-         "init_position_sigma_m", "vision_only_speed_mps", "map_margin_m", "kld",
-         "kld_min_particles", "kld_epsilon", "kld_bin_m", "kld_bin_deg", "nearby_test",
-         "nearby_bound_nats", "nearby_frames", "seed_heading_from_boards"});
+    check.only(*t, "filter.",
+               {"particles",
+                "seed",
+                "alpha",
+                "fix_sigma_m",
+                "outlier_probability",
+                "resample_threshold",
+                "init_position_sigma_m",
+                "vision_only_speed_mps",
+                "map_margin_m",
+                "kld",
+                "kld_min_particles",
+                "kld_epsilon",
+                "kld_bin_m",
+                "kld_bin_deg",
+                "nearby_test",
+                "nearby_bound_nats",
+                "nearby_frames",
+                "nearby_radius_m",
+                "nearby_levels",
+                "seed_heading_from_boards"});
     auto& f = c.filter;
     f.particles = static_cast<std::size_t>(
         check.integer(*t, "particles", "filter.", static_cast<std::int64_t>(f.particles), 16,
@@ -183,6 +198,10 @@ void read_filter(const Checker& check, const toml::table& root, FirmwareConfig& 
         check.number(*t, "nearby_bound_nats", "filter.", f.nearby.bound_nats, 1.0, 1000.0);
     f.nearby.max_frames = static_cast<std::uint32_t>(check.integer(
         *t, "nearby_frames", "filter.", static_cast<std::int64_t>(f.nearby.max_frames), 1, 3000));
+    f.nearby.search_radius_m =
+        check.number(*t, "nearby_radius_m", "filter.", f.nearby.search_radius_m, 0.05, 2.0);
+    f.nearby.search_levels = static_cast<int>(check.integer(
+        *t, "nearby_levels", "filter.", static_cast<std::int64_t>(f.nearby.search_levels), 1, 4));
   }
 }
 
@@ -231,7 +250,17 @@ void read_observation(const Checker& check, const toml::table& root, Observation
   else
     check.fail(t->get("route_terms"),
                "observation.route_terms must be \"auto\", \"on\" or \"off\"");
-  o.fix_term = flag(check, *t, "fix_term", w, o.fix_term);
+  // true and false as before "auto" was the default: on and off whatever the map.
+  if (const toml::node* n = t->get("fix_term")) {
+    const auto on = n->value_exact<bool>();
+    const auto text = n->value_exact<std::string>();
+    if (on)
+      o.fix_term = *on ? FixTerm::kOn : FixTerm::kOff;
+    else if (text && *text == "auto")
+      o.fix_term = FixTerm::kAuto;
+    else
+      check.fail(n, "observation.fix_term must be true, false or \"auto\"");
+  }
   o.fix_board_check = flag(check, *t, "fix_board_check", w, o.fix_board_check);
   auto& b = o.boards;
   b.robust = flag(check, *t, "robust", w, b.robust);

@@ -85,6 +85,24 @@ std::string route_terms_summary(const FirmwareConfig& config,
   return line;
 }
 
+bool fix_term_on(const FirmwareConfig& config, const algorithms::MapFile& map) {
+  switch (config.observation.fix_term) {
+    case FixTerm::kOn:
+      return true;
+    case FixTerm::kOff:
+      return false;
+    case FixTerm::kAuto:
+      break;
+  }
+  return !algorithms::is_floor_map(map.calibration);
+}
+
+std::string fix_term_summary(const FirmwareConfig& config, const algorithms::MapFile& map) {
+  if (config.observation.fix_term != FixTerm::kAuto || fix_term_on(config, map)) return {};
+  return "a floor map: the harmonic fix does not weigh the particles (observation.fix_term = "
+         "\"auto\"; true turns it on)";
+}
+
 LocalizationCycle::LocalizationCycle(const FirmwareConfig& config, const algorithms::MapFile& map,
                                      hal::Camera& camera, hal::WheelEncoders& encoders,
                                      hal::PoseLink& link, const hal::Clock& clock,
@@ -142,7 +160,7 @@ LocalizationCycle::LocalizationCycle(const FirmwareConfig& config, const algorit
     fix_check_params_ =
         algorithms::fix_check_params(static_cast<double>(map.calibration.fix_rmse_x_m),
                                      static_cast<double>(map.calibration.fix_rmse_y_m));
-  if (config.observation.fix_term && fix_rmse > 0.0) {
+  if (fix_term_on(config, map) && fix_rmse > 0.0) {
     fix_term_sigma_m_ = std::max(fix_rmse, 0.005) * std::sqrt(board_params_.tempering);
     // The per-sample fix errors (map format 11) over the forward map's cells: the fix term reads
     // the error near a fix's place from one cell. Nothing else reads them.

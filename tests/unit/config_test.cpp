@@ -112,6 +112,8 @@ kld_bin_deg = 15
 nearby_test = false
 nearby_bound_nats = 35
 nearby_frames = 90
+nearby_radius_m = 0.3
+nearby_levels = 2
 seed_heading_from_boards = false
 
 [link]
@@ -178,6 +180,8 @@ heartbeat_hz = 2
   EXPECT_FALSE(c.filter.nearby_test);
   EXPECT_DOUBLE_EQ(c.filter.nearby.bound_nats, 35.0);
   EXPECT_EQ(c.filter.nearby.max_frames, 90U);
+  EXPECT_DOUBLE_EQ(c.filter.nearby.search_radius_m, 0.3);
+  EXPECT_EQ(c.filter.nearby.search_levels, 2);
   EXPECT_FALSE(c.filter.seed_heading_from_boards);
 
   EXPECT_EQ(c.link.system_id, 7);
@@ -453,6 +457,11 @@ TEST(Config, ObservationAndKidnapValuesAreChecked) {
       {"[filter]\nnearby_test = 1\n", "filter.nearby_test must be true or false"},
       {"[filter]\nnearby_bound_nats = 0.5\n", "filter.nearby_bound_nats"},
       {"[filter]\nnearby_frames = 0\n", "filter.nearby_frames"},
+      {"[filter]\nnearby_radius_m = 0.01\n", "filter.nearby_radius_m"},
+      {"[filter]\nnearby_levels = 5\n", "filter.nearby_levels"},
+      {"[observation]\nfix_term = \"yes\"\n",
+       "observation.fix_term must be true, false or \"auto\""},
+      {"[observation]\nfix_term = 1\n", "observation.fix_term must be true, false or \"auto\""},
       {"[filter]\nseed_heading_from_boards = \"yes\"\n",
        "filter.seed_heading_from_boards must be true or false"},
   };
@@ -561,4 +570,30 @@ TEST(Config, FloorMapsDropTheRouteTermsUnlessConfiguredOtherwise) {
   cal.pass_heading_spread_rad = 0.0F;
   EXPECT_FALSE(hf::route_terms_on(c, cal));
   EXPECT_NE(hf::route_terms_summary(c, cal).find("route_terms = \"off\""), std::string::npos);
+}
+
+// The fix term: on for a route map, off for a floor map, unless the config says true or false.
+TEST(Config, TheFixTermIsOffOnAFloorMapUnlessConfigured) {
+  ht::TempDir dir;
+  hf::FirmwareConfig c = hf::default_config();
+  EXPECT_EQ(c.observation.fix_term, hf::FixTerm::kAuto);
+  harmoloc::algorithms::MapFile map;
+  EXPECT_TRUE(hf::fix_term_on(c, map)) << "a route map";
+  const double deg = 3.14159265358979 / 180.0;
+  map.calibration.pass_heading_spread_rad = static_cast<float>(21.0 * deg);
+  EXPECT_FALSE(hf::fix_term_on(c, map));
+  EXPECT_NE(hf::fix_term_summary(c, map).find("the harmonic fix does not weigh the particles"),
+            std::string::npos);
+  map.calibration.pass_heading_spread_rad = static_cast<float>(3.0 * deg);
+  EXPECT_TRUE(hf::fix_term_on(c, map)) << "a route map";
+  EXPECT_EQ(hf::fix_term_summary(c, map), "");
+  map.calibration.pass_heading_spread_rad = static_cast<float>(21.0 * deg);
+  c = hf::load_config(dir.write("on.toml", "[observation]\nfix_term = true\n"));
+  EXPECT_TRUE(hf::fix_term_on(c, map));
+  EXPECT_EQ(hf::fix_term_summary(c, map), "");
+  c = hf::load_config(dir.write("off.toml", "[observation]\nfix_term = false\n"));
+  map.calibration.pass_heading_spread_rad = 0.0F;
+  EXPECT_FALSE(hf::fix_term_on(c, map));
+  c = hf::load_config(dir.write("auto.toml", "[observation]\nfix_term = \"auto\"\n"));
+  EXPECT_EQ(c.observation.fix_term, hf::FixTerm::kAuto);
 }

@@ -107,6 +107,8 @@ void Application::say_map_settings() const {
       !route.empty()) {
     std::fprintf(stderr, "harmoloc: %s\n", route.c_str());
   }
+  if (const std::string fix = firmware::fix_term_summary(config_, map_); !fix.empty())
+    std::fprintf(stderr, "harmoloc: %s\n", fix.c_str());
 }
 
 void Application::run(BoardLoop& loop, bool progress_line) {

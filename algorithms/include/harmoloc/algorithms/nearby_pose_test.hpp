@@ -23,8 +23,11 @@ struct NearbyPoseParams {
   double bound_nats = 20.0;       ///< the summed log-ratio that draws particles (and drops at -)
   std::uint32_t max_frames = 60;  ///< frames an alternative is tested before another is sought
   double search_radius_m = 0.20;  ///< where an alternative is sought around the estimate
-  double min_distance_m = 0.05;   ///< an alternative nearer the estimate than this is none
-  double refine_step_m = 0.02;    ///< both poses: the best of 3 x 3 places this far apart
+  /// Levels of the search (FloorSearch::refine): a 5 x 5 grid over the radius, then each further
+  /// level the eight places around the best at half the step.
+  int search_levels = 1;
+  double min_distance_m = 0.05;  ///< an alternative nearer the estimate than this is none
+  double refine_step_m = 0.02;   ///< both poses: the best of 3 x 3 places this far apart
   /// The draw: this share of the particles, around the pose (position spread refine_step_m,
   /// heading spread draw_yaw_sigma_rad: its heading comes from the bearings, a degree or two),
   /// holding this share of the weight. The following frames weigh them as any other, so a

@@ -79,12 +79,19 @@ enum class RouteTerms : std::uint8_t {
   kOff,   ///< off
 };
 
+/// Whether the harmonic fix weighs the particles besides the boards (observation.fix_term).
+enum class FixTerm : std::uint8_t {
+  kAuto,  ///< on for a route map, off for a floor map (fix_term_on)
+  kOn,    ///< on, whatever the map
+  kOff,   ///< off
+};
+
 struct ObservationConfig {
   ObservationModel model = ObservationModel::kBoards;
   RouteTerms route_terms = RouteTerms::kAuto;
   /// With the per-board model, also weigh the particles by the harmonic fix (a version 4 map's
   /// calibration gives its width).
-  bool fix_term = true;
+  FixTerm fix_term = FixTerm::kAuto;
   /// Check the fix's boards one a frame by leaving each out (algorithms/fix_board_check.hpp);
   /// needs a version 4 map's calibration.
   bool fix_board_check = true;

@@ -142,6 +142,16 @@ bool route_terms_on(const FirmwareConfig& config, const algorithms::MapCalibrati
 std::string route_terms_summary(const FirmwareConfig& config,
                                 const algorithms::MapCalibration& calibration);
 
+/// Whether the harmonic fix weighs the particles (the fix term; it needs the map's calibration
+/// as well): as observation.fix_term says, or by the map (off for a floor map: there the fix,
+/// trained at the headings the coverage run drove, is many times further off at the others than
+/// its calibration says; docs/filter.md).
+bool fix_term_on(const FirmwareConfig& config, const algorithms::MapFile& map);
+
+/// One start-up line when the map turns the fix term off (observation.fix_term = "auto"); empty
+/// otherwise. Start-up only (allocates).
+std::string fix_term_summary(const FirmwareConfig& config, const algorithms::MapFile& map);
+
 class LocalizationCycle {
  public:
   /// @p map must outlive the cycle (the firmware keeps it in static storage). The colour table
