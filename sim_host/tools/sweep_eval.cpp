@@ -227,7 +227,7 @@ void floor_part(const Scenario& scene, const algorithms::ThresholdSet& threshold
     const firmware::FirmwareConfig config = config_for(thresholds, opt);
     FixErrors fixes;
     double se = 0.0, sh = 0.0, worst = 0.0;
-    std::size_t frames = 0, nominal_bad = 0, nominal = 0;
+    std::size_t frames = 0, nominal_bad = 0, vouched_bad = 0, nominal = 0;
     for (int k = 1; k <= opt.roams; ++k) {
       step("floor: roam " + std::to_string(k));
       const Scenario roam =
@@ -251,7 +251,11 @@ void floor_part(const Scenario& scene, const algorithms::ThresholdSet& threshold
       for (const FrameRecord& f : run.frames) {
         if (f.t_s < from_s || !f.valid || f.health != firmware::Health::kNominal) continue;
         ++nominal;
-        if (f.position_error_m() > 0.10) ++nominal_bad;
+        if (f.position_error_m() <= 0.10) continue;
+        ++nominal_bad;
+        // ODOMETRY's quality, 100 - 1000 x the spread rounded (pose_messages.cpp): above 0 while
+        // the spread is under 9.95 cm.
+        if (std::lround(std::clamp(100.0 - 1000.0 * f.sigma_m, 0.0, 100.0)) > 0) ++vouched_bad;
       }
     }
     if (fixes.all > 0) {
@@ -264,6 +268,7 @@ void floor_part(const Scenario& scene, const algorithms::ThresholdSet& threshold
       r.floor_heading_rmse_deg = std::sqrt(sh / n);
       r.floor_max_m = worst;
       r.floor_nominal_over_10cm = static_cast<double>(nominal_bad) / n;
+      r.floor_vouched_over_10cm = static_cast<double>(vouched_bad) / n;
       r.floor_nominal_share = static_cast<double>(nominal) / n;
     }
     if (opt.floor_kidnaps > 0) {

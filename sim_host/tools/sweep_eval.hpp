@@ -159,6 +159,9 @@ struct SceneResult {
   double floor_max_m = -1.0;
   /// Share of those frames reported nominal (health) with an error above 10 cm.
   double floor_nominal_over_10cm = -1.0;
+  /// The same with a published quality above 0 as well (ODOMETRY's quality: a position spread
+  /// under 10 cm): the frames whose error the pose's own figures do not own up to.
+  double floor_vouched_over_10cm = -1.0;
   /// Share of those frames reported nominal at all: a health that says "nominal" less often
   /// lowers the share above, and this says how much of the floor it still vouches for.
   double floor_nominal_share = -1.0;

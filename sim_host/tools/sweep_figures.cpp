@@ -75,6 +75,11 @@ std::vector<Figure> figures() {
          return r.floor_nominal_over_10cm < 0.0 ? -1.0 : 100.0 * r.floor_nominal_over_10cm;
        },
        -1.0, 0.0},
+      {"floor_vouched_bad", "floor roams: cycles nominal, quality > 0, error > 10 cm", "%",
+       [](const SceneResult& r) {
+         return r.floor_vouched_over_10cm < 0.0 ? -1.0 : 100.0 * r.floor_vouched_over_10cm;
+       },
+       -1.0, 0.0},
       {"floor_nominal", "floor roams: cycles reported nominal", "%",
        [](const SceneResult& r) {
          return r.floor_nominal_share < 0.0 ? -1.0 : 100.0 * r.floor_nominal_share;

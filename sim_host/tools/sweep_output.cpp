@@ -93,6 +93,7 @@ nlohmann::json to_json(const SceneResult& r) {
   j["floor_heading_rmse_deg"] = r.floor_heading_rmse_deg;
   j["floor_max_m"] = r.floor_max_m;
   j["floor_nominal_over_10cm"] = r.floor_nominal_over_10cm;
+  j["floor_vouched_over_10cm"] = r.floor_vouched_over_10cm;
   j["floor_nominal_share"] = r.floor_nominal_share;
   j["floor_kidnaps"] = r.floor_kidnaps;
   j["floor_kidnaps_recovered_2s"] = r.floor_kidnaps_recovered_2s;

@@ -8,8 +8,10 @@ known, and how far each weighed frame leaves the position open (frame_sigma_m) i
 the fits. The figures themselves are the sweep's (docs/sweep.md); this only shows the path works
 end to end.
 
-With --sweep and --min-recovered it also asks that many of the roam's kidnaps to have come back
-under 10 cm within 2 s (the sweep's own count, floor_kidnaps_recovered_2s in its sweep.json)."""
+With --sweep it also asks that the nearby pose test drew particles on some floor's roams
+(floor_nearby_draws in its sweep.json; random floors 2 and 6 give it 6 and 2 draws), and with
+--min-recovered that many of the roam's kidnaps to have come back under 10 cm within 2 s (the
+sweep's own count, floor_kidnaps_recovered_2s)."""
 import argparse
 import csv
 import json
@@ -124,6 +126,9 @@ def main():
         if recovered < args.min_recovered:
             problems.append(f"{recovered} of {total} kidnaps back under 10 cm within 2 s, "
                             f"fewer than {args.min_recovered}")
+        # The nearby pose test (filter.nearby_test, on by default) on the roams.
+        if sum(r.get("floor_nearby_draws", 0) for r in results) == 0:
+            problems.append("the nearby pose test drew on no floor's roam")
     for p in problems:
         print("check_floor_search_trace: " + p)
     print(f"check_floor_search_trace: {len(kidnaps)} kidnaps, evidence in {len(evidence)} of "

@@ -2,16 +2,17 @@
 """Checks a floor sweep's sweep.json (harmoloc-sweep --parts floor, issue 20): every scene's
 coverage run trained into a floor map (its passes 10 degrees or more apart in heading, so that
 the firmware drops the route terms), its visibility tables taken from the fitted geometry on some
-board, and its roams replayed and scored. No accuracy bound yet:
-the floor maps localize to tens of centimetres (docs/sweep.md, "Floor runs"). The nearby pose
-test must have drawn on some floor.
+board, and its roams replayed and scored. No accuracy bound yet (docs/sweep.md, "Floor runs").
+The nearby pose test's draws must be recorded; that it draws is sweep.floor_search's check
+(check_floor_search_trace.py --sweep): seed 5's roam, tracked within 2 cm since the harmonic fix
+stopped weighing the particles on a floor map, gives it no place to draw at.
 """
 import json
 import sys
 
 FIGURES = ["floor_rmse_m", "floor_heading_rmse_deg", "floor_max_m", "floor_nominal_over_10cm",
-           "floor_nominal_share", "floor_fix_mse_x_m2", "floor_fix_mse_y_m2", "floor_cv_rmse_x_m",
-           "floor_cv_rmse_y_m"]
+           "floor_vouched_over_10cm", "floor_nominal_share", "floor_fix_mse_x_m2",
+           "floor_fix_mse_y_m2", "floor_cv_rmse_x_m", "floor_cv_rmse_y_m"]
 
 
 def main():
@@ -81,11 +82,9 @@ def main():
         if r.get("fused_rmse_m", -1.0) >= 0.0:
             problems.append(f"seed {seed}: a route part ran although only the floor was asked for")
     # The nearby pose test (filter.nearby_test, on by default) runs on every floor map with
-    # bearings; a floor off by tens of centimetres gives it places to draw at.
+    # bearings; its draws are recorded (a floor tracked within centimetres may give it none).
     if results and not any("floor_nearby_draws" in r for r in results):
         problems.append("floor_nearby_draws not recorded")
-    elif results and sum(r.get("floor_nearby_draws", 0) for r in results) == 0:
-        problems.append("the nearby pose test drew on no floor")
     for p in problems:
         print("check_floor_sweep: " + p)
     print(f"check_floor_sweep: {len(results)} scenes, {len(problems)} problems")
