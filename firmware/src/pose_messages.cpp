@@ -49,6 +49,10 @@ HealthText health_text(Health health, HealthCause cause) {
   return HealthText{severity, kText[static_cast<std::size_t>(health)]};
 }
 
+int quality_of_spread(double sigma_m) {
+  return static_cast<int>(std::lround(std::clamp(100.0 - 1000.0 * sigma_m, 0.0, 100.0)));
+}
+
 mavlink::Odometry odometry_message(const PoseOutput& pose, std::uint64_t time_ns,
                                    std::uint8_t reset_counter) {
   mavlink::Odometry m;
@@ -77,9 +81,8 @@ mavlink::Odometry odometry_message(const PoseOutput& pose, std::uint64_t time_ns
   } else if (pose.cause == HealthCause::kHeadingNotCovered) {
     m.quality = 0;
   } else {
-    const double sigma_m = std::sqrt(std::max(0.0, 0.5 * (c(0, 0) + c(1, 1))));
-    m.quality =
-        static_cast<std::int8_t>(std::lround(std::clamp(100.0 - 1000.0 * sigma_m, 0.0, 100.0)));
+    m.quality = static_cast<std::int8_t>(
+        quality_of_spread(std::sqrt(std::max(0.0, 0.5 * (c(0, 0) + c(1, 1))))));
   }
   return m;
 }

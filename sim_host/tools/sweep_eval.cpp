@@ -7,6 +7,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "harmoloc/firmware/pose_messages.hpp"
 #include "harmoloc/sim_host/random_scene.hpp"
 #include "scenario_eval.hpp"
 
@@ -253,9 +254,8 @@ void floor_part(const Scenario& scene, const algorithms::ThresholdSet& threshold
         ++nominal;
         if (f.position_error_m() <= 0.10) continue;
         ++nominal_bad;
-        // ODOMETRY's quality, 100 - 1000 x the spread rounded (pose_messages.cpp): above 0 while
-        // the spread is under 9.95 cm.
-        if (std::lround(std::clamp(100.0 - 1000.0 * f.sigma_m, 0.0, 100.0)) > 0) ++vouched_bad;
+        // The quality the pose was published with (a nominal pose's: its spread's).
+        if (firmware::quality_of_spread(f.sigma_m) > 0) ++vouched_bad;
       }
     }
     if (fixes.all > 0) {

@@ -26,6 +26,11 @@ struct HealthText {
 /// ignored).
 HealthText health_text(Health health, HealthCause cause);
 
+/// ODOMETRY's quality for a pose that is neither invalid nor facing a heading the map does not
+/// cover: 100 - 1000 x the position spread @p sigma_m (metres), rounded, within 0..100 (0 from a
+/// spread of 9.95 cm).
+int quality_of_spread(double sigma_m);
+
 /// @p pose as ODOMETRY stamped @p time_ns. Map frame (x, y on the floor, z up, yaw
 /// counter-clockwise) -> MAV_FRAME_LOCAL_FRD (z down): y and yaw change sign; body velocity in
 /// MAV_FRAME_BODY_FRD. Quality from the position's spread (100 at 0, 0 at 10 cm), -1 when the
