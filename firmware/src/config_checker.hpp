@@ -116,6 +116,19 @@ inline bool flag(const Checker& check, const toml::table& t, const char* key,
   return *b;
 }
 
+// A switch that takes true, false or "auto" (the map decides): @p on, @p off or @p automatic;
+// @p fallback when the key is absent.
+template <typename Mode>
+Mode on_off_auto(const Checker& check, const toml::table& t, const char* key,
+                 const std::string& where, Mode fallback, Mode on, Mode off, Mode automatic) {
+  const toml::node* n = t.get(key);
+  if (n == nullptr) return fallback;
+  if (const auto b = n->value_exact<bool>()) return *b ? on : off;
+  const auto text = n->value_exact<std::string>();
+  if (!text || *text != "auto") check.fail(n, where + key + " must be true, false or \"auto\"");
+  return automatic;
+}
+
 // Each reads its section (if present) into @p c, or throws through @p check.
 void read_cycle(const Checker& check, const toml::table& root, FirmwareConfig& c);
 void read_boards(const Checker& check, const toml::table& root, FirmwareConfig& c);

@@ -182,7 +182,8 @@ void read_filter(const Checker& check, const toml::table& root, FirmwareConfig& 
         check.number(*t, "vision_only_speed_mps", "filter.", f.vision_only_speed_mps, 0.0, 10.0);
     f.map_margin_m = check.number(*t, "map_margin_m", "filter.", f.map_margin_m, 0.0, 100.0);
     algorithms::KldSampling& k = f.kld;
-    k.enabled = flag(check, *t, "kld", "filter.", k.enabled);
+    f.kld_mode = on_off_auto(check, *t, "kld", "filter.", f.kld_mode, KldMode::kOn, KldMode::kOff,
+                             KldMode::kAuto);
     k.min_particles = static_cast<std::size_t>(check.integer(
         *t, "kld_min_particles", "filter.", static_cast<std::int64_t>(k.min_particles), 16,
         static_cast<std::int64_t>(algorithms::ParticleFilter::kMaxParticles)));
@@ -251,16 +252,8 @@ void read_observation(const Checker& check, const toml::table& root, Observation
     check.fail(t->get("route_terms"),
                "observation.route_terms must be \"auto\", \"on\" or \"off\"");
   // true and false as before "auto" was the default: on and off whatever the map.
-  if (const toml::node* n = t->get("fix_term")) {
-    const auto on = n->value_exact<bool>();
-    const auto text = n->value_exact<std::string>();
-    if (on)
-      o.fix_term = *on ? FixTerm::kOn : FixTerm::kOff;
-    else if (text && *text == "auto")
-      o.fix_term = FixTerm::kAuto;
-    else
-      check.fail(n, "observation.fix_term must be true, false or \"auto\"");
-  }
+  o.fix_term = on_off_auto(check, *t, "fix_term", w, o.fix_term, FixTerm::kOn, FixTerm::kOff,
+                           FixTerm::kAuto);
   o.fix_board_check = flag(check, *t, "fix_board_check", w, o.fix_board_check);
   auto& b = o.boards;
   b.robust = flag(check, *t, "robust", w, b.robust);

@@ -103,6 +103,29 @@ std::string fix_term_summary(const FirmwareConfig& config, const algorithms::Map
          "\"auto\"; true turns it on)";
 }
 
+bool kld_on(const FirmwareConfig& config, const algorithms::MapFile& map) {
+  switch (config.filter.kld_mode) {
+    case KldMode::kOn:
+      return true;
+    case KldMode::kOff:
+      return false;
+    case KldMode::kAuto:
+      break;
+  }
+  return algorithms::is_floor_map(map.calibration);
+}
+
+std::string kld_summary(const FirmwareConfig& config, const algorithms::MapFile& map) {
+  if (config.filter.kld_mode != KldMode::kAuto || !kld_on(config, map)) return {};
+  char line[200];
+  std::snprintf(line, sizeof line,
+                "a floor map: the particle count adapts between %zu and %zu (filter.kld = "
+                "\"auto\"; false keeps it at %zu)",
+                std::min(config.filter.kld.min_particles, config.filter.particles),
+                config.filter.particles, config.filter.particles);
+  return line;
+}
+
 LocalizationCycle::LocalizationCycle(const FirmwareConfig& config, const algorithms::MapFile& map,
                                      hal::Camera& camera, hal::WheelEncoders& encoders,
                                      hal::PoseLink& link, const hal::Clock& clock,
@@ -120,7 +143,9 @@ LocalizationCycle::LocalizationCycle(const FirmwareConfig& config, const algorit
       period_ns_(static_cast<std::uint64_t>(std::llround(1e9 / config.cycle.rate_hz))),
       budget_ns_(static_cast<std::uint64_t>(std::llround(config.cycle.budget_ms * 1e6))) {
   filter_.configure(config.filter.particles, config.filter.seed, config.filter.noise);
-  filter_.set_kld_sampling(config.filter.kld);
+  algorithms::KldSampling kld = config.filter.kld;
+  kld.enabled = kld_on(config, map);
+  filter_.set_kld_sampling(kld);
   geometry_ = effective_geometry(config, map.calibration);
   board_params_ = config.observation.boards;
   // A floor map's places between its passes, at the headings it drove, are the map's too.

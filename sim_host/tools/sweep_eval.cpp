@@ -229,6 +229,7 @@ void floor_part(const Scenario& scene, const algorithms::ThresholdSet& threshold
     FixErrors fixes;
     double se = 0.0, sh = 0.0, worst = 0.0;
     std::size_t frames = 0, nominal_bad = 0, vouched_bad = 0, nominal = 0;
+    std::uint64_t particles = 0, particle_cycles = 0;
     for (int k = 1; k <= opt.roams; ++k) {
       step("floor: roam " + std::to_string(k));
       const Scenario roam =
@@ -238,6 +239,8 @@ void floor_part(const Scenario& scene, const algorithms::ThresholdSet& threshold
       trace(opt, seed, ("floor-roam" + std::to_string(k)).c_str(), run);
       if (!run.frames.empty()) r.floor_roam_s += run.frames.back().t_s;
       r.floor_nearby_draws += run.counters.nearby_draws;
+      particles += run.counters.particles_sum;
+      particle_cycles += run.counters.particle_cycles;
       fixes.add(run);
       const Settled st = settle(run, opt.settle_s, kSettledBound_m, kStartupHold_s);
       if (st.first_fix_s < 0.0) continue;
@@ -258,6 +261,9 @@ void floor_part(const Scenario& scene, const algorithms::ThresholdSet& threshold
         if (firmware::quality_of_spread(f.sigma_m) > 0) ++vouched_bad;
       }
     }
+    if (particle_cycles > 0)
+      r.floor_particles_mean =
+          static_cast<double>(particles) / static_cast<double>(particle_cycles);
     if (fixes.all > 0) {
       r.floor_fix_mse_x_m2 = fixes.mse_x_m2();
       r.floor_fix_mse_y_m2 = fixes.mse_y_m2();

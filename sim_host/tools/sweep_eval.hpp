@@ -153,6 +153,9 @@ struct SceneResult {
   double floor_roam_s = 0.0;  ///< the roams' run time
   /// The nearby pose test's draws in the roams, not the kidnap roam (filter.nearby_draws).
   std::uint64_t floor_nearby_draws = 0;
+  /// The filter's particles a cycle in the roams, on average (filter.particles_mean): the
+  /// capacity unless KLD-sampling adapts the count (-1: no roam cycle).
+  double floor_particles_mean = -1.0;
   double floor_fix_mse_x_m2 = -1.0, floor_fix_mse_y_m2 = -1.0;  ///< every frame with a fix
   double floor_rmse_m = -1.0;  ///< after first fix + settle_s, every roam's frames
   double floor_heading_rmse_deg = -1.0;

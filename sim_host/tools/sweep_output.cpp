@@ -95,6 +95,7 @@ nlohmann::json to_json(const SceneResult& r) {
   j["floor_nominal_over_10cm"] = r.floor_nominal_over_10cm;
   j["floor_vouched_over_10cm"] = r.floor_vouched_over_10cm;
   j["floor_nominal_share"] = r.floor_nominal_share;
+  j["floor_particles_mean"] = r.floor_particles_mean;
   j["floor_kidnaps"] = r.floor_kidnaps;
   j["floor_kidnaps_recovered_2s"] = r.floor_kidnaps_recovered_2s;
   j["seconds"] = r.seconds;

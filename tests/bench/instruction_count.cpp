@@ -97,7 +97,7 @@ const Table& table_for(std::size_t boards, algorithms::SegmentPath path) {
 // @p floor: the map read as a floor map (route terms off) with the floor search on
 // (kidnap.floor_search, algorithms/floor_search.hpp): what it adds to a cycle.
 int run_cycle(const bench::Frames& f, hal::PixelFormat format, std::size_t boards,
-              std::size_t particles, std::size_t samples, bool floor = false) {
+              std::size_t particles, std::size_t samples, bool floor = false, bool kld = false) {
   bench::synthetic_map(samples, f.width_px, f.height_px, g_map, boards);
   firmware::FirmwareConfig config = firmware::default_config();
   config.filter.particles = particles;
@@ -105,6 +105,8 @@ int run_cycle(const bench::Frames& f, hal::PixelFormat format, std::size_t board
     config.observation.route_terms = firmware::RouteTerms::kOff;
     config.kidnap.floor_search = true;
   }
+  // As filter.kld = "auto" does on a floor map (the synthetic map is not one by its calibration).
+  if (kld) config.filter.kld_mode = firmware::KldMode::kOn;
   bench::MemoryCamera camera(f, format);
   bench::MemoryEncoders encoders;
   bench::NullLink link;
@@ -193,6 +195,8 @@ int main(int argc, char** argv) {
       return run_cycle(f, hal::PixelFormat::kRgb24, 6, 1024, 204);
     } else if (kernel == "cycle_floor") {
       return run_cycle(f, hal::PixelFormat::kRgb24, 6, 1024, 204, true);
+    } else if (kernel == "cycle_floor_kld") {
+      return run_cycle(f, hal::PixelFormat::kRgb24, 6, 1024, 204, true, true);
     } else if (kernel == "cycle_yuyv") {
       return run_cycle(f, hal::PixelFormat::kYuyv, 6, 1024, 204);
     } else if (kernel == "cycle_boards") {
@@ -225,7 +229,8 @@ int main(int argc, char** argv) {
   } else if (kernel == "filter_boards" || kernel == "filter_boards_kld" ||
              kernel == "filter_boards_vis" || kernel == "filter_boards_proj" ||
              kernel == "filter_boards_proj_steady" || kernel == "filter_boards_proj_areas" ||
-             kernel == "filter_boards_proj_areas_steady") {
+             kernel == "filter_boards_proj_areas_steady" ||
+             kernel == "filter_boards_proj_areas_kld") {
     // The default measurement update: every board against the forward map, robust weights.
     // _kld: with KLD-sampling on a cloud as tight as in steady tracking (1 cm, 1 degree), n the
     // capacity: the count it settles at decides the cost (the bins' pass included).
@@ -235,11 +240,14 @@ int main(int argc, char** argv) {
     // within the reach of the projection's quadratic about the estimate.
     // _proj_areas, _proj_areas_steady: the same with every board's area projected as well (map
     // version 17) from the eight-point outlines, the cloud's spreads given as the firmware does.
+    // _proj_areas_kld: _proj_areas_steady with KLD-sampling (on by default on a floor map), n
+    // the capacity: the floor filter's step in steady tracking.
     bench::synthetic_map(204, 320, 240, g_map);
-    const bool projected_areas =
-        kernel == "filter_boards_proj_areas" || kernel == "filter_boards_proj_areas_steady";
-    const bool steady =
-        kernel == "filter_boards_proj_steady" || kernel == "filter_boards_proj_areas_steady";
+    const bool floor_kld = kernel == "filter_boards_proj_areas_kld";
+    const bool projected_areas = kernel == "filter_boards_proj_areas" ||
+                                 kernel == "filter_boards_proj_areas_steady" || floor_kld;
+    const bool steady = kernel == "filter_boards_proj_steady" ||
+                        kernel == "filter_boards_proj_areas_steady" || floor_kld;
     const bool projected =
         kernel == "filter_boards_proj" || kernel == "filter_boards_proj_steady" || projected_areas;
     if (kernel == "filter_boards_vis" || projected) {
@@ -260,7 +268,7 @@ int main(int argc, char** argv) {
     }
     static algorithms::ParticleFilter filter;
     filter.configure(n, 1, algorithms::MotionNoise{});
-    if (kernel == "filter_boards_kld") {
+    if (kernel == "filter_boards_kld" || floor_kld) {
       algorithms::KldSampling kld;
       kld.enabled = true;
       filter.set_kld_sampling(kld);

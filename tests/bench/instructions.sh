@@ -17,12 +17,13 @@ kernels=(
   "filter 256" "filter 1024" "filter 4096"
   "filter_boards 256" "filter_boards 1024" "filter_boards 4096"
   "filter_boards_kld 1024" "filter_boards_kld 4096" "filter_boards_vis 1024" "filter_boards_proj 1024" "filter_boards_proj_steady 1024"
-  "filter_boards_proj_areas 1024" "filter_boards_proj_areas_steady 1024"
+  "filter_boards_proj_areas 1024" "filter_boards_proj_areas_steady 1024" "filter_boards_proj_areas_kld 1024"
   "kidnap_preference 25" "kidnap_preference_areas 25" "fix_error_grid 4096" "fix_error_grid_build 4096"
   "cycle 320x240" "cycle 640x480" "cycle_yuyv 640x480" "cycle_floor 320x240"
+  "cycle_floor_kld 320x240"
 )
 # Kernels whose count depends on the CPU's best segmentation path.
-on_best_path() { case $1 in seg_table|seg_yuyv_table|cycle|cycle_yuyv|cycle_floor) return 0;; *) return 1;; esac; }
+on_best_path() { case $1 in seg_table|seg_yuyv_table|cycle|cycle_yuyv|cycle_floor|cycle_floor_kld) return 0;; *) return 1;; esac; }
 repeat=4
 best=$("$bin" path 0)
 declare -A count
@@ -56,8 +57,10 @@ echo "  filter step, per-board update / harmonic-fix update (1024 particles) $(r
 echo "  filter step, KLD-sampling in steady tracking / fixed count (1024 particles) $(ratio 'filter_boards_kld 1024' 'filter_boards 1024')"
 echo "  filter step, floor map with visibility / without (1024 particles) $(ratio 'filter_boards_vis 1024' 'filter_boards 1024')"
 echo "  filter step, areas projected too / bearings projected (1024 particles) $(ratio 'filter_boards_proj_areas 1024' 'filter_boards_proj 1024')"
+echo "  filter step, floor map in steady tracking, KLD-sampling / route map, fixed count (1024 particles) $(ratio 'filter_boards_proj_areas_kld 1024' 'filter_boards 1024')"
 echo "  kidnap preference near a fix, areas and bearings / areas alone (25 cm) $(ratio 'kidnap_preference 25' 'kidnap_preference_areas 25')"
 echo "  whole cycle, floor map (floor search) / route map (320x240) $(ratio 'cycle_floor 320x240' 'cycle 320x240')"
+echo "  whole cycle, floor map with KLD-sampling (its default) / route map (320x240) $(ratio 'cycle_floor_kld 320x240' 'cycle 320x240')"
 echo "  whole cycle / OpenCV segmentation alone (RGB)      $(ratio 'cycle 640x480' 'seg_rgb_opencv 640x480')"
 echo "  whole cycle / OpenCV segmentation alone (YUYV)     $(ratio 'cycle_yuyv 640x480' 'seg_yuyv_opencv 640x480')"
 

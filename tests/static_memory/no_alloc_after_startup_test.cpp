@@ -255,7 +255,8 @@ PassResult run_pass(const std::string& dataset, Fault fault, const std::string& 
   // As the board mains refuse it: a map trained with other thresholds than the config's.
   EXPECT_EQ(firmware::check_map_matches(g_map, config, meta.image_width_px, meta.image_height_px),
             "");
-  config.filter.kld.enabled = fault == Fault::kKldSampling;
+  config.filter.kld_mode =
+      fault == Fault::kKldSampling ? firmware::KldMode::kOn : firmware::KldMode::kOff;
   host::FileCamera file_camera(dataset, meta);
   // Frames 100..200 go missing: odometry only for a while, then back to nominal.
   StallingCamera camera(file_camera, fault == Fault::kCameraStallMidRun ? 100 : 0,

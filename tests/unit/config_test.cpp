@@ -172,7 +172,7 @@ heartbeat_hz = 2
   EXPECT_DOUBLE_EQ(c.filter.init_position_sigma_m, 0.2);
   EXPECT_DOUBLE_EQ(c.filter.vision_only_speed_mps, 0.5);
   EXPECT_DOUBLE_EQ(c.filter.map_margin_m, 2.5);
-  EXPECT_TRUE(c.filter.kld.enabled);
+  EXPECT_EQ(c.filter.kld_mode, hf::KldMode::kOn);
   EXPECT_EQ(c.filter.kld.min_particles, 64U);
   EXPECT_DOUBLE_EQ(c.filter.kld.epsilon, 0.1);
   EXPECT_DOUBLE_EQ(c.filter.kld.bin_xy_m, 0.1);
@@ -449,7 +449,8 @@ TEST(Config, ObservationAndKidnapValuesAreChecked) {
       {"[kidnap]\nlost_frames = 0\n", "kidnap.lost_frames"},
       {"[kidnap]\ndivergence_gap_frames = -1\n", "kidnap.divergence_gap_frames"},
       {"[kidnap]\nfloor_search = \"on\"\n", "kidnap.floor_search must be true or false"},
-      {"[filter]\nkld = \"yes\"\n", "filter.kld must be true or false"},
+      {"[filter]\nkld = \"yes\"\n", "filter.kld must be true, false or \"auto\""},
+      {"[filter]\nkld = 1\n", "filter.kld must be true, false or \"auto\""},
       {"[filter]\nkld_min_particles = 8\n", "filter.kld_min_particles"},
       {"[filter]\nkld_epsilon = 0\n", "filter.kld_epsilon"},
       {"[filter]\nkld_bin_m = 2\n", "filter.kld_bin_m"},
@@ -596,4 +597,29 @@ TEST(Config, TheFixTermIsOffOnAFloorMapUnlessConfigured) {
   EXPECT_FALSE(hf::fix_term_on(c, map));
   c = hf::load_config(dir.write("auto.toml", "[observation]\nfix_term = \"auto\"\n"));
   EXPECT_EQ(c.observation.fix_term, hf::FixTerm::kAuto);
+}
+
+// KLD-sampling: on for a floor map, off for a route map, unless the config says true or false.
+TEST(Config, KldSamplingIsOnForAFloorMapUnlessConfigured) {
+  ht::TempDir dir;
+  hf::FirmwareConfig c = hf::default_config();
+  EXPECT_EQ(c.filter.kld_mode, hf::KldMode::kAuto);
+  harmoloc::algorithms::MapFile map;
+  EXPECT_FALSE(hf::kld_on(c, map)) << "a route map";
+  EXPECT_EQ(hf::kld_summary(c, map), "");
+  const double deg = 3.14159265358979 / 180.0;
+  map.calibration.pass_heading_spread_rad = static_cast<float>(21.0 * deg);
+  EXPECT_TRUE(hf::kld_on(c, map));
+  EXPECT_NE(hf::kld_summary(c, map).find("the particle count adapts between 256 and 1024"),
+            std::string::npos)
+      << hf::kld_summary(c, map);
+  c = hf::load_config(dir.write("off.toml", "[filter]\nkld = false\n"));
+  EXPECT_FALSE(hf::kld_on(c, map));
+  EXPECT_EQ(hf::kld_summary(c, map), "");
+  c = hf::load_config(dir.write("on.toml", "[filter]\nkld = true\n"));
+  map.calibration.pass_heading_spread_rad = 0.0F;
+  EXPECT_TRUE(hf::kld_on(c, map));
+  EXPECT_EQ(hf::kld_summary(c, map), "") << "configured, not decided by the map";
+  c = hf::load_config(dir.write("auto.toml", "[filter]\nkld = \"auto\"\n"));
+  EXPECT_EQ(c.filter.kld_mode, hf::KldMode::kAuto);
 }

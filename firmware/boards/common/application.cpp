@@ -109,6 +109,8 @@ void Application::say_map_settings() const {
   }
   if (const std::string fix = firmware::fix_term_summary(config_, map_); !fix.empty())
     std::fprintf(stderr, "harmoloc: %s\n", fix.c_str());
+  if (const std::string kld = firmware::kld_summary(config_, map_); !kld.empty())
+    std::fprintf(stderr, "harmoloc: %s\n", kld.c_str());
 }
 
 void Application::run(BoardLoop& loop, bool progress_line) {

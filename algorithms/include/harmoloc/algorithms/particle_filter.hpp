@@ -37,7 +37,7 @@ struct MotionNoise {
 /// configure()). Many particles when lost, few when converged.
 struct KldSampling {
   bool enabled = false;
-  std::size_t min_particles = 128;
+  std::size_t min_particles = 256;
   double bin_xy_m = 0.05;
   double bin_yaw_rad = 0.17453292519943295;  // 10 degrees
   double epsilon = 0.05;

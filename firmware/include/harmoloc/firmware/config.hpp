@@ -36,10 +36,20 @@ struct CycleConfig {
   std::uint32_t overrun_alarm_cycles = 3;
 };
 
+/// Whether the filter adapts its particle count by KLD-sampling (filter.kld).
+enum class KldMode : std::uint8_t {
+  kAuto,  ///< on for a floor map, off for a route map (kld_on)
+  kOn,
+  kOff,
+};
+
 struct FilterConfig {
   std::size_t particles = 1024;  ///< the capacity; with KLD-sampling the most it uses
-  /// Adaptive particle count within `particles` (off by default until a sweep backs it).
-  algorithms::KldSampling kld;
+  /// Adaptive particle count within `particles`: on for a floor map, where the 30-floor sweep
+  /// backs it, off for a route map, where no sweep has yet (docs/filter.md). kld_on() decides;
+  /// `kld.enabled` is set from it at start-up.
+  KldMode kld_mode = KldMode::kAuto;
+  algorithms::KldSampling kld;  ///< its parameters
   std::uint64_t seed = 1;
   algorithms::MotionNoise noise;
   /// Standard deviation given to each harmonic fix. Far above the localizer's own error (5-9 cm):

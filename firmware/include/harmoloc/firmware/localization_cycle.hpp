@@ -152,6 +152,13 @@ bool fix_term_on(const FirmwareConfig& config, const algorithms::MapFile& map);
 /// otherwise. Start-up only (allocates).
 std::string fix_term_summary(const FirmwareConfig& config, const algorithms::MapFile& map);
 
+/// Whether the filter adapts its particle count (KLD-sampling): as filter.kld says, or by the
+/// map (on for a floor map: the 30-floor sweep backs it there; docs/filter.md).
+bool kld_on(const FirmwareConfig& config, const algorithms::MapFile& map);
+
+/// One start-up line when the map turns KLD-sampling on (filter.kld = "auto"); empty otherwise.
+std::string kld_summary(const FirmwareConfig& config, const algorithms::MapFile& map);
+
 class LocalizationCycle {
  public:
   /// @p map must outlive the cycle (the firmware keeps it in static storage). The colour table
