@@ -43,6 +43,13 @@ def main():
             problems.append(f"seed {seed}: roams of {r.get('floor_roam_s', 0.0)} s")
         if r.get("floor_kidnaps", 0) < 1:
             problems.append(f"seed {seed}: no kidnap in the floor's kidnap roam")
+        # KLD-sampling is on by default on a floor map (filter.kld = "auto"): the roams' cloud,
+        # once converged, holds fewer than the 1024 particles of the capacity and never fewer
+        # than kld_min_particles (256); a fixed count would give exactly 1024.
+        particles = r.get("floor_particles_mean", -1.0)
+        if not 256.0 <= particles < 1000.0:
+            problems.append(f"seed {seed}: {particles} particles a cycle in the roams: "
+                            "not the adaptive count of a floor map")
         # The floor map's visibility tables come from the fitted camera and boards by default
         # (the sweep gives the scene's camera height): some board must have taken them.
         if d.get("options", {}).get("visibility_from_geometry", True) and \
