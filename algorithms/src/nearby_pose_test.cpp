@@ -6,12 +6,8 @@
 
 namespace harmoloc::algorithms {
 
-namespace {
-
-// The boards' log-likelihood of the best of 3 x 3 places @p step_m apart around @p around, at
-// its heading. The likelihood is at least the product of the boards' floors, so its log is
-// finite.
-Pose2 best_near(const BoardUpdate& update, const Pose2& around, double step_m, double& nats) {
+Pose2 best_model_fit_near(const BoardUpdate& update, const Pose2& around, double step_m,
+                          double& nats) {
   Pose2 best = around;
   nats = -HUGE_VAL;
   for (int j = -1; j <= 1; ++j) {
@@ -26,8 +22,6 @@ Pose2 best_near(const BoardUpdate& update, const Pose2& around, double step_m, d
   }
   return best;
 }
-
-}  // namespace
 
 void NearbyPoseTest::reset() {
   holding_ = false;
@@ -58,8 +52,9 @@ bool NearbyPoseTest::step(const ForwardMap& map, const BoardFeatures& observed,
       // the refinement's reach (a re-seed that chose the wrong start, 0.3 m or more from the
       // robot) only the search has seen the place.
       double found_nats = 0.0, hint_nats = 0.0;
-      best_near(update, alternative, test.refine_step_m, found_nats);
-      best_near(update, Pose2{hint.x_m, hint.y_m, hint.yaw_rad}, test.refine_step_m, hint_nats);
+      best_model_fit_near(update, alternative, test.refine_step_m, found_nats);
+      best_model_fit_near(update, Pose2{hint.x_m, hint.y_m, hint.yaw_rad}, test.refine_step_m,
+                          hint_nats);
       if (hint_nats > found_nats) alternative = Pose2{hint.x_m, hint.y_m, hint.yaw_rad};
     }
     holding_ = true;
@@ -70,8 +65,8 @@ bool NearbyPoseTest::step(const ForwardMap& map, const BoardFeatures& observed,
                         wrap_angle_rad(estimate.yaw_rad + dyaw_rad_)};
   }
   double here_nats = 0.0, there_nats = 0.0;
-  best_near(update, estimate, test.refine_step_m, here_nats);
-  alternative = best_near(update, alternative, test.refine_step_m, there_nats);
+  best_model_fit_near(update, estimate, test.refine_step_m, here_nats);
+  alternative = best_model_fit_near(update, alternative, test.refine_step_m, there_nats);
   const double ratio = there_nats - here_nats;
   // A frame the model cannot weigh (no finite likelihood) tells nothing.
   if (std::isfinite(ratio)) sum_nats_ += ratio;

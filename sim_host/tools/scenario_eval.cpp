@@ -168,6 +168,26 @@ RunRecord replay_scenario(const Scenario& scenario, std::uint64_t seed,
                                            f.truth.yaw_rad, params, 0U);
       f.estimate_nats = algorithms::floor_fit(map.forward, seen, out.pose.x_m, out.pose.y_m,
                                               out.pose.yaw_rad, params, 0U);
+      const algorithms::FloorPose& search = cycle->floor_search_pose();
+      if (search.valid) {
+        f.search_x_m = search.x_m;
+        f.search_y_m = search.y_m;
+        f.search_nats = search.nats;
+      }
+      const auto d = static_cast<double>(map.forward.bearing_camera_forward_m);
+      const algorithms::FloorPose at_truth = algorithms::floor_pose_seen_from(
+          map.forward, seen, f.truth.x_m + d * std::cos(f.truth.yaw_rad),
+          f.truth.y_m + d * std::sin(f.truth.yaw_rad), params, 0U);
+      if (at_truth.valid) f.truth_seen_nats = at_truth.nats;
+      const algorithms::BoardUpdate& model = cycle->board_update();
+      if (model.map != nullptr) {
+        using algorithms::ParticleFilter;
+        f.truth_model_nats = std::log(ParticleFilter::board_likelihood(model, f.truth));
+        f.estimate_model_nats = std::log(ParticleFilter::board_likelihood(model, out.pose));
+        if (search.valid)
+          f.search_model_nats = std::log(ParticleFilter::board_likelihood(
+              model, algorithms::Pose2{search.x_m, search.y_m, search.yaw_rad}));
+      }
       const algorithms::FrameInformation info =
           algorithms::frame_information(map.forward, seen, out.pose, params, f.distrusted);
       f.frame_sigma_m = info.weak_sigma_m;
@@ -206,30 +226,35 @@ void write_trace(const RunRecord& run, const std::string& path) {
     std::fprintf(f, "# kidnap at %.3f s: %.4f %.4f %.4f -> %.4f %.4f %.4f\n", k.t_s, k.from.x_m,
                  k.from.y_m, k.from.yaw_rad, k.to.x_m, k.to.y_m, k.to.yaw_rad);
   }
-  std::fprintf(f,
-               "t_s,truth_x_m,truth_y_m,truth_yaw_rad,x_m,y_m,yaw_rad,error_m,valid,health,"
-               "fix_present,fix_known,fix_x_m,fix_y_m,verdict,distrusted,consensus,robust_fix_x_m,"
-               "robust_fix_y_m,preference,sigma_m,sigma_yaw_rad,match,covered,evidence_known,"
-               "evidence_x_m,evidence_y_m,evidence_distance_m,truth_nats,estimate_nats,board_seen,"
-               "cut_board,fix_suspects,truth_lane_m,frame_sigma_m,frame_axis_rad");
+  std::fprintf(
+      f,
+      "t_s,truth_x_m,truth_y_m,truth_yaw_rad,x_m,y_m,yaw_rad,error_m,valid,health,"
+      "fix_present,fix_known,fix_x_m,fix_y_m,verdict,distrusted,consensus,robust_fix_x_m,"
+      "robust_fix_y_m,preference,sigma_m,sigma_yaw_rad,match,covered,evidence_known,"
+      "evidence_x_m,evidence_y_m,evidence_distance_m,truth_nats,estimate_nats,board_seen,"
+      "cut_board,fix_suspects,truth_lane_m,frame_sigma_m,frame_axis_rad,search_x_m,search_y_m,"
+      "search_nats,truth_seen_nats,truth_model_nats,search_model_nats,estimate_model_nats");
   const std::size_t boards = run.frames.empty() ? 0 : run.frames.front().boards;
   for (std::size_t b = 0; b < boards; ++b) std::fprintf(f, ",chi2_%zu", b + 1);
   for (std::size_t b = 0; b < boards; ++b) std::fprintf(f, ",static_%zu", b + 1);
   std::fprintf(f, "\n");
   for (const FrameRecord& r : run.frames) {
-    std::fprintf(
-        f,
-        "%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%d,%s,%d,%d,%.4f,%.4f,%d,%u,%d,%.4f,%.4f,"
-        "%.3f,%.4f,"
-        "%.4f,%.4g,%d,%d,%.4f,%.4f,%.4f,%.3f,%.3f,%d,%d,%u,%.3f,%.4g,%.3f",
-        r.t_s, r.truth.x_m, r.truth.y_m, r.truth.yaw_rad, r.estimate.x_m, r.estimate.y_m,
-        r.estimate.yaw_rad, r.position_error_m(), r.valid ? 1 : 0, firmware::health_name(r.health),
-        r.fix_present ? 1 : 0, r.fix_known ? 1 : 0, r.fix.x_m, r.fix.y_m,
-        static_cast<int>(r.verdict), static_cast<unsigned>(r.distrusted), r.consensus ? 1 : 0,
-        r.robust_fix.x_m, r.robust_fix.y_m, r.preference, r.sigma_m, r.sigma_yaw_rad, r.match,
-        r.covered, r.evidence_known ? 1 : 0, r.evidence.x_m, r.evidence.y_m, r.evidence_distance_m,
-        r.truth_nats, r.estimate_nats, r.board_seen ? 1 : 0, r.cut_board ? 1 : 0,
-        static_cast<unsigned>(r.fix_suspects), r.truth_lane_m, r.frame_sigma_m, r.frame_axis_rad);
+    std::fprintf(f,
+                 "%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%d,%s,%d,%d,%.4f,%.4f,%d,%u,%d,%.4f,%.4f,"
+                 "%.3f,%.4f,"
+                 "%.4f,%.4g,%d,%d,%.4f,%.4f,%.4f,%.3f,%.3f,%d,%d,%u,%.3f,%.4g,%.3f,%.4f,%.4f,%.3f,%"
+                 ".3f,%.3f,%.3f,%.3f",
+                 r.t_s, r.truth.x_m, r.truth.y_m, r.truth.yaw_rad, r.estimate.x_m, r.estimate.y_m,
+                 r.estimate.yaw_rad, r.position_error_m(), r.valid ? 1 : 0,
+                 firmware::health_name(r.health), r.fix_present ? 1 : 0, r.fix_known ? 1 : 0,
+                 r.fix.x_m, r.fix.y_m, static_cast<int>(r.verdict),
+                 static_cast<unsigned>(r.distrusted), r.consensus ? 1 : 0, r.robust_fix.x_m,
+                 r.robust_fix.y_m, r.preference, r.sigma_m, r.sigma_yaw_rad, r.match, r.covered,
+                 r.evidence_known ? 1 : 0, r.evidence.x_m, r.evidence.y_m, r.evidence_distance_m,
+                 r.truth_nats, r.estimate_nats, r.board_seen ? 1 : 0, r.cut_board ? 1 : 0,
+                 static_cast<unsigned>(r.fix_suspects), r.truth_lane_m, r.frame_sigma_m,
+                 r.frame_axis_rad, r.search_x_m, r.search_y_m, r.search_nats, r.truth_seen_nats,
+                 r.truth_model_nats, r.search_model_nats, r.estimate_model_nats);
     for (std::size_t b = 0; b < boards; ++b)
       std::fprintf(f, ",%.3g", static_cast<double>(r.chi2[b]));
     for (std::size_t b = 0; b < boards; ++b)

@@ -80,6 +80,17 @@ struct FrameRecord {
   /// fit that the boards cannot tell the two apart.
   double truth_nats = std::numeric_limits<double>::quiet_NaN();
   double estimate_nats = std::numeric_limits<double>::quiet_NaN();
+  /// The floor search's pose and its fit; the fit at the truth's place with the heading the
+  /// bearings give there (what the search would find at the truth).
+  double search_x_m = std::numeric_limits<double>::quiet_NaN();
+  double search_y_m = std::numeric_limits<double>::quiet_NaN();
+  double search_nats = std::numeric_limits<double>::quiet_NaN();
+  double truth_seen_nats = std::numeric_limits<double>::quiet_NaN();
+  /// The filter's own observation model (untempered log-likelihood) at the truth, the search's
+  /// pose and the estimate.
+  double truth_model_nats = std::numeric_limits<double>::quiet_NaN();
+  double search_model_nats = std::numeric_limits<double>::quiet_NaN();
+  double estimate_model_nats = std::numeric_limits<double>::quiet_NaN();
   /// How far the frame leaves the position open at the estimate (algorithms::frame_information:
   /// the weakest direction's sigma, metres, and that direction, radians). NaN where no board
   /// fits were computed.

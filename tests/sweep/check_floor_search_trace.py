@@ -114,6 +114,26 @@ def main():
             problems.append("a frame with fits but no frame_sigma_m above 0")
         elif not any(math.isfinite(s) for s in spreads):
             problems.append("frame_sigma_m is infinite on every frame")
+    # The search's own pose and fit, and the fit the search would find at the truth's place:
+    # table fits, so at most the bound; the search's fit is written on the frames with fits
+    # where it holds a pose (nan where it has none yet, or the frame gives no bearing).
+    # The filter's own model at the truth, the search's pose and the estimate: log-likelihoods,
+    # finite where written.
+    wanted = ("search_x_m", "search_y_m", "search_nats", "truth_seen_nats", "truth_model_nats",
+              "search_model_nats", "estimate_model_nats")
+    missing = [c for c in wanted if rows and c not in rows[0]]
+    if missing:
+        problems.append("no column " + ", ".join(missing))
+    elif rows:
+        searched = [r for r in fitted if not math.isnan(float(r["search_nats"]))]
+        if not searched:
+            problems.append("the search's fit written on no frame")
+        if any(not (float(r[c]) <= bound) for r in searched
+               for c in ("search_nats", "truth_seen_nats") if not math.isnan(float(r[c]))):
+            problems.append(f"a search fit above a perfect one ({bound} nats)")
+        if any(math.isinf(float(r[c])) for r in fitted
+               for c in ("truth_model_nats", "search_model_nats", "estimate_model_nats")):
+            problems.append("a model log-likelihood that is not finite")
     confirmed = sum(1 for r in rows if r["verdict"] == "2")
     if confirmed == 0:
         problems.append("no kidnap confirmed")

@@ -58,6 +58,30 @@ TEST(NearbyPoseTest, BoardLikelihoodIsTheWeightAParticleGets) {
             ha::ParticleFilter::board_likelihood(u, ha::Pose2{1.45, 0.9, 0.6}));
 }
 
+// The best of 3 x 3 places in the filter's model: the one nearest the robot, its fit the log of
+// the likelihood there, never worse than the centre's. The floor kidnap test weighs the floor
+// search's place against the estimate with it.
+TEST(NearbyPoseTest, BestModelFitNearIsTheGridPlaceNearestTheRobot) {
+  const auto map = make_floor();
+  ha::BoardModelParams params;
+  const ha::Pose2 robot{1.3, 0.9, 0.6};
+  const ha::BoardFeatures o = seen(robot.x_m, robot.y_m, robot.yaw_rad);
+  const ha::BoardUpdate u = update_for(*map, o, robot, params);
+  double nats = 0.0;
+  const ha::Pose2 around{1.34, 0.86, 0.6};  // 4 cm off in x and y: the grid's corner is the robot
+  const ha::Pose2 best = ha::best_model_fit_near(u, around, 0.04, nats);
+  EXPECT_NEAR(best.x_m, robot.x_m, 1e-9);
+  EXPECT_NEAR(best.y_m, robot.y_m, 1e-9);
+  EXPECT_DOUBLE_EQ(best.yaw_rad, around.yaw_rad);
+  EXPECT_NEAR(nats, std::log(ha::ParticleFilter::board_likelihood(u, best)), 1e-12);
+  EXPECT_GT(nats, std::log(ha::ParticleFilter::board_likelihood(u, around)));
+  // Far from the robot the best of the grid still fits worse than the robot's place.
+  double far_nats = 0.0;
+  ha::best_model_fit_near(u, ha::Pose2{1.8, 0.9, 0.6}, 0.02, far_nats);
+  EXPECT_LT(far_nats, nats);
+  EXPECT_TRUE(std::isfinite(far_nats));
+}
+
 TEST(NearbyPoseTest, DrawsAtTheRobotWhenTheEstimateIsOffAndNeverWhenItIsRight) {
   const auto map = make_floor();
   const ha::BoardModelParams params;

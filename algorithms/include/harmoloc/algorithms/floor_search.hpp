@@ -73,6 +73,10 @@ class FloorSearch {
   static FloorPose refine(const ForwardMap& map, const BoardFeatures& observed,
                           const FloorPose& around, double radius_m, const BoardModelParams& params,
                           std::uint32_t leave_out, int levels = 1);
+  /// The places refine() tries with @p levels levels.
+  static constexpr std::size_t refine_places(int levels) {
+    return 25U + 8U * static_cast<std::size_t>(levels > 1 ? levels - 1 : 0);
+  }
 
  private:
   std::uint64_t cursor_ = 0;  ///< the next place of the pass, row-major over the strided grid

@@ -37,6 +37,12 @@ struct NearbyPoseParams {
   double draw_weight = 0.5;
 };
 
+/// The boards' log-likelihood in the filter's own model (@p update, untempered) of the best of
+/// 3 x 3 places @p step_m apart around @p around, at its heading, in @p nats; returns that place.
+/// The likelihood is at least the product of the boards' floors, so its log is finite.
+Pose2 best_model_fit_near(const BoardUpdate& update, const Pose2& around, double step_m,
+                          double& nats);
+
 class NearbyPoseTest {
  public:
   /// Forgets the alternative (after a re-seed).

@@ -211,6 +211,10 @@ class LocalizationCycle {
   algorithms::KidnapVerdict kidnap_verdict() const { return kidnap_verdict_; }
   /// What the kidnap test saw this cycle (for tools that look at one run closely).
   const algorithms::KidnapInput& kidnap_input() const { return kidnap_input_; }
+  /// On a floor: the pose the floor search follows (invalid elsewhere).
+  const algorithms::FloorPose& floor_search_pose() const { return floor_fix_; }
+  /// The filter's board update of the latest frame weighed (its observation model).
+  const algorithms::BoardUpdate& board_update() const { return board_update_; }
   const FixOutput& last_fix() const { return fix_; }
   const CycleCounters& counters() const { return counters_; }
   const LatencyHistogram& stage_histogram(Stage stage) const {
@@ -405,7 +409,7 @@ class LocalizationCycle {
   bool floor_search_on_ = false;
   std::uint32_t floor_stride_ = 1;  ///< cells between the places a pass tries, along each axis
   double floor_refine_m_ = 0.02;    ///< the refinement's reach: a stride
-  double floor_margin_nats_ = 0.0;  ///< ln of the places a pass tries (the luckiest's margin)
+  double floor_margin_nats_ = 0.0;  ///< the luck of a pass's best over the estimate's (nats)
   algorithms::FloorSearch floor_search_;
   algorithms::FloorPose floor_fix_{};
   // On a floor map with bearings: a seed's heading from the boards' bearings (observed_), and
