@@ -23,6 +23,13 @@ Pose2 best_model_fit_near(const BoardUpdate& update, const Pose2& around, double
   return best;
 }
 
+double model_log_ratio(const BoardUpdate& update, const Pose2& here, Pose2& there, double step_m) {
+  double here_nats = 0.0, there_nats = 0.0;
+  best_model_fit_near(update, here, step_m, here_nats);
+  there = best_model_fit_near(update, there, step_m, there_nats);
+  return there_nats - here_nats;
+}
+
 void NearbyPoseTest::reset() {
   holding_ = false;
   sum_nats_ = 0.0;
@@ -64,10 +71,7 @@ bool NearbyPoseTest::step(const ForwardMap& map, const BoardFeatures& observed,
     alternative = Pose2{estimate.x_m + dx_m_, estimate.y_m + dy_m_,
                         wrap_angle_rad(estimate.yaw_rad + dyaw_rad_)};
   }
-  double here_nats = 0.0, there_nats = 0.0;
-  best_model_fit_near(update, estimate, test.refine_step_m, here_nats);
-  alternative = best_model_fit_near(update, alternative, test.refine_step_m, there_nats);
-  const double ratio = there_nats - here_nats;
+  const double ratio = model_log_ratio(update, estimate, alternative, test.refine_step_m);
   // A frame the model cannot weigh (no finite likelihood) tells nothing.
   if (std::isfinite(ratio)) sum_nats_ += ratio;
   ++frames_;

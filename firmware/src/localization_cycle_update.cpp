@@ -263,8 +263,8 @@ void LocalizationCycle::floor_kidnap_test(const algorithms::BoardFeatures& obser
       near = algorithms::better_of(
           near, algorithms::FloorSearch::refine(map_.forward, observed, near, floor_refine_m_,
                                                 board_params_, leave_out, kFloorRefineLevels));
-      // The best of a pass is the luckiest of its places: it must beat the estimate by the log
-      // of their number more (the chance that some place fits the frame that well by accident).
+      // The best of a pass is the luckiest of its places: it must beat the estimate by the luck
+      // the two maxima do not share more (floor_margin_nats_, set at start-up).
       in.preference = floor_fix_.nats - near.nats - floor_margin_nats_;
       // The search weighs the map's tables; the filter weighs the boards projected from the
       // fitted camera where the map has them, and a place the tables predict poorly can fit the
@@ -276,13 +276,9 @@ void LocalizationCycle::floor_kidnap_test(const algorithms::BoardFeatures& obser
       // Where the model is flat (the boards it sees written off after a kidnap) it does not
       // contradict the search.
       if (in.preference >= kidnap_params_.preference_min && board_update_.map != nullptr) {
-        const double step_m = config_.filter.nearby.refine_step_m;
-        double here_nats = 0.0, there_nats = 0.0;
-        algorithms::best_model_fit_near(board_update_, estimate, step_m, here_nats);
-        algorithms::best_model_fit_near(
-            board_update_, algorithms::Pose2{floor_fix_.x_m, floor_fix_.y_m, floor_fix_.yaw_rad},
-            step_m, there_nats);
-        const double model_nats = there_nats - here_nats;
+        algorithms::Pose2 searched{floor_fix_.x_m, floor_fix_.y_m, floor_fix_.yaw_rad};
+        const double model_nats = algorithms::model_log_ratio(board_update_, estimate, searched,
+                                                              config_.filter.nearby.refine_step_m);
         if (std::isfinite(model_nats) && model_nats < -kidnap_params_.preference_min)
           in.preference = model_nats;
       }

@@ -43,6 +43,10 @@ struct NearbyPoseParams {
 Pose2 best_model_fit_near(const BoardUpdate& update, const Pose2& around, double step_m,
                           double& nats);
 
+/// The filter's model's log-ratio of @p there over @p here, each the best of its 3 x 3 places
+/// (best_model_fit_near, @p here first); @p there becomes its best place.
+double model_log_ratio(const BoardUpdate& update, const Pose2& here, Pose2& there, double step_m);
+
 class NearbyPoseTest {
  public:
   /// Forgets the alternative (after a re-seed).
