@@ -1,6 +1,9 @@
 #include "harmoloc/algorithms/projected_bearing.hpp"
 
+#include <cstdint>
+#include <cstring>
 #include <limits>
+#include <utility>
 
 namespace harmoloc::algorithms {
 
@@ -48,9 +51,24 @@ std::size_t clip(const ImagePoint* in, std::size_t n, ImagePoint* out, Keep keep
   return m;
 }
 
-}  // namespace
+// Four floats, and four lanes' masks (0 or -1) from comparing them.
+using F4 = float __attribute__((vector_size(16)));
+using I4 = std::int32_t __attribute__((vector_size(16)));
+constexpr I4 kLaneIndex = {0, 1, 2, 3};
 
-namespace {
+F4 load4(const float* p) {
+  F4 out;
+  std::memcpy(&out, p, sizeof out);
+  return out;
+}
+
+void store4(float* p, F4 in) {
+  std::memcpy(p, &in, sizeof in);
+}
+
+bool any(I4 mask) {
+  return (mask[0] | mask[1] | mask[2] | mask[3]) != 0;
+}
 
 // project_outline, with the area's work compiled out of the bearings' loop (kArea false): the
 // filter takes a bearing alone at most particles, and that loop is tuned for its instruction
@@ -62,6 +80,7 @@ ProjectedOutline project(const BearingProjection& p, const CameraAtPose& c, std:
   const std::size_t n = p.points[b];
   if (n < 3 || n > BearingProjection::kMaxPoints) return out;
   constexpr std::size_t kLanes = BearingProjection::kMaxPoints;
+  static_assert(kLanes % 4 == 0, "the points run four at a time");
   // Four clips add at most one point each.
   constexpr std::size_t kMaxClipped = kLanes + 4;
   const float* px = p.outline_m.data() + b * 3 * kLanes;
@@ -79,60 +98,64 @@ ProjectedOutline project(const BearingProjection& p, const CameraAtPose& c, std:
   const float u0 = -0.5F, v0 = -0.5F;
   const float u1 = static_cast<float>(p.width_px) - 0.5F;
   const float v1 = static_cast<float>(p.height_px) - 0.5F;
-  std::array<float, kLanes> u{}, v{};
-  bool ahead = false, unprojected = false;
-  float u_lo = u0, u_hi = u0, v_lo = v0, v_hi = v0;
-  if constexpr (kArea) {
-    u_lo = v_lo = std::numeric_limits<float>::infinity();
-    u_hi = v_hi = -std::numeric_limits<float>::infinity();
-  }
-  for (std::size_t i = 0; i < n; ++i) {
-    const float w0 = px[i] - o0, w1 = py[i] - o1, w2 = pz[i] - o2;
-    const float z = w0 * f0 + w1 * f1 + w2 * f2;
-    // Bitwise, not ||: no branch per point.
-    if constexpr (kArea) ahead |= z > 0.0F;
-    // Behind the camera (or NaN), or beyond the lens's monotonic region: no column; the area
-    // still needs to know whether any point lies ahead.
-    if (!(z > 0.01F)) {
-      if constexpr (!kArea) return out;
-      unprojected = true;
-      continue;
-    }
-    const float inv_z = 1.0F / z;
-    const float x = (w0 * r0 + w1 * r1 + w2 * r_2) * inv_z;
-    const float y = (w0 * d0 + w1 * d1 + w2 * d2) * inv_z;
-    const float r2 = x * x + y * y;
-    const float radial = 1.0F + r2 * (k1 + r2 * (k2 + k3 * r2));
-    float xd = x * radial, yd = y * radial;
+  // Four points at a time in GCC's portable vectors (SSE and NEON; plain floats where a target has
+  // none): each lane is the same IEEE arithmetic as the point alone. A point's verdicts are or-ed
+  // into lane masks; a lane past the outline (i >= n) computes from the outline's zero padding and
+  // is masked out of them.
+  // Two lanes beyond the points: the shoelace below reads a point's next two.
+  std::array<float, kLanes + 2> u{}, v{};
+  I4 ahead4{}, unprojected4{};
+  // The points beyond each of the frame's sides: left, right, top, bottom.
+  std::array<I4, 4> beyond4{};
+  for (std::size_t g = 0; g < n; g += 4) {
+    const I4 used = (kLaneIndex + static_cast<std::int32_t>(g)) < static_cast<std::int32_t>(n);
+    const F4 w0 = load4(px + g) - o0, w1 = load4(py + g) - o1, w2 = load4(pz + g) - o2;
+    const F4 z = w0 * f0 + w1 * f1 + w2 * f2;
+    const F4 inv_z = 1.0F / z;
+    const F4 x = (w0 * r0 + w1 * r1 + w2 * r_2) * inv_z;
+    const F4 y = (w0 * d0 + w1 * d1 + w2 * d2) * inv_z;
+    const F4 r2 = x * x + y * y;
+    const F4 radial = 1.0F + r2 * (k1 + r2 * (k2 + k3 * r2));
+    F4 xd = x * radial, yd = y * radial;
     if (tangential) {
       xd += 2.0F * t1 * x * y + t2 * (r2 + 2.0F * x * x);
       yd += t1 * (r2 + 2.0F * y * y) + 2.0F * t2 * x * y;
     }
-    if (!(r2 < max_r2)) {
-      if constexpr (!kArea) return out;
-      unprojected = true;
-      continue;
-    }
-    u[i] = focal * xd + cx;
-    v[i] = focal * yd + cy;
+    const F4 ug = focal * xd + cx, vg = focal * yd + cy;
+    store4(u.data() + g, ug);
+    store4(v.data() + g, vg);
+    ahead4 |= used & (z > 0.0F);
+    // Behind the camera (or NaN), or beyond the lens's monotonic region: no column, and no area
+    // unless every point lies behind.
+    unprojected4 |= used & ~((z > 0.01F) & (r2 < max_r2));
     if constexpr (kArea) {
-      // The points' bounds, one min or max each: cheaper than four tests a point.
-      u_lo = u[i] < u_lo ? u[i] : u_lo;
-      u_hi = u[i] > u_hi ? u[i] : u_hi;
-      v_lo = v[i] < v_lo ? v[i] : v_lo;
-      v_hi = v[i] > v_hi ? v[i] : v_hi;
+      beyond4[0] |= used & (ug < u0);
+      beyond4[1] |= used & (ug > u1);
+      beyond4[2] |= used & (vg < v0);
+      beyond4[3] |= used & (vg > v1);
     }
   }
+  const bool ahead = any(ahead4), unprojected = any(unprojected4);
+  if constexpr (!kArea) {
+    if (unprojected) return out;
+  }
   // The whole polygon's area and centroid (shoelace), about its first point to keep the
-  // products small.
+  // products small: triangle (0, i, i + 1)'s cross product four at a time, the sums in order.
   float a2 = 0.0F;
   if (!unprojected) {
+    std::array<float, kLanes> cross{}, moment{};
+    const float ua = u[0], va = v[0];
+    for (std::size_t g = 0; g + 2 < n; g += 4) {
+      const F4 ui = load4(u.data() + g + 1) - ua, vi = load4(v.data() + g + 1) - va;
+      const F4 uk = load4(u.data() + g + 2) - ua, vk = load4(v.data() + g + 2) - va;
+      const F4 c4 = ui * vk - uk * vi;
+      store4(cross.data() + g, c4);
+      store4(moment.data() + g, (ui + uk) * c4);
+    }
     float cu = 0.0F;
     for (std::size_t i = 1; i + 1 < n; ++i) {
-      const float ui = u[i] - u[0], vi = v[i] - v[0], uk = u[i + 1] - u[0], vk = v[i + 1] - v[0];
-      const float cross = ui * vk - uk * vi;
-      a2 += cross;
-      cu += (ui + uk) * cross;
+      a2 += cross[i - 1];
+      cu += moment[i - 1];
     }
     if (a2 > 1e-3F || a2 < -1e-3F) {
       out.has_column = true;
@@ -146,26 +169,31 @@ ProjectedOutline project(const BearingProjection& p, const CameraAtPose& c, std:
     }
     if (unprojected) return out;
     out.has_area = true;
-    if (u_lo >= u0 && u_hi <= u1 && v_lo >= v0 && v_hi <= v1) {
+    if (!any(beyond4[0] | beyond4[1] | beyond4[2] | beyond4[3])) {
       out.area_px = 0.5F * (a2 < 0.0F ? -a2 : a2);
       return out;
     }
     std::array<ImagePoint, kMaxClipped> a{}, bpoly{};
     for (std::size_t i = 0; i < n; ++i) a[i] = {u[i], v[i]};
+    // Only the sides some point lies beyond: a side every point is within keeps the polygon as
+    // it is (its clips' points lie between two points within it), so the area is the same.
+    ImagePoint* in = a.data();
+    ImagePoint* spare = bpoly.data();
     std::size_t m = n;
-    m = clip<kMaxClipped>(a.data(), m, bpoly.data(),
-                          [u0](const ImagePoint& q) { return q.u - u0; });
-    m = clip<kMaxClipped>(bpoly.data(), m, a.data(),
-                          [u1](const ImagePoint& q) { return u1 - q.u; });
-    m = clip<kMaxClipped>(a.data(), m, bpoly.data(),
-                          [v0](const ImagePoint& q) { return q.v - v0; });
-    m = clip<kMaxClipped>(bpoly.data(), m, a.data(),
-                          [v1](const ImagePoint& q) { return v1 - q.v; });
+    const auto clip_side = [&](std::size_t side, auto keep) {
+      if (!any(beyond4[side])) return;
+      m = clip<kMaxClipped>(in, m, spare, keep);
+      std::swap(in, spare);
+    };
+    clip_side(0, [u0](const ImagePoint& q) { return q.u - u0; });
+    clip_side(1, [u1](const ImagePoint& q) { return u1 - q.u; });
+    clip_side(2, [v0](const ImagePoint& q) { return q.v - v0; });
+    clip_side(3, [v1](const ImagePoint& q) { return v1 - q.v; });
     if (m < 3) return out;
     float clipped2 = 0.0F;
     for (std::size_t i = 1; i + 1 < m; ++i) {
-      clipped2 +=
-          (a[i].u - a[0].u) * (a[i + 1].v - a[0].v) - (a[i + 1].u - a[0].u) * (a[i].v - a[0].v);
+      clipped2 += (in[i].u - in[0].u) * (in[i + 1].v - in[0].v) -
+                  (in[i + 1].u - in[0].u) * (in[i].v - in[0].v);
     }
     out.area_px = 0.5F * (clipped2 < 0.0F ? -clipped2 : clipped2);
   }

@@ -21,6 +21,7 @@ add_executable(algorithms_test
   ${HARMOLOC_UNIT_DIR}/odometry_test.cpp
   ${HARMOLOC_UNIT_DIR}/particle_filter_test.cpp
   ${HARMOLOC_UNIT_DIR}/robust_filter_test.cpp
+  ${HARMOLOC_UNIT_DIR}/projected_outline_test.cpp
   ${HARMOLOC_UNIT_DIR}/visibility_test.cpp
   ${HARMOLOC_UNIT_DIR}/floor_search_test.cpp
   ${HARMOLOC_UNIT_DIR}/frame_information_test.cpp
