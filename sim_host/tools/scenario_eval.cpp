@@ -187,6 +187,10 @@ RunRecord replay_scenario(const Scenario& scenario, std::uint64_t seed,
         if (search.valid)
           f.search_model_nats = std::log(ParticleFilter::board_likelihood(
               model, algorithms::Pose2{search.x_m, search.y_m, search.yaw_rad}));
+        f.boards_in_view = 0;
+        for (std::size_t b = 0; b < model.boards; ++b)
+          if (model.use[b] && model.observed[b] > 0.0F) ++f.boards_in_view;
+        f.boards_with_bearing = __builtin_popcount(model.bearing_mask);
       }
       const algorithms::FrameInformation info =
           algorithms::frame_information(map.forward, seen, out.pose, params, f.distrusted);
@@ -233,28 +237,29 @@ void write_trace(const RunRecord& run, const std::string& path) {
       "robust_fix_y_m,preference,sigma_m,sigma_yaw_rad,match,covered,evidence_known,"
       "evidence_x_m,evidence_y_m,evidence_distance_m,truth_nats,estimate_nats,board_seen,"
       "cut_board,fix_suspects,truth_lane_m,frame_sigma_m,frame_axis_rad,search_x_m,search_y_m,"
-      "search_nats,truth_seen_nats,truth_model_nats,search_model_nats,estimate_model_nats");
+      "search_nats,truth_seen_nats,truth_model_nats,search_model_nats,estimate_model_nats,"
+      "boards_in_view,boards_with_bearing");
   const std::size_t boards = run.frames.empty() ? 0 : run.frames.front().boards;
   for (std::size_t b = 0; b < boards; ++b) std::fprintf(f, ",chi2_%zu", b + 1);
   for (std::size_t b = 0; b < boards; ++b) std::fprintf(f, ",static_%zu", b + 1);
   std::fprintf(f, "\n");
   for (const FrameRecord& r : run.frames) {
-    std::fprintf(f,
-                 "%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%d,%s,%d,%d,%.4f,%.4f,%d,%u,%d,%.4f,%.4f,"
-                 "%.3f,%.4f,"
-                 "%.4f,%.4g,%d,%d,%.4f,%.4f,%.4f,%.3f,%.3f,%d,%d,%u,%.3f,%.4g,%.3f,%.4f,%.4f,%.3f,%"
-                 ".3f,%.3f,%.3f,%.3f",
-                 r.t_s, r.truth.x_m, r.truth.y_m, r.truth.yaw_rad, r.estimate.x_m, r.estimate.y_m,
-                 r.estimate.yaw_rad, r.position_error_m(), r.valid ? 1 : 0,
-                 firmware::health_name(r.health), r.fix_present ? 1 : 0, r.fix_known ? 1 : 0,
-                 r.fix.x_m, r.fix.y_m, static_cast<int>(r.verdict),
-                 static_cast<unsigned>(r.distrusted), r.consensus ? 1 : 0, r.robust_fix.x_m,
-                 r.robust_fix.y_m, r.preference, r.sigma_m, r.sigma_yaw_rad, r.match, r.covered,
-                 r.evidence_known ? 1 : 0, r.evidence.x_m, r.evidence.y_m, r.evidence_distance_m,
-                 r.truth_nats, r.estimate_nats, r.board_seen ? 1 : 0, r.cut_board ? 1 : 0,
-                 static_cast<unsigned>(r.fix_suspects), r.truth_lane_m, r.frame_sigma_m,
-                 r.frame_axis_rad, r.search_x_m, r.search_y_m, r.search_nats, r.truth_seen_nats,
-                 r.truth_model_nats, r.search_model_nats, r.estimate_model_nats);
+    std::fprintf(
+        f,
+        "%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%d,%s,%d,%d,%.4f,%.4f,%d,%u,%d,%.4f,%.4f,"
+        "%.3f,%.4f,"
+        "%.4f,%.4g,%d,%d,%.4f,%.4f,%.4f,%.3f,%.3f,%d,%d,%u,%.3f,%.4g,%.3f,%.4f,%.4f,%.3f,%"
+        ".3f,%.3f,%.3f,%.3f,%d,%d",
+        r.t_s, r.truth.x_m, r.truth.y_m, r.truth.yaw_rad, r.estimate.x_m, r.estimate.y_m,
+        r.estimate.yaw_rad, r.position_error_m(), r.valid ? 1 : 0, firmware::health_name(r.health),
+        r.fix_present ? 1 : 0, r.fix_known ? 1 : 0, r.fix.x_m, r.fix.y_m,
+        static_cast<int>(r.verdict), static_cast<unsigned>(r.distrusted), r.consensus ? 1 : 0,
+        r.robust_fix.x_m, r.robust_fix.y_m, r.preference, r.sigma_m, r.sigma_yaw_rad, r.match,
+        r.covered, r.evidence_known ? 1 : 0, r.evidence.x_m, r.evidence.y_m, r.evidence_distance_m,
+        r.truth_nats, r.estimate_nats, r.board_seen ? 1 : 0, r.cut_board ? 1 : 0,
+        static_cast<unsigned>(r.fix_suspects), r.truth_lane_m, r.frame_sigma_m, r.frame_axis_rad,
+        r.search_x_m, r.search_y_m, r.search_nats, r.truth_seen_nats, r.truth_model_nats,
+        r.search_model_nats, r.estimate_model_nats, r.boards_in_view, r.boards_with_bearing);
     for (std::size_t b = 0; b < boards; ++b)
       std::fprintf(f, ",%.3g", static_cast<double>(r.chi2[b]));
     for (std::size_t b = 0; b < boards; ++b)

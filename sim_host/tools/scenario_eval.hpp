@@ -91,6 +91,10 @@ struct FrameRecord {
   double truth_model_nats = std::numeric_limits<double>::quiet_NaN();
   double search_model_nats = std::numeric_limits<double>::quiet_NaN();
   double estimate_model_nats = std::numeric_limits<double>::quiet_NaN();
+  /// Boards the filter's model weighs that show an area in this frame, and of those, the ones
+  /// that give a bearing (-1 without a model): fewer than two leave a pose a line of places.
+  int boards_in_view = -1;
+  int boards_with_bearing = -1;
   /// How far the frame leaves the position open at the estimate (algorithms::frame_information:
   /// the weakest direction's sigma, metres, and that direction, radians). NaN where no board
   /// fits were computed.

@@ -134,6 +134,19 @@ def main():
         if any(math.isinf(float(r[c])) for r in fitted
                for c in ("truth_model_nats", "search_model_nats", "estimate_model_nats")):
             problems.append("a model log-likelihood that is not finite")
+    # The boards in view and those of them giving a bearing: counts within the boards, the
+    # bearings no more than the boards in view, some board in view on most frames with fits.
+    counted = ("boards_in_view", "boards_with_bearing")
+    missing = [c for c in counted if rows and c not in rows[0]]
+    if missing:
+        problems.append("no column " + ", ".join(missing))
+    elif fitted:
+        in_view = [int(r["boards_in_view"]) for r in fitted]
+        bearings = [int(r["boards_with_bearing"]) for r in fitted]
+        if any(not 0 <= v <= 8 for v in in_view) or any(b > v for b, v in zip(bearings, in_view)):
+            problems.append("boards_in_view or boards_with_bearing out of range")
+        if sum(1 for v in in_view if v > 0) < 0.5 * len(in_view):
+            problems.append("no board in view on most frames with fits")
     confirmed = sum(1 for r in rows if r["verdict"] == "2")
     if confirmed == 0:
         problems.append("no kidnap confirmed")
