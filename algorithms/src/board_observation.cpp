@@ -342,6 +342,13 @@ struct NearViews {
   }
 };
 
+// The share of the cloud's spread its particles are weighed over: the bandwidth Silverman's
+// rule of thumb gives a kernel density over @p particles points in three dimensions (x, y and
+// the heading), (4 / (5 n))^(1/7): 0.36 of the spread at 1024 particles, 0.44 at 256.
+double kernel_bandwidth_share(std::size_t particles) {
+  return std::pow(4.0 / (5.0 * static_cast<double>(particles)), 1.0 / 7.0);
+}
+
 /// BoardUpdate's quadratics near the estimate @p at (BoardUpdate::near_bearing, near_area): the
 /// bearings of the projected boards of @p bearing_boards, each to a tolerance of its spread, the
 /// areas of @p area_boards (bit b), each to a tolerance of @p area_noise[b] (the projection's
@@ -423,7 +430,7 @@ void BoardReliability::reset(const BoardModelParams& params) {
 BoardAssessment BoardReliability::assess(const ForwardMap& map, const BoardFeatures& observed,
                                          const Pose2& estimate, const BoardModelParams& params,
                                          BoardUpdate& update, double yaw_variance_rad2,
-                                         double position_sigma_m) {
+                                         double position_sigma_m, std::size_t particles) {
   BoardAssessment a;
   update.map = &map;
   update.boards = std::min<std::size_t>(map.board_count, observed.count);
@@ -465,10 +472,22 @@ BoardAssessment BoardReliability::assess(const ForwardMap& map, const BoardFeatu
                    bearing_residual);
     });
   }
-  // How far the projected areas change across the cloud's spread (assess's comment).
+  // How far the projected areas change across the cloud's spread (assess's comment), and
+  // across the particles' bandwidth.
   std::array<float, kMaxBoards> cloud_lo = expected, cloud_hi = expected;
-  if (position_sigma_m > 0.0 && projects_areas(map))
+  std::array<float, kMaxBoards> kernel_lo = expected, kernel_hi = expected;
+  const double bandwidth_m =
+      particles > 0 ? position_sigma_m * kernel_bandwidth_share(particles) : position_sigma_m;
+  if (position_sigma_m > 0.0 && projects_areas(map)) {
     over_cross(std::min(position_sigma_m, 0.5), cloud_lo, cloud_hi, [](double, double) {});
+    if (bandwidth_m < position_sigma_m) {
+      over_cross(std::min(bandwidth_m, 0.5), kernel_lo, kernel_hi, [](double, double) {});
+    } else {
+      kernel_lo = cloud_lo;
+      kernel_hi = cloud_hi;
+    }
+  }
+  std::array<double, kMaxBoards> weight_inv_var{};
   std::array<double, kMaxBoards> inv_var{};
   // A projected area's noise widened by the cloud's spread (not scaled): the yardstick of its
   // quadratic near the estimate.
@@ -488,9 +507,12 @@ BoardAssessment BoardReliability::assess(const ForwardMap& map, const BoardFeatu
     const double width = cut * params.sigma_scale * static_cast<double>(weighed_area_sigma(map, b));
     const double across =
         projects_area(map, b) ? 0.5 * static_cast<double>(cloud_hi[b] - cloud_lo[b]) : 0.0;
+    const double kernel =
+        projects_area(map, b) ? 0.5 * static_cast<double>(kernel_hi[b] - kernel_lo[b]) : 0.0;
     inv_var[b] = 1.0 / (width * width + across * across);
+    weight_inv_var[b] = 1.0 / (width * width + kernel * kernel);
     const double noise = static_cast<double>(weighed_area_sigma(map, b));
-    area_noise[b] = static_cast<float>(std::sqrt(noise * noise + across * across));
+    area_noise[b] = static_cast<float>(std::sqrt(noise * noise + kernel * kernel));
     const float o = observed.value[b];
     const double r = o < lo[b]   ? static_cast<double>(o) - static_cast<double>(lo[b])
                      : o > hi[b] ? static_cast<double>(o) - static_cast<double>(hi[b])
@@ -541,7 +563,7 @@ BoardAssessment BoardReliability::assess(const ForwardMap& map, const BoardFeatu
     const double w = params.robust ? static_probability_[b] : 1.0;
     update.gain[b] = static_cast<float>(w);
     update.floor[b] = static_cast<float>(params.robust ? (1.0 - w) * c : 0.0);
-    update.inv_two_var[b] = static_cast<float>(0.5 * s * s * inv_var[b]);
+    update.inv_two_var[b] = static_cast<float>(0.5 * s * s * weight_inv_var[b]);
     const double bearing_sigma = static_cast<double>(weighed_bearing_sigma_rad(map, b));
     if (params.bearings && map.has_bearings && bearing_sigma > 0.0 &&
         ((observed.angle_mask >> b) & 1U) != 0U) {

@@ -95,8 +95,9 @@ bool LocalizationCycle::update_with_boards(
   observed_ = algorithms::board_features(map_.forward, map_.model.area_scale, areas);
   ++observations_;
   const algorithms::BoardFeatures& observed = observed_;
-  assessment_ = reliability_.assess(map_.forward, observed, estimate, params, board_update_,
-                                    yaw_variance_rad2, std::sqrt(position_variance_m2));
+  assessment_ =
+      reliability_.assess(map_.forward, observed, estimate, params, board_update_,
+                          yaw_variance_rad2, std::sqrt(position_variance_m2), filter_.size());
   if (!assessment_.consensus) ++counters_.no_consensus;
 
   // The global fix without the boards that are not to be trusted now: those the motion index

@@ -292,7 +292,7 @@ int main(int argc, char** argv) {
         double yaw_var = 0.0, position_var = 0.0;
         const algorithms::Pose2 mean = filter.mean_pose(&yaw_var, &position_var);
         reliability.assess(g_map.forward, observed, mean, params, update, yaw_var,
-                           std::sqrt(position_var));
+                           std::sqrt(position_var), filter.size());
       } else {
         reliability.assess(g_map.forward, observed, filter.mean_pose(), params, update);
       }

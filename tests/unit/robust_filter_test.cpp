@@ -1618,23 +1618,42 @@ TEST(ParticleFilterBoards, ProjectedAreasNearTheEstimateFollowTheProjectionsQuad
   EXPECT_EQ(u.near_area_mask, 0U);
 }
 
+// Board 0's areas projected (noise 0.01), board 1's from the cells, an estimate near both, and
+// board 0's projected feature at a place.
+struct ProjectedAreaScene {
+  std::unique_ptr<ha::ForwardMap> map = make_projected_map(1.5F, 2.0F);
+  ha::Pose2 estimate{1.45, 0.75, 1.5};
+  ProjectedAreaScene() {
+    map->projection.area_per_px[0] = 1.0e-3F;
+    map->projection.area_sigma[0] = 0.01F;
+  }
+  double feature(double x, double y) const {
+    std::array<float, ha::kMaxBoards> e{};
+    ha::expected_at_pose(*map, ha::locate(*map, x, y), x, y, ha::seen_heading(estimate.yaw_rad),
+                         e.data());
+    return static_cast<double>(e[0]);
+  }
+  // Half the range of board 0's feature over the estimate moved by @p d along +-x and +-y.
+  double half_range(double d) const {
+    double lo = feature(estimate.x_m, estimate.y_m), hi = lo;
+    for (const auto& o : {std::array<double, 2>{d, 0.0}, {-d, 0.0}, {0.0, d}, {0.0, -d}}) {
+      lo = std::min(lo, feature(estimate.x_m + o[0], estimate.y_m + o[1]));
+      hi = std::max(hi, feature(estimate.x_m + o[0], estimate.y_m + o[1]));
+    }
+    return 0.5 * (hi - lo);
+  }
+};
+
 // While the cloud is wide, a projected area is weighed by its noise widened by how much it
 // changes across the cloud: half the range of the projected area over the estimate moved by the
 // cloud's spread along x and y (at most 0.5 m). A board read from the cells keeps its width, and
 // a tight cloud (spread 0) the projection's own noise.
 TEST(ParticleFilterBoards, ProjectedAreasWidenWithTheCloudsSpread) {
-  const auto map = make_projected_map(1.5F, 2.0F);
-  ha::BearingProjection& p = map->projection;
-  p.area_per_px[0] = 1.0e-3F;
-  p.area_sigma[0] = 0.01F;
-  const ha::Pose2 estimate{1.45, 0.75, 1.5};
+  const ProjectedAreaScene scene;
+  const auto& map = scene.map;
+  const ha::Pose2 estimate = scene.estimate;
   ha::BoardModelParams params;
-  const auto feature = [&](double x, double y) {
-    std::array<float, ha::kMaxBoards> e{};
-    ha::expected_at_pose(*map, ha::locate(*map, x, y), x, y, ha::seen_heading(estimate.yaw_rad),
-                         e.data());
-    return static_cast<double>(e[0]);
-  };
+  const auto feature = [&](double x, double y) { return scene.feature(x, y); };
   // Seen as expected at the estimate: no board is scaled down for its residual.
   ha::BoardFeatures seen = observe(estimate.x_m, estimate.y_m);
   seen.value[0] = static_cast<float>(feature(estimate.x_m, estimate.y_m));
@@ -1648,13 +1667,7 @@ TEST(ParticleFilterBoards, ProjectedAreasWidenWithTheCloudsSpread) {
   const double k = params.sigma_scale;
   EXPECT_NEAR(inv_two_var(0.0, 0), 0.5 / (k * k * 0.01 * 0.01), 1e-3 * 0.5 / (k * k * 1e-4));
   for (const double spread : {0.1, 2.0}) {
-    const double d = std::min(spread, 0.5);
-    double lo = feature(estimate.x_m, estimate.y_m), hi = lo;
-    for (const auto& o : {std::array<double, 2>{d, 0.0}, {-d, 0.0}, {0.0, d}, {0.0, -d}}) {
-      lo = std::min(lo, feature(estimate.x_m + o[0], estimate.y_m + o[1]));
-      hi = std::max(hi, feature(estimate.x_m + o[0], estimate.y_m + o[1]));
-    }
-    const double across = 0.5 * (hi - lo);
+    const double across = scene.half_range(std::min(spread, 0.5));
     ASSERT_GT(across, 0.01) << spread;  // the board's area changes over the cloud
     const double expected = 0.5 / (k * k * 0.01 * 0.01 + across * across);
     EXPECT_NEAR(inv_two_var(spread, 0), expected, 1e-3 * expected) << spread;
@@ -1662,6 +1675,40 @@ TEST(ParticleFilterBoards, ProjectedAreasWidenWithTheCloudsSpread) {
     EXPECT_EQ(inv_two_var(spread, 1), inv_two_var(0.0, 1)) << spread;
   }
   EXPECT_LT(inv_two_var(0.1, 0), 0.5 * inv_two_var(0.0, 0));
+}
+
+// Given the cloud's particle count, the particles are weighed over their bandwidth, not the
+// whole spread: the spread times Silverman's (4 / (5 n))^(1/7) (0.36 at 1024 particles). The
+// board's chi2, which judges the estimate, still takes the whole spread.
+TEST(ParticleFilterBoards, ProjectedAreasWeighOverTheParticlesBandwidth) {
+  const ProjectedAreaScene scene;
+  const auto& map = scene.map;
+  const ha::Pose2 estimate = scene.estimate;
+  ha::BoardModelParams params;
+  const auto feature = [&](double x, double y) { return scene.feature(x, y); };
+  const auto half_range = [&](double d) { return scene.half_range(d); };
+  // Seen 0.05 off what the map expects at the estimate: a chi2 to compare.
+  ha::BoardFeatures seen = observe(estimate.x_m, estimate.y_m);
+  seen.value[0] = static_cast<float>(feature(estimate.x_m, estimate.y_m) + 0.05);
+  const double spread = 0.1, k = params.sigma_scale;
+  const auto assessed = [&](std::size_t particles, ha::BoardUpdate& u) {
+    ha::BoardReliability reliability;
+    reliability.reset(params);
+    return reliability.assess(*map, seen, estimate, params, u, 0.0, spread, particles);
+  };
+  ha::BoardUpdate whole, kernel;
+  const ha::BoardAssessment a_whole = assessed(0, whole);
+  const ha::BoardAssessment a_kernel = assessed(1024, kernel);
+  const double share = std::pow(4.0 / (5.0 * 1024.0), 1.0 / 7.0);
+  ASSERT_NEAR(share, 0.36, 0.005);
+  const double across = half_range(spread * share);
+  ASSERT_LT(across, 0.5 * half_range(spread));  // the bandwidth is narrower than the cloud
+  const double expected = 0.5 / (k * k * 0.01 * 0.01 + across * across);
+  EXPECT_NEAR(kernel.inv_two_var[0], expected, 1e-3 * expected);
+  EXPECT_GT(kernel.inv_two_var[0], 1.5F * whole.inv_two_var[0]);
+  EXPECT_EQ(a_kernel.chi2[0], a_whole.chi2[0]);
+  // A board read from the cells keeps its width.
+  EXPECT_EQ(kernel.inv_two_var[1], whole.inv_two_var[1]);
 }
 
 // The cloud's spread in position that mean_pose gives on request: half the particles at each of

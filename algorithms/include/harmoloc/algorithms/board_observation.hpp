@@ -254,9 +254,16 @@ class BoardReliability {
   /// alike. A projection is sharp (0.2-1% of the area): against a cloud tens of centimetres wide
   /// the board that fits one line of places best outweighs the others, which all read as
   /// outliers, and the cloud follows that line (random floor 6, docs/filter.md).
+  /// With @p particles (the cloud's count; 0: as the spread) the weights are widened over the
+  /// particles' bandwidth instead, the spread times (4 / (5 particles))^(1/7) (Silverman's rule
+  /// for a kernel density in x, y and the heading), and the chi2 over the whole spread: a point
+  /// of the cloud need not fit worse than its neighbours' spacing, but weighed over the whole
+  /// spread the cloud could not tell its own places apart, and a re-seed a few centimetres off
+  /// stayed there (docs/filter.md).
   BoardAssessment assess(const ForwardMap& map, const BoardFeatures& observed,
                          const Pose2& estimate, const BoardModelParams& params, BoardUpdate& update,
-                         double yaw_variance_rad2 = 0.0, double position_sigma_m = 0.0);
+                         double yaw_variance_rad2 = 0.0, double position_sigma_m = 0.0,
+                         std::size_t particles = 0);
 
   /// Motion index of board @p b: probability that it is static and visible.
   double static_probability(std::size_t b) const { return static_probability_[b]; }
