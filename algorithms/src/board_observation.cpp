@@ -487,10 +487,11 @@ BoardAssessment BoardReliability::assess(const ForwardMap& map, const BoardFeatu
       kernel_hi = cloud_hi;
     }
   }
+  // The board check's (over the cloud's spread) and the particles' (over their bandwidth).
   std::array<double, kMaxBoards> weight_inv_var{};
   std::array<double, kMaxBoards> inv_var{};
-  // A projected area's noise widened by the cloud's spread (not scaled): the yardstick of its
-  // quadratic near the estimate.
+  // A projected area's noise widened over the particles' bandwidth (not scaled), as the
+  // particles are weighed: the yardstick of its quadratic near the estimate.
   std::array<float, kMaxBoards> area_noise{};
   // A sign of a move in this frame: the board disagrees by showing more area than the map
   // expects around the estimate, or a bearing off. An occlusion only hides.
