@@ -30,8 +30,20 @@ double model_log_ratio(const BoardUpdate& update, const Pose2& here, Pose2& ther
   return there_nats - here_nats;
 }
 
+TablesEvidence tables_evidence(const ForwardMap& map, const BoardFeatures& observed,
+                               const FloorPose& searched, const Pose2& estimate, double radius_m,
+                               const BoardModelParams& params, std::uint32_t leave_out) {
+  TablesEvidence e;
+  if (!searched.valid) return e;
+  e.searched = FloorSearch::refine(map, observed, searched, radius_m, params, leave_out, 1);
+  const FloorPose around{estimate.x_m, estimate.y_m, estimate.yaw_rad, 0.0, true};
+  e.estimate = FloorSearch::refine(map, observed, around, radius_m, params, leave_out, 1);
+  return e;
+}
+
 void NearbyPoseTest::reset() {
   holding_ = false;
+  by_tables_ = false;
   sum_nats_ = 0.0;
   frames_ = 0;
 }
@@ -39,8 +51,38 @@ void NearbyPoseTest::reset() {
 bool NearbyPoseTest::step(const ForwardMap& map, const BoardFeatures& observed,
                           const BoardUpdate& update, const Pose2& estimate,
                           const BoardModelParams& params, std::uint32_t leave_out,
-                          const NearbyPoseParams& test, Pose2& draw_at, const FloorPose& hint) {
+                          const NearbyPoseParams& test, Pose2& draw_at, const FloorPose& hint,
+                          const TablesEvidence* tables) {
   if (update.map == nullptr || !floor_search_possible(map)) return false;
+  const bool use_tables = test.hint_by_tables && tables != nullptr && tables->searched.valid &&
+                          tables->estimate.valid &&
+                          std::hypot(tables->searched.x_m - estimate.x_m,
+                                     tables->searched.y_m - estimate.y_m) >= test.min_distance_m;
+  if (by_tables_ && !use_tables) reset();
+  if (use_tables) {
+    if (!holding_ || !by_tables_) {
+      holding_ = true;
+      by_tables_ = true;
+      sum_nats_ = 0.0;
+      frames_ = 0;
+    }
+    const Pose2 searched{tables->searched.x_m, tables->searched.y_m, tables->searched.yaw_rad};
+    double ratio = tables->searched.nats - tables->estimate.nats;
+    // The draw is at the tables' pose: the model's best place near it is the model's say, and
+    // where the model is flat (the case for the tables) that is any of its places.
+    Pose2 model_place = searched;
+    const double model = model_log_ratio(update, estimate, model_place, test.refine_step_m);
+    if (std::isfinite(model) && model < -test.veto_nats) ratio = model;
+    if (std::isfinite(ratio)) sum_nats_ += ratio;
+    ++frames_;
+    if (sum_nats_ > test.bound_nats) {
+      draw_at = searched;
+      reset();
+      return true;
+    }
+    if (sum_nats_ < -test.bound_nats || frames_ >= test.max_frames) reset();
+    return false;
+  }
   Pose2 alternative;
   if (!holding_) {
     const auto apart = [&](const FloorPose& p) {

@@ -147,6 +147,7 @@ void read_filter(const Checker& check, const toml::table& root, FirmwareConfig& 
                 "nearby_frames",
                 "nearby_radius_m",
                 "nearby_levels",
+                "nearby_hint_by_tables",
                 "seed_heading_from_boards"});
     auto& f = c.filter;
     f.particles = static_cast<std::size_t>(
@@ -203,6 +204,8 @@ void read_filter(const Checker& check, const toml::table& root, FirmwareConfig& 
         check.number(*t, "nearby_radius_m", "filter.", f.nearby.search_radius_m, 0.05, 2.0);
     f.nearby.search_levels = static_cast<int>(check.integer(
         *t, "nearby_levels", "filter.", static_cast<std::int64_t>(f.nearby.search_levels), 1, 4));
+    f.nearby.hint_by_tables =
+        flag(check, *t, "nearby_hint_by_tables", "filter.", f.nearby.hint_by_tables);
   }
 }
 

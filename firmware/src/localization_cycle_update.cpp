@@ -169,14 +169,23 @@ bool LocalizationCycle::update_with_boards(
   const bool hint = floor_search_on_ && nearby_hint_frames_ > 0;
   if (nearby_hint_frames_ > 0) --nearby_hint_frames_;
   algorithms::Pose2 draw_at;
+  // In those frames the map's tables weigh the search's pose against the estimate, each the
+  // best of 5 x 5 places 2 cm apart around it (the same luck for both), with every board as the
+  // search weighs them.
+  const algorithms::NearbyPoseParams& nearby = config_.filter.nearby;
+  algorithms::TablesEvidence tables;
+  if (nearby_on_ && hint && nearby.hint_by_tables && floor_fix_.valid) {
+    tables = algorithms::tables_evidence(map_.forward, observed, floor_fix_, estimate,
+                                         2.0 * nearby.refine_step_m, board_params_,
+                                         kFloorSearchLeaveOut);
+  }
   if (nearby_on_ &&
-      nearby_.step(map_.forward, observed, board_update_, estimate, params, leave_out,
-                   config_.filter.nearby, draw_at, hint ? floor_fix_ : algorithms::FloorPose{})) {
-    const algorithms::NearbyPoseParams& np = config_.filter.nearby;
+      nearby_.step(map_.forward, observed, board_update_, estimate, params, leave_out, nearby,
+                   draw_at, hint ? floor_fix_ : algorithms::FloorPose{}, &tables)) {
     const auto count =
-        static_cast<std::size_t>(static_cast<double>(filter_.size()) * np.draw_share);
-    filter_.replace_some(draw_at, np.refine_step_m, np.draw_yaw_sigma_rad,
-                         std::max<std::size_t>(count, 1), np.draw_weight);
+        static_cast<std::size_t>(static_cast<double>(filter_.size()) * nearby.draw_share);
+    filter_.replace_some(draw_at, nearby.refine_step_m, nearby.draw_yaw_sigma_rad,
+                         std::max<std::size_t>(count, 1), nearby.draw_weight);
     ++counters_.nearby_draws;
   }
 

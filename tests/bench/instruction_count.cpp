@@ -24,6 +24,8 @@
 //                              a fix 60 cm along the route from the estimate (areas and bearings;
 //                              only while a fix is that far)
 //   kidnap_preference_areas R  the same from the areas alone
+//   nearby_tables R            the nearby pose test's tables' evidence in a frame after a re-seed
+//                              on a floor: two poses each refined over 5 x 5 places within R cm
 //   cycle RES, cycle_yuyv RES  the whole cycle, steady state: 6 boards, 1024 particles, 204 samples
 //   cycle_boards N, cycle_particles N, cycle_samples N   the whole cycle at 640x480 RGB24 with
 //                              one of those changed
@@ -46,6 +48,7 @@
 #include "harmoloc/algorithms/board_observation.hpp"
 #include "harmoloc/algorithms/fix_error_grid.hpp"
 #include "harmoloc/algorithms/harmonic_localizer.hpp"
+#include "harmoloc/algorithms/nearby_pose_test.hpp"
 #include "harmoloc/algorithms/particle_filter.hpp"
 #include "harmoloc/algorithms/random.hpp"
 #include "harmoloc/algorithms/segmentation.hpp"
@@ -311,6 +314,20 @@ int main(int argc, char** argv) {
     measure([&] {
       (void)algorithms::board_preference_near(g_map.forward, observed, 2.1, 1.6, reach_m, 2.1, 1.0,
                                               reach_m, params);
+    });
+  } else if (kernel == "nearby_tables") {
+    // The nearby pose test's tables' evidence in a hint frame after a re-seed on a floor: the
+    // search's pose and the estimate each refined over 5 x 5 places within n cm.
+    bench::synthetic_map(204, 320, 240, g_map);
+    const algorithms::BoardModelParams params;
+    algorithms::BoardFeatures observed;
+    bench::bench_observation(g_map.forward, observed);
+    const algorithms::FloorPose searched{2.1, 1.6, 1.5, 0.0, true};
+    const algorithms::Pose2 estimate{2.1, 1.0, 1.5};
+    const double radius_m = 0.01 * static_cast<double>(n);
+    measure([&] {
+      (void)algorithms::tables_evidence(g_map.forward, observed, searched, estimate, radius_m,
+                                        params, 0U);
     });
   } else if (kernel == "filter") {
     static algorithms::ParticleFilter filter;

@@ -18,7 +18,7 @@ kernels=(
   "filter_boards 256" "filter_boards 1024" "filter_boards 4096"
   "filter_boards_kld 1024" "filter_boards_kld 4096" "filter_boards_vis 1024" "filter_boards_proj 1024" "filter_boards_proj_steady 1024"
   "filter_boards_proj_areas 1024" "filter_boards_proj_areas_steady 1024" "filter_boards_proj_areas_kld 1024"
-  "kidnap_preference 25" "kidnap_preference_areas 25" "fix_error_grid 4096" "fix_error_grid_build 4096"
+  "kidnap_preference 25" "kidnap_preference_areas 25" "nearby_tables 4" "fix_error_grid 4096" "fix_error_grid_build 4096"
   "cycle 320x240" "cycle 640x480" "cycle_yuyv 640x480" "cycle_floor 320x240"
   "cycle_floor_kld 320x240"
 )

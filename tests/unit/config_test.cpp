@@ -114,6 +114,7 @@ nearby_bound_nats = 35
 nearby_frames = 90
 nearby_radius_m = 0.3
 nearby_levels = 2
+nearby_hint_by_tables = false
 seed_heading_from_boards = false
 
 [link]
@@ -182,6 +183,7 @@ heartbeat_hz = 2
   EXPECT_EQ(c.filter.nearby.max_frames, 90U);
   EXPECT_DOUBLE_EQ(c.filter.nearby.search_radius_m, 0.3);
   EXPECT_EQ(c.filter.nearby.search_levels, 2);
+  EXPECT_FALSE(c.filter.nearby.hint_by_tables);
   EXPECT_FALSE(c.filter.seed_heading_from_boards);
 
   EXPECT_EQ(c.link.system_id, 7);
@@ -460,6 +462,8 @@ TEST(Config, ObservationAndKidnapValuesAreChecked) {
       {"[filter]\nnearby_frames = 0\n", "filter.nearby_frames"},
       {"[filter]\nnearby_radius_m = 0.01\n", "filter.nearby_radius_m"},
       {"[filter]\nnearby_levels = 5\n", "filter.nearby_levels"},
+      {"[filter]\nnearby_hint_by_tables = 1\n",
+       "filter.nearby_hint_by_tables must be true or false"},
       {"[observation]\nfix_term = \"yes\"\n",
        "observation.fix_term must be true, false or \"auto\""},
       {"[observation]\nfix_term = 1\n", "observation.fix_term must be true, false or \"auto\""},

@@ -171,3 +171,81 @@ TEST(NearbyPoseTest, TakesTheFloorSearchsPoseBeyondTheRefinementsReach) {
   EXPECT_GT(run(false), 0.15);
   EXPECT_LT(run(true), 0.04);
 }
+
+// After a re-seed the filter's model can be flat over 20 cm and more (random floor 21: two
+// boards, both with a bearing, fitting the robot's place and one 24 cm off alike) while the
+// map's tables tell the places apart. In the hint frames the test then weighs the search's pose
+// against the estimate by the tables, each the best of the same 5 x 5 places around it.
+TEST(NearbyPoseTest, WeighsTheSearchsPoseByTheTablesInTheHintFrames) {
+  const auto map = make_floor();
+  const ha::BoardModelParams params;
+  ha::NearbyPoseParams test;
+  test.hint_by_tables = true;
+  // The estimate 30 cm off, beyond the refinement's reach; the search's pose 1 cm off the robot.
+  // The filter's model flat: no board weighed. Returns the draw's distance from the robot
+  // (infinite: no draw in 60 frames).
+  const auto run = [&](const ha::NearbyPoseParams& p, bool evidence, int& frames) {
+    ha::NearbyPoseTest t;
+    for (frames = 1; frames <= 60; ++frames) {
+      const double x = 0.8 + 0.01 * frames, y = 0.9, yaw = 0.3;
+      const ha::Pose2 estimate{x, y + 0.30, yaw};
+      const ha::BoardFeatures o = seen(x, y, yaw);
+      ha::BoardUpdate flat = update_for(*map, o, estimate, params);
+      flat.use = {};
+      flat.bearing_mask = 0;
+      flat.area_projection_mask = 0;
+      flat.near_bearing_mask = 0;
+      flat.near_area_mask = 0;
+      const ha::FloorPose hint{x + 0.01, y - 0.01, yaw, 0.0, true};
+      const ha::TablesEvidence tables =
+          ha::tables_evidence(*map, o, hint, estimate, 2.0 * p.refine_step_m, params, 0U);
+      EXPECT_TRUE(tables.searched.valid);
+      EXPECT_TRUE(tables.estimate.valid);
+      EXPECT_GT(tables.searched.nats, tables.estimate.nats + 5.0);
+      ha::Pose2 at;
+      if (t.step(*map, o, flat, estimate, params, 0U, p, at, hint, evidence ? &tables : nullptr))
+        return std::hypot(at.x_m - x, at.y_m - y);
+    }
+    return HUGE_VAL;
+  };
+  int frames = 0;
+  EXPECT_LT(run(test, true, frames), 0.03);
+  EXPECT_LE(frames, 5);
+  // Without the tables' evidence, or with the mode off, the flat model never draws.
+  EXPECT_EQ(run(test, false, frames), HUGE_VAL);
+  ha::NearbyPoseParams off = test;
+  off.hint_by_tables = false;
+  EXPECT_EQ(run(off, true, frames), HUGE_VAL);
+}
+
+// The tables can prefer a wrong place (random floor 27: a place 0.8 m off fitted them better
+// than the robot's). Where the filter's model finds the search's pose ln 100 less likely than
+// the estimate, the frame counts the model's log-ratio instead.
+TEST(NearbyPoseTest, TheModelVetoesTablesThatPreferAPlaceItRulesOut) {
+  const auto map = make_floor();
+  const ha::BoardModelParams params;
+  ha::NearbyPoseParams test;
+  test.hint_by_tables = true;
+  const auto draws = [&](const ha::NearbyPoseParams& p) {
+    ha::NearbyPoseTest t;
+    for (int frames = 0; frames < 60; ++frames) {
+      const double x = 0.8 + 0.01 * frames, y = 0.9, yaw = 0.3;
+      const ha::Pose2 estimate{x, y, yaw};  // right
+      const ha::BoardFeatures o = seen(x, y, yaw);
+      // Tables that put the robot 25 cm off, 5 nats a frame better than the estimate.
+      ha::TablesEvidence tables;
+      tables.searched = ha::FloorPose{x, y + 0.25, yaw, -0.5, true};
+      tables.estimate = ha::FloorPose{x, y, yaw, -5.5, true};
+      ha::Pose2 at;
+      if (t.step(*map, o, update_for(*map, o, estimate, params), estimate, params, 0U, p, at,
+                 tables.searched, &tables))
+        return true;
+      if (t.summed_nats() > 0.0) return true;  // a vetoed frame never adds
+    }
+    return false;
+  };
+  EXPECT_FALSE(draws(test));
+  ha::NearbyPoseParams no_veto = test;
+  no_veto.veto_nats = 1e9;
+  EXPECT_TRUE(draws(no_veto));
+}
