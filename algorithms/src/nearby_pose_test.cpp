@@ -68,8 +68,9 @@ bool NearbyPoseTest::step(const ForwardMap& map, const BoardFeatures& observed,
     }
     const Pose2 searched{tables->searched.x_m, tables->searched.y_m, tables->searched.yaw_rad};
     double ratio = tables->searched.nats - tables->estimate.nats;
-    // The draw is at the tables' pose: the model's best place near it is the model's say, and
-    // where the model is flat (the case for the tables) that is any of its places.
+    // The model's best of its 3 x 3 places near the search's pose serves the veto only: the
+    // draw is at the tables' pose. Where the model is flat, as it is where the tables are
+    // needed, any of those places is its best.
     Pose2 model_place = searched;
     const double model = model_log_ratio(update, estimate, model_place, test.refine_step_m);
     if (std::isfinite(model) && model < -test.veto_nats) ratio = model;

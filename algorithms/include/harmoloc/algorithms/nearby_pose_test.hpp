@@ -8,7 +8,9 @@
 /// places around it, so that neither gains from being searched). When the sum passes a bound,
 /// particles are drawn around the alternative and the filter's own weighing decides between
 /// the two; when it falls below minus the bound, or after a number of frames, the alternative
-/// is dropped and another sought. No heap; bounded work per frame.
+/// is dropped and another sought. In the frames after a re-seed the alternative can instead be
+/// the floor search's pose, weighed by the map's tables (NearbyPoseParams::hint_by_tables). No
+/// heap; bounded work per frame.
 
 #include <cstdint>
 
@@ -82,7 +84,11 @@ class NearbyPoseTest {
   /// log-ratio. Returns true, with the pose in @p draw_at, when the sum passed the bound (the
   /// alternative is then dropped). @p hint: the floor search's pose, where there is one; when
   /// no alternative is held it is taken instead of the refinement's where it lies apart from the
-  /// estimate and fits the frame better (it may lie beyond search_radius_m).
+  /// estimate and fits the frame better (it may lie beyond search_radius_m). @p tables: the
+  /// tables' evidence of this frame (tables_evidence), where the caller has it; with
+  /// hint_by_tables, while it is given and its search pose lies apart from the estimate, that pose
+  /// is the alternative, taken afresh each frame, and the frame adds the tables' log-ratio unless
+  /// the model vetoes it (NearbyPoseParams::veto_nats); a frame without it ends such a test.
   bool step(const ForwardMap& map, const BoardFeatures& observed, const BoardUpdate& update,
             const Pose2& estimate, const BoardModelParams& params, std::uint32_t leave_out,
             const NearbyPoseParams& test, Pose2& draw_at, const FloorPose& hint = FloorPose{},
