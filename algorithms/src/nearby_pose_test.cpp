@@ -48,6 +48,28 @@ void NearbyPoseTest::reset() {
   frames_ = 0;
 }
 
+void NearbyPoseTest::start(bool by_tables) {
+  holding_ = true;
+  by_tables_ = by_tables;
+  sum_nats_ = 0.0;
+  frames_ = 0;
+}
+
+bool NearbyPoseTest::add(double ratio, const Pose2& alternative, const NearbyPoseParams& test,
+                         Pose2& draw_at) {
+  // A frame that cannot be weighed (no finite likelihood) tells nothing.
+  if (std::isfinite(ratio)) sum_nats_ += ratio;
+  ++frames_;
+  if (sum_nats_ <= test.bound_nats) return false;
+  draw_at = alternative;
+  reset();
+  return true;
+}
+
+bool NearbyPoseTest::ended(const NearbyPoseParams& test) const {
+  return sum_nats_ < -test.bound_nats || frames_ >= test.max_frames;
+}
+
 bool NearbyPoseTest::step(const ForwardMap& map, const BoardFeatures& observed,
                           const BoardUpdate& update, const Pose2& estimate,
                           const BoardModelParams& params, std::uint32_t leave_out,
@@ -60,12 +82,7 @@ bool NearbyPoseTest::step(const ForwardMap& map, const BoardFeatures& observed,
                                      tables->searched.y_m - estimate.y_m) >= test.min_distance_m;
   if (by_tables_ && !use_tables) reset();
   if (use_tables) {
-    if (!holding_ || !by_tables_) {
-      holding_ = true;
-      by_tables_ = true;
-      sum_nats_ = 0.0;
-      frames_ = 0;
-    }
+    if (!by_tables_) start(true);
     const Pose2 searched{tables->searched.x_m, tables->searched.y_m, tables->searched.yaw_rad};
     double ratio = tables->searched.nats - tables->estimate.nats;
     // The model's best of its 3 x 3 places near the search's pose serves the veto only: the
@@ -74,14 +91,8 @@ bool NearbyPoseTest::step(const ForwardMap& map, const BoardFeatures& observed,
     Pose2 model_place = searched;
     const double model = model_log_ratio(update, estimate, model_place, test.refine_step_m);
     if (std::isfinite(model) && model < -test.veto_nats) ratio = model;
-    if (std::isfinite(ratio)) sum_nats_ += ratio;
-    ++frames_;
-    if (sum_nats_ > test.bound_nats) {
-      draw_at = searched;
-      reset();
-      return true;
-    }
-    if (sum_nats_ < -test.bound_nats || frames_ >= test.max_frames) reset();
+    if (add(ratio, searched, test, draw_at)) return true;
+    if (ended(test)) reset();
     return false;
   }
   Pose2 alternative;
@@ -107,24 +118,15 @@ bool NearbyPoseTest::step(const ForwardMap& map, const BoardFeatures& observed,
                           hint_nats);
       if (hint_nats > found_nats) alternative = Pose2{hint.x_m, hint.y_m, hint.yaw_rad};
     }
-    holding_ = true;
-    sum_nats_ = 0.0;
-    frames_ = 0;
+    start(false);
   } else {
     alternative = Pose2{estimate.x_m + dx_m_, estimate.y_m + dy_m_,
                         wrap_angle_rad(estimate.yaw_rad + dyaw_rad_)};
   }
   const double ratio = model_log_ratio(update, estimate, alternative, test.refine_step_m);
-  // A frame the model cannot weigh (no finite likelihood) tells nothing.
-  if (std::isfinite(ratio)) sum_nats_ += ratio;
-  ++frames_;
-  if (sum_nats_ > test.bound_nats) {
-    draw_at = alternative;
-    reset();
-    return true;
-  }
+  if (add(ratio, alternative, test, draw_at)) return true;
   const double away_m = std::hypot(alternative.x_m - estimate.x_m, alternative.y_m - estimate.y_m);
-  if (sum_nats_ < -test.bound_nats || frames_ >= test.max_frames || away_m < test.min_distance_m) {
+  if (ended(test) || away_m < test.min_distance_m) {
     reset();
     return false;
   }

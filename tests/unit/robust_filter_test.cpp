@@ -1642,6 +1642,12 @@ struct ProjectedAreaScene {
     }
     return 0.5 * (hi - lo);
   }
+  // What the camera sees at the estimate, board 0 @p off the map's projection there.
+  ha::BoardFeatures seen_off(double off) const {
+    ha::BoardFeatures seen = observe(estimate.x_m, estimate.y_m);
+    seen.value[0] = static_cast<float>(feature(estimate.x_m, estimate.y_m) + off);
+    return seen;
+  }
 };
 
 // While the cloud is wide, a projected area is weighed by its noise widened by how much it
@@ -1653,10 +1659,8 @@ TEST(ParticleFilterBoards, ProjectedAreasWidenWithTheCloudsSpread) {
   const auto& map = scene.map;
   const ha::Pose2 estimate = scene.estimate;
   ha::BoardModelParams params;
-  const auto feature = [&](double x, double y) { return scene.feature(x, y); };
   // Seen as expected at the estimate: no board is scaled down for its residual.
-  ha::BoardFeatures seen = observe(estimate.x_m, estimate.y_m);
-  seen.value[0] = static_cast<float>(feature(estimate.x_m, estimate.y_m));
+  const ha::BoardFeatures seen = scene.seen_off(0.0);
   const auto inv_two_var = [&](double spread_m, std::size_t b) {
     ha::BoardReliability reliability;
     reliability.reset(params);
@@ -1685,11 +1689,9 @@ TEST(ParticleFilterBoards, ProjectedAreasWeighOverTheParticlesBandwidth) {
   const auto& map = scene.map;
   const ha::Pose2 estimate = scene.estimate;
   ha::BoardModelParams params;
-  const auto feature = [&](double x, double y) { return scene.feature(x, y); };
   const auto half_range = [&](double d) { return scene.half_range(d); };
   // Seen 0.05 off what the map expects at the estimate: a chi2 to compare.
-  ha::BoardFeatures seen = observe(estimate.x_m, estimate.y_m);
-  seen.value[0] = static_cast<float>(feature(estimate.x_m, estimate.y_m) + 0.05);
+  const ha::BoardFeatures seen = scene.seen_off(0.05);
   const double spread = 0.1, k = params.sigma_scale;
   const auto assessed = [&](std::size_t particles, ha::BoardUpdate& u) {
     ha::BoardReliability reliability;

@@ -98,8 +98,16 @@ class NearbyPoseTest {
   double summed_nats() const { return sum_nats_; }
 
  private:
+  /// Holds a new alternative (@p by_tables: the search's pose, weighed by the tables).
+  void start(bool by_tables);
+  /// Adds a frame's log-ratio; true, with @p alternative in @p draw_at and the test forgotten,
+  /// when the sum passed the bound.
+  bool add(double ratio, const Pose2& alternative, const NearbyPoseParams& test, Pose2& draw_at);
+  /// The sum fell below minus the bound, or the alternative had its frames.
+  bool ended(const NearbyPoseParams& test) const;
+
   bool holding_ = false;
-  bool by_tables_ = false;  ///< the alternative is the search's pose, weighed by the tables
+  bool by_tables_ = false;  ///< the alternative is the search's pose (holding_ too)
   double dx_m_ = 0.0, dy_m_ = 0.0, dyaw_rad_ = 0.0;  ///< the alternative less the estimate
   double sum_nats_ = 0.0;
   std::uint32_t frames_ = 0;
