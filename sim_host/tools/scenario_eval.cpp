@@ -173,6 +173,7 @@ RunRecord replay_scenario(const Scenario& scenario, std::uint64_t seed,
         f.search_x_m = search.x_m;
         f.search_y_m = search.y_m;
         f.search_nats = search.nats;
+        f.search_yaw_rad = search.yaw_rad;
       }
       const auto d = static_cast<double>(map.forward.bearing_camera_forward_m);
       const algorithms::FloorPose at_truth = algorithms::floor_pose_seen_from(
@@ -197,6 +198,12 @@ RunRecord replay_scenario(const Scenario& scenario, std::uint64_t seed,
       f.frame_sigma_m = info.weak_sigma_m;
       f.frame_axis_rad = info.weak_axis_rad;
     }
+    if (cycle->uses_nearby_test()) {
+      const algorithms::NearbyPoseTest& nearby = cycle->nearby_test();
+      if (nearby.holding()) f.nearby_sum_nats = nearby.summed_nats();
+      f.nearby_by_tables = nearby.by_tables() ? 1 : 0;
+    }
+    f.nearby_draws = cycle->counters().nearby_draws;
     if (map.forward.present())
       f.truth_lane_m = static_cast<double>(algorithms::route_distance(
           map.forward, algorithms::locate(map.forward, f.truth.x_m, f.truth.y_m)));
@@ -238,28 +245,31 @@ void write_trace(const RunRecord& run, const std::string& path) {
       "evidence_x_m,evidence_y_m,evidence_distance_m,truth_nats,estimate_nats,board_seen,"
       "cut_board,fix_suspects,truth_lane_m,frame_sigma_m,frame_axis_rad,search_x_m,search_y_m,"
       "search_nats,truth_seen_nats,truth_model_nats,search_model_nats,estimate_model_nats,"
-      "boards_in_view,boards_with_bearing");
+      "boards_in_view,boards_with_bearing,search_yaw_rad,nearby_sum_nats,nearby_by_tables,"
+      "nearby_draws");
   const std::size_t boards = run.frames.empty() ? 0 : run.frames.front().boards;
   for (std::size_t b = 0; b < boards; ++b) std::fprintf(f, ",chi2_%zu", b + 1);
   for (std::size_t b = 0; b < boards; ++b) std::fprintf(f, ",static_%zu", b + 1);
   std::fprintf(f, "\n");
   for (const FrameRecord& r : run.frames) {
-    std::fprintf(
-        f,
-        "%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%d,%s,%d,%d,%.4f,%.4f,%d,%u,%d,%.4f,%.4f,"
-        "%.3f,%.4f,"
-        "%.4f,%.4g,%d,%d,%.4f,%.4f,%.4f,%.3f,%.3f,%d,%d,%u,%.3f,%.4g,%.3f,%.4f,%.4f,%.3f,%"
-        ".3f,%.3f,%.3f,%.3f,%d,%d",
-        r.t_s, r.truth.x_m, r.truth.y_m, r.truth.yaw_rad, r.estimate.x_m, r.estimate.y_m,
-        r.estimate.yaw_rad, r.position_error_m(), r.valid ? 1 : 0, firmware::health_name(r.health),
-        r.fix_present ? 1 : 0, r.fix_known ? 1 : 0, r.fix.x_m, r.fix.y_m,
-        static_cast<int>(r.verdict), static_cast<unsigned>(r.distrusted), r.consensus ? 1 : 0,
-        r.robust_fix.x_m, r.robust_fix.y_m, r.preference, r.sigma_m, r.sigma_yaw_rad, r.match,
-        r.covered, r.evidence_known ? 1 : 0, r.evidence.x_m, r.evidence.y_m, r.evidence_distance_m,
-        r.truth_nats, r.estimate_nats, r.board_seen ? 1 : 0, r.cut_board ? 1 : 0,
-        static_cast<unsigned>(r.fix_suspects), r.truth_lane_m, r.frame_sigma_m, r.frame_axis_rad,
-        r.search_x_m, r.search_y_m, r.search_nats, r.truth_seen_nats, r.truth_model_nats,
-        r.search_model_nats, r.estimate_model_nats, r.boards_in_view, r.boards_with_bearing);
+    std::fprintf(f,
+                 "%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%d,%s,%d,%d,%.4f,%.4f,%d,%u,%d,%.4f,%.4f,"
+                 "%.3f,%.4f,"
+                 "%.4f,%.4g,%d,%d,%.4f,%.4f,%.4f,%.3f,%.3f,%d,%d,%u,%.3f,%.4g,%.3f,%.4f,%.4f,%.3f,%"
+                 ".3f,%.3f,%.3f,%.3f,%d,%d,%.4f,%.3f,%d,%llu",
+                 r.t_s, r.truth.x_m, r.truth.y_m, r.truth.yaw_rad, r.estimate.x_m, r.estimate.y_m,
+                 r.estimate.yaw_rad, r.position_error_m(), r.valid ? 1 : 0,
+                 firmware::health_name(r.health), r.fix_present ? 1 : 0, r.fix_known ? 1 : 0,
+                 r.fix.x_m, r.fix.y_m, static_cast<int>(r.verdict),
+                 static_cast<unsigned>(r.distrusted), r.consensus ? 1 : 0, r.robust_fix.x_m,
+                 r.robust_fix.y_m, r.preference, r.sigma_m, r.sigma_yaw_rad, r.match, r.covered,
+                 r.evidence_known ? 1 : 0, r.evidence.x_m, r.evidence.y_m, r.evidence_distance_m,
+                 r.truth_nats, r.estimate_nats, r.board_seen ? 1 : 0, r.cut_board ? 1 : 0,
+                 static_cast<unsigned>(r.fix_suspects), r.truth_lane_m, r.frame_sigma_m,
+                 r.frame_axis_rad, r.search_x_m, r.search_y_m, r.search_nats, r.truth_seen_nats,
+                 r.truth_model_nats, r.search_model_nats, r.estimate_model_nats, r.boards_in_view,
+                 r.boards_with_bearing, r.search_yaw_rad, r.nearby_sum_nats, r.nearby_by_tables,
+                 static_cast<unsigned long long>(r.nearby_draws));
     for (std::size_t b = 0; b < boards; ++b)
       std::fprintf(f, ",%.3g", static_cast<double>(r.chi2[b]));
     for (std::size_t b = 0; b < boards; ++b)

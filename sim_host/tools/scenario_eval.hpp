@@ -85,6 +85,7 @@ struct FrameRecord {
   double search_x_m = std::numeric_limits<double>::quiet_NaN();
   double search_y_m = std::numeric_limits<double>::quiet_NaN();
   double search_nats = std::numeric_limits<double>::quiet_NaN();
+  double search_yaw_rad = std::numeric_limits<double>::quiet_NaN();
   double truth_seen_nats = std::numeric_limits<double>::quiet_NaN();
   /// The filter's own observation model (untempered log-likelihood) at the truth, the search's
   /// pose and the estimate.
@@ -95,6 +96,12 @@ struct FrameRecord {
   /// that give a bearing (-1 without a model): fewer than two leave a pose a line of places.
   int boards_in_view = -1;
   int boards_with_bearing = -1;
+  /// The nearby pose test after this frame: its summed log-ratio (NaN when it holds no
+  /// alternative), whether the alternative is the search's pose weighed by the tables (1) or
+  /// not (0; -1 with no test), and the particle draws it made so far in the run.
+  double nearby_sum_nats = std::numeric_limits<double>::quiet_NaN();
+  int nearby_by_tables = -1;
+  std::uint64_t nearby_draws = 0;
   /// How far the frame leaves the position open at the estimate (algorithms::frame_information:
   /// the weakest direction's sigma, metres, and that direction, radians). NaN where no board
   /// fits were computed.

@@ -5,7 +5,8 @@ robot within 10 cm of its new place after a kidnap, and a kidnap was confirmed f
 boards' fit columns (truth_nats, estimate_nats) hold fits, the truth's the better just after a
 kidnap; every row has the header's columns, and the distance off the lanes (truth_lane_m) is
 known, and how far each weighed frame leaves the position open (frame_sigma_m) is written with
-the fits. The figures themselves are the sweep's (docs/sweep.md); this only shows the path works
+the fits, and the search's heading and the nearby pose test's sum, kind and draws are written. The
+figures themselves are the sweep's (docs/sweep.md); this only shows the path works
 end to end.
 
 With --sweep it also asks that the nearby pose test drew particles on some floor's roams
@@ -147,6 +148,27 @@ def main():
             problems.append("boards_in_view or boards_with_bearing out of range")
         if sum(1 for v in in_view if v > 0) < 0.5 * len(in_view):
             problems.append("no board in view on most frames with fits")
+    # The search's heading, written with its pose; the nearby pose test's sum (nan when it holds
+    # no alternative), whether the search's pose is weighed by the tables, and its draws so far
+    # (never fewer than the frame before, and some on a roam with kidnaps).
+    nearby = ("search_yaw_rad", "nearby_sum_nats", "nearby_by_tables", "nearby_draws")
+    missing = [c for c in nearby if rows and c not in rows[0]]
+    if missing:
+        problems.append("no column " + ", ".join(missing))
+    elif rows:
+        if any(math.isnan(float(r["search_yaw_rad"])) != math.isnan(float(r["search_nats"]))
+               for r in rows):
+            problems.append("search_yaw_rad written where the search's fit is not, or not where it is")
+        if any(r["nearby_by_tables"] not in ("0", "1") for r in rows):
+            problems.append("nearby_by_tables not 0 or 1 on a floor")
+        if any(r["nearby_by_tables"] == "1" and math.isnan(float(r["nearby_sum_nats"]))
+               for r in rows):
+            problems.append("the tables' alternative held with no sum")
+        draws = [int(r["nearby_draws"]) for r in rows]
+        if any(b < a for a, b in zip(draws, draws[1:])):
+            problems.append("nearby_draws fell")
+        if not any(r["nearby_by_tables"] == "1" for r in rows):
+            problems.append("the tables never weighed the search's pose after a re-seed")
     confirmed = sum(1 for r in rows if r["verdict"] == "2")
     if confirmed == 0:
         problems.append("no kidnap confirmed")

@@ -95,6 +95,8 @@ class NearbyPoseTest {
             const TablesEvidence* tables = nullptr);
 
   bool holding() const { return holding_; }
+  /// The alternative held is the floor search's pose, weighed by the tables.
+  bool by_tables() const { return by_tables_; }
   double summed_nats() const { return sum_nats_; }
 
  private:

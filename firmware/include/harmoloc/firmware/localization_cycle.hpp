@@ -213,6 +213,8 @@ class LocalizationCycle {
   const algorithms::KidnapInput& kidnap_input() const { return kidnap_input_; }
   /// On a floor: the pose the floor search follows (invalid elsewhere).
   const algorithms::FloorPose& floor_search_pose() const { return floor_fix_; }
+  /// On a floor: the nearby pose test, as the latest frame left it.
+  const algorithms::NearbyPoseTest& nearby_test() const { return nearby_; }
   /// The filter's board update of the latest frame weighed (its observation model).
   const algorithms::BoardUpdate& board_update() const { return board_update_; }
   const FixOutput& last_fix() const { return fix_; }
