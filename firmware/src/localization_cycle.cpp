@@ -69,6 +69,9 @@ void LocalizationCycle::set_published_health() {
   } else if ((h == Health::kOdometryOnly || h == Health::kInvalid) && ever_fix_ &&
              camera_fresh(last_view_ns_)) {
     cause = HealthCause::kHeadingNotCovered;
+  } else if ((h == Health::kOdometryOnly || h == Health::kInvalid) && ever_fix_ &&
+             camera_fresh(last_disagree_ns_)) {
+    cause = HealthCause::kBoardsDisagree;
   }
   pose_.health = h;
   pose_.cause = cause;
@@ -261,8 +264,12 @@ void LocalizationCycle::predict(const EncoderIn& e) {
                     algorithms::wrap_angle_rad(target.yaw_rad - mean.yaw_rad));
     } else if (e.have_delta) {
       filter_.predict(e.delta);
-    } else if (assess_health() == Health::kVisionOnly) {
-      // Motion unknown: let the cloud spread as fast as the robot could move.
+    } else if (assess_health() == Health::kVisionOnly ||
+               (assess_health() == Health::kInvalid && ever_fix_ &&
+                camera_fresh(last_disagree_ns_))) {
+      // Motion unknown: let the cloud spread as fast as the robot could move. Also while the
+      // frames' boards disagree with it (the pose then goes out invalid): the robot may be
+      // moving away from the cloud.
       const double step_m = config_.filter.vision_only_speed_mps / config_.cycle.rate_hz;
       filter_.predict(algorithms::OdometryDelta{0.0, 0.0});
       filter_.diffuse(step_m, 0.5 * step_m / (0.5 * geometry_.track_m));

@@ -46,6 +46,12 @@ HealthText health_text(Health health, HealthCause cause) {
     if (health == Health::kInvalid)  // no encoder data either
       return HealthText{severity, "harmoloc: pose invalid (heading not mapped here)"};
   }
+  if (cause == HealthCause::kBoardsDisagree) {
+    if (health == Health::kOdometryOnly)
+      return HealthText{severity, "harmoloc: odometry only (boards disagree)"};
+    if (health == Health::kInvalid)
+      return HealthText{severity, "harmoloc: pose invalid (boards disagree)"};
+  }
   return HealthText{severity, kText[static_cast<std::size_t>(health)]};
 }
 
@@ -78,7 +84,8 @@ mavlink::Odometry odometry_message(const PoseOutput& pose, std::uint64_t time_ns
   m.reset_counter = reset_counter;
   if (pose.health == Health::kInvalid) {
     m.quality = -1;
-  } else if (pose.cause == HealthCause::kHeadingNotCovered) {
+  } else if (pose.cause == HealthCause::kHeadingNotCovered ||
+             pose.cause == HealthCause::kBoardsDisagree) {
     m.quality = 0;
   } else {
     m.quality = static_cast<std::int8_t>(
@@ -146,7 +153,8 @@ bool health_of_text(const char* text, std::size_t size, Health& health) {
   for (const Health h : {Health::kNotInitialized, Health::kNominal, Health::kOdometryOnly,
                          Health::kVisionOnly, Health::kInvalid}) {
     for (const HealthCause cause :
-         {HealthCause::kInputs, HealthCause::kOffMap, HealthCause::kHeadingNotCovered}) {
+         {HealthCause::kInputs, HealthCause::kOffMap, HealthCause::kHeadingNotCovered,
+          HealthCause::kBoardsDisagree}) {
       const char* t = health_text(h, cause).text;
       if (std::strlen(t) == n && std::strncmp(t, text, n) == 0) {
         health = h;

@@ -209,6 +209,7 @@ void to_json(Json& j, const Document& d) {
                           {"implausible_frames", l.implausible_frames},
                           {"off_map_cycles", l.off_map_cycles},
                           {"uncovered_cycles", l.uncovered_cycles},
+                          {"disagree_cycles", l.disagree_cycles},
                           {"cut_board_frames", l.cut_board_frames}};
   }
   const Filter& f = d.filter;
@@ -317,6 +318,7 @@ void from_json(const Json& j, Document& d) {
     read_count(*l, "implausible_frames", "localizer.", localizer.implausible_frames);
     read_count(*l, "off_map_cycles", "localizer.", localizer.off_map_cycles);
     read_count(*l, "uncovered_cycles", "localizer.", localizer.uncovered_cycles);
+    read_count(*l, "disagree_cycles", "localizer.", localizer.disagree_cycles);
     read_count(*l, "cut_board_frames", "localizer.", localizer.cut_board_frames);
     d.localizer = localizer;
   }

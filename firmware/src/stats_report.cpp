@@ -83,7 +83,8 @@ stats::Document stats_document(const StatsSnapshot& snapshot) {
   d.encoders = {run.encoders, c.encoder_gaps_bridged};
   d.link = run.link;
   d.localizer = stats::Localizer{c.fixes_used,     c.unknown_place,    c.implausible_frames,
-                                 c.off_map_cycles, c.uncovered_cycles, c.cut_board_frames};
+                                 c.off_map_cycles, c.uncovered_cycles, c.cut_board_frames,
+                                 c.disagree_cycles};
   d.filter = {snapshot.uses_boards ? "boards" : "fix",
               c.resamples,
               c.particles_mean(),

@@ -74,6 +74,27 @@ Settled settle(const RunRecord& run, double settle_s, double bound_m, double hol
   return s;
 }
 
+// From @p from_s on: the frames with a pose, those reported nominal, those of them with an
+// error above 10 cm, and of those the ones published with a quality above 0 (a nominal pose's
+// quality is its spread's).
+struct NominalCount {
+  std::size_t frames = 0, nominal = 0, bad = 0, vouched_bad = 0;
+};
+
+NominalCount count_nominal(const RunRecord& run, double from_s) {
+  NominalCount c;
+  for (const FrameRecord& f : run.frames) {
+    if (f.t_s < from_s || !f.valid) continue;
+    ++c.frames;
+    if (f.health != firmware::Health::kNominal) continue;
+    ++c.nominal;
+    if (f.position_error_m() <= 0.10) continue;
+    ++c.bad;
+    if (firmware::quality_of_spread(f.sigma_m) > 0) ++c.vouched_bad;
+  }
+  return c;
+}
+
 std::string board_names(const TrainReport& r, const Scenario& scene) {
   std::string out;
   for (int b : r.boards) {
@@ -252,14 +273,10 @@ void floor_part(const Scenario& scene, const algorithms::ThresholdSet& threshold
       sh += e.heading_rmse_deg * e.heading_rmse_deg * n;
       worst = std::max(worst, e.max_m);
       frames += e.frames;
-      for (const FrameRecord& f : run.frames) {
-        if (f.t_s < from_s || !f.valid || f.health != firmware::Health::kNominal) continue;
-        ++nominal;
-        if (f.position_error_m() <= 0.10) continue;
-        ++nominal_bad;
-        // The quality the pose was published with (a nominal pose's: its spread's).
-        if (firmware::quality_of_spread(f.sigma_m) > 0) ++vouched_bad;
-      }
+      const NominalCount c = count_nominal(run, from_s);
+      nominal += c.nominal;
+      nominal_bad += c.bad;
+      vouched_bad += c.vouched_bad;
     }
     if (particle_cycles > 0)
       r.floor_particles_mean =
@@ -288,6 +305,15 @@ void floor_part(const Scenario& scene, const algorithms::ThresholdSet& threshold
         const KidnapSummary ks = kidnap_summary(run, 0.10, 0.5, 2.0);
         r.floor_kidnaps = ks.outcomes.size();
         r.floor_kidnaps_recovered_2s = ks.recovered_within;
+        const Settled st = settle(run, opt.settle_s, kSettledBound_m, kStartupHold_s);
+        if (st.first_fix_s >= 0.0) {
+          const NominalCount c = count_nominal(run, st.first_fix_s + opt.settle_s);
+          if (c.frames > 0) {
+            const auto n = static_cast<double>(c.frames);
+            r.floor_kidnap_nominal_over_10cm = static_cast<double>(c.bad) / n;
+            r.floor_kidnap_vouched_over_10cm = static_cast<double>(c.vouched_bad) / n;
+          }
+        }
       } catch (const std::exception& e) {
         // The roams' figures stand; the scene still counts as failed.
         r.floor_error = std::string("roam with kidnaps: ") + e.what();

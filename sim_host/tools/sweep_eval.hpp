@@ -171,6 +171,11 @@ struct SceneResult {
   /// A roam with kidnaps to anywhere on the floor (SweepOptions::floor_kidnaps): how many, and
   /// how many the filter confirmed and brought back under 10 cm within 2 s (for 0.5 s).
   std::size_t floor_kidnaps = 0, floor_kidnaps_recovered_2s = 0;
+  /// In that roam, from the first fix + settle_s: the share of its frames reported nominal with
+  /// an error above 10 cm, and of those with a quality above 0 (a kidnapped robot's pose before
+  /// the filter finds it again; -1: no such roam).
+  double floor_kidnap_nominal_over_10cm = -1.0;
+  double floor_kidnap_vouched_over_10cm = -1.0;
   double seconds = 0.0;  ///< wall time of the scene's evaluation
 };
 

@@ -91,6 +91,18 @@ std::vector<Figure> figures() {
                                            static_cast<double>(r.floor_kidnaps);
        },
        -1.0, -1.0, true},
+      {"floor_kidnap_nominal_bad", "floor roams with kidnaps: cycles nominal with error > 10 cm",
+       "%",
+       [](const SceneResult& r) {
+         return r.floor_kidnap_nominal_over_10cm < 0.0 ? -1.0
+                                                       : 100.0 * r.floor_kidnap_nominal_over_10cm;
+       }},
+      {"floor_kidnap_vouched_bad",
+       "floor roams with kidnaps: cycles nominal, quality > 0, error > 10 cm", "%",
+       [](const SceneResult& r) {
+         return r.floor_kidnap_vouched_over_10cm < 0.0 ? -1.0
+                                                       : 100.0 * r.floor_kidnap_vouched_over_10cm;
+       }},
       {"floor_fix_mse_x", "floor roams: harmonic localizer alone, MSE x", "cm^2",
        [](const SceneResult& r) { return cm2(r.floor_fix_mse_x_m2); }},
       {"floor_fix_mse_y", "floor roams: harmonic localizer alone, MSE y", "cm^2",

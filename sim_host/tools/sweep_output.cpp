@@ -98,6 +98,8 @@ nlohmann::json to_json(const SceneResult& r) {
   j["floor_particles_mean"] = r.floor_particles_mean;
   j["floor_kidnaps"] = r.floor_kidnaps;
   j["floor_kidnaps_recovered_2s"] = r.floor_kidnaps_recovered_2s;
+  j["floor_kidnap_nominal_over_10cm"] = r.floor_kidnap_nominal_over_10cm;
+  j["floor_kidnap_vouched_over_10cm"] = r.floor_kidnap_vouched_over_10cm;
   j["seconds"] = r.seconds;
   return j;
 }

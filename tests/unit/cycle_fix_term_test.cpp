@@ -15,28 +15,17 @@ namespace ha = harmoloc::algorithms;
 namespace hf = harmoloc::firmware;
 namespace mv = harmoloc::firmware::mavlink;
 namespace tf = harmoloc::test::mav;
+using harmoloc::test::one_board::calibrated_flat_map;
 using harmoloc::test::one_board::kTargets;
 using harmoloc::test::one_board::Rig;
-using harmoloc::test::one_board::test_map;
 
 namespace {
 
-// The rig's map with a calibration (the fix's error 3 cm) and a flat forward map over 4 m x 4 m,
-// and the per-sample fix error @p fix_error_m at sample 0 (the place a full red frame names).
+// The rig's map with a calibration and a flat forward map over 4 m x 4 m (the full red frame
+// everywhere), and the per-sample fix error @p fix_error_m at sample 0 (the place a full red
+// frame names).
 std::unique_ptr<ha::MapFile> flat_map(float fix_error_m) {
-  auto map = std::make_unique<ha::MapFile>(test_map());
-  map->calibration.present = true;
-  map->calibration.fix_rmse_x_m = map->calibration.fix_rmse_y_m = 0.03F;
-  map->calibration.pass_spread_m = 0.02F;
-  ha::ForwardMap& f = map->forward;
-  EXPECT_TRUE(ha::lay_out_grid(f, 200, 200, nullptr));
-  f.origin_x_m = -0.5F;
-  f.origin_y_m = -1.5F;
-  f.cell_m = 0.02F;
-  f.board_count = 1;
-  f.sigma[0] = 5.0F;
-  for (std::size_t c = 0; c < f.stored_cells(); ++c) f.expected[c * ha::kMaxBoards] = 100.0F;
-  for (std::size_t i = 0; i < map->model.sample_count; ++i) map->model.fix_error_m[i] = 0.01F;
+  auto map = calibrated_flat_map(100.0F);
   map->model.fix_error_m[0] = fix_error_m;
   return map;
 }

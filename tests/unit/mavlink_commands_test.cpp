@@ -27,6 +27,7 @@ namespace tf = harmoloc::test::mav;
 
 namespace {
 
+using harmoloc::test::one_board::calibrated_flat_map;
 using harmoloc::test::one_board::kHeight;
 using harmoloc::test::one_board::kNoParams;
 using harmoloc::test::one_board::kTargets;
@@ -688,6 +689,87 @@ TEST(HeadingCoverage, FacingAHeadingTheMapDoesNotCoverIsOdometryOnly) {
   face(-1.6F);
   EXPECT_EQ(r.cycle->pose().health, hf::Health::kInvalid);
   EXPECT_EQ(r.cycle->pose().cause, hf::HealthCause::kHeadingNotCovered);
+}
+
+namespace {
+
+// The rig's map with a calibration (so that the harmonic fix may weigh the particles) and a
+// forward map over 4 m x 4 m whose one board is expected at @p expected everywhere but the last
+// cell, where it is expected at 100 (the full red frame's area: the frame stays plausible).
+std::unique_ptr<ha::MapFile> map_expecting(float expected) {
+  auto map = calibrated_flat_map(expected);
+  ha::ForwardMap& f = map->forward;
+  f.expected[(f.stored_cells() - 1) * ha::kMaxBoards] = 100.0F;
+  return map;
+}
+
+}  // namespace
+
+// Issue 20: on random floor 23 a kidnapped robot's pose went out nominal 1.1 m from the robot for
+// 3.5 s while every board disagreed with it: a known-place harmonic fix counted as vision,
+// although on a floor map the filter does not weigh the fix. A fix now vouches for the pose only
+// where the filter weighs it; frames whose boards disagree with the pose otherwise leave it
+// odometry only after the camera timeout, with its own STATUSTEXT, quality 0, counted. Fails if
+// the fix vouches regardless (the pose stays nominal) or if agreeing boards stop counting.
+TEST(HealthOfDisagreeingBoards, ThePoseIsNotNominalWhileTheBoardsDisagreeAndNoWeighedFixVouches) {
+  const auto run = [](const ha::MapFile& map, hf::FixTerm fix_term, Rig& r,
+                      StillEncoders& encoders) {
+    r.camera.frames = true;
+    r.config.link.heartbeat_hz = 50.0;
+    r.config.observation.fix_term = fix_term;
+    r.cycle =
+        std::make_unique<hf::LocalizationCycle>(r.config, map, r.camera, encoders, r.link, r.clock);
+    std::vector<tf::Decoded> last;
+    for (int i = 0; i < 17; ++i) last = r.run();  // 0.4 s after the seed: past the 250 ms timeout
+    return last;
+  };
+  const auto disagree = map_expecting(10.0F);  // the full red frame shows 100 at the robot
+  {
+    Rig r;
+    StillEncoders encoders;
+    const auto frames = run(*disagree, hf::FixTerm::kOff, r, encoders);
+    EXPECT_EQ(r.cycle->pose().health, hf::Health::kOdometryOnly);
+    EXPECT_EQ(r.cycle->pose().cause, hf::HealthCause::kBoardsDisagree);
+    ASSERT_EQ(of_type(frames, 331).size(), 1U);
+    EXPECT_EQ(odometry_of(of_type(frames, 331)[0]).quality, 0);
+    ASSERT_EQ(of_type(frames, 0).size(), 1U);
+    EXPECT_EQ(of_type(frames, 0)[0].payload[7], 5);  // CRITICAL
+    const std::uint64_t counted = r.cycle->counters().disagree_cycles;
+    EXPECT_GE(counted, 3U);
+    EXPECT_LE(counted, 12U);
+    std::vector<std::string> texts;
+    for (const auto& f : tf::decode(r.link.written, nullptr))
+      if (f.msg_id == 253) texts.push_back(statustext_of(f));
+    ASSERT_FALSE(texts.empty());
+    EXPECT_EQ(texts.back(), "harmoloc: odometry only (boards disagree)");
+  }
+  {
+    // Where the filter weighs the fix (a route map's default), the known-place fix vouches.
+    Rig r;
+    StillEncoders encoders;
+    run(*disagree, hf::FixTerm::kOn, r, encoders);
+    EXPECT_EQ(r.cycle->pose().health, hf::Health::kNominal);
+    EXPECT_EQ(r.cycle->counters().disagree_cycles, 0U);
+  }
+  {
+    // Boards that agree vouch without the fix.
+    Rig r;
+    StillEncoders encoders;
+    run(*map_expecting(100.0F), hf::FixTerm::kOff, r, encoders);
+    EXPECT_EQ(r.cycle->pose().health, hf::Health::kNominal);
+    EXPECT_EQ(r.cycle->counters().disagree_cycles, 0U);
+  }
+  {
+    // Without encoder data the same frames leave the pose invalid, in the same words.
+    Rig r;
+    r.camera.frames = true;
+    r.config.observation.fix_term = hf::FixTerm::kOff;
+    r.cycle = std::make_unique<hf::LocalizationCycle>(r.config, *disagree, r.camera, r.encoders,
+                                                      r.link, r.clock);
+    for (int i = 0; i < 17; ++i) r.run();
+    EXPECT_EQ(r.cycle->pose().health, hf::Health::kInvalid);
+    EXPECT_EQ(r.cycle->pose().cause, hf::HealthCause::kBoardsDisagree);
+  }
 }
 
 // Issue 16 item 2: a signed set-pose captured on the line was accepted again after the firmware

@@ -3,6 +3,8 @@
 // at every reading, and a three-sample map whose sample 0 is the full red frame.
 #pragma once
 
+#include <gtest/gtest.h>
+
 #include <array>
 #include <cstdint>
 #include <memory>
@@ -100,6 +102,26 @@ inline const ha::MapFile& test_map() {
     return m;
   }();
   return *map;
+}
+
+// The rig's map with a calibration (the fix's error 3 cm; each sample's fixes 1 cm off) and a
+// forward map over 4 m x 4 m (2 cm cells) that expects the one board at @p expected everywhere,
+// in a noise of 5.
+inline std::unique_ptr<ha::MapFile> calibrated_flat_map(float expected) {
+  auto map = std::make_unique<ha::MapFile>(test_map());
+  map->calibration.present = true;
+  map->calibration.fix_rmse_x_m = map->calibration.fix_rmse_y_m = 0.03F;
+  map->calibration.pass_spread_m = 0.02F;
+  ha::ForwardMap& f = map->forward;
+  EXPECT_TRUE(ha::lay_out_grid(f, 200, 200, nullptr));
+  f.origin_x_m = -0.5F;
+  f.origin_y_m = -1.5F;
+  f.cell_m = 0.02F;
+  f.board_count = 1;
+  f.sigma[0] = 5.0F;
+  for (std::size_t c = 0; c < f.stored_cells(); ++c) f.expected[c * ha::kMaxBoards] = expected;
+  for (std::size_t i = 0; i < map->model.sample_count; ++i) map->model.fix_error_m[i] = 0.01F;
+  return map;
 }
 
 struct Rig {

@@ -106,6 +106,10 @@ TEST(PoseMessages, HealthTextSaysWhyThePoseIsNotNominal) {
        mav::kSeverityWarning},
       {H::kInvalid, C::kHeadingNotCovered, "harmoloc: pose invalid (heading not mapped here)",
        mav::kSeverityCritical},
+      {H::kOdometryOnly, C::kBoardsDisagree, "harmoloc: odometry only (boards disagree)",
+       mav::kSeverityWarning},
+      {H::kInvalid, C::kBoardsDisagree, "harmoloc: pose invalid (boards disagree)",
+       mav::kSeverityCritical},
       {H::kNominal, C::kHeadingNotCovered, "harmoloc: pose nominal", mav::kSeverityInfo},
       {H::kOdometryOnly, C::kOffMap, "harmoloc: odometry only (no camera fix)",
        mav::kSeverityWarning},
@@ -116,7 +120,7 @@ TEST(PoseMessages, HealthTextSaysWhyThePoseIsNotNominal) {
     EXPECT_EQ(t.severity, c.severity) << c.text;
   }
   // STATUSTEXT holds 50 characters.
-  for (const C c : {C::kInputs, C::kOffMap, C::kHeadingNotCovered})
+  for (const C c : {C::kInputs, C::kOffMap, C::kHeadingNotCovered, C::kBoardsDisagree})
     for (int h = 0; h <= 4; ++h)
       EXPECT_LE(std::strlen(hf::health_text(static_cast<H>(h), c).text), 50U);
 }
@@ -127,6 +131,8 @@ TEST(PoseMessages, QualityUnknownWhereTheMapDoesNotCoverTheHeading) {
   p.health = hf::Health::kOdometryOnly;
   EXPECT_EQ(hf::odometry_message(p, 0, 0).quality, 90);
   p.cause = hf::HealthCause::kHeadingNotCovered;
+  EXPECT_EQ(hf::odometry_message(p, 0, 0).quality, 0);
+  p.cause = hf::HealthCause::kBoardsDisagree;  // the cloud's narrow spread is not its error
   EXPECT_EQ(hf::odometry_message(p, 0, 0).quality, 0);
   p.health = hf::Health::kInvalid;
   EXPECT_EQ(hf::odometry_message(p, 0, 0).quality, -1);
@@ -176,6 +182,10 @@ TEST(PoseMessages, HealthReadsBackFromItsTextAndHeartbeat) {
       hf::health_text(hf::Health::kOdometryOnly, hf::HealthCause::kHeadingNotCovered).text;
   ASSERT_TRUE(hf::health_of_text(uncovered, 50, got));
   EXPECT_EQ(got, hf::Health::kOdometryOnly);
+  const char* disagree =
+      hf::health_text(hf::Health::kInvalid, hf::HealthCause::kBoardsDisagree).text;
+  ASSERT_TRUE(hf::health_of_text(disagree, 50, got));
+  EXPECT_EQ(got, hf::Health::kInvalid);
   EXPECT_FALSE(hf::health_of_text("harmoloc: overrun alarm", 50, got));
   EXPECT_FALSE(hf::health_of_text("harmoloc: pose nominal", 8, got));  // cut short: no match
   EXPECT_TRUE(hf::health_of_heartbeat(mav::kMavStateActive, got));

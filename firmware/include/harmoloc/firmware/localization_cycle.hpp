@@ -72,6 +72,10 @@ struct CycleCounters {
   /// Cycles published odometry only (invalid without encoder data) because the map's heading
   /// coverage did not hold the estimate's heading at its place while frames were usable.
   std::uint64_t uncovered_cycles = 0;
+  /// Cycles published odometry only (invalid without encoder data) because the frames' boards
+  /// disagreed with the estimate and no fix the filter weighs vouched for it
+  /// (HealthCause::kBoardsDisagree).
+  std::uint64_t disagree_cycles = 0;
   /// Frames whose fix left out a board the frame's side cut (algorithms::uncut_features()).
   std::uint64_t cut_board_frames = 0;
   std::uint64_t encoder_samples = 0;
@@ -307,7 +311,8 @@ class LocalizationCycle {
   // Sets the health the pose is published with and its cause: assess_health(), except that a
   // pose outside the mapped region (plus filter.map_margin_m) is invalid, never nominal; a health
   // that lacks vision while frames arrive whose estimate the heading coverage does not hold says
-  // so (HealthCause::kHeadingNotCovered).
+  // so (HealthCause::kHeadingNotCovered), as does one while frames arrive whose boards disagree
+  // with the estimate (HealthCause::kBoardsDisagree).
   void set_published_health();
   bool off_map(const algorithms::Pose2& pose) const;
   // Whether a fix's place is finite and within the mapped region (off_map's test).
@@ -460,6 +465,9 @@ class LocalizationCycle {
   /// The last frame that would have counted as vision had the map covered the estimate's
   /// heading at its place (the same as last_fix_ns_ wherever it does).
   std::uint64_t last_view_ns_ = 0;
+  /// The last frame whose boards were weighed and disagreed with the estimate, with no fix the
+  /// filter weighs to vouch for it (update_with_boards).
+  std::uint64_t last_disagree_ns_ = 0;
   algorithms::HarmonicFix last_known_fix_{};  ///< the latest fix of a known place
   std::uint64_t last_encoder_ns_ = 0;
   bool have_encoder_ = false;

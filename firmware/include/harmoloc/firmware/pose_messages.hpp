@@ -22,8 +22,8 @@ struct HealthText {
   const char* text;
 };
 /// A cause other than the inputs is said in its own words (kOffMap with kInvalid,
-/// kHeadingNotCovered with kOdometryOnly or kInvalid; with any other health the cause is
-/// ignored).
+/// kHeadingNotCovered and kBoardsDisagree with kOdometryOnly or kInvalid; with any other health
+/// the cause is ignored).
 HealthText health_text(Health health, HealthCause cause);
 
 /// ODOMETRY's quality for a pose that is neither invalid nor facing a heading the map does not
@@ -35,8 +35,9 @@ int quality_of_spread(double sigma_m);
 /// counter-clockwise) -> MAV_FRAME_LOCAL_FRD (z down): y and yaw change sign; body velocity in
 /// MAV_FRAME_BODY_FRD. Quality from the position's spread (100 at 0, 0 at 10 cm), -1 when the
 /// pose is invalid, 0 ("unknown" in MAVLink's words) while the map does not cover the estimate's
-/// heading at its place: the spread is then the cloud's, and the cloud was weighed against a view
-/// the map only guesses.
+/// heading at its place (the spread is then the cloud's, and the cloud was weighed against a view
+/// the map only guesses) or while the boards disagree with the pose (the cloud's spread says
+/// nothing of how far off it is).
 mavlink::Odometry odometry_message(const PoseOutput& pose, std::uint64_t time_ns,
                                    std::uint8_t reset_counter);
 

@@ -28,6 +28,10 @@ enum class HealthCause : std::uint8_t {
   /// training run never drove there), so what the boards show cannot be compared with what the
   /// map expects.
   kHeadingNotCovered = 2,
+  /// Odometry only (or invalid, without encoder data) although frames arrive: most boards
+  /// disagree with the estimate (BoardAssessment::consensus), and no fix the filter weighs
+  /// vouches for it. The robot was carried, or the cloud stands where the boards say it is not.
+  kBoardsDisagree = 3,
 };
 
 struct PoseOutput {
