@@ -66,12 +66,11 @@ void LocalizationCycle::set_published_health() {
   if (h != Health::kNotInitialized && off_map(pose_.pose)) {
     h = Health::kInvalid;
     cause = HealthCause::kOffMap;
-  } else if ((h == Health::kOdometryOnly || h == Health::kInvalid) && ever_fix_ &&
-             camera_fresh(last_view_ns_)) {
-    cause = HealthCause::kHeadingNotCovered;
-  } else if ((h == Health::kOdometryOnly || h == Health::kInvalid) && ever_fix_ &&
-             camera_fresh(last_disagree_ns_)) {
-    cause = HealthCause::kBoardsDisagree;
+  } else if ((h == Health::kOdometryOnly || h == Health::kInvalid) && ever_fix_) {
+    if (camera_fresh(last_view_ns_))
+      cause = HealthCause::kHeadingNotCovered;
+    else if (camera_fresh(last_disagree_ns_))
+      cause = HealthCause::kBoardsDisagree;
   }
   pose_.health = h;
   pose_.cause = cause;
@@ -264,9 +263,9 @@ void LocalizationCycle::predict(const EncoderIn& e) {
                     algorithms::wrap_angle_rad(target.yaw_rad - mean.yaw_rad));
     } else if (e.have_delta) {
       filter_.predict(e.delta);
-    } else if (assess_health() == Health::kVisionOnly ||
-               (assess_health() == Health::kInvalid && ever_fix_ &&
-                camera_fresh(last_disagree_ns_))) {
+    } else if (const Health h = assess_health();
+               h == Health::kVisionOnly ||
+               (h == Health::kInvalid && ever_fix_ && camera_fresh(last_disagree_ns_))) {
       // Motion unknown: let the cloud spread as fast as the robot could move. Also while the
       // frames' boards disagree with it (the pose then goes out invalid): the robot may be
       // moving away from the cloud.
