@@ -322,21 +322,32 @@ Scenario roam_variant(const Scenario& s, std::uint64_t seed, int waypoints, int 
     return true;
   };
   std::array<double, 3> at{};
-  for (int tries = 0; tries < 200; ++tries) {
-    at = draw_pose();
-    if (leg_fine(at, at)) break;
-    if (tries == 199) throw std::runtime_error(s.name + ": no place on the floor to start a roam");
-  }
-  r.waypoints_m.push_back({at[0], at[1]});
-  r.heading_deg.push_back(at[2]);
+  const auto start = [&]() {
+    for (int tries = 0; tries < 200; ++tries) {
+      at = draw_pose();
+      if (leg_fine(at, at)) {
+        r.waypoints_m.push_back({at[0], at[1]});
+        r.heading_deg.push_back(at[2]);
+        return;
+      }
+    }
+    throw std::runtime_error(s.name + ": no place on the floor to start a roam");
+  };
+  start();
   // With kidnaps the roam lasts until 10 s after the last one (more poses where needed).
   KidnapSpec& ks = out.kidnaps;
   ks.first_s = kKidnapFirst_s;
   ks.interval_s = kKidnapInterval_s;
   ks.min_distance_m = std::min(1.0, 0.4 * std::hypot(2.0 * f.half_length_m, 2.0 * f.half_width_m));
   const double need_s = kidnaps > 0 ? ks.first_s + (kidnaps - 1) * ks.interval_s + 10.0 : 0.0;
-  for (int k = 1; k < waypoints || (kidnaps > 0 && run_duration_s(out) < need_s); ++k) {
-    if (k > 1000) throw std::runtime_error(s.name + ": the roam cannot be made long enough");
+  // A pose from which no leg keeps 2 boards in view is a dead end: the roam steps back to the
+  // pose before it (or starts afresh) and draws on from there. Random floor 1's roam with
+  // kidnaps met one and the sweep had no kidnaps on that floor.
+  int step_backs = 0;
+  for (int legs = 1; static_cast<int>(r.waypoints_m.size()) < waypoints ||
+                     (kidnaps > 0 && run_duration_s(out) < need_s);
+       ++legs) {
+    if (legs > 1000) throw std::runtime_error(s.name + ": the roam cannot be made long enough");
     bool found = false;
     for (int tries = 0; tries < 200 && !found; ++tries) {
       const std::array<double, 3> next = draw_pose();
@@ -344,7 +355,19 @@ Scenario roam_variant(const Scenario& s, std::uint64_t seed, int waypoints, int 
       at = next;
       found = true;
     }
-    if (!found) throw std::runtime_error(s.name + ": no roam leg that keeps 2 boards in view");
+    if (!found) {
+      // Bounded: a floor where most poses are dead ends fails as before, and soon.
+      if (++step_backs > 20)
+        throw std::runtime_error(s.name + ": no roam leg that keeps 2 boards in view");
+      r.waypoints_m.pop_back();
+      r.heading_deg.pop_back();
+      if (r.waypoints_m.empty()) {
+        start();
+      } else {
+        at = {r.waypoints_m.back()[0], r.waypoints_m.back()[1], r.heading_deg.back()};
+      }
+      continue;
+    }
     r.waypoints_m.push_back({at[0], at[1]});
     r.heading_deg.push_back(at[2]);
   }
