@@ -321,15 +321,14 @@ Scenario roam_variant(const Scenario& s, std::uint64_t seed, int waypoints, int 
     }
     return true;
   };
-  std::array<double, 3> at{};
+  const auto add = [&](const std::array<double, 3>& p) {
+    r.waypoints_m.push_back({p[0], p[1]});
+    r.heading_deg.push_back(p[2]);
+  };
   const auto start = [&]() {
     for (int tries = 0; tries < 200; ++tries) {
-      at = draw_pose();
-      if (leg_fine(at, at)) {
-        r.waypoints_m.push_back({at[0], at[1]});
-        r.heading_deg.push_back(at[2]);
-        return;
-      }
+      const std::array<double, 3> p = draw_pose();
+      if (leg_fine(p, p)) return add(p);
     }
     throw std::runtime_error(s.name + ": no place on the floor to start a roam");
   };
@@ -348,28 +347,22 @@ Scenario roam_variant(const Scenario& s, std::uint64_t seed, int waypoints, int 
                      (kidnaps > 0 && run_duration_s(out) < need_s);
        ++legs) {
     if (legs > 1000) throw std::runtime_error(s.name + ": the roam cannot be made long enough");
+    const std::array<double, 3> at{r.waypoints_m.back()[0], r.waypoints_m.back()[1],
+                                   r.heading_deg.back()};
     bool found = false;
     for (int tries = 0; tries < 200 && !found; ++tries) {
       const std::array<double, 3> next = draw_pose();
       if (std::hypot(next[0] - at[0], next[1] - at[1]) < 0.3 || !leg_fine(at, next)) continue;
-      at = next;
+      add(next);
       found = true;
     }
-    if (!found) {
-      // Bounded: a floor where most poses are dead ends fails as before, and soon.
-      if (++step_backs > 20)
-        throw std::runtime_error(s.name + ": no roam leg that keeps 2 boards in view");
-      r.waypoints_m.pop_back();
-      r.heading_deg.pop_back();
-      if (r.waypoints_m.empty()) {
-        start();
-      } else {
-        at = {r.waypoints_m.back()[0], r.waypoints_m.back()[1], r.heading_deg.back()};
-      }
-      continue;
-    }
-    r.waypoints_m.push_back({at[0], at[1]});
-    r.heading_deg.push_back(at[2]);
+    if (found) continue;
+    // Bounded: a floor where most poses are dead ends fails as before, and soon.
+    if (++step_backs > 20)
+      throw std::runtime_error(s.name + ": no roam leg that keeps 2 boards in view");
+    r.waypoints_m.pop_back();
+    r.heading_deg.pop_back();
+    if (r.waypoints_m.empty()) start();
   }
   // The kidnaps, one by one: where the robot is at the kidnap's time (with the earlier ones),
   // a pose on the floor far enough from it from which the rest of its way keeps 2 boards in view.
