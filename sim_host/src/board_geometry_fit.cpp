@@ -108,9 +108,13 @@ BoardFit fit_board_geometry(const CameraSpec& camera, const LensModel& lens,
   fit.sightings_used = used.size();
   if (used.size() < options.min_sightings) return fit;
   detail::RobustSolution best;
+  const bool aspect = detail::has_aspect_residual(options);
   auto f = [&](const Eigen::VectorXd& p, Eigen::VectorXd& r) {
     detail::board_residuals(camera, lens, detail::board_from_params(p.data(), start), used, options,
                             r);
+    if (!aspect) return;
+    r.conservativeResize(r.size() + 1);
+    r[r.size() - 1] = detail::aspect_residual(p.data(), options);
   };
   const auto jac = [&f](const Eigen::VectorXd& p, Eigen::Index rows, Eigen::MatrixXd& j) {
     detail::central_differences(f, p, kSteps, rows, j);

@@ -21,6 +21,15 @@ inline Eigen::VectorXd board_params(const BoardSpec& b) {
   return p;
 }
 
+// The aspect residual of a board's parameters at @p p (BoardFitOptions::aspect_log_scale, not 0),
+// and its derivatives by the log width and the log height.
+inline double aspect_residual(const double* p, const BoardFitOptions& o) {
+  return (p[3] - p[4]) / o.aspect_log_scale;
+}
+inline bool has_aspect_residual(const BoardFitOptions& o) {
+  return o.aspect_log_scale > 0.0;
+}
+
 // @p like with the kBoardParams parameters at @p p.
 inline BoardSpec board_from_params(const double* p, const BoardSpec& like) {
   BoardSpec b = like;

@@ -76,7 +76,9 @@ SceneGeometryFit fit_scene_geometry(const CameraSpec& camera_start,
     const LensModel lens(camera_start);
     for (std::size_t b : in) {
       starts.push_back(
-          fit_board_geometry(camera_start, lens, sightings[b], board_starts[b], wide).board);
+          options.from_fit
+              ? board_starts[b]
+              : fit_board_geometry(camera_start, lens, sightings[b], board_starts[b], wide).board);
     }
   }
 
@@ -94,8 +96,11 @@ SceneGeometryFit fit_scene_geometry(const CameraSpec& camera_start,
     return detail::board_from_params(
         q.data() + kCameraParams + kBoardParams * static_cast<Eigen::Index>(k), starts[k]);
   };
+  // The boards' aspect residuals after all the sightings' (one a board).
+  const Eigen::Index aspect_rows =
+      detail::has_aspect_residual(options.board) ? static_cast<Eigen::Index>(in.size()) : 0;
   auto residuals = [&](const Eigen::VectorXd& q, Eigen::VectorXd& r) {
-    r.resize(rows_at.back());
+    r.resize(rows_at.back() + aspect_rows);
     // A field of view outside (1, 179) degrees has no pinhole: every residual as large as any.
     if (!(q[0] > 1.0 && q[0] < 179.0)) {
       r.setConstant(1e6);
@@ -105,6 +110,10 @@ SceneGeometryFit fit_scene_geometry(const CameraSpec& camera_start,
     const LensModel lens(camera);
     for (std::size_t k = 0; k < in.size(); ++k) {
       detail::board_residuals(camera, lens, board_k(q, k), used[k], o, r, rows_at[k]);
+    }
+    for (Eigen::Index k = 0; k < aspect_rows; ++k) {
+      r[rows_at.back() + k] =
+          detail::aspect_residual(q.data() + kCameraParams + kBoardParams * k, o);
     }
   };
   // A board's parameters move only its own rows: those columns cost one board's sightings each.
@@ -132,9 +141,15 @@ SceneGeometryFit fit_scene_geometry(const CameraSpec& camera_start,
         detail::board_residuals(camera, lens, board_k(b, k), used[k], o, rm);
         jac.block(rows_at[k], first + j, block, 1) = (rp - rm) / (2.0 * kBoardStep);
       }
+      if (aspect_rows > 0) {
+        const Eigen::Index row = rows_at.back() + static_cast<Eigen::Index>(k);
+        jac(row, first + 3) = 1.0 / o.aspect_log_scale;
+        jac(row, first + 4) = -1.0 / o.aspect_log_scale;
+      }
     }
   };
   for (const double widen : {8.0, 4.0, 2.0, 1.0}) {
+    if (options.from_fit && widen > 1.0) continue;
     o.sqrt_area_scale = options.board.sqrt_area_scale * widen;
     o.centroid_scale_px = options.board.centroid_scale_px * widen;
     // The wide runs only bring the fit near: a few steps each.

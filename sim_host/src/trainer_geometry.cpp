@@ -61,10 +61,19 @@ GeometryReport fit_training_geometry(const AreaSeries& run, const std::vector<Pl
 
   const std::size_t boards = bearings.placements.size();
   std::vector<std::vector<BoardSighting>> sightings(boards);
-  for (const PlacedFrame& f : frames) {
+  std::vector<std::size_t> frame_of;  // each sighting's frame in frames
+  std::vector<double> time_s;
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    const PlacedFrame& f = frames[i];
     const algorithms::AreaVector& a = run.areas[f.index];
     if (!a.rows_measured() || !a.columns_measured()) continue;
-    for (std::size_t b = 0; b < boards && b < a.count; ++b) {
+    frame_of.push_back(i);
+    time_s.push_back(f.t_s);
+    for (std::size_t b = 0; b < boards; ++b) {
+      if (b >= a.count) {  // one entry a frame for every board
+        sightings[b].push_back({f.pose, 0.0, 0.0, 0.0});
+        continue;
+      }
       sightings[b].push_back({f.pose, static_cast<double>(a.pixels[b]), a.centroid_column_px(b),
                               a.centroid_row_px(b)});
     }
@@ -100,11 +109,25 @@ GeometryReport fit_training_geometry(const AreaSeries& run, const std::vector<Pl
   report.fit = fit_with(opt.geometry_fit);
   const bool reference_frame = camera.width_px == kBoardFitReferenceWidthPx &&
                                camera.height_px == kBoardFitReferenceHeightPx;
+  const auto frame_options_of = [&](SceneFitOptions o) {
+    o.board = for_frame(o.board, camera.width_px, camera.height_px);
+    return o;
+  };
   if (!report.fit.ok && !reference_frame) {
-    SceneFitOptions frame_options = opt.geometry_fit;
-    frame_options.board = for_frame(frame_options.board, camera.width_px, camera.height_px);
-    report.fit = fit_with(frame_options);
+    report.fit = fit_with(frame_options_of(opt.geometry_fit));
     report.frame_scales = true;
+  }
+  if (opt.refine_headings && report.fit.ok) {
+    const SceneFitOptions& used =
+        report.frame_scales ? frame_options_of(opt.geometry_fit) : opt.geometry_fit;
+    HeadingRefinement r =
+        refine_headings(report.fit, sightings, time_s, used, opt.heading_refinement);
+    report.fit = std::move(r.fit);
+    report.heading_rounds = r.rounds;
+    report.heading_offset_rms_rad = r.rms_offset_rad;
+    report.heading_offset_rad.assign(frames.size(), 0.0);
+    for (std::size_t k = 0; k < frame_of.size(); ++k)
+      report.heading_offset_rad[frame_of[k]] = r.offset_rad[k];
   }
   report.tried = true;
   report.ms = ms_since(t0);

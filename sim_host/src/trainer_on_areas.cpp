@@ -230,9 +230,27 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<dataset::Sta
   }
   if (!bearing_frames.empty()) report.bearings = algorithms::calibrate_bearings(bearing_frames);
   report.bearings_ms = ms_since(t_bearings);
-  if (opt.fit_geometry)
+  // TrainOptions::refine_headings: the frames take the headings the geometry fit refined, for
+  // all that is trained after it, and the boards are placed again from them.
+  const auto take_headings = [&](const GeometryReport& g) {
+    if (g.heading_rounds == 0 || g.heading_offset_rad.size() != frames.size()) return false;
+    bearing_frames.clear();
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+      PlacedFrame& f = frames[i];
+      f.pose.yaw_rad = algorithms::wrap_angle_rad(f.pose.yaw_rad + g.heading_offset_rad[i]);
+      pr.poses[f.index].yaw_rad = f.pose.yaw_rad;
+      if (run.areas[f.index].columns_measured())
+        bearing_frames.push_back({f.pose, run.areas[f.index]});
+    }
+    algorithms::BearingCalibration again = algorithms::calibrate_bearings(bearing_frames);
+    if (again.ok) report.bearings = std::move(again);
+    return true;
+  };
+  if (opt.fit_geometry) {
     report.geometry =
         trainer_detail::fit_training_geometry(run, frames, report.bearings, opt, camera_height_m);
+    take_headings(report.geometry);
+  }
   const bool with_bearings = opt.bearings && report.bearings.ok;
   // Every placed frame's world bearing of each board under the law (a1, a3), for the forward map.
   const auto observations_under = [&](double a1_rad, double a3_rad, double axis_rad) {
@@ -277,9 +295,12 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<dataset::Sta
     // The fit takes seconds: only for a map whose tables it fills (a floor's), unless asked.
     if (opt.visibility_from_geometry && (opt.fit_geometry || forward->has_visibility)) {
       GeometryReport& g = report.geometry;
-      if (!opt.fit_geometry)
+      bool turned = false;
+      if (!opt.fit_geometry) {
         g = trainer_detail::fit_training_geometry(run, frames, report.bearings, opt,
                                                   camera_height_m);
+        turned = take_headings(g);
+      }
       g.tables_asked = true;
       // The law triangulated from the frames leaves out the optical axis's offset and the
       // camera's place ahead of the axle (calibrate_bearings), and bends a1 and a3 to make up for
@@ -292,21 +313,26 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<dataset::Sta
       const std::vector<double> rows =
           fitted ? seen_rows(run.areas, frames) : std::vector<double>{};
       const ColumnLaw law = fitted ? column_law_of(g.fit.camera, rows) : ColumnLaw{};
-      if (opt.law_from_geometry && with_bearings && forward->has_visibility && law.ok) {
+      const bool law_taken =
+          opt.law_from_geometry && with_bearings && forward->has_visibility && law.ok;
+      if (law_taken || turned) {
         auto first = std::make_unique<algorithms::ForwardMap>(*forward);
         const ForwardMapReport first_report = forward_report;
-        observations = observations_under(law.a1_rad, law.a3_rad, law.optical_axis_rad);
-        forward_report =
-            train_forward_map_placed(all, frames, boards, forward_opt, *forward, &observations);
-        if (forward->has_visibility) {
+        if (with_bearings)
+          observations =
+              law_taken ? observations_under(law.a1_rad, law.a3_rad, law.optical_axis_rad)
+                        : observations_under(report.bearings.a1_rad, report.bearings.a3_rad, 0.0);
+        forward_report = train_forward_map_placed(all, frames, boards, forward_opt, *forward,
+                                                  with_bearings ? &observations : nullptr);
+        if (!forward->has_visibility) {  // the same frames under another law lost the visibility
+          *forward = *first;
+          forward_report = first_report;
+        } else if (law_taken) {
           g.law_from_camera = true;
           g.law_a1_rad = law.a1_rad;
           g.law_a3_rad = law.a3_rad;
           g.law_axis_rad = static_cast<double>(forward->visibility_axis_rad);
           g.law_rows = rows;
-        } else {  // not seen so far: the same frames under another law lost the visibility
-          *forward = *first;
-          forward_report = first_report;
         }
       }
       if (g.tried) {

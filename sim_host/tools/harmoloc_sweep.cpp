@@ -123,6 +123,9 @@ int main(int argc, char** argv) {
   app.add_flag("--law-from-frames", opt.law_from_frames,
                "floor: keep the column-to-angle law triangulated from the frames, not the fitted\n"
                "camera's (harmoloc-train --law-from-frames), for comparison");
+  app.add_flag("--refine-headings", opt.refine_headings,
+               "floor: refine the coverage run's headings by the boards the geometry fit holds\n"
+               "(harmoloc-train --refine-headings). Experimental");
   app.add_flag("--projected-bearings,!--no-projected-bearings", opt.projected_bearings,
                "floor: project the bearings of the geometry's boards from the fitted camera at\n"
                "each particle's pose (harmoloc-train --projected-bearings; on by default,\n"
@@ -215,6 +218,7 @@ int main(int argc, char** argv) {
                     {"visibility_from_geometry", opt.visibility_from_geometry},
                     {"geometry_noise_ratio", opt.geometry_noise_ratio},
                     {"law_from_frames", opt.law_from_frames},
+                    {"refine_headings", opt.refine_headings},
                     {"projected_bearings", opt.projected_bearings},
                     {"projected_areas", opt.projected_bearings && opt.projected_areas},
                     {"roams", opt.roams}};

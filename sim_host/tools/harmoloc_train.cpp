@@ -126,6 +126,12 @@ void print_geometry(const harmoloc::sim_host::GeometryReport& g,
         "than two boards fitted)\n",
         g.camera_start.width_px, g.camera_start.height_px);
   }
+  if (g.heading_rounds > 0) {
+    std::printf(
+        "              headings refined by the boards: %d rounds, the frames turned by %.2f deg "
+        "RMS (the fit above is from them)\n",
+        g.heading_rounds, g.heading_offset_rms_rad * 180.0 / harmoloc::algorithms::kPi);
+  }
   // Each board, fitted or not: a failed fit says which boards failed and by how much.
   for (std::size_t k = 0; k < f.boards.size(); ++k) {
     const harmoloc::sim_host::BoardFit& b = f.boards[k];
@@ -274,6 +280,11 @@ int main(int argc, char** argv) {
                "keep the column-to-angle law triangulated from the frames' centroid columns; by\n"
                "default a map whose visibility tables the geometry fit serves takes the fitted\n"
                "camera's law, and its forward map is trained again with it (docs/training.md)");
+  bool refine_headings = false;
+  app.add_flag("--refine-headings", refine_headings,
+               "where the geometry is fitted: refine the placed frames' headings by the boards it\n"
+               "holds (a frame's heading error moves every board's column alike) and train the\n"
+               "forward map with them. Experimental (docs/training.md)");
   bool projected_bearings = true;
   app.add_flag("--projected-bearings,!--no-projected-bearings", projected_bearings,
                "store the fitted camera and the outlines of the boards whose visibility tables\n"
@@ -356,6 +367,7 @@ int main(int argc, char** argv) {
     opt.visibility_from_geometry = !visibility_from_frames;
     opt.geometry_tables_required = visibility_from_geometry;
     opt.law_from_geometry = !law_from_frames;
+    opt.refine_headings = refine_headings;
     opt.projected_bearings = projected_bearings;
     opt.projected_areas = projected_bearings && projected_areas;
     opt.camera_height_m = camera_height;

@@ -193,6 +193,8 @@ void geometry_against_truth(const GeometryReport& g, const Scenario& scene, Scen
   r.floor_geometry_fov_error_deg = c.horizontal_fov_deg - scene.camera.horizontal_fov_deg;
   r.floor_geometry_pitch_error_deg = c.pitch_deg - scene.camera.pitch_deg;
   r.floor_geometry_forward_error_m = c.forward_offset_m - scene.camera.forward_offset_m;
+  r.floor_heading_rounds = g.heading_rounds;
+  r.floor_heading_offset_rms_deg = g.heading_offset_rms_rad * 180.0 / algorithms::kPi;
 }
 
 // Issue 20's floor runs: train on the coverage run, replay the roams, pool their frames.
@@ -214,6 +216,7 @@ void floor_part(const Scenario& scene, const algorithms::ThresholdSet& threshold
     train.visibility_from_geometry = opt.visibility_from_geometry;
     train.geometry_tables.kernel_noise_ratio = opt.geometry_noise_ratio;
     train.law_from_geometry = !opt.law_from_frames;
+    train.refine_headings = opt.refine_headings;
     train.projected_bearings = opt.projected_bearings;
     train.projected_areas = opt.projected_bearings && opt.projected_areas;
     train.camera_height_m = coverage.camera.height_m;  // a tape measure gives it

@@ -46,6 +46,7 @@ struct SweepOptions {
   /// The floor map's column-to-angle law triangulated from the frames, not the fitted camera's
   /// (TrainOptions::law_from_geometry off).
   bool law_from_frames = false;
+  bool refine_headings = false;
   /// The floor map projects the geometry's boards' bearings (harmoloc-train --projected-bearings).
   bool projected_bearings = true;
   /// With projected_bearings: their areas as well (harmoloc-train --projected-areas).
@@ -141,6 +142,9 @@ struct SceneResult {
   double floor_geometry_fov_error_deg = std::numeric_limits<double>::quiet_NaN();
   double floor_geometry_pitch_error_deg = std::numeric_limits<double>::quiet_NaN();
   double floor_geometry_forward_error_m = std::numeric_limits<double>::quiet_NaN();
+  /// --refine-headings: rounds whose refit held, and the RMS of the coverage run's heading moves.
+  int floor_heading_rounds = 0;
+  double floor_heading_offset_rms_deg = 0.0;
   /// The floor map's column-to-angle law is the fitted camera's (GeometryReport::law_from_camera),
   /// and the optical axis's image angle under it, where the map's angle gain is centred (degrees
   /// right of the centre column; NaN: not taken).

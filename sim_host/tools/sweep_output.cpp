@@ -78,6 +78,8 @@ nlohmann::json to_json(const SceneResult& r) {
   j["floor_geometry_fov_error_deg"] = r.floor_geometry_fov_error_deg;
   j["floor_geometry_pitch_error_deg"] = r.floor_geometry_pitch_error_deg;
   j["floor_geometry_forward_error_m"] = r.floor_geometry_forward_error_m;
+  j["floor_heading_rounds"] = r.floor_heading_rounds;
+  j["floor_heading_offset_rms_deg"] = r.floor_heading_offset_rms_deg;
   j["floor_law_from_camera"] = r.floor_law_from_camera;
   j["floor_law_axis_deg"] = r.floor_law_axis_deg;
   j["floor_heading_bandwidth_m"] = r.floor_heading_bandwidth_m;

@@ -45,6 +45,13 @@ struct BoardFitOptions {
   double centroid_scale_px = 1.0;
   /// Huber's threshold in scaled units.
   double huber = 3.0;
+  /// A board's sightings pin its area, centre and facing but hardly the ratio of its width to
+  /// its height: the areas give their product and the centroids move with the ratio only by
+  /// perspective and at the frame's edge. Above 0: one more residual a board, ln(width / height)
+  /// over this scale, which keeps the ratio near 1 where the sightings leave it free (at ln 3, a
+  /// board 3 times wider than tall costs what a sighting one scale off does). Off by default:
+  /// at ln 3 the 30 random floors' roams came out no better (docs/sweep.md, 2026-12-07 (6)).
+  double aspect_log_scale = 0.0;
   int max_iterations = 60;
   /// Also start with the facing turned by +-40 and +-80 degrees (off when the start is a fit
   /// already).

@@ -22,6 +22,10 @@ struct SceneFitOptions {
   BoardFitOptions board;
   /// Of the joint fit's last run (a quarter of it for each of the three wide runs before).
   int max_iterations = 40;
+  /// The camera and the boards' starts are a fit already (heading_refinement.hpp fits again
+  /// after moving the headings a little): no boards alone under the rough camera and no widened
+  /// runs, only the last joint run and the boards' own figures.
+  bool from_fit = false;
 };
 
 struct SceneGeometryFit {

@@ -18,6 +18,7 @@
 #include "harmoloc/dataset/tum.hpp"
 #include "harmoloc/sim_host/forward_map_geometry.hpp"
 #include "harmoloc/sim_host/forward_map_training.hpp"
+#include "harmoloc/sim_host/heading_refinement.hpp"
 #include "harmoloc/sim_host/label_offset.hpp"
 #include "harmoloc/sim_host/scene_geometry_fit.hpp"
 #include "harmoloc/sim_host/training_odometry.hpp"
@@ -123,6 +124,10 @@ struct TrainOptions {
   /// camera.height_m), else unknown.
   double camera_height_m = 0.0;
   SceneFitOptions geometry_fit;
+  /// Where the geometry is fitted: refine the placed frames' headings by the boards it holds
+  /// (heading_refinement.hpp), and train the forward map and its tables with them. Experimental.
+  bool refine_headings = false;
+  HeadingRefinementOptions heading_refinement;
   ForwardMapOptions forward;
 };
 
@@ -177,6 +182,12 @@ struct GeometryReport {
   /// 320 x 240 frame's scales fewer than two boards fitted.
   bool frame_scales = false;
   double ms = 0.0;
+  /// TrainOptions::refine_headings: rounds whose refit held (0: the headings are the
+  /// placement's), the heading each placed frame moved by (counter-clockwise, one per frame the
+  /// trainer placed, 0 for a frame without row sums) and its RMS.
+  int heading_rounds = 0;
+  std::vector<double> heading_offset_rad;
+  double heading_offset_rms_rad = 0.0;
   /// TrainOptions::visibility_from_geometry: what the map took from the fit.
   bool tables_asked = false;
   GeometryTablesReport tables;
