@@ -21,8 +21,8 @@ inline Eigen::VectorXd board_params(const BoardSpec& b) {
   return p;
 }
 
-// The aspect residual of a board's parameters at @p p (BoardFitOptions::aspect_log_scale, not 0),
-// and its derivatives by the log width and the log height.
+// The aspect residual of a board's parameters at @p p (BoardFitOptions::aspect_log_scale, when
+// has_aspect_residual): linear in the log width and the log height.
 inline double aspect_residual(const double* p, const BoardFitOptions& o) {
   return (p[3] - p[4]) / o.aspect_log_scale;
 }

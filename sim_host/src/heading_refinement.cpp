@@ -43,7 +43,7 @@ std::vector<double> heading_offsets_rad(const SceneGeometryFit& fit,
     }
     if (!misses.empty()) per_frame[k] = median_of(misses);
   }
-  std::vector<double> offset(frames, 0.0), window, taken;
+  std::vector<double> offset(frames, std::nan("")), window, taken;
   std::size_t lo = 0, hi = 0;
   for (std::size_t k = 0; k < frames; ++k) {
     while (lo < k && time_s[lo] < time_s[k] - options.window_s) ++lo;
@@ -56,12 +56,9 @@ std::vector<double> heading_offsets_rad(const SceneGeometryFit& fit,
     offset[k] = median_of(window);
     taken.push_back(offset[k]);
   }
-  if (taken.empty()) return offset;
   // A turn every frame shares is the camera's: the labels hold the run's heading.
-  const double shared = median_of(taken);
-  for (std::size_t k = 0; k < frames; ++k) {
-    if (offset[k] != 0.0) offset[k] -= shared;
-  }
+  const double shared = taken.empty() ? 0.0 : median_of(taken);
+  for (double& v : offset) v = std::isnan(v) ? 0.0 : v - shared;
   return offset;
 }
 

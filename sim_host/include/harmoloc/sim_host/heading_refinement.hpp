@@ -1,7 +1,7 @@
 #pragma once
 /// @file The training run's headings refined by the boards it saw. The trainer places every frame
 /// by the wheel odometry between the labels; the heading that placement gives drifts between two
-/// labels as the wheels slip (on random floor 3, 0.9 degrees RMS, for 0.1 to 0.3 on most floors).
+/// labels as the wheels slip (on random floor 3, 1.0 degree RMS, for 0.1 to 0.3 on most floors).
 /// At 1280 x 720 a degree is 13 pixels of centroid column, every board in the frame moved alike:
 /// the geometry fit then turned the camera's principal point 37 px off and fitted two wall boards
 /// as strips 6 m long, a better fit to those headings than the truth was (docs/sweep.md).
