@@ -223,26 +223,28 @@ TrainReport train_on_areas(const AreaSeries& run, const std::vector<dataset::Sta
   // Where the boards stand and the lens's column-to-angle law, from the placed frames' centroid
   // columns; with the law, every frame's world bearing of each board for the forward map.
   const auto t_bearings = std::chrono::steady_clock::now();
-  std::vector<algorithms::BearingFrame> bearing_frames;
-  for (const PlacedFrame& f : frames) {
-    if (run.areas[f.index].columns_measured())
-      bearing_frames.push_back({placed.poses[f.index], run.areas[f.index]});
-  }
-  if (!bearing_frames.empty()) report.bearings = algorithms::calibrate_bearings(bearing_frames);
+  // The boards placed from the frames' poses as they stand (the placement's, or the refined).
+  const auto bearings_from_frames = [&] {
+    std::vector<algorithms::BearingFrame> bearing_frames;
+    for (const PlacedFrame& f : frames) {
+      if (run.areas[f.index].columns_measured())
+        bearing_frames.push_back({f.pose, run.areas[f.index]});
+    }
+    return bearing_frames.empty() ? algorithms::BearingCalibration{}
+                                  : algorithms::calibrate_bearings(bearing_frames);
+  };
+  report.bearings = bearings_from_frames();
   report.bearings_ms = ms_since(t_bearings);
   // TrainOptions::refine_headings: the frames take the headings the geometry fit refined, for
   // all that is trained after it, and the boards are placed again from them.
   const auto take_headings = [&](const GeometryReport& g) {
     if (g.heading_rounds == 0 || g.heading_offset_rad.size() != frames.size()) return false;
-    bearing_frames.clear();
     for (std::size_t i = 0; i < frames.size(); ++i) {
       PlacedFrame& f = frames[i];
       f.pose.yaw_rad = algorithms::wrap_angle_rad(f.pose.yaw_rad + g.heading_offset_rad[i]);
       pr.poses[f.index].yaw_rad = f.pose.yaw_rad;
-      if (run.areas[f.index].columns_measured())
-        bearing_frames.push_back({f.pose, run.areas[f.index]});
     }
-    algorithms::BearingCalibration again = algorithms::calibrate_bearings(bearing_frames);
+    algorithms::BearingCalibration again = bearings_from_frames();
     if (again.ok) report.bearings = std::move(again);
     return true;
   };
