@@ -137,6 +137,8 @@ void read_filter(const Checker& check, const toml::table& root, FirmwareConfig& 
                 "init_position_sigma_m",
                 "vision_only_speed_mps",
                 "map_margin_m",
+                "nominal_spread_m",
+                "nominal_resume_spread_m",
                 "kld",
                 "kld_min_particles",
                 "kld_epsilon",
@@ -148,7 +150,8 @@ void read_filter(const Checker& check, const toml::table& root, FirmwareConfig& 
                 "nearby_radius_m",
                 "nearby_levels",
                 "nearby_hint_by_tables",
-                "seed_heading_from_boards"});
+                "seed_heading_from_boards",
+                "seed_from_search"});
     auto& f = c.filter;
     f.particles = static_cast<std::size_t>(
         check.integer(*t, "particles", "filter.", static_cast<std::int64_t>(f.particles), 16,
@@ -182,6 +185,17 @@ void read_filter(const Checker& check, const toml::table& root, FirmwareConfig& 
     f.vision_only_speed_mps =
         check.number(*t, "vision_only_speed_mps", "filter.", f.vision_only_speed_mps, 0.0, 10.0);
     f.map_margin_m = check.number(*t, "map_margin_m", "filter.", f.map_margin_m, 0.0, 100.0);
+    f.nominal_spread_m =
+        check.number(*t, "nominal_spread_m", "filter.", f.nominal_spread_m, 0.001, 100.0);
+    // Without its own value the resume bound keeps the defaults' ratio to the spread bound.
+    const toml::node* resume = t->get("nominal_resume_spread_m");
+    f.nominal_resume_spread_m = resume != nullptr
+                                    ? check.number(*t, "nominal_resume_spread_m", "filter.",
+                                                   f.nominal_resume_spread_m, 0.001, 100.0)
+                                    : 0.7 * f.nominal_spread_m;
+    if (f.nominal_resume_spread_m > f.nominal_spread_m) {
+      check.fail(resume, "filter.nominal_resume_spread_m must not exceed filter.nominal_spread_m");
+    }
     algorithms::KldSampling& k = f.kld;
     f.kld_mode = on_off_auto(check, *t, "kld", "filter.", f.kld_mode, KldMode::kOn, KldMode::kOff,
                              KldMode::kAuto);
@@ -196,6 +210,7 @@ void read_filter(const Checker& check, const toml::table& root, FirmwareConfig& 
     f.nearby_test = flag(check, *t, "nearby_test", "filter.", f.nearby_test);
     f.seed_heading_from_boards =
         flag(check, *t, "seed_heading_from_boards", "filter.", f.seed_heading_from_boards);
+    f.seed_from_search = flag(check, *t, "seed_from_search", "filter.", f.seed_from_search);
     f.nearby.bound_nats =
         check.number(*t, "nearby_bound_nats", "filter.", f.nearby.bound_nats, 1.0, 1000.0);
     f.nearby.max_frames = static_cast<std::uint32_t>(check.integer(

@@ -71,6 +71,12 @@ void LocalizationCycle::set_published_health() {
       cause = HealthCause::kHeadingNotCovered;
     else if (camera_fresh(last_disagree_ns_))
       cause = HealthCause::kBoardsDisagree;
+  } else if (h == Health::kNominal && spread_wide_) {
+    // Fresh frames and encoders, but a cloud as wide as the published quality's 0: the boards
+    // do not pin the pose (one board in view, a cloud just seeded). On random floors 30% of the
+    // nominal cycles more than 10 cm off were so (docs/sweep.md).
+    h = Health::kOdometryOnly;
+    cause = HealthCause::kSpreadWide;
   }
   pose_.health = h;
   pose_.cause = cause;

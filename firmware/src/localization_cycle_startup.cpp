@@ -160,6 +160,7 @@ LocalizationCycle::LocalizationCycle(const FirmwareConfig& config, const algorit
   nearby_on_ = searchable_floor && config.filter.nearby_test;
   seed_heading_from_boards_ = searchable_floor && config.filter.seed_heading_from_boards;
   floor_search_on_ = searchable_floor && config.kidnap.floor_search;
+  start_from_search_ = floor_search_on_ && config.filter.seed_from_search;
   if (floor_search_on_) {
     // A pass tries at most kFloorPassPlaces places, kFloorPlacesPerCycle a cycle (12 cycles,
     // 0.4 s at 30 Hz): the stride is the finest that covers the grid with that many.

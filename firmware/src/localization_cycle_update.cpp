@@ -32,11 +32,22 @@ void LocalizationCycle::update(const algorithms::AreaVector& areas, const Featur
         // give none (all cut by the frame's side, or too small) is let pass, for a second at
         // most: seeded at the training run's mean heading there instead, random seed 25's
         // first cloud stood 100 degrees off and lost the heading in the turn that followed.
-        if (seed_heading_from_boards_)
+        if (seed_heading_from_boards_ || start_from_search_)
           observed_ = algorithms::board_features(map_.forward, map_.model.area_scale, areas);
+        // With filter.seed_from_search the floor search looks over the whole floor while the
+        // seed waits, and the first cloud starts as a kidnap's re-seed does: on the search's
+        // pose and the fix. On a floor map the harmonic fix is trained at the headings the
+        // coverage run drove and can be 15-50 cm off at a start (random floors 1, 7 and 9):
+        // a cloud seeded around it alone settled 15-20 cm from the robot for 3-10 s.
+        if (start_from_search_) follow_floor(observed_);
         const SeedHeading heading = seed_heading(fix_.fix.x_m, fix_.fix.y_m);
-        if (seed_heading_from_boards_ && !heading.from_boards && start_waits_ < kStartWaitFrames) {
+        const bool want_heading = seed_heading_from_boards_ && !heading.from_boards;
+        const bool want_search = start_from_search_ && !floor_fix_.valid;
+        if ((want_heading || want_search) && start_waits_ < kStartWaitFrames) {
           ++start_waits_;
+        } else if (start_from_search_ && floor_fix_.valid) {
+          seed_from_search(std::max(floor_refine_m_, 0.03), heading.sigma_rad);
+          vision = true;
         } else {
           reseed_around(fix_.fix.x_m, fix_.fix.y_m, heading);
           vision = true;
@@ -64,6 +75,12 @@ void LocalizationCycle::update(const algorithms::AreaVector& areas, const Featur
       last_fix_ns_ = data_time_ns_;
     pose_.pose = e.mean;
     pose_.covariance = e.covariance;
+    // Entered at nominal_spread_m, left under the lower resume bound: a spread hovering at the
+    // bound does not flip the health (and its STATUSTEXT) every few cycles. A NaN is wide.
+    const double spread_m =
+        std::sqrt(std::max(0.0, 0.5 * (e.covariance(0, 0) + e.covariance(1, 1))));
+    spread_wide_ = spread_wide_ ? !(spread_m < config_.filter.nominal_resume_spread_m)
+                                : !(spread_m < config_.filter.nominal_spread_m);
     pose_.valid = true;
     const std::uint64_t particles = filter_.size();
     counters_.particles_min =
@@ -81,6 +98,7 @@ void LocalizationCycle::update(const algorithms::AreaVector& areas, const Featur
   set_published_health();
   if (pose_.cause == HealthCause::kHeadingNotCovered) ++counters_.uncovered_cycles;
   if (pose_.cause == HealthCause::kBoardsDisagree) ++counters_.disagree_cycles;
+  if (pose_.cause == HealthCause::kSpreadWide) ++counters_.spread_wide_cycles;
   ++counters_.cycles_in_health[static_cast<std::size_t>(pose_.health)];
 }
 
@@ -312,27 +330,30 @@ void LocalizationCycle::floor_kidnap_test(const algorithms::BoardFeatures& obser
   if (config_.kidnap.reseed == ReseedStrategy::kAroundFix && floor_fix_.valid) {
     const double sigma_m = config_.kidnap.position_sigma_m >= 0.0 ? config_.kidnap.position_sigma_m
                                                                   : std::max(floor_refine_m_, 0.03);
-    const double yaw_sigma_rad = config_.kidnap.yaw_sigma_deg * algorithms::kPi / 180.0;
-    const algorithms::Pose2 searched{floor_fix_.x_m, floor_fix_.y_m, floor_fix_.yaw_rad};
-    // The harmonic fix as a second start, where it is a known place apart from the search's pose
-    // and the boards give a heading there: the search weighs the boards alone, and where the map
-    // predicts the robot's own place poorly a wrong place can fit the frame better (random floor
-    // 2: the truth at -8 to -20 nats, a place 0.2-0.6 m off at -0.7, the fix 4-10 cm from the
-    // robot). The filter weighs the fix as well, and the next frames choose between the two.
-    const algorithms::HarmonicFix& fix = fix_.fix;
-    const bool fix_apart = fix.known_place && fix_on_map(fix) &&
-                           std::hypot(fix.x_m - searched.x_m, fix.y_m - searched.y_m) > sigma_m;
-    const SeedHeading at_fix = fix_apart ? seed_heading(fix.x_m, fix.y_m) : SeedHeading{};
-    if (at_fix.from_boards) {
-      filter_.initialize_between(searched, algorithms::Pose2{fix.x_m, fix.y_m, at_fix.yaw_rad},
-                                 sigma_m, std::max(yaw_sigma_rad, at_fix.sigma_rad), false);
-    } else {
-      filter_.initialize(searched, sigma_m, yaw_sigma_rad, false);
-    }
-    after_reseed();
+    seed_from_search(sigma_m, config_.kidnap.yaw_sigma_deg * algorithms::kPi / 180.0);
   } else {
     reseed_globally();
   }
+}
+
+void LocalizationCycle::seed_from_search(double sigma_m, double yaw_sigma_rad) {
+  const algorithms::Pose2 searched{floor_fix_.x_m, floor_fix_.y_m, floor_fix_.yaw_rad};
+  // The harmonic fix as a second start, where it is a known place apart from the search's pose
+  // and the boards give a heading there: the search weighs the boards alone, and where the map
+  // predicts the robot's own place poorly a wrong place can fit the frame better (random floor
+  // 2: the truth at -8 to -20 nats, a place 0.2-0.6 m off at -0.7, the fix 4-10 cm from the
+  // robot). The filter weighs the fix as well, and the next frames choose between the two.
+  const algorithms::HarmonicFix& fix = fix_.fix;
+  const bool fix_apart = fix.known_place && fix_on_map(fix) &&
+                         std::hypot(fix.x_m - searched.x_m, fix.y_m - searched.y_m) > sigma_m;
+  const SeedHeading at_fix = fix_apart ? seed_heading(fix.x_m, fix.y_m) : SeedHeading{};
+  if (at_fix.from_boards) {
+    filter_.initialize_between(searched, algorithms::Pose2{fix.x_m, fix.y_m, at_fix.yaw_rad},
+                               sigma_m, std::max(yaw_sigma_rad, at_fix.sigma_rad), false);
+  } else {
+    filter_.initialize(searched, sigma_m, yaw_sigma_rad, false);
+  }
+  after_reseed();
 }
 
 algorithms::KidnapVerdict LocalizationCycle::step_kidnap_test(const algorithms::KidnapInput& in) {

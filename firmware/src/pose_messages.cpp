@@ -52,6 +52,8 @@ HealthText health_text(Health health, HealthCause cause) {
     if (health == Health::kInvalid)
       return HealthText{severity, "harmoloc: pose invalid (boards disagree)"};
   }
+  if (cause == HealthCause::kSpreadWide && health == Health::kOdometryOnly)
+    return HealthText{severity, "harmoloc: odometry only (pose spread too wide)"};
   return HealthText{severity, kText[static_cast<std::size_t>(health)]};
 }
 
@@ -154,7 +156,7 @@ bool health_of_text(const char* text, std::size_t size, Health& health) {
                          Health::kVisionOnly, Health::kInvalid}) {
     for (const HealthCause cause :
          {HealthCause::kInputs, HealthCause::kOffMap, HealthCause::kHeadingNotCovered,
-          HealthCause::kBoardsDisagree}) {
+          HealthCause::kBoardsDisagree, HealthCause::kSpreadWide}) {
       const char* t = health_text(h, cause).text;
       if (std::strlen(t) == n && std::strncmp(t, text, n) == 0) {
         health = h;

@@ -210,6 +210,7 @@ void to_json(Json& j, const Document& d) {
                           {"off_map_cycles", l.off_map_cycles},
                           {"uncovered_cycles", l.uncovered_cycles},
                           {"disagree_cycles", l.disagree_cycles},
+                          {"spread_wide_cycles", l.spread_wide_cycles},
                           {"cut_board_frames", l.cut_board_frames}};
   }
   const Filter& f = d.filter;
@@ -319,6 +320,7 @@ void from_json(const Json& j, Document& d) {
     read_count(*l, "off_map_cycles", "localizer.", localizer.off_map_cycles);
     read_count(*l, "uncovered_cycles", "localizer.", localizer.uncovered_cycles);
     read_count(*l, "disagree_cycles", "localizer.", localizer.disagree_cycles);
+    read_count(*l, "spread_wide_cycles", "localizer.", localizer.spread_wide_cycles);
     read_count(*l, "cut_board_frames", "localizer.", localizer.cut_board_frames);
     d.localizer = localizer;
   }

@@ -82,9 +82,9 @@ stats::Document stats_document(const StatsSnapshot& snapshot) {
   d.camera = {run.camera, c.no_frame, c.frame_size_mismatch, c.stale_frames};
   d.encoders = {run.encoders, c.encoder_gaps_bridged};
   d.link = run.link;
-  d.localizer = stats::Localizer{c.fixes_used,     c.unknown_place,    c.implausible_frames,
-                                 c.off_map_cycles, c.uncovered_cycles, c.cut_board_frames,
-                                 c.disagree_cycles};
+  d.localizer = stats::Localizer{c.fixes_used,      c.unknown_place,     c.implausible_frames,
+                                 c.off_map_cycles,  c.uncovered_cycles,  c.cut_board_frames,
+                                 c.disagree_cycles, c.spread_wide_cycles};
   d.filter = {snapshot.uses_boards ? "boards" : "fix",
               c.resamples,
               c.particles_mean(),

@@ -133,6 +133,7 @@ RunRecord replay_scenario(const Scenario& scenario, std::uint64_t seed,
     f.estimate = out.pose;
     f.valid = out.valid;
     f.health = out.health;
+    f.cause = out.cause;
     const firmware::FixOutput& fix = cycle->last_fix();
     f.fix_present = fix.present;
     f.fix_known = fix.present && fix.fix.known_place;
@@ -246,7 +247,7 @@ void write_trace(const RunRecord& run, const std::string& path) {
       "cut_board,fix_suspects,truth_lane_m,frame_sigma_m,frame_axis_rad,search_x_m,search_y_m,"
       "search_nats,truth_seen_nats,truth_model_nats,search_model_nats,estimate_model_nats,"
       "boards_in_view,boards_with_bearing,search_yaw_rad,nearby_sum_nats,nearby_by_tables,"
-      "nearby_draws");
+      "nearby_draws,health_cause");
   const std::size_t boards = run.frames.empty() ? 0 : run.frames.front().boards;
   for (std::size_t b = 0; b < boards; ++b) std::fprintf(f, ",chi2_%zu", b + 1);
   for (std::size_t b = 0; b < boards; ++b) std::fprintf(f, ",static_%zu", b + 1);
@@ -256,7 +257,7 @@ void write_trace(const RunRecord& run, const std::string& path) {
                  "%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%d,%s,%d,%d,%.4f,%.4f,%d,%u,%d,%.4f,%.4f,"
                  "%.3f,%.4f,"
                  "%.4f,%.4g,%d,%d,%.4f,%.4f,%.4f,%.3f,%.3f,%d,%d,%u,%.3f,%.4g,%.3f,%.4f,%.4f,%.3f,%"
-                 ".3f,%.3f,%.3f,%.3f,%d,%d,%.4f,%.3f,%d,%llu",
+                 ".3f,%.3f,%.3f,%.3f,%d,%d,%.4f,%.3f,%d,%llu,%d",
                  r.t_s, r.truth.x_m, r.truth.y_m, r.truth.yaw_rad, r.estimate.x_m, r.estimate.y_m,
                  r.estimate.yaw_rad, r.position_error_m(), r.valid ? 1 : 0,
                  firmware::health_name(r.health), r.fix_present ? 1 : 0, r.fix_known ? 1 : 0,
@@ -269,7 +270,7 @@ void write_trace(const RunRecord& run, const std::string& path) {
                  r.frame_axis_rad, r.search_x_m, r.search_y_m, r.search_nats, r.truth_seen_nats,
                  r.truth_model_nats, r.search_model_nats, r.estimate_model_nats, r.boards_in_view,
                  r.boards_with_bearing, r.search_yaw_rad, r.nearby_sum_nats, r.nearby_by_tables,
-                 static_cast<unsigned long long>(r.nearby_draws));
+                 static_cast<unsigned long long>(r.nearby_draws), static_cast<int>(r.cause));
     for (std::size_t b = 0; b < boards; ++b)
       std::fprintf(f, ",%.3g", static_cast<double>(r.chi2[b]));
     for (std::size_t b = 0; b < boards; ++b)

@@ -50,6 +50,7 @@ struct FrameRecord {
   algorithms::Pose2 estimate;
   bool valid = false;
   firmware::Health health = firmware::Health::kNotInitialized;
+  firmware::HealthCause cause = firmware::HealthCause::kInputs;
   bool fix_present = false;  ///< the harmonic localizer computed a fix (a usable frame)
   bool fix_known = false;    ///< the harmonic localizer's own fix is a known place
   /// A board the localizer compares showed (HarmonicFix::board_seen): without, the fix is none.

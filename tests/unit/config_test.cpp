@@ -104,6 +104,8 @@ resample_threshold = 0.6
 init_position_sigma_m = 0.2
 vision_only_speed_mps = 0.5
 map_margin_m = 2.5
+nominal_spread_m = 0.2
+nominal_resume_spread_m = 0.15
 kld = true
 kld_min_particles = 64
 kld_epsilon = 0.1
@@ -116,6 +118,7 @@ nearby_radius_m = 0.3
 nearby_levels = 2
 nearby_hint_by_tables = false
 seed_heading_from_boards = false
+seed_from_search = true
 
 [link]
 system_id = 7
@@ -173,6 +176,8 @@ heartbeat_hz = 2
   EXPECT_DOUBLE_EQ(c.filter.init_position_sigma_m, 0.2);
   EXPECT_DOUBLE_EQ(c.filter.vision_only_speed_mps, 0.5);
   EXPECT_DOUBLE_EQ(c.filter.map_margin_m, 2.5);
+  EXPECT_DOUBLE_EQ(c.filter.nominal_spread_m, 0.2);
+  EXPECT_DOUBLE_EQ(c.filter.nominal_resume_spread_m, 0.15);
   EXPECT_EQ(c.filter.kld_mode, hf::KldMode::kOn);
   EXPECT_EQ(c.filter.kld.min_particles, 64U);
   EXPECT_DOUBLE_EQ(c.filter.kld.epsilon, 0.1);
@@ -185,6 +190,7 @@ heartbeat_hz = 2
   EXPECT_EQ(c.filter.nearby.search_levels, 2);
   EXPECT_FALSE(c.filter.nearby.hint_by_tables);
   EXPECT_FALSE(c.filter.seed_heading_from_boards);
+  EXPECT_TRUE(c.filter.seed_from_search);
 
   EXPECT_EQ(c.link.system_id, 7);
   EXPECT_EQ(c.link.component_id, 100);
@@ -273,6 +279,18 @@ TEST(Config, ValueMinAboveValueMax) {
   expect_one_line_error(
       dir, "[[board]]\nname = \"x\"\nhue_deg = [10, 40]\nvalue_min = 200\nvalue_max = 100\n",
       "value_min is above value_max");
+}
+
+// The health's spread bounds: without its own value the resume bound keeps the defaults' ratio
+// (0.07 to 0.10); one beyond the spread bound would never let the health resume.
+TEST(Config, TheSpreadResumeBoundFollowsTheSpreadBound) {
+  ht::TempDir dir;
+  const hf::FirmwareConfig c =
+      hf::load_config(dir.write("spread.toml", "[filter]\nnominal_spread_m = 0.2\n"));
+  EXPECT_DOUBLE_EQ(c.filter.nominal_resume_spread_m, 0.7 * 0.2);
+  expect_one_line_error(dir, "[filter]\nnominal_spread_m = 0.05\nnominal_resume_spread_m = 0.06\n",
+                        "filter.nominal_resume_spread_m must not exceed filter.nominal_spread_m",
+                        3);
 }
 
 TEST(Config, CanLayoutThatDoesNotFit) {

@@ -588,6 +588,52 @@ TEST(MapRegion, APoseOutsideTheMappedRegionIsNeverNominal) {
   EXPECT_EQ(texts, expected);
 }
 
+// A cloud as wide as the published quality's 0 is not nominal, whatever the inputs' freshness:
+// on random floors a pose seeded 15-40 cm off, or held by one board, was published nominal with
+// a spread of 10-20 cm. The health goes odometry only at filter.nominal_spread_m (0.10 m) and
+// comes back under filter.nominal_resume_spread_m (0.07 m), so a spread between the two keeps
+// what the health was. Set-pose commands set the spread here.
+TEST(SpreadHealth, ACloudTooWideIsNotNominalUntilItNarrows) {
+  Rig r;
+  StillEncoders encoders;
+  r.camera.frames = true;
+  r.cycle = std::make_unique<hf::LocalizationCycle>(r.config, test_map(), r.camera, encoders,
+                                                    r.link, r.clock);
+  for (int i = 0; i < 5; ++i) r.run();
+  ASSERT_EQ(r.cycle->pose().health, hf::Health::kNominal);
+  const auto set_spread = [&](float sigma_m) {
+    r.send_and_run(tf::command(mv::kCmdSetPose, {2.0F, -1.5F, 0, sigma_m, 0, 0, 0}));
+    return r.run();  // the first cycle that weighs the set cloud
+  };
+  struct Step {
+    float sigma_m;
+    hf::Health health;
+  };
+  const Step steps[] = {{0.08F, hf::Health::kNominal},       // under the bound: stays nominal
+                        {0.30F, hf::Health::kOdometryOnly},  // beyond it
+                        {0.08F, hf::Health::kOdometryOnly},  // not yet under the resume bound
+                        {0.02F, hf::Health::kNominal}};
+  for (const Step& s : steps) {
+    const auto frames = set_spread(s.sigma_m);
+    EXPECT_EQ(r.cycle->pose().health, s.health) << s.sigma_m;
+    const bool wide = s.health != hf::Health::kNominal;
+    EXPECT_EQ(r.cycle->pose().cause, wide ? hf::HealthCause::kSpreadWide : hf::HealthCause::kInputs)
+        << s.sigma_m;
+    const auto hb = of_type(frames, 0);
+    if (!hb.empty()) {
+      EXPECT_EQ(hb[0].payload[7], wide ? 5 : 4);  // CRITICAL, ACTIVE
+    }
+  }
+  EXPECT_GE(r.cycle->counters().spread_wide_cycles, 3U);
+  std::vector<std::string> texts;
+  for (const auto& f : tf::decode(r.link.written, nullptr))
+    if (f.msg_id == 253) texts.push_back(statustext_of(f));
+  const std::vector<std::string> expected = {"harmoloc: pose nominal",
+                                             "harmoloc: odometry only (pose spread too wide)",
+                                             "harmoloc: pose nominal"};
+  EXPECT_EQ(texts, expected);
+}
+
 namespace {
 
 // test_map() with a forward map over its region whose heading coverage holds the sectors within

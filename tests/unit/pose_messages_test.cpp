@@ -110,7 +110,11 @@ TEST(PoseMessages, HealthTextSaysWhyThePoseIsNotNominal) {
        mav::kSeverityWarning},
       {H::kInvalid, C::kBoardsDisagree, "harmoloc: pose invalid (boards disagree)",
        mav::kSeverityCritical},
+      {H::kOdometryOnly, C::kSpreadWide, "harmoloc: odometry only (pose spread too wide)",
+       mav::kSeverityWarning},
       {H::kNominal, C::kHeadingNotCovered, "harmoloc: pose nominal", mav::kSeverityInfo},
+      {H::kInvalid, C::kSpreadWide, "harmoloc: pose invalid (no camera, no encoders)",
+       mav::kSeverityCritical},
       {H::kOdometryOnly, C::kOffMap, "harmoloc: odometry only (no camera fix)",
        mav::kSeverityWarning},
   };
@@ -120,7 +124,8 @@ TEST(PoseMessages, HealthTextSaysWhyThePoseIsNotNominal) {
     EXPECT_EQ(t.severity, c.severity) << c.text;
   }
   // STATUSTEXT holds 50 characters.
-  for (const C c : {C::kInputs, C::kOffMap, C::kHeadingNotCovered, C::kBoardsDisagree})
+  for (const C c :
+       {C::kInputs, C::kOffMap, C::kHeadingNotCovered, C::kBoardsDisagree, C::kSpreadWide})
     for (int h = 0; h <= 4; ++h)
       EXPECT_LE(std::strlen(hf::health_text(static_cast<H>(h), c).text), 50U);
 }

@@ -63,6 +63,12 @@ struct FilterConfig {
   /// How far beyond the mapped region (the box around the map's training positions and its
   /// forward map) a pose may lie and still be published as more than invalid.
   double map_margin_m = 1.0;
+  /// A pose whose cloud spreads this far (the root of the mean of the x and y variances, as the
+  /// published quality takes it: 0 at 10 cm) is not nominal: odometry only
+  /// (HealthCause::kSpreadWide) until the spread is back under nominal_resume_spread_m. The
+  /// boards then do not pin the pose to the map's accuracy, whatever the inputs' freshness says.
+  double nominal_spread_m = 0.10;
+  double nominal_resume_spread_m = 0.07;
   /// On a floor map with bearings (route terms off): the sequential test between the estimate
   /// and the best pose near it that draws particles there when the boards keep preferring it
   /// (algorithms/nearby_pose_test.hpp, docs/filter.md "The nearby pose test").
@@ -73,6 +79,11 @@ struct FilterConfig {
   /// kidnap's yaw spread, instead of the training run's mean heading there with the spread of
   /// its passes (docs/filter.md, "The seed's heading on a floor").
   bool seed_heading_from_boards = true;
+  /// On a floor map with the floor search (kidnap.floor_search): the first seed waits, at most
+  /// a second, for the search's first pass over the floor and starts the cloud on its pose and
+  /// on the harmonic fix, as a floor kidnap's re-seed does (docs/filter.md, "Start-up on a
+  /// floor"). Off: around the first known-place fix, init_position_sigma_m wide.
+  bool seed_from_search = false;
 };
 
 /// What the particles are weighed by.

@@ -76,6 +76,9 @@ struct CycleCounters {
   /// disagreed with the estimate and no fix the filter weighs vouched for it
   /// (HealthCause::kBoardsDisagree).
   std::uint64_t disagree_cycles = 0;
+  /// Cycles published odometry only because the cloud's position spread was too wide
+  /// (HealthCause::kSpreadWide, filter.nominal_spread_m).
+  std::uint64_t spread_wide_cycles = 0;
   /// Frames whose fix left out a board the frame's side cut (algorithms::uncut_features()).
   std::uint64_t cut_board_frames = 0;
   std::uint64_t encoder_samples = 0;
@@ -346,6 +349,10 @@ class LocalizationCycle {
   // wait for a frame with a bearing.
   void reseed_around(double x_m, double y_m, const SeedHeading& heading);
   void reseed_between(double place_x_m, double place_y_m, double fix_x_m, double fix_y_m);
+  /// The cloud on the floor search's pose (floor_fix_, valid) and, where it is a known place
+  /// apart from it, the harmonic fix: a floor kidnap's re-seed, and the first seed with
+  /// filter.seed_from_search.
+  void seed_from_search(double sigma_m, double yaw_sigma_rad);
   void reseed_globally();
   void after_reseed();
   // Whether the map knows the training run's heading (and the boards are used): a re-seed then
@@ -424,6 +431,9 @@ class LocalizationCycle {
   bool seed_heading_from_boards_ = false;
   static constexpr std::uint32_t kStartWaitFrames = 30;
   std::uint32_t start_waits_ = 0;
+  /// filter.seed_from_search on a floor map with the floor search: the first seed waits (within
+  /// kStartWaitFrames) for the search's first pass and starts on its pose and the fix.
+  bool start_from_search_ = false;
   // On a floor map: the sequential test between the estimate and the best pose near it.
   bool nearby_on_ = false;
   algorithms::NearbyPoseTest nearby_;
@@ -461,6 +471,9 @@ class LocalizationCycle {
   bool have_frame_time_ = false;
   bool live_clock_ = false;
   std::uint64_t last_fix_ns_ = 0;  ///< the last frame that counted as vision
+  /// The cloud's position spread reached filter.nominal_spread_m and has not yet come back under
+  /// filter.nominal_resume_spread_m: not nominal (HealthCause::kSpreadWide).
+  bool spread_wide_ = false;
   bool ever_fix_ = false;
   /// The last frame that would have counted as vision had the map covered the estimate's
   /// heading at its place (the same as last_fix_ns_ wherever it does).

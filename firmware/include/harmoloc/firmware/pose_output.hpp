@@ -32,6 +32,11 @@ enum class HealthCause : std::uint8_t {
   /// disagree with the estimate (BoardAssessment::consensus), and no fix the filter weighs
   /// vouches for it. The robot was carried, or the cloud stands where the boards say it is not.
   kBoardsDisagree = 3,
+  /// Odometry only although frames arrive and vouch for the estimate: the cloud's position
+  /// spread has reached `filter.nominal_spread_m` (10 cm, where the published quality is 0) and
+  /// not yet come back under `filter.nominal_resume_spread_m`. The boards do not pin the pose to
+  /// the map's accuracy (a frame with one board in view, a cloud just seeded).
+  kSpreadWide = 4,
 };
 
 struct PoseOutput {

@@ -97,9 +97,10 @@ struct Localizer {
   std::optional<std::uint64_t> unknown_place;
   std::uint64_t implausible_frames = 0;
   std::uint64_t off_map_cycles = 0;
-  std::uint64_t uncovered_cycles = 0;  ///< not nominal: the map's coverage lacks the heading
-  std::uint64_t cut_board_frames = 0;  ///< fixes without a board the frame's side cut
-  std::uint64_t disagree_cycles = 0;   ///< not nominal: the boards disagreed with the pose
+  std::uint64_t uncovered_cycles = 0;    ///< not nominal: the map's coverage lacks the heading
+  std::uint64_t cut_board_frames = 0;    ///< fixes without a board the frame's side cut
+  std::uint64_t disagree_cycles = 0;     ///< not nominal: the boards disagreed with the pose
+  std::uint64_t spread_wide_cycles = 0;  ///< not nominal: the cloud spread too wide
 };
 
 struct Filter {
