@@ -73,8 +73,8 @@ void LocalizationCycle::set_published_health() {
       cause = HealthCause::kBoardsDisagree;
   } else if (h == Health::kNominal && spread_wide_) {
     // Fresh frames and encoders, but a cloud as wide as the published quality's 0: the boards
-    // do not pin the pose (one board in view, a cloud just seeded). On random floors 30% of the
-    // nominal cycles more than 10 cm off were so (docs/sweep.md).
+    // do not pin the pose (one board in view, a cloud just seeded). On 30 random floors 28% of the
+    // nominal cycles more than 10 cm off were so (docs/sweep.md, 2026-12-07 (7)).
     h = Health::kOdometryOnly;
     cause = HealthCause::kSpreadWide;
   }

@@ -81,8 +81,8 @@ struct FilterConfig {
   bool seed_heading_from_boards = true;
   /// On a floor map with the floor search (kidnap.floor_search): the first seed waits, at most
   /// a second, for the search's first pass over the floor and starts the cloud on its pose and
-  /// on the harmonic fix, as a floor kidnap's re-seed does (docs/filter.md, "Start-up on a
-  /// floor"). Off: around the first known-place fix, init_position_sigma_m wide.
+  /// on the harmonic fix, as a floor kidnap's re-seed does (docs/filter.md, "The first seed on a
+  /// floor from the search"). Off: around the first known-place fix, init_position_sigma_m wide.
   bool seed_from_search = false;
 };
 
