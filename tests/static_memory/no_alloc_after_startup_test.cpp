@@ -151,6 +151,8 @@ struct PassResult {
 // and reports each heartbeat period's latencies on the link (NAMED_VALUE_FLOAT).
 // kFloorSearch: on a floor map, the kidnap test takes its evidence from the search over the
 // whole floor (kidnap.floor_search) instead of the harmonic fix.
+// kSeedFromSearch: the same, and the first seed waits for the search's first pass and starts on
+// its pose (filter.seed_from_search): the search's slices run before the filter exists.
 enum class Fault {
   kNone,
   kCameraStallMidRun,
@@ -159,7 +161,8 @@ enum class Fault {
   kStatsOnRequest,
   kLiveClock,
   kKldSampling,
-  kFloorSearch
+  kFloorSearch,
+  kSeedFromSearch
 };
 
 // A monotonic clock an hour ahead of the recording's first frame: a live board's clock, as far
@@ -249,7 +252,8 @@ PassResult run_pass(const std::string& dataset, Fault fault, const std::string& 
   const auto meta = dataset::read_metadata(dataset);
   firmware::FirmwareConfig config =
       config_file.empty() ? firmware::default_config() : firmware::load_config(config_file);
-  config.kidnap.floor_search = fault == Fault::kFloorSearch;
+  config.kidnap.floor_search = fault == Fault::kFloorSearch || fault == Fault::kSeedFromSearch;
+  config.filter.seed_from_search = fault == Fault::kSeedFromSearch;
   config.geometry = meta.geometry;
   config.can_layout = meta.encoder_layout;
   // As the board mains refuse it: a map trained with other thresholds than the config's.
@@ -514,13 +518,13 @@ TEST(StaticMemory, NoAllocationAfterStartUpOnAFloor) {
   const std::string roam = work + "/floor-roam";
   const std::string config = work + "/floor-coverage/harmoloc.toml";
   std::uint64_t total = 0, draws = 0, kidnaps = 0;
-  for (const Fault fault : {Fault::kNone, Fault::kFloorSearch}) {
+  for (const Fault fault : {Fault::kNone, Fault::kFloorSearch, Fault::kSeedFromSearch}) {
     const PassResult r = run_pass(roam, fault, config);
     EXPECT_EQ(r.allocations, 0U) << r.allocations << " allocations after start-up on a floor, "
                                  << "the first of " << r.first_size << " bytes";
     EXPECT_TRUE(r.uses_boards);
     EXPECT_TRUE(r.uses_nearby_test) << "a floor map with bearings: the nearby pose test must run";
-    EXPECT_EQ(r.uses_floor_search, fault == Fault::kFloorSearch);
+    EXPECT_EQ(r.uses_floor_search, fault != Fault::kNone);
     total += r.cycles;
     draws += r.counters.nearby_draws;
     if (fault == Fault::kFloorSearch) kidnaps += r.kidnaps;
