@@ -443,6 +443,14 @@ std::string statustext_of(const tf::Decoded& d) {
                      strnlen(reinterpret_cast<const char*>(d.payload.data() + 1), 50));
 }
 
+// Every STATUSTEXT in @p written, in order.
+std::vector<std::string> statustexts(const tf::Bytes& written) {
+  std::vector<std::string> texts;
+  for (const auto& f : tf::decode(written, nullptr))
+    if (f.msg_id == 253) texts.push_back(statustext_of(f));
+  return texts;
+}
+
 // A rig whose cycles overrun while the clock runs fast (1 ms a reading: a cycle reads it a few
 // dozen times, against a 0.5 ms budget) and fit while it runs slowly (1 us a reading).
 struct OverrunRig : Rig {
@@ -579,9 +587,7 @@ TEST(MapRegion, APoseOutsideTheMappedRegionIsNeverNominal) {
   EXPECT_EQ(r.cycle->counters().off_map_cycles, 8U);
   EXPECT_EQ(r.cycle->counters().cycles_in_health[4], 7U);
   // Each change between on and off the map said so once.
-  std::vector<std::string> texts;
-  for (const auto& f : tf::decode(r.link.written, nullptr))
-    if (f.msg_id == 253) texts.push_back(statustext_of(f));
+  const std::vector<std::string> texts = statustexts(r.link.written);
   const std::vector<std::string> expected = {
       "harmoloc: pose nominal", "harmoloc: pose invalid (outside the mapped region)",
       "harmoloc: pose nominal", "harmoloc: pose invalid (outside the mapped region)"};
@@ -625,9 +631,7 @@ TEST(SpreadHealth, ACloudTooWideIsNotNominalUntilItNarrows) {
     }
   }
   EXPECT_GE(r.cycle->counters().spread_wide_cycles, 3U);
-  std::vector<std::string> texts;
-  for (const auto& f : tf::decode(r.link.written, nullptr))
-    if (f.msg_id == 253) texts.push_back(statustext_of(f));
+  const std::vector<std::string> texts = statustexts(r.link.written);
   const std::vector<std::string> expected = {"harmoloc: pose nominal",
                                              "harmoloc: odometry only (pose spread too wide)",
                                              "harmoloc: pose nominal"};
@@ -710,9 +714,7 @@ TEST(HeadingCoverage, FacingAHeadingTheMapDoesNotCoverIsOdometryOnly) {
   face(-0.2F);
   EXPECT_EQ(r.cycle->pose().health, hf::Health::kNominal);
 
-  std::vector<std::string> texts;
-  for (const auto& f : tf::decode(r.link.written, nullptr))
-    if (f.msg_id == 253) texts.push_back(statustext_of(f));
+  const std::vector<std::string> texts = statustexts(r.link.written);
   const std::vector<std::string> expected = {"harmoloc: pose nominal",
                                              "harmoloc: odometry only (heading not mapped here)",
                                              "harmoloc: pose nominal"};
@@ -783,9 +785,7 @@ TEST(HealthOfDisagreeingBoards, ThePoseIsNotNominalWhileTheBoardsDisagreeAndNoWe
     const std::uint64_t counted = r.cycle->counters().disagree_cycles;
     EXPECT_GE(counted, 3U);
     EXPECT_LE(counted, 12U);
-    std::vector<std::string> texts;
-    for (const auto& f : tf::decode(r.link.written, nullptr))
-      if (f.msg_id == 253) texts.push_back(statustext_of(f));
+    const std::vector<std::string> texts = statustexts(r.link.written);
     ASSERT_FALSE(texts.empty());
     EXPECT_EQ(texts.back(), "harmoloc: odometry only (boards disagree)");
   }
