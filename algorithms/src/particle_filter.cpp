@@ -22,10 +22,17 @@ void ParticleFilter::initialize(const Pose2& centre, double position_sigma_m, do
 
 void ParticleFilter::initialize_between(const Pose2& a, const Pose2& b, double position_sigma_m,
                                         double yaw_sigma_rad, bool uniform_yaw) {
+  initialize_between(a, position_sigma_m, b, position_sigma_m, yaw_sigma_rad, uniform_yaw);
+}
+
+void ParticleFilter::initialize_between(const Pose2& a, double a_sigma_m, const Pose2& b,
+                                        double b_sigma_m, double yaw_sigma_rad, bool uniform_yaw) {
   start_seed();
   const double w = 1.0 / static_cast<double>(count_);
   for (std::size_t i = 0; i < count_; ++i) {
-    const Pose2& centre = (i % 2 == 0) ? a : b;
+    const bool at_a = i % 2 == 0;
+    const Pose2& centre = at_a ? a : b;
+    const double position_sigma_m = at_a ? a_sigma_m : b_sigma_m;
     Particle& p = particles_[i];
     p.x_m = rng_.normal(centre.x_m, position_sigma_m);
     p.y_m = rng_.normal(centre.y_m, position_sigma_m);

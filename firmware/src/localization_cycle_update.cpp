@@ -34,11 +34,11 @@ void LocalizationCycle::update(const algorithms::AreaVector& areas, const Featur
         // first cloud stood 100 degrees off and lost the heading in the turn that followed.
         if (seed_heading_from_boards_ || start_from_search_)
           observed_ = algorithms::board_features(map_.forward, map_.model.area_scale, areas);
-        // With filter.seed_from_search the floor search looks over the whole floor while the
-        // seed waits, and the first cloud starts as a kidnap's re-seed does: on the search's
-        // pose and the fix. On a floor map the harmonic fix is trained at the headings the
-        // coverage run drove and can be 15-50 cm off at a start (random floors 1, 7 and 9):
-        // a cloud seeded around it alone settled 15-20 cm from the robot for 3-10 s.
+        // With filter.seed_from_search (the default) the floor search looks over the whole floor
+        // while the seed waits, and the first cloud starts on the search's pose and the fix. On a
+        // floor map the harmonic fix is trained at the headings the coverage run drove and can be
+        // 15-50 cm off at a start (random floors 1, 7 and 9): a cloud seeded around it alone
+        // settled 15-20 cm from the robot for 3-10 s.
         if (start_from_search_) follow_floor(observed_);
         const SeedHeading heading = seed_heading(fix_.fix.x_m, fix_.fix.y_m);
         const bool want_heading = seed_heading_from_boards_ && !heading.from_boards;
@@ -46,7 +46,13 @@ void LocalizationCycle::update(const algorithms::AreaVector& areas, const Featur
         if ((want_heading || want_search) && start_waits_ < kStartWaitFrames) {
           ++start_waits_;
         } else if (start_from_search_ && floor_fix_.valid) {
-          seed_from_search(std::max(floor_refine_m_, 0.03), heading.sigma_rad);
+          // The search's pose as precise as its refinement, the fix as wide as its calibrated
+          // error (the first seed around the fix alone): both 3 cm wide, a start whose two
+          // places were both wrong (random floor 7: the search 31 cm off, the fix 17 cm) held
+          // no particle near the robot.
+          const double search_sigma_m = std::max(floor_refine_m_, 0.03);
+          seed_from_search(search_sigma_m, std::max(search_sigma_m, init_sigma_m_),
+                           heading.sigma_rad);
           vision = true;
         } else {
           reseed_around(fix_.fix.x_m, fix_.fix.y_m, heading);
@@ -330,13 +336,13 @@ void LocalizationCycle::floor_kidnap_test(const algorithms::BoardFeatures& obser
   if (config_.kidnap.reseed == ReseedStrategy::kAroundFix && floor_fix_.valid) {
     const double sigma_m = config_.kidnap.position_sigma_m >= 0.0 ? config_.kidnap.position_sigma_m
                                                                   : std::max(floor_refine_m_, 0.03);
-    seed_from_search(sigma_m, config_.kidnap.yaw_sigma_deg * algorithms::kPi / 180.0);
+    seed_from_search(sigma_m, sigma_m, config_.kidnap.yaw_sigma_deg * algorithms::kPi / 180.0);
   } else {
     reseed_globally();
   }
 }
 
-void LocalizationCycle::seed_from_search(double sigma_m, double yaw_sigma_rad) {
+void LocalizationCycle::seed_from_search(double sigma_m, double fix_sigma_m, double yaw_sigma_rad) {
   const algorithms::Pose2 searched{floor_fix_.x_m, floor_fix_.y_m, floor_fix_.yaw_rad};
   // The harmonic fix as a second start, where it is a known place apart from the search's pose
   // and the boards give a heading there: the search weighs the boards alone, and where the map
@@ -348,8 +354,9 @@ void LocalizationCycle::seed_from_search(double sigma_m, double yaw_sigma_rad) {
                          std::hypot(fix.x_m - searched.x_m, fix.y_m - searched.y_m) > sigma_m;
   const SeedHeading at_fix = fix_apart ? seed_heading(fix.x_m, fix.y_m) : SeedHeading{};
   if (at_fix.from_boards) {
-    filter_.initialize_between(searched, algorithms::Pose2{fix.x_m, fix.y_m, at_fix.yaw_rad},
-                               sigma_m, std::max(yaw_sigma_rad, at_fix.sigma_rad), false);
+    filter_.initialize_between(searched, sigma_m,
+                               algorithms::Pose2{fix.x_m, fix.y_m, at_fix.yaw_rad}, fix_sigma_m,
+                               std::max(yaw_sigma_rad, at_fix.sigma_rad), false);
   } else {
     filter_.initialize(searched, sigma_m, yaw_sigma_rad, false);
   }

@@ -150,9 +150,11 @@ struct PassResult {
 // kLiveClock: the cycle runs as on a live board (set_live_clock): it measures capture to send
 // and reports each heartbeat period's latencies on the link (NAMED_VALUE_FLOAT).
 // kFloorSearch: on a floor map, the kidnap test takes its evidence from the search over the
-// whole floor (kidnap.floor_search) instead of the harmonic fix.
+// whole floor (kidnap.floor_search) instead of the harmonic fix; the first seed goes round the
+// fix (filter.seed_from_search off).
 // kSeedFromSearch: the same, and the first seed waits for the search's first pass and starts on
-// its pose (filter.seed_from_search): the search's slices run before the filter exists.
+// its pose and the fix (filter.seed_from_search, the default): the search's slices run before
+// the filter exists.
 enum class Fault {
   kNone,
   kCameraStallMidRun,

@@ -118,7 +118,7 @@ nearby_radius_m = 0.3
 nearby_levels = 2
 nearby_hint_by_tables = false
 seed_heading_from_boards = false
-seed_from_search = true
+seed_from_search = false
 
 [link]
 system_id = 7
@@ -190,7 +190,7 @@ heartbeat_hz = 2
   EXPECT_EQ(c.filter.nearby.search_levels, 2);
   EXPECT_FALSE(c.filter.nearby.hint_by_tables);
   EXPECT_FALSE(c.filter.seed_heading_from_boards);
-  EXPECT_TRUE(c.filter.seed_from_search);
+  EXPECT_FALSE(c.filter.seed_from_search);
 
   EXPECT_EQ(c.link.system_id, 7);
   EXPECT_EQ(c.link.component_id, 100);

@@ -168,6 +168,29 @@ TEST(ParticleFilter, InitializeBetweenSharesTheCloudByHalves) {
   EXPECT_NEAR(e.mean.x_m, 1.15, 0.005);
 }
 
+TEST(ParticleFilter, InitializeBetweenSpreadsEachCentreByItsOwnSigma) {
+  auto pf = make_filter(4000, 7);
+  // A searched pose 1 cm wide and a fix 20 cm wide, 2 m apart: the halves do not mix.
+  pf->initialize_between(ha::Pose2{0.0, 0.0, 0.0}, 0.01, ha::Pose2{2.0, 0.0, 0.0}, 0.20, 0.0,
+                         false);
+  double sum_a = 0.0, sum_b = 0.0;
+  int n_a = 0, n_b = 0;
+  for (std::size_t i = 0; i < pf->size(); ++i) {
+    const auto& q = pf->particle(i);
+    if (q.x_m < 1.0) {
+      sum_a += q.y_m * q.y_m;
+      ++n_a;
+    } else {
+      sum_b += q.y_m * q.y_m;
+      ++n_b;
+    }
+  }
+  ASSERT_EQ(n_a, 2000);
+  ASSERT_EQ(n_b, 2000);
+  EXPECT_NEAR(std::sqrt(sum_a / n_a), 0.01, 0.001);
+  EXPECT_NEAR(std::sqrt(sum_b / n_b), 0.20, 0.015);
+}
+
 TEST(ParticleFilter, PointInitialisationHasZeroCovariance) {
   auto pf = make_filter(64, 3);
   pf->initialize(ha::Pose2{0.5, 0.25, -1.0}, 0.0, 0.0, false);

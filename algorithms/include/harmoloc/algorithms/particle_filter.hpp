@@ -73,6 +73,10 @@ class ParticleFilter {
   /// same yaw for both): for two candidate places that the next frames will tell apart.
   void initialize_between(const Pose2& a, const Pose2& b, double position_sigma_m,
                           double yaw_sigma_rad, bool uniform_yaw);
+  /// As above, each centre with its own position spread: for two candidates whose errors differ
+  /// (a searched pose and a harmonic fix).
+  void initialize_between(const Pose2& a, double a_sigma_m, const Pose2& b, double b_sigma_m,
+                          double yaw_sigma_rad, bool uniform_yaw);
 
   /// Spreads the particles over @p count candidate positions (each particle near one of them,
   /// picked at random: Gaussian in x and y), yaw uniform. For relocalizing when all that is

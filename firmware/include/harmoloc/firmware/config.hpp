@@ -80,10 +80,11 @@ struct FilterConfig {
   /// its passes (docs/filter.md, "The seed's heading on a floor").
   bool seed_heading_from_boards = true;
   /// On a floor map with the floor search (kidnap.floor_search): the first seed waits, at most
-  /// a second, for the search's first pass over the floor and starts the cloud on its pose and
-  /// on the harmonic fix, as a floor kidnap's re-seed does (docs/filter.md, "The first seed on a
-  /// floor from the search"). Off: around the first known-place fix, init_position_sigma_m wide.
-  bool seed_from_search = false;
+  /// a second, for the search's first pass over the floor and starts half the cloud on its pose
+  /// (as a floor kidnap's re-seed does) and half on the harmonic fix, init_position_sigma_m wide
+  /// (docs/filter.md, "The first seed on a floor from the search"). Off: all of it around the
+  /// first known-place fix.
+  bool seed_from_search = true;
 };
 
 /// What the particles are weighed by.

@@ -351,8 +351,8 @@ class LocalizationCycle {
   void reseed_between(double place_x_m, double place_y_m, double fix_x_m, double fix_y_m);
   /// The cloud on the floor search's pose (floor_fix_, valid) and, where it is a known place
   /// apart from it, the harmonic fix: a floor kidnap's re-seed, and the first seed with
-  /// filter.seed_from_search.
-  void seed_from_search(double sigma_m, double yaw_sigma_rad);
+  /// filter.seed_from_search. @p sigma_m spreads the search's pose, @p fix_sigma_m the fix.
+  void seed_from_search(double sigma_m, double fix_sigma_m, double yaw_sigma_rad);
   void reseed_globally();
   void after_reseed();
   // Whether the map knows the training run's heading (and the boards are used): a re-seed then
